@@ -1,0 +1,43 @@
+"""mixdyn: kinematics and forward, inverse and mixed dynamics of planar mechanisms.
+
+All numerics run in JAX with float64 (enabled on import). Every quantity is expressed in the
+model's :class:`~mixdyn.UnitSystem`; angles are in radians.
+"""
+
+import jax as _jax
+
+_jax.config.update("jax_enable_x64", True)
+
+from . import errors  # noqa: E402
+from .analysis import (  # noqa: E402
+    Assembly,
+    DofReport,
+    Result,
+    assemble,
+    degrees_of_freedom,
+    kinematic,
+)
+from .errors import (  # noqa: E402
+    AssemblyError,
+    ConvergenceError,
+    DegreesOfFreedomError,
+    MixdynError,
+    ModelError,
+    NumericalError,
+    RedundantConstraintError,
+    SingularityError,
+    SolvabilityError,
+    StepSizeError,
+)
+from .model import *  # noqa: E402, F403
+from .model import __all__ as _model_all  # noqa: E402
+from .units import SI, UnitSystem  # noqa: E402
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "SI", "Assembly", "AssemblyError", "ConvergenceError", "DegreesOfFreedomError", "DofReport",
+    "MixdynError", "ModelError", "NumericalError", "RedundantConstraintError", "Result",
+    "SingularityError", "SolvabilityError", "StepSizeError", "UnitSystem", "__version__",
+    "assemble", "degrees_of_freedom", "errors", "kinematic", *_model_all,
+]

@@ -1,0 +1,8 @@
+"""The analyses: kinematic, forward, inverse and mixed dynamics."""
+
+from ._assembly import Assembly, assemble
+from ._structure import DofReport, degrees_of_freedom
+from .kinematic import kinematic
+from .result import Result
+
+__all__ = ["Assembly", "DofReport", "Result", "assemble", "degrees_of_freedom", "kinematic"]

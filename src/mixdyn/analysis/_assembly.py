@@ -1,0 +1,121 @@
+"""Assembly: close the joints from a rough pose (damped Gauss–Newton, least-norm steps)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import Constraints
+from ..errors import AssemblyError, ModelError
+from ..linalg import min_norm_step
+from ..model import CoordinateDriver, Model, Polynomial
+
+
+@dataclasses.dataclass(frozen=True)
+class Assembly:
+    """Result of an assembly.
+
+    Attributes:
+        q: (nq,) assembled coordinates.
+        residual: largest joint-equation residual [model units].
+        iterations: Gauss–Newton iterations used.
+    """
+
+    q: np.ndarray
+    residual: float
+    iterations: int
+
+
+def length_scale(model: Model) -> float:
+    """A characteristic length of the model [length]: the largest point or body offset."""
+    vals = [1e-300]
+    for b in model.bodies:
+        vals.append(float(jnp.max(jnp.abs(b.q0[:2]))))
+        vals += [float(jnp.max(jnp.abs(p))) for p in b.points.values()]
+    vals += [float(jnp.max(jnp.abs(p))) for p in model.ground.points.values()]
+    L = max(vals)
+    return L if L > 1e-300 else 1.0
+
+
+def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
+    """Coordinate drivers that keep the coordinates named in ``hold`` at their value in ``q``."""
+    out = []
+    for ref in hold:
+        idx = model.coordinate_index(ref)
+        body, coord = ref.split(".")
+        out.append(CoordinateDriver(f"hold {ref}", body, coord, law=Polynomial([float(q[idx])])))
+    return out
+
+
+@eqx.filter_jit
+def _gn_step(c: Constraints, q, t, damping):
+    r = c(q, t)
+    J = c.phi_q(q, t)
+    return q + min_norm_step(J, r, damping=damping), r
+
+
+@eqx.filter_jit
+def _residual(c: Constraints, q, t):
+    return c.full(q, t)
+
+
+def assemble(model: Model, q=None, hold=(), t: float = 0.0, drivers=(), tol: float | None = None,
+             max_iter: int = 100) -> Assembly:
+    """Close the joints (and optional drivers) starting from a rough pose.
+
+    Damped Gauss–Newton with least-norm steps: the result is the consistent configuration
+    nearest (in the Euclidean sense, locally) to the starting one.
+
+    Args:
+        model: the mechanism.
+        q: (nq,) rough configuration (default: the bodies' ``q0``).
+        hold: coordinates kept at their starting value, e.g. ``("crank.phi",)``.
+        t: time [time] at which drivers are evaluated.
+        drivers: drivers to satisfy as well (none by default).
+        tol: largest residual accepted [length] (default ``1e-12 x`` the model's size).
+        max_iter: iteration limit.
+
+    Raises:
+        AssemblyError: naming the joint equations that could not be closed.
+    """
+    q = model.q0 if q is None else jnp.asarray(q, dtype=jnp.float64)
+    if q.shape != (model.nq,):
+        raise ModelError(f"q must have shape ({model.nq},), got {tuple(q.shape)}", model.name)
+    hold = tuple(hold)
+    c = Constraints(model.joints, [*hold_drivers(model, hold, q), *drivers], model.nq)
+    L = length_scale(model)
+    tol = 1e-12 * L if tol is None else tol
+    t = jnp.asarray(t, dtype=jnp.float64)
+    damping = jnp.asarray(0.0)
+    r = _residual(c, q, t)
+    err = float(jnp.max(jnp.abs(r))) if r.size else 0.0
+    it = 0
+    while err > tol and it < max_iter:
+        # Levenberg–Marquardt damping from the residual size keeps the step bounded far away.
+        damping = jnp.asarray(min(err / L, 1.0) * 1e-3)
+        q_new, _ = _gn_step(c, q, t, damping)
+        r_new = _residual(c, q_new, t)
+        err_new = float(jnp.max(jnp.abs(r_new)))
+        if not np.isfinite(err_new):
+            break
+        # Backtracking line search on the residual norm.
+        step = q_new - q
+        alpha = 1.0
+        while err_new > err and alpha > 1e-3:
+            alpha *= 0.5
+            q_new = q + alpha * step
+            r_new = _residual(c, q_new, t)
+            err_new = float(jnp.max(jnp.abs(r_new)))
+        q, r, err = q_new, r_new, err_new
+        it += 1
+    if not err <= tol:
+        r = np.asarray(r)
+        bad = [c.labels[i] for i in np.argsort(-np.abs(r)) if abs(r[i]) > tol][:6]
+        raise AssemblyError(
+            f"could not close the constraints from the given pose in {it} iterations "
+            f"(largest residual {err:.3g}, tolerance {tol:.3g}); check the point coordinates "
+            "and the starting pose, or hold fewer coordinates", None, bad)
+    return Assembly(np.asarray(q), err, it)

@@ -1,0 +1,119 @@
+"""Degrees of freedom, redundant equations and the balance of drivers."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import Constraints
+from ..errors import DegreesOfFreedomError, RedundantConstraintError
+from ..linalg import independent_rows
+from ..model import Model
+
+
+@dataclasses.dataclass(frozen=True)
+class DofReport:
+    """Mobility analysis of a model at one configuration.
+
+    Attributes:
+        n_coordinates: ``nc = 3 nb``.
+        n_equations: joint equations ``nh`` (redundant ones included).
+        rank: rank of the joints' ``Phi_q``.
+        dof: degrees of freedom, ``nc - rank``.
+        redundant: labels of joint equations that repeat others (dropped by the solvers).
+        n_drivers: number of drivers considered.
+        redundant_drivers: drivers that prescribe a motion the joints already fix, or that
+            repeat another driver.
+    """
+
+    n_coordinates: int
+    n_equations: int
+    rank: int
+    dof: int
+    redundant: tuple[str, ...]
+    n_drivers: int
+    redundant_drivers: tuple[str, ...]
+
+    @property
+    def balanced(self) -> bool:
+        """Whether the drivers fix every degree of freedom exactly once."""
+        return self.n_drivers == self.dof and not self.redundant_drivers
+
+    def __str__(self) -> str:
+        lines = [
+            f"coordinates: {self.n_coordinates}",
+            f"joint equations: {self.n_equations} (rank {self.rank})",
+            f"degrees of freedom: {self.dof}",
+            f"redundant joint equations: {', '.join(self.redundant) or 'none'}",
+            f"drivers: {self.n_drivers}"
+            + ("" if self.n_drivers == self.dof else f" (expected {self.dof})"),
+        ]
+        if self.redundant_drivers:
+            lines.append(f"redundant drivers: {', '.join(self.redundant_drivers)}")
+        return "\n".join(lines)
+
+
+@jax.jit
+def _jac(c: Constraints, q, t):
+    return c.phi_q(q, t)
+
+
+def analyse(model: Model, q=None, t: float = 0.0, drivers=None, rtol: float = 1e-9
+            ) -> tuple[DofReport, tuple[int, ...]]:
+    """Mobility analysis; returns the report and the rows to keep in ``Constraints.of(model,
+    drivers)`` (joint rows independent among themselves, then the drivers)."""
+    c = Constraints.of(model, drivers)
+    q = model.q0 if q is None else jnp.asarray(q, dtype=jnp.float64)
+    J = np.asarray(_jac(c, q, jnp.asarray(t, dtype=jnp.float64)))
+    nk = c.n_joint_rows
+    keep_k, red_k, rank_k = independent_rows(J[:nk], rtol)
+    redundant_drivers = []
+    keep = list(keep_k)
+    # Add drivers one by one: a driver that does not raise the rank is redundant.
+    rank = rank_k
+    for k in range(nk, c.n_full):
+        _, _, r = independent_rows(J[[*keep, k]], rtol)
+        if r > rank:
+            keep.append(k)
+            rank = r
+        else:
+            redundant_drivers.append(c.labels[k])
+    report = DofReport(
+        n_coordinates=model.nq,
+        n_equations=nk,
+        rank=rank_k,
+        dof=model.nq - rank_k,
+        redundant=tuple(c.labels[i] for i in red_k),
+        n_drivers=c.n_full - nk,
+        redundant_drivers=tuple(redundant_drivers),
+    )
+    return report, tuple(int(i) for i in keep)
+
+
+def degrees_of_freedom(model: Model, q=None, t: float = 0.0, drivers=None) -> DofReport:
+    """Degrees of freedom and redundant equations of ``model`` at configuration ``q``.
+
+    Args:
+        model: the mechanism.
+        q: (nq,) configuration (default: the bodies' ``q0``; assemble first for a reliable
+            count, since a rough pose may hide or create singularities).
+        t: time at which drivers are evaluated [time].
+        drivers: drivers to check against the degrees of freedom (default: the model's).
+    """
+    return analyse(model, q, t, drivers)[0]
+
+
+def require_balanced(report: DofReport, what: str = "kinematic analysis") -> None:
+    """Raise a clear error unless the drivers fix every degree of freedom once."""
+    if report.redundant_drivers:
+        raise RedundantConstraintError(
+            f"{what}: driver(s) {', '.join(report.redundant_drivers)} prescribe a motion that "
+            "the joints or other drivers already fix; remove them or drive another coordinate")
+    if report.n_drivers != report.dof:
+        more = "remove" if report.n_drivers > report.dof else "add"
+        raise DegreesOfFreedomError(
+            f"{what}: the mechanism has {report.dof} degree(s) of freedom but "
+            f"{report.n_drivers} driver(s); {more} {abs(report.n_drivers - report.dof)} driver(s)")

@@ -1,0 +1,129 @@
+"""Kinematic analysis: motion prescribed for every degree of freedom.
+
+At each output time: positions by Newton–Raphson on ``Phi(q, t) = 0`` (warm-started by a
+second-order Taylor prediction from the previous time), velocities from
+``Phi_q qd = -Phi_t``, accelerations from ``Phi_q qdd = gamma``. The time loop is one
+``lax.scan``, compiled once per model structure.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import Constraints
+from ..errors import ConvergenceError, SingularityError
+from ..linalg import dependent_rows, lu_solve_checked
+from ..model import Model
+from ._assembly import assemble, length_scale
+from ._newton import newton_positions
+from ._structure import analyse, require_balanced
+from .result import Result
+
+
+@eqx.filter_jit
+def _kinematic_scan(c: Constraints, q_start, ts, tol, max_iter):
+    def step(carry, t):
+        q, qd, qdd, t_prev = carry
+        dt = t - t_prev
+        guess = q + qd * dt + 0.5 * qdd * dt**2
+        q, it, res, ratio = newton_positions(c, guess, t, tol, max_iter)
+        J = c.phi_q(q, t)
+        qd, r1 = lu_solve_checked(J, -c.phi_t(q, t))
+        qdd, r2 = lu_solve_checked(J, c.gamma(q, qd, t))
+        ratio = jnp.minimum(ratio, jnp.minimum(r1, r2))
+        return (q, qd, qdd, t), (q, qd, qdd, it, res, ratio)
+
+    zeros = jnp.zeros_like(q_start)
+    _, out = jax.lax.scan(step, (q_start, zeros, zeros, ts[0]), ts)
+    return out
+
+
+@eqx.filter_jit
+def _jacobian(c: Constraints, q, t):
+    return c.phi_q(q, t)
+
+
+def _fail(c: Constraints, q, t, message, cls, J=None):
+    J = np.asarray(_jacobian(c, jnp.asarray(q), jnp.asarray(t))) if J is None else J
+    rows = dependent_rows(J, 1e-8)
+    names = []
+    for i in rows:
+        e = c.element_names[c.owners[c.active[i]]]
+        if e not in names:
+            names.append(e)
+    raise cls(message, float(t), names)
+
+
+def check_run(c, ts, q, it, res, ratio, tol, max_iter, singular_tol):
+    """Raise the named error for the first failed time of a scan, if any."""
+    it, res, ratio = np.asarray(it), np.asarray(res), np.asarray(ratio)
+    bad_ratio = ratio < singular_tol
+    bad_newton = ~(res <= tol)
+    if not (bad_ratio.any() or bad_newton.any()):
+        return
+    k = int(np.argmax(bad_ratio | bad_newton))
+    if bad_ratio[k] or (k > 0 and ratio[k - 1] < 1e3 * singular_tol):
+        _fail(c, q[k - 1] if bad_newton[k] and k > 0 else q[k], ts[k],
+              f"singular configuration: the Jacobian lost rank (pivot ratio {ratio[k]:.2e}); "
+              "the mechanism is at a dead point or bifurcation, where the drivers do not "
+              "determine the motion. Drive another coordinate or stop before this time",
+              SingularityError)
+    _fail(c, q[k - 1] if k > 0 else q[k], ts[k],
+          f"Newton-Raphson did not converge in {max_iter} iterations (residual {res[k]:.3g}); "
+          "the prescribed motion may leave the reachable workspace, or the time step between "
+          "outputs is too large for the motion", ConvergenceError)
+
+
+def kinematic(model: Model, t, *, drivers=None, q0=None, assemble_first: bool = True,
+              tol: float | None = None, max_iter: int = 25,
+              singular_tol: float = 1e-10) -> Result:
+    """Positions, velocities and accelerations of a fully driven mechanism over time.
+
+    Args:
+        model: the mechanism; its drivers (or ``drivers``) must fix every degree of freedom.
+        t: (N,) increasing output times [time].
+        drivers: drivers to use instead of the model's.
+        q0: (nq,) rough starting configuration (default: the bodies' ``q0``).
+        assemble_first: close the joints from the rough pose before applying the drivers.
+        tol: Newton tolerance on the largest residual [length] (default ``1e-12 x`` size).
+        max_iter: Newton iterations per time.
+        singular_tol: a pivot ratio of ``Phi_q`` below this is reported as a singularity.
+
+    Returns:
+        A :class:`Result` with the body coordinates, velocities and accelerations and, in
+        ``stats``, the Newton iterations and the largest residual.
+
+    Raises:
+        DegreesOfFreedomError: the drivers do not match the degrees of freedom.
+        AssemblyError, ConvergenceError, SingularityError: with the time and the elements.
+    """
+    ts = np.atleast_1d(np.asarray(t, dtype=float))
+    if ts.ndim != 1 or np.any(np.diff(ts) <= 0):
+        raise ValueError("output times must be a 1-D increasing sequence")
+    drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
+    q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
+    if assemble_first:
+        q = jnp.asarray(assemble(model, q).q)
+    report, keep = analyse(model, q, float(ts[0]), drivers)
+    require_balanced(report)
+    c = Constraints.of(model, drivers).with_active(keep)
+    tol = 1e-12 * length_scale(model) if tol is None else tol
+    q_all, qd, qdd, it, res, ratio = _kinematic_scan(
+        c, q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter))
+    q_all = np.asarray(q_all)
+    check_run(c, ts, q_all, it, res, ratio, tol, max_iter, singular_tol)
+    return Result(
+        kind="kinematic", model=model, t=ts, q=q_all, qd=np.asarray(qd), qdd=np.asarray(qdd),
+        stats={"newton_iterations": int(np.sum(it)), "max_newton_iterations": int(np.max(it)),
+               "max_residual": float(np.max(res)), "min_pivot_ratio": float(np.min(ratio)),
+               "redundant_equations": report.redundant, "tolerance": tol},
+    )
+
+
+def _resolver(model: Model):
+    from ..model._element import Resolver
+
+    return Resolver(model.ground, model.bodies)

@@ -1,0 +1,123 @@
+"""The result of an analysis: time histories as named columns with units."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..model import Model
+from ..model._element import Resolver
+from ..model._geometry import point
+
+#: Per-body columns: (suffix, source array, index in [x, y, phi], kind of quantity).
+_BODY_COLUMNS = (
+    ("x", "q", 0, "length"), ("y", "q", 1, "length"), ("phi", "q", 2, "angle"),
+    ("vx", "qd", 0, "velocity"), ("vy", "qd", 1, "velocity"),
+    ("omega", "qd", 2, "angular_velocity"),
+    ("ax", "qdd", 0, "acceleration"), ("ay", "qdd", 1, "acceleration"),
+    ("alpha", "qdd", 2, "angular_acceleration"),
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class Result:
+    """Time histories of one analysis.
+
+    Attributes:
+        kind: ``"kinematic"``, ``"forward"``, ``"inverse"`` or ``"mixed"``.
+        model: the model analysed.
+        t: (N,) output times [time].
+        q, qd, qdd: (N, nq) coordinates, velocities and accelerations (model units, rad).
+        extra: further columns by name, each (N,): multipliers, reactions, efforts, energies.
+        kinds: kind of quantity of each extra column (a key of ``mixdyn.units.DIMENSIONS``).
+        stats: solver counters and settings (iterations, steps, largest violation...).
+    """
+
+    kind: str
+    model: Model
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    extra: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    kinds: dict[str, str] = dataclasses.field(default_factory=dict)
+    stats: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    # ----------------------------------------------------------------- columns
+    def columns(self) -> dict[str, np.ndarray]:
+        """Every column by name, ``t`` first, each (N,)."""
+        cols = {"t": self.t}
+        for b, body in enumerate(self.model.bodies):
+            for suffix, src, k, _ in _BODY_COLUMNS:
+                cols[f"{body.name}.{suffix}"] = getattr(self, src)[:, 3 * b + k]
+        cols.update(self.extra)
+        return cols
+
+    def units(self) -> dict[str, str]:
+        """The unit of every column (pint spelling, in the model's unit system)."""
+        u = self.model.units
+        out = {"t": u.unit("time")}
+        for body in self.model.bodies:
+            for suffix, _, _, kind in _BODY_COLUMNS:
+                out[f"{body.name}.{suffix}"] = u.unit(kind)
+        out.update({k: u.unit(v) for k, v in self.kinds.items()})
+        return out
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        cols = self.columns()
+        if name in cols:
+            return cols[name]
+        raise KeyError(f"no column {name!r}; columns: {', '.join(cols)}")
+
+    def table(self, points=()):
+        """A pandas DataFrame indexed by ``t``; ``points`` adds point trajectories.
+
+        Args:
+            points: point references (``"crank.B"``) whose global position, velocity and
+                acceleration are added as columns ``crank.B.x``, ``.vx``, ``.ax`` (and y).
+
+        The units of the columns are in ``df.attrs["units"]``.
+        """
+        import pandas as pd
+
+        cols = self.columns()
+        units = self.units()
+        for ref in points:
+            p, v, a = self.point(ref)
+            for arr, pre, kind in ((p, "", "length"), (v, "v", "velocity"),
+                                   (a, "a", "acceleration")):
+                for k, axis in enumerate("xy"):
+                    cols[f"{ref}.{pre}{axis}"] = arr[:, k]
+                    units[f"{ref}.{pre}{axis}"] = self.model.units.unit(kind)
+        df = pd.DataFrame(cols).set_index("t")
+        df.attrs["units"] = units
+        df.attrs["kind"] = self.kind
+        return df
+
+    def point(self, ref) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Global position, velocity and acceleration of a point, each (N, 2) [model units]."""
+        b, s = Resolver(self.model.ground, self.model.bodies).point(ref, "point")
+
+        def pos(q):
+            return point(q, b, s)
+
+        def pva(q, qd, qdd):
+            p, v = jax.jvp(pos, (q,), (qd,))
+            _, a2 = jax.jvp(lambda qq: jax.jvp(pos, (qq,), (qd,))[1], (q,), (qd,))
+            return p, v, a2 + jax.jacfwd(pos)(q) @ qdd
+
+        p, v, a = jax.vmap(pva)(jnp.asarray(self.q), jnp.asarray(self.qd), jnp.asarray(self.qdd))
+        return np.asarray(p), np.asarray(v), np.asarray(a)
+
+    def at(self, t: float) -> dict[str, float]:
+        """The row of the output time nearest to ``t``, as a dict."""
+        i = int(np.argmin(np.abs(self.t - t)))
+        return {k: float(v[i]) for k, v in self.columns().items()}
+
+    def __repr__(self) -> str:
+        return (f"Result({self.kind}, {self.model.name}, {len(self.t)} times "
+                f"{self.t[0]:.4g}..{self.t[-1]:.4g}, {len(self.columns())} columns)")

@@ -1,0 +1,16 @@
+"""Assembly of the equations of motion from the model's pure functions."""
+
+from ._constraints import Constraints
+from ._dynamics import (
+    applied_forces,
+    force_directions,
+    gravity_force,
+    kinetic_energy,
+    nonconservative_power,
+    potential_energy,
+)
+
+__all__ = [
+    "Constraints", "applied_forces", "force_directions", "gravity_force", "kinetic_energy",
+    "nonconservative_power", "potential_energy",
+]

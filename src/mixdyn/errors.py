@@ -1,0 +1,69 @@
+"""The errors mixdyn raises. Each one says what is wrong, where, and what to do.
+
+Every error derives from :class:`MixdynError`. Errors about the *description* of a
+mechanism (unknown names, bad values) derive from :class:`ModelError`; errors found
+while *solving* (divergence, singularity) derive from :class:`NumericalError` and carry
+the time at which they occurred and the elements involved.
+"""
+
+from __future__ import annotations
+
+
+class MixdynError(Exception):
+    """Base class of every error raised by mixdyn."""
+
+
+class ModelError(MixdynError, ValueError):
+    """The mechanism or analysis is described wrongly (a name, a value, a count).
+
+    Attributes:
+        element: name of the offending element (body, joint, driver, force, run), if any.
+    """
+
+    def __init__(self, message: str, element: str | None = None):
+        self.element = element
+        super().__init__(f"{element}: {message}" if element else message)
+
+
+class DegreesOfFreedomError(ModelError):
+    """The number of drivers (prescribed motions) does not match the degrees of freedom."""
+
+
+class RedundantConstraintError(ModelError):
+    """Constraint equations are redundant or contradict each other."""
+
+
+class SolvabilityError(ModelError):
+    """A mixed-dynamics problem is not solvable as posed (pairing of forces and motions)."""
+
+
+class NumericalError(MixdynError, RuntimeError):
+    """A solver failed on a well-formed problem.
+
+    Attributes:
+        time: simulation time [model time unit] at which it failed, or None.
+        elements: names of the constraint equations or elements involved.
+    """
+
+    def __init__(self, message: str, time: float | None = None, elements=()):
+        self.time = time
+        self.elements = tuple(elements)
+        where = f"at t = {time:.6g}: " if time is not None else ""
+        involved = f" (involved: {', '.join(self.elements)})" if self.elements else ""
+        super().__init__(f"{where}{message}{involved}")
+
+
+class AssemblyError(NumericalError):
+    """The constraints could not be closed from the given starting pose."""
+
+
+class ConvergenceError(NumericalError):
+    """A Newton iteration diverged or did not converge in its iteration limit."""
+
+
+class SingularityError(NumericalError):
+    """A Jacobian lost rank: a singular (dead-point, bifurcation) configuration."""
+
+
+class StepSizeError(NumericalError):
+    """An adaptive integrator's step size collapsed below its minimum."""

@@ -1,0 +1,123 @@
+"""Dense linear algebra used by every analysis: checked LU solves, the constrained-dynamics
+(KKT) solve and rank-revealing analysis of Jacobians.
+
+The conditioning of each factorization is monitored by the *pivot ratio*
+``min |U_ii| / max |U_ii|`` of its LU factors: a value near machine precision means the matrix
+lost rank (a singular configuration, a mixed problem that cannot be solved).
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+import numpy as np
+import scipy.linalg as sl
+
+
+def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
+    """Solve ``A x = b`` by partial-pivoting LU; return ``(x, pivot_ratio)``.
+
+    Args:
+        A: (n, n) matrix.
+        b: (n,) or (n, k) right-hand side.
+    """
+    if A.shape[0] == 0:
+        return b, jnp.ones(())
+    lu, piv = jsl.lu_factor(A)
+    d = jnp.abs(jnp.diag(lu))
+    ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(A.dtype).tiny)
+    return jsl.lu_solve((lu, piv), b), ratio
+
+
+def solve_kkt(Minv, C, G, Q, rhs) -> tuple[jax.Array, jax.Array, jax.Array]:
+    """Solve the constrained equations of motion for accelerations and multipliers.
+
+    Solves ``M qdd + G mu = Q``, ``C qdd = rhs`` with ``M = diag(1/Minv)``, by the Schur
+    complement ``(C M^-1 G) mu = C M^-1 Q - rhs``; ``qdd = M^-1 (Q - G mu)``.
+    In forward dynamics ``G = C^T = Phi_q^T`` and ``mu = lambda``; in mixed dynamics ``G``
+    also holds ``-B``, the directions of the unknown forces.
+
+    Args:
+        Minv: (n,) inverse of the diagonal mass matrix.
+        C: (m, n) constraint Jacobian.
+        G: (n, m) force directions of the unknowns ``mu``.
+        Q: (n,) known generalized forces.
+        rhs: (m,) right-hand side of the acceleration constraints (``gamma``).
+
+    Returns:
+        ``(qdd (n,), mu (m,), pivot_ratio)``.
+    """
+    MinvG = Minv[:, None] * G
+    S = C @ MinvG
+    mu, ratio = lu_solve_checked(S, C @ (Minv * Q) - rhs)
+    qdd = Minv * Q - MinvG @ mu
+    return qdd, mu, ratio
+
+
+def min_norm_step(J, r, weights=None, damping=0.0) -> jax.Array:
+    """The least-norm correction ``dx`` with ``J dx = -r``: ``dx = -W J^T (J W J^T + mu I)^-1 r``.
+
+    Args:
+        J: (m, n) Jacobian, m <= n.
+        r: (m,) residual.
+        weights: (n,) diagonal metric ``W`` (e.g. ``M^-1`` for a mass-weighted projection).
+        damping: Levenberg–Marquardt parameter ``mu`` (0 for Gauss–Newton).
+    """
+    W = jnp.ones(J.shape[1]) if weights is None else weights
+    JW = J * W[None, :]
+    S = JW @ J.T + damping * jnp.eye(J.shape[0])
+    y, _ = lu_solve_checked(S, r)
+    return -(JW.T @ y)
+
+
+def independent_rows(A, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, int]:
+    """Rank-revealing QR (column-pivoted, on ``A^T``) of a Jacobian.
+
+    Rows are scaled to unit norm first, so the decision does not depend on the units of the
+    equations.
+
+    Args:
+        A: (m, n) matrix.
+        rtol: a diagonal entry of ``R`` below ``rtol * |R_00|`` counts as zero.
+
+    Returns:
+        ``(independent, redundant, rank)``: sorted row indices of a maximal independent set,
+        the other rows, and the numerical rank.
+    """
+    A = np.asarray(A, dtype=float)
+    m = A.shape[0]
+    if m == 0:
+        return np.zeros(0, int), np.zeros(0, int), 0
+    norms = np.linalg.norm(A, axis=1)
+    zero = norms == 0
+    As = A / np.where(zero, 1.0, norms)[:, None]
+    _, R, piv = sl.qr(As.T, mode="economic", pivoting=True)
+    d = np.abs(np.diag(R))
+    rank = int(np.sum(d > rtol * max(d[0], 1e-300))) if d.size else 0
+    independent = np.sort(piv[:rank])
+    redundant = np.sort(piv[rank:])
+    return independent, redundant, rank
+
+
+def dependent_rows(A, rtol: float = 1e-9) -> np.ndarray:
+    """Rows taking part in the (near) linear dependency of ``A``'s rows: the rows with large
+    components in the left singular vectors of the smallest singular values."""
+    A = np.asarray(A, dtype=float)
+    if A.size == 0:
+        return np.zeros(0, int)
+    norms = np.linalg.norm(A, axis=1)
+    As = A / np.where(norms == 0, 1.0, norms)[:, None]
+    U, s, _ = np.linalg.svd(As)
+    k = int(np.sum(s > rtol * s[0])) if s.size else 0
+    m = A.shape[0]
+    if k >= m:
+        U_small = U[:, [int(np.argmin(s))]] if s.size == m else U[:, k:]
+    else:
+        U_small = U[:, k:]
+    weight = np.max(np.abs(U_small), axis=1)
+    rows = np.where(weight > 0.1 * weight.max())[0] if weight.size else np.zeros(0, int)
+    return rows
+
+
+__all__ = ["dependent_rows", "independent_rows", "lu_solve_checked", "min_norm_step", "solve_kkt"]

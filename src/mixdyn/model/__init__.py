@@ -1,0 +1,72 @@
+"""Model of a planar mechanism: bodies, joints, drivers, forces and laws of time."""
+
+from ._body import Body, Ground
+from ._drivers import (
+    DRIVER_TYPES,
+    CoordinateDriver,
+    DistanceDriver,
+    Driver,
+    PointDriver,
+    RelativeAngleDriver,
+)
+from ._forces import (
+    FORCE_TYPES,
+    ForceElement,
+    GeneralizedForce,
+    PointForce,
+    RotarySpringDamper,
+    SpringDamper,
+    StateFunction,
+    Torque,
+)
+from ._joints import JOINT_TYPES, Distance, Joint, PinInSlot, Revolute, Translational, Weld
+from ._laws import (
+    Constant,
+    FunctionLaw,
+    Harmonic,
+    Law,
+    PiecewisePolynomial,
+    Polynomial,
+    QuinticHermite,
+    Ramp,
+    Spline,
+    as_law,
+)
+from ._model import Model
+
+__all__ = [
+    "DRIVER_TYPES",
+    "FORCE_TYPES",
+    "JOINT_TYPES",
+    "Body",
+    "Constant",
+    "CoordinateDriver",
+    "Distance",
+    "DistanceDriver",
+    "Driver",
+    "ForceElement",
+    "FunctionLaw",
+    "GeneralizedForce",
+    "Ground",
+    "Harmonic",
+    "Joint",
+    "Law",
+    "Model",
+    "PiecewisePolynomial",
+    "PinInSlot",
+    "PointDriver",
+    "PointForce",
+    "Polynomial",
+    "QuinticHermite",
+    "Ramp",
+    "RelativeAngleDriver",
+    "Revolute",
+    "RotarySpringDamper",
+    "Spline",
+    "SpringDamper",
+    "StateFunction",
+    "Torque",
+    "Translational",
+    "Weld",
+    "as_law",
+]

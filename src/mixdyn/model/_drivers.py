@@ -1,0 +1,154 @@
+"""Drivers: prescribed motions ``Phi^D(q, t) = g(q) - f(t) = 0``.
+
+A driver measures one quantity ``g(q)`` of the mechanism (a coordinate, a point coordinate, a
+relative angle, a distance) and prescribes it to follow a :class:`~mixdyn.model.Law`. The effort a
+driver exerts, ``-lambda``, is the generalized force conjugate to ``g``: a force [force] for a
+length measure, a torque [torque] for an angle measure.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..errors import ModelError
+from ._element import Element, Resolver, moving
+from ._geometry import GROUND, angle, point
+from ._laws import Law, as_law
+
+_UNBOUND = -2
+_COORD = {"x": 0, "y": 1, "phi": 2}
+
+
+class Driver(Element):
+    """Abstract driver: a measure ``g(q)`` and its prescribed law ``f(t)``."""
+
+    law: Law = eqx.field(converter=as_law, kw_only=True)
+    #: ``"length"`` or ``"angle"``: the unit of the measure; the effort is a force or torque.
+    measure_kind: ClassVar[str] = "length"
+
+    @abc.abstractmethod
+    def measure(self, q: jax.Array) -> jax.Array:
+        """The driven quantity ``g(q)`` (scalar)."""
+
+    def residual(self, q, t):
+        """``g(q) - f(t)``, shape (1,)."""
+        return (self.measure(q) - self.law(t))[None]
+
+    @property
+    def effort_kind(self) -> str:
+        """``"force"`` or ``"torque"``."""
+        return "torque" if self.measure_kind == "angle" else "force"
+
+
+class CoordinateDriver(Driver):
+    """Prescribes one absolute coordinate (``"x"``, ``"y"`` or ``"phi"``) of a body."""
+
+    body: str = eqx.field(static=True)
+    coordinate: str = eqx.field(static=True)
+    b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+
+    def bind(self, r: Resolver):
+        if self.coordinate not in _COORD:
+            raise ModelError(f"coordinate must be x, y or phi, got {self.coordinate!r}", self.name)
+        b = r.body(self.body, self.name)
+        if b == GROUND:
+            raise ModelError("the ground cannot be driven", self.name)
+        return dataclasses.replace(self, b=b)
+
+    @property
+    def measure_kind(self):
+        return "angle" if self.coordinate == "phi" else "length"
+
+    @property
+    def index(self) -> int:
+        """Index of the driven coordinate in ``q``."""
+        return 3 * self.b + _COORD[self.coordinate]
+
+    def body_indices(self):
+        return (self.b,)
+
+    def measure(self, q):
+        return q[self.index]
+
+
+class PointDriver(Driver):
+    """Prescribes the global ``"x"`` or ``"y"`` coordinate of a body point."""
+
+    point: str = eqx.field(static=True)
+    coordinate: str = eqx.field(static=True)
+    b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    s: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def bind(self, r: Resolver):
+        if self.coordinate not in ("x", "y"):
+            raise ModelError(f"coordinate must be x or y, got {self.coordinate!r}", self.name)
+        b, s = r.point(self.point, self.name)
+        if b == GROUND:
+            raise ModelError("a ground point cannot be driven", self.name)
+        return dataclasses.replace(self, b=b, s=s)
+
+    def body_indices(self):
+        return (self.b,)
+
+    def measure(self, q):
+        return point(q, self.b, self.s)[_COORD[self.coordinate]]
+
+
+class RelativeAngleDriver(Driver):
+    """Prescribes ``phi_j - phi_i`` [rad], the angle of body j relative to body i."""
+
+    body_i: str = eqx.field(static=True)
+    body_j: str = eqx.field(static=True)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    measure_kind: ClassVar[str] = "angle"
+
+    def bind(self, r: Resolver):
+        bi, bj = r.body(self.body_i, self.name), r.body(self.body_j, self.name)
+        if bi == bj:
+            raise ModelError("a relative angle needs two different bodies", self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj)
+
+    def body_indices(self):
+        return moving(self.bi, self.bj)
+
+    def measure(self, q):
+        return angle(q, self.bj) - angle(q, self.bi)
+
+
+class DistanceDriver(Driver):
+    """Prescribes the distance ``|r_Pj - r_Pi|`` [length] between two points (an actuator)."""
+
+    point_i: str = eqx.field(static=True)
+    point_j: str = eqx.field(static=True)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    si: jax.Array | None = eqx.field(default=None, kw_only=True)
+    sj: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def bind(self, r: Resolver):
+        bi, si = r.point(self.point_i, self.name)
+        bj, sj = r.point(self.point_j, self.name)
+        if bi == bj:
+            raise ModelError("a distance driver needs points on two different bodies", self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj)
+
+    def body_indices(self):
+        return moving(self.bi, self.bj)
+
+    def measure(self, q):
+        return jnp.linalg.norm(point(q, self.bj, self.sj) - point(q, self.bi, self.si))
+
+
+DRIVER_TYPES: dict[str, type[Driver]] = {
+    "coordinate": CoordinateDriver,
+    "point": PointDriver,
+    "relative_angle": RelativeAngleDriver,
+    "distance": DistanceDriver,
+}

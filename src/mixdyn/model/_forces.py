@@ -1,0 +1,316 @@
+"""Force elements: contributions to the generalized applied forces ``Q^A(q, qd, t)``.
+
+Each element gives, for the bodies it acts on, ``[Fx, Fy, Mz]`` per body (force [force] at the
+body frame's origin, moment [torque] about it), assembled into a vector of shape (3 nb,).
+
+An element with a *magnitude* (point force, torque, actuator of a spring–damper) splits as
+``Q = passive(q, qd, t) + magnitude * direction(q, qd, t)``. A mixed-dynamics analysis may declare
+that magnitude unknown; ``direction`` is then the column of the matrix ``B`` of the paper.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..errors import ModelError
+from ._element import Element, Resolver, moving
+from ._geometry import GROUND, angle, cross, point, rot, vector
+from ._laws import Law, as_law
+
+_UNBOUND = -2
+
+
+def _f64(x):
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+class StateFunction(eqx.Module):
+    """A magnitude given as a JAX-traceable function of the state, ``fn(q, qd, t) -> scalar``.
+
+    ``q`` and ``qd`` are the full coordinate and velocity vectors (3 nb,).
+    """
+
+    fn: Callable = eqx.field(static=True)
+
+    def __call__(self, q, qd, t):
+        return self.fn(q, qd, t)
+
+
+def _magnitude(law, q, qd, t):
+    if isinstance(law, StateFunction):
+        return law(q, qd, t)
+    return law(t)
+
+
+def _as_magnitude(value):
+    if value is None or isinstance(value, StateFunction):
+        return value
+    return as_law(value)
+
+
+def wrench(nq: int, parts) -> jax.Array:
+    """Assemble ``[(body, (3,) [Fx, Fy, Mz]), ...]`` into a generalized force (nq,)."""
+    Q = jnp.zeros(nq)
+    for b, w in parts:
+        if b != GROUND:
+            Q = Q.at[3 * b : 3 * b + 3].add(w)
+    return Q
+
+
+def point_wrench(q, b, s, F):
+    """``[Fx, Fy, Mz]`` on body ``b`` of force ``F`` (2,) applied at body point ``s``."""
+    arm = vector(q, b, s) if b != GROUND else s
+    return jnp.concatenate([F, cross(arm, F)[None]])
+
+
+class ForceElement(Element):
+    """Abstract force element."""
+
+    #: Whether the element has a scalar magnitude that may be declared unknown.
+    has_magnitude = False
+
+    def passive(self, q, qd, t, nq: int) -> jax.Array:
+        """The part of ``Q`` that does not scale with the magnitude, (nq,)."""
+        return jnp.zeros(nq)
+
+    def direction(self, q, qd, t, nq: int) -> jax.Array:
+        """``dQ/d(magnitude)``, (nq,): the generalized force per unit magnitude."""
+        return jnp.zeros(nq)
+
+    def magnitude(self, q, qd, t) -> jax.Array:
+        """The magnitude's current value (0 for elements without one)."""
+        return jnp.zeros(())
+
+    def generalized(self, q, qd, t, nq: int) -> jax.Array:
+        """The element's generalized force ``Q`` (nq,)."""
+        return self.passive(q, qd, t, nq) + self.magnitude(q, qd, t) * self.direction(q, qd, t, nq)
+
+    def potential(self, q) -> jax.Array:
+        """Potential energy stored in the element [energy] (0 if it stores none)."""
+        return jnp.zeros(())
+
+    @property
+    def magnitude_kind(self) -> str:
+        """``"force"`` or ``"torque"``: the unit of the magnitude."""
+        return "force"
+
+
+class PointForce(ForceElement):
+    """A force at a body point along a fixed direction, of magnitude ``magnitude`` [force].
+
+    Args:
+        name: unique name.
+        point: ``"body.point"`` (or ``"body"`` for the centre of mass).
+        along: (2,) direction, in the ground frame (``frame="ground"``) or the body frame.
+        magnitude: a law of time, a :class:`StateFunction`, or a number.
+        frame: ``"ground"`` or ``"body"``.
+    """
+
+    point: str = eqx.field(static=True)
+    along: tuple = eqx.field(static=True, default=(1.0, 0.0))
+    law: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
+    frame: str = eqx.field(static=True, default="ground")
+    b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    s: jax.Array | None = eqx.field(default=None, kw_only=True)
+    u: jax.Array | None = eqx.field(default=None, kw_only=True)
+    has_magnitude = True
+
+    def bind(self, r: Resolver):
+        if self.frame not in ("ground", "body"):
+            raise ModelError(f"frame must be 'ground' or 'body', got {self.frame!r}", self.name)
+        b, s = r.point(self.point, self.name)
+        if b == GROUND:
+            raise ModelError("a force on the ground has no effect; apply it to a body", self.name)
+        u = r.vector(tuple(float(x) for x in self.along), GROUND, self.name)
+        return dataclasses.replace(self, b=b, s=s, u=u)
+
+    def body_indices(self):
+        return (self.b,)
+
+    def direction(self, q, qd, t, nq):
+        u = self.u if self.frame == "ground" else rot(angle(q, self.b)) @ self.u
+        return wrench(nq, [(self.b, point_wrench(q, self.b, self.s, u))])
+
+    def magnitude(self, q, qd, t):
+        return _magnitude(self.law, q, qd, t)
+
+
+class Torque(ForceElement):
+    """A torque ``magnitude`` [torque] (counter-clockwise positive) on ``body``.
+
+    If ``reaction`` names a second body, the opposite torque acts on it.
+    """
+
+    body: str = eqx.field(static=True)
+    law: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
+    reaction: str | None = eqx.field(static=True, default=None)
+    b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    br: int = eqx.field(static=True, default=GROUND, kw_only=True)
+    has_magnitude = True
+
+    def bind(self, r: Resolver):
+        b = r.body(self.body, self.name)
+        if b == GROUND:
+            raise ModelError("a torque on the ground has no effect; apply it to a body", self.name)
+        br = r.body(self.reaction, self.name) if self.reaction else GROUND
+        return dataclasses.replace(self, b=b, br=br)
+
+    def body_indices(self):
+        return moving(self.b, self.br)
+
+    def direction(self, q, qd, t, nq):
+        e = jnp.array([0.0, 0.0, 1.0])
+        return wrench(nq, [(self.b, e), (self.br, -e)])
+
+    def magnitude(self, q, qd, t):
+        return _magnitude(self.law, q, qd, t)
+
+    @property
+    def magnitude_kind(self):
+        return "torque"
+
+
+class SpringDamper(ForceElement):
+    """Translational spring–damper–actuator between two points.
+
+    The tension ``T = stiffness (L - free_length) + damping dL/dt - actuator`` pulls the points
+    together; the actuator force [force] pushes them apart. ``L`` is the current distance.
+    """
+
+    point_i: str = eqx.field(static=True)
+    point_j: str = eqx.field(static=True)
+    stiffness: jax.Array = eqx.field(default=0.0, converter=_f64)
+    damping: jax.Array = eqx.field(default=0.0, converter=_f64)
+    free_length: jax.Array = eqx.field(default=0.0, converter=_f64)
+    actuator: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    si: jax.Array | None = eqx.field(default=None, kw_only=True)
+    sj: jax.Array | None = eqx.field(default=None, kw_only=True)
+    has_magnitude = True
+
+    def bind(self, r: Resolver):
+        bi, si = r.point(self.point_i, self.name)
+        bj, sj = r.point(self.point_j, self.name)
+        if bi == bj:
+            raise ModelError("a spring needs points on two different bodies", self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj)
+
+    def body_indices(self):
+        return moving(self.bi, self.bj)
+
+    def _geometry(self, q, qd):
+        d = point(q, self.bj, self.sj) - point(q, self.bi, self.si)
+        L = jnp.linalg.norm(d)
+        u = d / L
+        Ld = jax.jvp(lambda qq: jnp.linalg.norm(point(qq, self.bj, self.sj)
+                                                - point(qq, self.bi, self.si)), (q,), (qd,))[1]
+        return L, Ld, u
+
+    def _pair(self, q, F_on_j, nq):
+        return wrench(nq, [(self.bj, point_wrench(q, self.bj, self.sj, F_on_j)),
+                           (self.bi, point_wrench(q, self.bi, self.si, -F_on_j))])
+
+    def passive(self, q, qd, t, nq):
+        L, Ld, u = self._geometry(q, qd)
+        T = self.stiffness * (L - self.free_length) + self.damping * Ld
+        return self._pair(q, -T * u, nq)
+
+    def direction(self, q, qd, t, nq):
+        _, _, u = self._geometry(q, qd)
+        return self._pair(q, u, nq)
+
+    def magnitude(self, q, qd, t):
+        return _magnitude(self.actuator, q, qd, t)
+
+    def potential(self, q):
+        d = point(q, self.bj, self.sj) - point(q, self.bi, self.si)
+        return 0.5 * self.stiffness * (jnp.linalg.norm(d) - self.free_length) ** 2
+
+
+class RotarySpringDamper(ForceElement):
+    """Rotational spring–damper–actuator between body i and body j (either may be the ground).
+
+    Torque on body j: ``-stiffness (theta - free_angle) - damping dtheta/dt + actuator`` with
+    ``theta = phi_j - phi_i``; the opposite torque acts on body i.
+    """
+
+    body_i: str = eqx.field(static=True)
+    body_j: str = eqx.field(static=True)
+    stiffness: jax.Array = eqx.field(default=0.0, converter=_f64)
+    damping: jax.Array = eqx.field(default=0.0, converter=_f64)
+    free_angle: jax.Array = eqx.field(default=0.0, converter=_f64)
+    actuator: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    has_magnitude = True
+
+    def bind(self, r: Resolver):
+        bi, bj = r.body(self.body_i, self.name), r.body(self.body_j, self.name)
+        if bi == bj:
+            raise ModelError("a rotary spring needs two different bodies", self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj)
+
+    def body_indices(self):
+        return moving(self.bi, self.bj)
+
+    def _theta(self, q):
+        return angle(q, self.bj) - angle(q, self.bi)
+
+    def direction(self, q, qd, t, nq):
+        e = jnp.array([0.0, 0.0, 1.0])
+        return wrench(nq, [(self.bj, e), (self.bi, -e)])
+
+    def passive(self, q, qd, t, nq):
+        th, thd = jax.jvp(self._theta, (q,), (qd,))
+        tau = -self.stiffness * (th - self.free_angle) - self.damping * thd
+        return tau * self.direction(q, qd, t, nq)
+
+    def magnitude(self, q, qd, t):
+        return _magnitude(self.actuator, q, qd, t)
+
+    def potential(self, q):
+        return 0.5 * self.stiffness * (self._theta(q) - self.free_angle) ** 2
+
+    @property
+    def magnitude_kind(self):
+        return "torque"
+
+
+class GeneralizedForce(ForceElement):
+    """A user generalized force: a JAX-traceable ``fn(q, qd, t) -> Q`` of shape (3 nb,).
+
+    ``bodies`` names the bodies it acts on (for the sparsity structure; all if empty).
+    """
+
+    fn: Callable = eqx.field(static=True)
+    bodies: tuple = eqx.field(static=True, default=())
+    idx: tuple = eqx.field(static=True, default=(), kw_only=True)
+
+    def bind(self, r: Resolver):
+        idx = tuple(r.body(b, self.name) for b in self.bodies) if self.bodies else tuple(
+            range(len(r.bodies)))
+        return dataclasses.replace(self, idx=idx)
+
+    def body_indices(self):
+        return moving(*self.idx)
+
+    def passive(self, q, qd, t, nq):
+        Q = jnp.asarray(self.fn(q, qd, t), dtype=jnp.float64)
+        if Q.shape != (nq,):
+            raise ModelError(f"the function must return shape ({nq},), got {Q.shape}", self.name)
+        return Q
+
+
+FORCE_TYPES: dict[str, type[ForceElement]] = {
+    "point_force": PointForce,
+    "torque": Torque,
+    "spring_damper": SpringDamper,
+    "rotary_spring_damper": RotarySpringDamper,
+    "generalized": GeneralizedForce,
+}

@@ -1,0 +1,183 @@
+"""Joints: time-independent constraint equations ``Phi^K(q) = 0``.
+
+Each joint connects body ``i`` and body ``j`` (either may be the ground) through points given by
+reference, ``"body.point"``. Equations follow the planar textbooks (Nikravesh, *Computer-Aided
+Analysis of Mechanical Systems*; Haug, *Computer-Aided Kinematics and Dynamics*).
+Multipliers of these equations scale so that the constraint force on the bodies is
+``-Phi_q^T lambda``; reactions are reported in physical terms by :mod:`mixdyn.analysis`.
+"""
+
+from __future__ import annotations
+
+import abc
+import dataclasses
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ._element import Element, Resolver, moving
+from ._geometry import angle, cross, point, vector
+
+_UNBOUND = -2
+
+
+def _f64(x):
+    return jnp.asarray(x, dtype=jnp.float64)
+
+
+class Joint(Element):
+    """Abstract joint between body ``i`` and body ``j``."""
+
+    #: Number of scalar equations.
+    n_equations: ClassVar[int]
+    #: Labels of the equations, for messages (``"A.x"``).
+    equation_labels: ClassVar[tuple[str, ...]]
+
+    @abc.abstractmethod
+    def residual(self, q: jax.Array) -> jax.Array:
+        """The joint's equations ``Phi^K(q)``, shape (n_equations,)."""
+
+    @abc.abstractmethod
+    def reaction_point(self) -> tuple[int, jax.Array]:
+        """``(body j, body-frame point)`` about which the reaction moment on body j is given."""
+
+    @property
+    def carries_moment(self) -> bool:
+        """Whether the joint transmits a moment (about its reaction point)."""
+        return False
+
+
+class _TwoPoint(Joint):
+    point_i: str = eqx.field(static=True)
+    point_j: str = eqx.field(static=True)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    si: jax.Array | None = eqx.field(default=None, kw_only=True)
+    sj: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def _bind_points(self, r: Resolver) -> dict:
+        bi, si = r.point(self.point_i, self.name)
+        bj, sj = r.point(self.point_j, self.name)
+        if bi == bj:
+            from ..errors import ModelError
+
+            raise ModelError("a joint must connect two different bodies", self.name)
+        return dict(bi=bi, bj=bj, si=si, sj=sj)
+
+    def bind(self, r: Resolver):
+        return dataclasses.replace(self, **self._bind_points(r))
+
+    def body_indices(self):
+        return moving(self.bi, self.bj)
+
+    def reaction_point(self):
+        return self.bj, self.sj
+
+    def _d(self, q):
+        """Vector from point i to point j, (2,) [length]."""
+        return point(q, self.bj, self.sj) - point(q, self.bi, self.si)
+
+
+class Revolute(_TwoPoint):
+    """Revolute (pin) joint: point ``point_i`` of body i coincides with ``point_j`` of body j.
+
+    Equations (2): ``r_j + A_j s_j - r_i - A_i s_i = 0``.
+    """
+
+    n_equations: ClassVar[int] = 2
+    equation_labels: ClassVar[tuple[str, ...]] = ("x", "y")
+
+    def residual(self, q):
+        return self._d(q)
+
+
+class Weld(_TwoPoint):
+    """Rigid (weld) joint: points coincide and the relative angle is fixed.
+
+    Equations (3): the revolute's two, and ``phi_j - phi_i - angle = 0``.
+    """
+
+    angle: jax.Array = eqx.field(default=0.0, converter=_f64)
+    n_equations: ClassVar[int] = 3
+    equation_labels: ClassVar[tuple[str, ...]] = ("x", "y", "angle")
+
+    def residual(self, q):
+        rel = angle(q, self.bj) - angle(q, self.bi) - self.angle
+        return jnp.concatenate([self._d(q), rel[None]])
+
+    @property
+    def carries_moment(self):
+        return True
+
+
+class Translational(_TwoPoint):
+    """Translational (prismatic, sliding) joint along ``axis`` fixed in body i.
+
+    Point ``point_j`` of body j moves on the line through ``point_i`` of body i with direction
+    ``axis`` (body-i frame), and the relative angle stays ``angle``.
+
+    Equations (2): ``u_i x (r_Pj - r_Pi) = 0`` (u_i the global unit axis) and
+    ``phi_j - phi_i - angle = 0``.
+    """
+
+    axis: object = eqx.field(static=True, default=(1.0, 0.0))
+    angle: jax.Array = eqx.field(default=0.0, converter=_f64)
+    u: jax.Array | None = eqx.field(default=None, kw_only=True)
+    n_equations: ClassVar[int] = 2
+    equation_labels: ClassVar[tuple[str, ...]] = ("normal", "angle")
+
+    def bind(self, r: Resolver):
+        kw = self._bind_points(r)
+        axis = self.axis if isinstance(self.axis, str) else tuple(float(a) for a in self.axis)
+        return dataclasses.replace(self, u=r.vector(axis, kw["bi"], self.name), **kw)
+
+    def residual(self, q):
+        n = cross(vector(q, self.bi, self.u), self._d(q))
+        return jnp.stack([n, angle(q, self.bj) - angle(q, self.bi) - self.angle])
+
+    @property
+    def carries_moment(self):
+        return True
+
+
+class PinInSlot(Translational):
+    """Revolute–translational joint: point ``point_j`` of body j moves in a slot of body i.
+
+    The slot is the line through ``point_i`` with direction ``axis`` (body-i frame); body j
+    may rotate freely. Equation (1): ``u_i x (r_Pj - r_Pi) = 0``.
+    """
+
+    n_equations: ClassVar[int] = 1
+    equation_labels: ClassVar[tuple[str, ...]] = ("normal",)
+
+    def residual(self, q):
+        return cross(vector(q, self.bi, self.u), self._d(q))[None]
+
+    @property
+    def carries_moment(self):
+        return False
+
+
+class Distance(_TwoPoint):
+    """Distance constraint (a massless rod): ``|r_Pj - r_Pi| - length = 0`` (1 equation).
+
+    Its multiplier is the rod's compression force [force].
+    """
+
+    length: jax.Array = eqx.field(default=1.0, converter=_f64)
+    n_equations: ClassVar[int] = 1
+    equation_labels: ClassVar[tuple[str, ...]] = ("length",)
+
+    def residual(self, q):
+        return (jnp.linalg.norm(self._d(q)) - self.length)[None]
+
+
+JOINT_TYPES: dict[str, type[Joint]] = {
+    "revolute": Revolute,
+    "translational": Translational,
+    "weld": Weld,
+    "distance": Distance,
+    "pin_in_slot": PinInSlot,
+}

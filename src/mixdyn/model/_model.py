@@ -1,0 +1,168 @@
+"""The immutable model of a planar mechanism."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ModelError
+from ..units import SI, UnitSystem
+from ._body import GROUND_NAME, Body, Ground
+from ._drivers import Driver
+from ._element import Resolver
+from ._forces import ForceElement
+from ._joints import Joint
+
+COORDINATES = ("x", "y", "phi")
+
+
+def _unique(items, what):
+    seen = set()
+    for it in items:
+        if it.name in seen:
+            raise ModelError(f"duplicate {what} name; every name must be unique", it.name)
+        seen.add(it.name)
+
+
+class Model(eqx.Module):
+    """A planar mechanism: bodies, joints, drivers and forces, in one unit system.
+
+    The model is an immutable PyTree: numbers are array leaves, names and topology are static.
+    Equal structures share compiled code; changing a number (a mass, a length) never recompiles.
+
+    Args:
+        bodies: the moving bodies. Body ``b`` owns coordinates ``q[3b:3b+3] = [x, y, phi]``.
+        joints: joints (constraints ``Phi^K(q) = 0``).
+        drivers: prescribed motions ``Phi^D(q, t) = 0`` used by kinematic and inverse analyses
+            (and, as motion constraints with reported efforts, by forward dynamics).
+        forces: force elements (``Q^A``).
+        ground: the fixed frame and its points [length].
+        gravity: (2,) acceleration of gravity [length/time**2], e.g. ``(0, -9.81)`` in SI.
+        units: the model's unit system; every number is in it.
+        name: a name for messages and files.
+    """
+
+    bodies: tuple[Body, ...]
+    joints: tuple[Joint, ...]
+    drivers: tuple[Driver, ...]
+    forces: tuple[ForceElement, ...]
+    ground: Ground
+    gravity: jax.Array
+    units: UnitSystem = eqx.field(static=True)
+    name: str = eqx.field(static=True)
+
+    def __init__(self, bodies, joints=(), drivers=(), forces=(), ground=None, gravity=(0.0, 0.0),
+                 units: UnitSystem = SI, name: str = "mechanism"):
+        bodies = tuple(bodies)
+        if not bodies:
+            raise ModelError("a model needs at least one moving body", name)
+        for b in bodies:
+            if not isinstance(b, Body):
+                raise ModelError(f"expected a Body, got {type(b).__name__}", name)
+        _unique(bodies, "body")
+        elements = [*joints, *drivers, *forces]
+        _unique(elements, "element")
+        for kind, items, base in (("joint", joints, Joint), ("driver", drivers, Driver),
+                                  ("force", forces, ForceElement)):
+            for it in items:
+                if not isinstance(it, base):
+                    raise ModelError(f"expected a {kind}, got {type(it).__name__}",
+                                     getattr(it, "name", None))
+        ground = ground if ground is not None else Ground()
+        if isinstance(ground, dict):
+            ground = Ground(ground)
+        r = Resolver(ground, bodies)
+        self.bodies = bodies
+        self.joints = tuple(j.bind(r) for j in joints)
+        self.drivers = tuple(d.bind(r) for d in drivers)
+        self.forces = tuple(f.bind(r) for f in forces)
+        self.ground = ground
+        g = np.asarray(gravity, dtype=float)
+        if g.shape != (2,):
+            raise ModelError("gravity must be two numbers (gx, gy)", name)
+        self.gravity = jnp.asarray(g)
+        if not isinstance(units, UnitSystem):
+            raise ModelError("units must be a mixdyn.UnitSystem", name)
+        self.units = units
+        self.name = name
+
+    # ----------------------------------------------------------------- sizes and names
+    @property
+    def nb(self) -> int:
+        """Number of moving bodies."""
+        return len(self.bodies)
+
+    @property
+    def nq(self) -> int:
+        """Number of coordinates, ``3 nb``."""
+        return 3 * len(self.bodies)
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        return tuple(b.name for b in self.bodies)
+
+    @property
+    def coordinate_names(self) -> tuple[str, ...]:
+        """``("crank.x", "crank.y", "crank.phi", ...)``, one per entry of ``q``."""
+        return tuple(f"{b.name}.{c}" for b in self.bodies for c in COORDINATES)
+
+    def coordinate_index(self, ref: str) -> int:
+        """Index in ``q`` of ``"body.x"``, ``"body.y"`` or ``"body.phi"``."""
+        names = self.coordinate_names
+        if ref not in names:
+            raise ModelError(f"unknown coordinate {ref!r}; use 'body.x', 'body.y' or 'body.phi' "
+                             f"with a body of {', '.join(self.body_names)}")
+        return names.index(ref)
+
+    def body_index(self, name: str) -> int:
+        if name not in self.body_names:
+            raise ModelError(f"unknown body; known: {', '.join(self.body_names)}", name)
+        return self.body_names.index(name)
+
+    def element(self, name: str):
+        """The joint, driver or force called ``name``."""
+        for e in (*self.joints, *self.drivers, *self.forces):
+            if e.name == name:
+                return e
+        known = [e.name for e in (*self.joints, *self.drivers, *self.forces)]
+        raise ModelError(f"no such element; known: {', '.join(known) or '(none)'}", name)
+
+    @property
+    def q0(self) -> jax.Array:
+        """The bodies' rough initial coordinates, stacked, (3 nb,)."""
+        return jnp.concatenate([b.q0 for b in self.bodies])
+
+    @property
+    def mass_diagonal(self) -> jax.Array:
+        """Diagonal of ``M = diag(m_i, m_i, J_i)``, (3 nb,) [mass, mass, mass*length**2]."""
+        return jnp.concatenate([jnp.stack([b.mass, b.mass, b.inertia]) for b in self.bodies])
+
+    @property
+    def n_joint_equations(self) -> int:
+        return sum(j.n_equations for j in self.joints)
+
+    def replace(self, **changes) -> Model:
+        """A new model with some constructor arguments changed (elements re-bound)."""
+        args = dict(bodies=self.bodies, joints=self.joints, drivers=self.drivers,
+                    forces=self.forces, ground=self.ground, gravity=self.gravity,
+                    units=self.units, name=self.name)
+        args.update(changes)
+        return Model(**args)
+
+    def point_position(self, q, ref) -> jax.Array:
+        """Global position (2,) [length] of a point reference (``"body.point"``) at ``q``."""
+        from ._geometry import point
+
+        b, s = Resolver(self.ground, self.bodies).point(ref, "point")
+        return point(jnp.asarray(q), b, s)
+
+    def summary(self) -> str:
+        """A short human-readable description."""
+        return (f"{self.name}: {self.nb} bodies ({self.nq} coordinates), {len(self.joints)} joints "
+                f"({self.n_joint_equations} equations), {len(self.drivers)} drivers, "
+                f"{len(self.forces)} forces; units {self.units.describe()}")
+
+
+__all__ = ["GROUND_NAME", "Model"]
