@@ -61,7 +61,9 @@ class UnitSystem:
         try:
             exps = DIMENSIONS[kind]
         except KeyError:
-            raise KeyError(f"unknown kind of quantity {kind!r}; known: {sorted(DIMENSIONS)}") from None
+            raise KeyError(
+                f"unknown kind of quantity {kind!r}; known: {sorted(DIMENSIONS)}"
+            ) from None
         num, den = [], []
         for name, e in zip((self.length, self.mass, self.time), exps, strict=True):
             if e == 0:

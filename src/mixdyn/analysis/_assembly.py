@@ -62,8 +62,15 @@ def _residual(c: Constraints, q, t):
     return c.full(q, t)
 
 
-def assemble(model: Model, q=None, hold=(), t: float = 0.0, drivers=(), tol: float | None = None,
-             max_iter: int = 100) -> Assembly:
+def assemble(
+    model: Model,
+    q=None,
+    hold=(),
+    t: float = 0.0,
+    drivers=(),
+    tol: float | None = None,
+    max_iter: int = 100,
+) -> Assembly:
     """Close the joints (and optional drivers) starting from a rough pose.
 
     Damped Gauss–Newton with least-norm steps: the result is the consistent configuration
@@ -117,5 +124,8 @@ def assemble(model: Model, q=None, hold=(), t: float = 0.0, drivers=(), tol: flo
         raise AssemblyError(
             f"could not close the constraints from the given pose in {it} iterations "
             f"(largest residual {err:.3g}, tolerance {tol:.3g}); check the point coordinates "
-            "and the starting pose, or hold fewer coordinates", None, bad)
+            "and the starting pose, or hold fewer coordinates",
+            None,
+            bad,
+        )
     return Assembly(np.asarray(q), err, it)

@@ -61,8 +61,9 @@ def _jac(c: Constraints, q, t):
     return c.phi_q(q, t)
 
 
-def analyse(model: Model, q=None, t: float = 0.0, drivers=None, rtol: float = 1e-9
-            ) -> tuple[DofReport, tuple[int, ...]]:
+def analyse(
+    model: Model, q=None, t: float = 0.0, drivers=None, rtol: float = 1e-9
+) -> tuple[DofReport, tuple[int, ...]]:
     """Mobility analysis; returns the report and the rows to keep in ``Constraints.of(model,
     drivers)`` (joint rows independent among themselves, then the drivers)."""
     c = Constraints.of(model, drivers)
@@ -111,9 +112,11 @@ def require_balanced(report: DofReport, what: str = "kinematic analysis") -> Non
     if report.redundant_drivers:
         raise RedundantConstraintError(
             f"{what}: driver(s) {', '.join(report.redundant_drivers)} prescribe a motion that "
-            "the joints or other drivers already fix; remove them or drive another coordinate")
+            "the joints or other drivers already fix; remove them or drive another coordinate"
+        )
     if report.n_drivers != report.dof:
         more = "remove" if report.n_drivers > report.dof else "add"
         raise DegreesOfFreedomError(
             f"{what}: the mechanism has {report.dof} degree(s) of freedom but "
-            f"{report.n_drivers} driver(s); {more} {abs(report.n_drivers - report.dof)} driver(s)")
+            f"{report.n_drivers} driver(s); {more} {abs(report.n_drivers - report.dof)} driver(s)"
+        )

@@ -66,20 +66,37 @@ def check_run(c, ts, q, it, res, ratio, tol, max_iter, singular_tol):
         return
     k = int(np.argmax(bad_ratio | bad_newton))
     if bad_ratio[k] or (k > 0 and ratio[k - 1] < 1e3 * singular_tol):
-        _fail(c, q[k - 1] if bad_newton[k] and k > 0 else q[k], ts[k],
-              f"singular configuration: the Jacobian lost rank (pivot ratio {ratio[k]:.2e}); "
-              "the mechanism is at a dead point or bifurcation, where the drivers do not "
-              "determine the motion. Drive another coordinate or stop before this time",
-              SingularityError)
-    _fail(c, q[k - 1] if k > 0 else q[k], ts[k],
-          f"Newton-Raphson did not converge in {max_iter} iterations (residual {res[k]:.3g}); "
-          "the prescribed motion may leave the reachable workspace, or the time step between "
-          "outputs is too large for the motion", ConvergenceError)
+        _fail(
+            c,
+            q[k - 1] if bad_newton[k] and k > 0 else q[k],
+            ts[k],
+            f"singular configuration: the Jacobian lost rank (pivot ratio {ratio[k]:.2e}); "
+            "the mechanism is at a dead point or bifurcation, where the drivers do not "
+            "determine the motion. Drive another coordinate or stop before this time",
+            SingularityError,
+        )
+    _fail(
+        c,
+        q[k - 1] if k > 0 else q[k],
+        ts[k],
+        f"Newton-Raphson did not converge in {max_iter} iterations (residual {res[k]:.3g}); "
+        "the prescribed motion may leave the reachable workspace, or the time step between "
+        "outputs is too large for the motion",
+        ConvergenceError,
+    )
 
 
-def kinematic(model: Model, t, *, drivers=None, q0=None, assemble_first: bool = True,
-              tol: float | None = None, max_iter: int = 25,
-              singular_tol: float = 1e-10) -> Result:
+def kinematic(
+    model: Model,
+    t,
+    *,
+    drivers=None,
+    q0=None,
+    assemble_first: bool = True,
+    tol: float | None = None,
+    max_iter: int = 25,
+    singular_tol: float = 1e-10,
+) -> Result:
     """Positions, velocities and accelerations of a fully driven mechanism over time.
 
     Args:
@@ -112,14 +129,25 @@ def kinematic(model: Model, t, *, drivers=None, q0=None, assemble_first: bool = 
     c = Constraints.of(model, drivers).with_active(keep)
     tol = 1e-12 * length_scale(model) if tol is None else tol
     q_all, qd, qdd, it, res, ratio = _kinematic_scan(
-        c, q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter))
+        c, q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)
+    )
     q_all = np.asarray(q_all)
     check_run(c, ts, q_all, it, res, ratio, tol, max_iter, singular_tol)
     return Result(
-        kind="kinematic", model=model, t=ts, q=q_all, qd=np.asarray(qd), qdd=np.asarray(qdd),
-        stats={"newton_iterations": int(np.sum(it)), "max_newton_iterations": int(np.max(it)),
-               "max_residual": float(np.max(res)), "min_pivot_ratio": float(np.min(ratio)),
-               "redundant_equations": report.redundant, "tolerance": tol},
+        kind="kinematic",
+        model=model,
+        t=ts,
+        q=q_all,
+        qd=np.asarray(qd),
+        qdd=np.asarray(qdd),
+        stats={
+            "newton_iterations": int(np.sum(it)),
+            "max_newton_iterations": int(np.max(it)),
+            "max_residual": float(np.max(res)),
+            "min_pivot_ratio": float(np.min(ratio)),
+            "redundant_equations": report.redundant,
+            "tolerance": tol,
+        },
     )
 
 

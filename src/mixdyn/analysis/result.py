@@ -15,10 +15,14 @@ from ..model._geometry import point
 
 #: Per-body columns: (suffix, source array, index in [x, y, phi], kind of quantity).
 _BODY_COLUMNS = (
-    ("x", "q", 0, "length"), ("y", "q", 1, "length"), ("phi", "q", 2, "angle"),
-    ("vx", "qd", 0, "velocity"), ("vy", "qd", 1, "velocity"),
+    ("x", "q", 0, "length"),
+    ("y", "q", 1, "length"),
+    ("phi", "q", 2, "angle"),
+    ("vx", "qd", 0, "velocity"),
+    ("vy", "qd", 1, "velocity"),
     ("omega", "qd", 2, "angular_velocity"),
-    ("ax", "qdd", 0, "acceleration"), ("ay", "qdd", 1, "acceleration"),
+    ("ax", "qdd", 0, "acceleration"),
+    ("ay", "qdd", 1, "acceleration"),
     ("alpha", "qdd", 2, "angular_acceleration"),
 )
 
@@ -88,8 +92,11 @@ class Result:
         units = self.units()
         for ref in points:
             p, v, a = self.point(ref)
-            for arr, pre, kind in ((p, "", "length"), (v, "v", "velocity"),
-                                   (a, "a", "acceleration")):
+            for arr, pre, kind in (
+                (p, "", "length"),
+                (v, "v", "velocity"),
+                (a, "a", "acceleration"),
+            ):
                 for k, axis in enumerate("xy"):
                     cols[f"{ref}.{pre}{axis}"] = arr[:, k]
                     units[f"{ref}.{pre}{axis}"] = self.model.units.unit(kind)
@@ -119,5 +126,7 @@ class Result:
         return {k: float(v[i]) for k, v in self.columns().items()}
 
     def __repr__(self) -> str:
-        return (f"Result({self.kind}, {self.model.name}, {len(self.t)} times "
-                f"{self.t[0]:.4g}..{self.t[-1]:.4g}, {len(self.columns())} columns)")
+        return (
+            f"Result({self.kind}, {self.model.name}, {len(self.t)} times "
+            f"{self.t[0]:.4g}..{self.t[-1]:.4g}, {len(self.columns())} columns)"
+        )

@@ -11,6 +11,11 @@ from ._dynamics import (
 )
 
 __all__ = [
-    "Constraints", "applied_forces", "force_directions", "gravity_force", "kinetic_energy",
-    "nonconservative_power", "potential_energy",
+    "Constraints",
+    "applied_forces",
+    "force_directions",
+    "gravity_force",
+    "kinetic_energy",
+    "nonconservative_power",
+    "potential_energy",
 ]

@@ -79,8 +79,9 @@ class Resolver:
                 raise ModelError(f"the ground has no named vector {ref!r}; give (x, y)", element)
             vecs = self._body_objs[body].vectors
             if ref not in vecs:
-                raise ModelError(f"unknown vector {ref!r} on body {self._body_objs[body].name!r}",
-                                 element)
+                raise ModelError(
+                    f"unknown vector {ref!r} on body {self._body_objs[body].name!r}", element
+                )
             v = np.asarray(vecs[ref])
         else:
             v = np.asarray(ref, dtype=float)

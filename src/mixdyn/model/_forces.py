@@ -208,13 +208,21 @@ class SpringDamper(ForceElement):
         d = point(q, self.bj, self.sj) - point(q, self.bi, self.si)
         L = jnp.linalg.norm(d)
         u = d / L
-        Ld = jax.jvp(lambda qq: jnp.linalg.norm(point(qq, self.bj, self.sj)
-                                                - point(qq, self.bi, self.si)), (q,), (qd,))[1]
+        Ld = jax.jvp(
+            lambda qq: jnp.linalg.norm(point(qq, self.bj, self.sj) - point(qq, self.bi, self.si)),
+            (q,),
+            (qd,),
+        )[1]
         return L, Ld, u
 
     def _pair(self, q, F_on_j, nq):
-        return wrench(nq, [(self.bj, point_wrench(q, self.bj, self.sj, F_on_j)),
-                           (self.bi, point_wrench(q, self.bi, self.si, -F_on_j))])
+        return wrench(
+            nq,
+            [
+                (self.bj, point_wrench(q, self.bj, self.sj, F_on_j)),
+                (self.bi, point_wrench(q, self.bi, self.si, -F_on_j)),
+            ],
+        )
 
     def passive(self, q, qd, t, nq):
         L, Ld, u = self._geometry(q, qd)
@@ -293,8 +301,11 @@ class GeneralizedForce(ForceElement):
     idx: tuple = eqx.field(static=True, default=(), kw_only=True)
 
     def bind(self, r: Resolver):
-        idx = tuple(r.body(b, self.name) for b in self.bodies) if self.bodies else tuple(
-            range(len(r.bodies)))
+        idx = (
+            tuple(r.body(b, self.name) for b in self.bodies)
+            if self.bodies
+            else tuple(range(len(r.bodies)))
+        )
         return dataclasses.replace(self, idx=idx)
 
     def body_indices(self):

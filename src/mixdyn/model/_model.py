@@ -53,8 +53,17 @@ class Model(eqx.Module):
     units: UnitSystem = eqx.field(static=True)
     name: str = eqx.field(static=True)
 
-    def __init__(self, bodies, joints=(), drivers=(), forces=(), ground=None, gravity=(0.0, 0.0),
-                 units: UnitSystem = SI, name: str = "mechanism"):
+    def __init__(
+        self,
+        bodies,
+        joints=(),
+        drivers=(),
+        forces=(),
+        ground=None,
+        gravity=(0.0, 0.0),
+        units: UnitSystem = SI,
+        name: str = "mechanism",
+    ):
         bodies = tuple(bodies)
         if not bodies:
             raise ModelError("a model needs at least one moving body", name)
@@ -64,12 +73,16 @@ class Model(eqx.Module):
         _unique(bodies, "body")
         elements = [*joints, *drivers, *forces]
         _unique(elements, "element")
-        for kind, items, base in (("joint", joints, Joint), ("driver", drivers, Driver),
-                                  ("force", forces, ForceElement)):
+        for kind, items, base in (
+            ("joint", joints, Joint),
+            ("driver", drivers, Driver),
+            ("force", forces, ForceElement),
+        ):
             for it in items:
                 if not isinstance(it, base):
-                    raise ModelError(f"expected a {kind}, got {type(it).__name__}",
-                                     getattr(it, "name", None))
+                    raise ModelError(
+                        f"expected a {kind}, got {type(it).__name__}", getattr(it, "name", None)
+                    )
         ground = ground if ground is not None else Ground()
         if isinstance(ground, dict):
             ground = Ground(ground)
@@ -112,8 +125,10 @@ class Model(eqx.Module):
         """Index in ``q`` of ``"body.x"``, ``"body.y"`` or ``"body.phi"``."""
         names = self.coordinate_names
         if ref not in names:
-            raise ModelError(f"unknown coordinate {ref!r}; use 'body.x', 'body.y' or 'body.phi' "
-                             f"with a body of {', '.join(self.body_names)}")
+            raise ModelError(
+                f"unknown coordinate {ref!r}; use 'body.x', 'body.y' or 'body.phi' "
+                f"with a body of {', '.join(self.body_names)}"
+            )
         return names.index(ref)
 
     def body_index(self, name: str) -> int:
@@ -145,9 +160,16 @@ class Model(eqx.Module):
 
     def replace(self, **changes) -> Model:
         """A new model with some constructor arguments changed (elements re-bound)."""
-        args = dict(bodies=self.bodies, joints=self.joints, drivers=self.drivers,
-                    forces=self.forces, ground=self.ground, gravity=self.gravity,
-                    units=self.units, name=self.name)
+        args = dict(
+            bodies=self.bodies,
+            joints=self.joints,
+            drivers=self.drivers,
+            forces=self.forces,
+            ground=self.ground,
+            gravity=self.gravity,
+            units=self.units,
+            name=self.name,
+        )
         args.update(changes)
         return Model(**args)
 
@@ -160,9 +182,11 @@ class Model(eqx.Module):
 
     def summary(self) -> str:
         """A short human-readable description."""
-        return (f"{self.name}: {self.nb} bodies ({self.nq} coordinates), {len(self.joints)} joints "
-                f"({self.n_joint_equations} equations), {len(self.drivers)} drivers, "
-                f"{len(self.forces)} forces; units {self.units.describe()}")
+        return (
+            f"{self.name}: {self.nb} bodies ({self.nq} coordinates), {len(self.joints)} joints "
+            f"({self.n_joint_equations} equations), {len(self.drivers)} drivers, "
+            f"{len(self.forces)} forces; units {self.units.describe()}"
+        )
 
 
 __all__ = ["GROUND_NAME", "Model"]
