@@ -15,6 +15,7 @@ from .analysis import (  # noqa: E402
     Result,
     assemble,
     degrees_of_freedom,
+    forward,
     kinematic,
 )
 from .errors import (  # noqa: E402

@@ -12,6 +12,7 @@ from ..equations import Constraints
 from ..errors import AssemblyError, ModelError
 from ..linalg import min_norm_step
 from ..model import CoordinateDriver, Model, Polynomial
+from ..model._element import Resolver
 
 
 @dataclasses.dataclass(frozen=True)
@@ -46,7 +47,8 @@ def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
     for ref in hold:
         idx = model.coordinate_index(ref)
         body, coord = ref.split(".")
-        out.append(CoordinateDriver(f"hold {ref}", body, coord, law=Polynomial([float(q[idx])])))
+        d = CoordinateDriver(f"hold {ref}", body, coord, law=Polynomial([float(q[idx])]))
+        out.append(d.bind(Resolver(model.ground, model.bodies)))
     return out
 
 

@@ -1,5 +1,19 @@
 """The linear-solver layer shared by every analysis."""
 
-from ._dense import dependent_rows, independent_rows, lu_solve_checked, min_norm_step, solve_kkt
+from ._dense import (
+    dependent_rows,
+    independent_rows,
+    lu_solve_checked,
+    min_norm_step,
+    min_pivot,
+    solve_kkt,
+)
 
-__all__ = ["dependent_rows", "independent_rows", "lu_solve_checked", "min_norm_step", "solve_kkt"]
+__all__ = [
+    "dependent_rows",
+    "independent_rows",
+    "lu_solve_checked",
+    "min_norm_step",
+    "min_pivot",
+    "solve_kkt",
+]

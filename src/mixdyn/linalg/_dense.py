@@ -30,6 +30,15 @@ def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
     return jsl.lu_solve((lu, piv), b), ratio
 
 
+def min_pivot(A: jax.Array) -> jax.Array:
+    """Smallest ``|U_ii|`` of the partial-pivoting LU of the square ``A``: compare choices of
+    a square block of one matrix by it (it is not scale free, unlike the pivot ratio)."""
+    if A.shape[0] == 0:
+        return jnp.asarray(jnp.inf)
+    lu, _ = jsl.lu_factor(A)
+    return jnp.min(jnp.abs(jnp.diag(lu)))
+
+
 def solve_kkt(Minv, C, G, Q, rhs) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Solve the constrained equations of motion for accelerations and multipliers.
 
@@ -120,4 +129,11 @@ def dependent_rows(A, rtol: float = 1e-9) -> np.ndarray:
     return rows
 
 
-__all__ = ["dependent_rows", "independent_rows", "lu_solve_checked", "min_norm_step", "solve_kkt"]
+__all__ = [
+    "dependent_rows",
+    "independent_rows",
+    "lu_solve_checked",
+    "min_norm_step",
+    "min_pivot",
+    "solve_kkt",
+]

@@ -1,0 +1,176 @@
+"""The constrained equations of motion of one analysis, as pure functions of ``(q, qd, t)``.
+
+Forward, inverse and mixed dynamics differ only in which constraint rows exist and which
+multipliers are forces of unknown magnitude:
+
+    M qdd + G mu = Q(q, qd, t)          G = [Phi_q^T | -B]
+    C qdd       = gamma                 C = [Phi_q ; Psi_q]
+
+with ``Phi`` the joints and drivers (their multipliers ``lambda``), ``Psi`` the prescribed
+motions of a mixed problem and ``B`` the directions of the unknown forces ``u`` (the last
+``p`` entries of ``mu``). In forward dynamics ``p = 0`` and ``G = C^T``. Two solvers of the
+acceleration problem exist: ``"augmented"`` (Schur complement, any ``B``) and
+``"partition"`` (the paper's equations (28)–(29), unknown forces along coordinates).
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+import numpy as np
+
+from ..equations import Constraints, applied_forces, force_directions, nonconservative_power
+from ..linalg import lu_solve_checked, min_pivot, solve_kkt
+from ..model import Model
+
+
+def pivot_columns(A, k: int):
+    """Indices (k,) of ``k`` well-conditioned columns of ``A`` (m, n), by partial-pivoting LU
+    of ``A^T``; and the other columns (n - k,). Jittable."""
+    n = A.shape[1]
+    if k == 0:
+        return jnp.zeros(0, dtype=int), jnp.arange(n)
+    P, _, _ = jsl.lu(A.T)
+    perm = jnp.argmax(P, axis=0)  # row of A^T (column of A) chosen at each pivot position
+    dep = perm[:k]
+    mask = jnp.ones(n, dtype=bool).at[dep].set(False)
+    rest = jnp.argsort(~mask, stable=True)[: n - k]
+    return dep, rest
+
+
+class Problem(eqx.Module):
+    """Equations of motion of one dynamic analysis.
+
+    Attributes:
+        model: the mechanism.
+        c: constraint rows ``[Phi; Psi]`` (joints, drivers, then prescribed motions).
+        unknown: names of the force elements of unknown magnitude (``p`` of them).
+        solver: ``"augmented"`` or ``"partition"``.
+        j_index: (p,) coordinates along which the unknown forces act (partition solver).
+        i_index: user-chosen independent coordinates, or ``()`` for automatic choice.
+    """
+
+    model: Model
+    c: Constraints
+    unknown: tuple[str, ...] = eqx.field(static=True)
+    solver: str = eqx.field(static=True)
+    j_index: tuple[int, ...] = eqx.field(static=True)
+    i_index: tuple[int, ...] = eqx.field(static=True)
+
+    def __init__(self, model, c, unknown=(), solver="augmented", j_index=(), i_index=()):
+        self.model = model
+        self.c = c
+        self.unknown = tuple(unknown)
+        self.solver = solver
+        self.j_index = tuple(int(i) for i in j_index)
+        self.i_index = tuple(int(i) for i in i_index)
+
+    @property
+    def p(self) -> int:
+        return len(self.unknown)
+
+    @property
+    def Minv(self):
+        return 1.0 / self.model.mass_diagonal
+
+    # ------------------------------------------------------------------ forces
+    def known_forces(self, q, qd, t):
+        """Known generalized forces ``Q`` (nq,)."""
+        return applied_forces(self.model, q, qd, t, exclude=self.unknown)
+
+    def G(self, q, qd, t, C):
+        """Force directions of the multipliers, (nq, m): ``[Phi_q^T | -B]``."""
+        if self.p == 0:
+            return C.T
+        B = force_directions(self.model, self.unknown, q, qd, t)
+        return jnp.concatenate([C[: C.shape[0] - self.p].T, -B], axis=1)
+
+    # ------------------------------------------------------------------ accelerations
+    def accelerations(self, q, qd, t, alpha=None, beta=None):
+        """``(qdd (nq,), mu (m,), pivot_ratio)`` at one state.
+
+        With ``alpha``, ``beta`` [1/time] the acceleration constraints are Baumgarte-stabilized:
+        ``C qdd = gamma - 2 alpha (Phi_q qd + Phi_t) - beta**2 Phi``.
+        """
+        C = self.c.phi_q(q, t)
+        gam = self.c.gamma(q, qd, t)
+        if alpha is not None:
+            gam = gam - 2 * alpha * (C @ qd + self.c.phi_t(q, t)) - beta**2 * self.c(q, t)
+        Q = self.known_forces(q, qd, t)
+        if self.solver == "partition":
+            return self._partition(q, qd, t, C, gam, Q)
+        return solve_kkt(self.Minv, C, self.G(q, qd, t, C), Q, gam)
+
+    def _partition(self, q, qd, t, C, gam, Q):
+        """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""
+        n, p = self.model.nq, self.p
+        mk = C.shape[0] - p  # constraint rows other than the prescribed motions
+        Phi_q = C[:mk]
+        j = jnp.asarray(self.j_index, dtype=int)
+        Mdiag = self.model.mass_diagonal
+        free = np.setdiff1d(np.arange(n), np.asarray(self.j_index, dtype=int))
+        k_auto, rest = pivot_columns(Phi_q[:, free], mk)
+        k_auto = jnp.asarray(free)[k_auto]
+        i_auto = jnp.asarray(free)[rest]
+        if self.i_index:
+            i_user = jnp.asarray(self.i_index, dtype=int)
+            mask = np.ones(n, dtype=bool)
+            mask[list(self.i_index) + list(self.j_index)] = False
+            k_user = jnp.asarray(np.where(mask)[0])
+            # Fall back to the pivoted choice where the user's Phi_qk is ill-conditioned
+            # (its smallest pivot far below the best choice's).
+            use_user = min_pivot(Phi_q[:, k_user]) > 1e-3 * min_pivot(Phi_q[:, k_auto])
+            k = jnp.where(use_user, k_user, k_auto)
+            i = jnp.where(use_user, i_user, i_auto)
+        else:
+            k, i = k_auto, i_auto
+        Pk, Pi = Phi_q[:, k], Phi_q[:, i]
+        Mrows = jnp.diag(Mdiag)
+        # X = (Phi_qk^T)^-1 [M_k. | Q_k]
+        X, ratio = lu_solve_checked(Pk.T, jnp.concatenate([Mrows[k], Q[k][:, None]], axis=1))
+        A_i = Mrows[i] - Pi.T @ X[:, :n]  # (29), left side
+        b_i = Q[i] - Pi.T @ X[:, n]  # (29), right side (the source's sign repaired)
+        A = jnp.concatenate([A_i, Phi_q, C[mk:]], axis=0)
+        b = jnp.concatenate([b_i, gam[:mk], gam[mk:]])
+        qdd, r2 = lu_solve_checked(A, b)
+        lam = jnp.linalg.solve(Pk.T, Q[k] - Mdiag[k] * qdd[k])  # (28)
+        B = force_directions(self.model, self.unknown, q, qd, t)
+        # j rows: M_j qdd_j + Phi_qj^T lam = Q_j + B_j u
+        Bj = B[j, :]
+        u = jnp.linalg.solve(Bj, Mdiag[j] * qdd[j] + Phi_q[:, j].T @ lam - Q[j])
+        return qdd, jnp.concatenate([lam, u]), jnp.minimum(ratio, r2)
+
+    # ------------------------------------------------------------------ work
+    def powers(self, q, qd, t, mu, C):
+        """Power of each multiplier's force (m,): ``-(G[:, r] mu_r) . qd``."""
+        G = self.G(q, qd, t, C)
+        return -(G.T @ qd) * mu
+
+    def work_rates(self, q, qd, t, mu):
+        """``[P_nonconservative_applied, P_constraints_and_unknowns]`` (2,) [power]."""
+        C = self.c.phi_q(q, t)
+        p_nc = nonconservative_power(self.model, q, qd, t, exclude=self.unknown)
+        return jnp.stack([p_nc, jnp.sum(self.powers(q, qd, t, mu, C))])
+
+    # ------------------------------------------------------------------ projections
+    def project_positions(self, q, t, tol, iters: int = 4):
+        """Mass-weighted least-norm projection of ``q`` onto ``Phi(q, t) = 0``."""
+
+        def body(_, q):
+            r = self.c(q, t)
+            J = self.c.phi_q(q, t)
+            MJ = self.Minv[:, None] * J.T
+            y, _ = lu_solve_checked(J @ MJ, r)
+            return jnp.where(jnp.max(jnp.abs(r)) > tol, q - MJ @ y, q)
+
+        return jax.lax.fori_loop(0, iters, body, q)
+
+    def project_velocities(self, q, qd, t):
+        """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``."""
+        J = self.c.phi_q(q, t)
+        r = J @ qd + self.c.phi_t(q, t)
+        MJ = self.Minv[:, None] * J.T
+        y, _ = lu_solve_checked(J @ MJ, r)
+        return qd - MJ @ y

@@ -1,0 +1,224 @@
+"""What forward, inverse and mixed dynamics share: a consistent start, the integrator call,
+failures turned into named errors, and results in physical terms."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import Constraints, kinetic_energy, potential_energy
+from ..errors import ModelError, NumericalError, SingularityError, StepSizeError
+from ..linalg import dependent_rows
+from ..model import Model
+from ._assembly import assemble, hold_drivers, length_scale
+from ._problem import Problem
+from ._reactions import driver_efforts, reaction_columns, reaction_kinds
+from .integrators import INTEGRATORS, STATUS_MESSAGES
+from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE
+from .result import Result
+
+FIXED_STEP = ("baumgarte", "generalized-alpha")
+
+
+def require_masses(model: Model) -> None:
+    """Every body of a dynamic run needs a positive mass and inertia."""
+    for b in model.bodies:
+        if not (float(b.mass) > 0 and float(b.inertia) > 0):
+            raise ModelError(
+                f"body has mass {float(b.mass):g} and inertia {float(b.inertia):g}; a dynamic "
+                "analysis needs both > 0 (give the body a mass and a moment of inertia about its "
+                "centre of mass, or weld it to a body that has them)",
+                b.name,
+            )
+
+
+def output_times(t) -> np.ndarray:
+    ts = np.atleast_1d(np.asarray(t, dtype=float))
+    if ts.ndim != 1 or ts.size < 2 or np.any(np.diff(ts) <= 0) or not np.all(np.isfinite(ts)):
+        raise ModelError(
+            "output times must be an increasing sequence of at least two finite "
+            "times (e.g. numpy.linspace(0, 2, 201))",
+            "t",
+        )
+    return ts
+
+
+@eqx.filter_jit
+def _velocity_fix(c: Constraints, q, qd, t, hold_idx):
+    J = c.phi_q(q, t)
+    rhs = -c.phi_t(q, t)
+    if hold_idx.size:
+        E = jnp.eye(q.shape[0])[hold_idx]
+        J = jnp.concatenate([J, E])
+        rhs = jnp.concatenate([rhs, qd[hold_idx]])
+    r = rhs - J @ qd
+    dqd, *_ = jnp.linalg.lstsq(J, r)
+    return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)))
+
+
+def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None, hold=()):
+    """Positions on ``Phi(q, t0) = 0`` and velocities on ``Phi_q qd = -Phi_t``.
+
+    Positions: assembled from ``q0`` (default the bodies' ``q0``) keeping the ``hold``
+    coordinates; velocities: the least change of ``qd0`` (default 0) that satisfies the velocity
+    constraints, keeping the held coordinates' velocities.
+    """
+    q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
+    asm = assemble(model, q, hold=hold, t=t0, drivers=c.drivers)
+    q = jnp.asarray(asm.q)
+    qd = jnp.zeros(model.nq) if qd0 is None else jnp.asarray(qd0, dtype=jnp.float64)
+    if qd.shape != (model.nq,):
+        raise ModelError(f"qd0 must have shape ({model.nq},)", model.name)
+    hold_idx = jnp.asarray([model.coordinate_index(h) for h in hold], dtype=int)
+    qd, err = _velocity_fix(c, q, qd, jnp.asarray(t0), hold_idx)
+    scale = length_scale(model)
+    if not float(err) < 1e-8 * max(scale, 1.0) * max(1.0, float(jnp.max(jnp.abs(qd)))):
+        raise ModelError(
+            "the initial velocities cannot satisfy the velocity constraints with "
+            f"the held coordinates {', '.join(hold)}; hold fewer velocities",
+            model.name,
+        )
+    return q, qd
+
+
+@eqx.filter_jit
+def _post(problem: Problem, ts, Q, QD, n_drivers: int):
+    c = problem.c
+
+    def one(q, qd, t):
+        qdd, mu, ratio = problem.accelerations(q, qd, t)
+        C = c.phi_q(q, t)
+        out = reaction_columns(c, C, mu, q)
+        powers = problem.powers(q, qd, t, mu, C)
+        out.update(driver_efforts(c, mu, powers, n_drivers))
+        for k, name in enumerate(problem.unknown):
+            out[name] = mu[c.m - problem.p + k]
+            out[f"{name}.power"] = powers[c.m - problem.p + k]
+        T = kinetic_energy(problem.model, qd)
+        V = potential_energy(problem.model, q)
+        out["energy.kinetic"], out["energy.potential"], out["energy.total"] = T, V, T + V
+        out["constraint.violation"] = jnp.max(jnp.abs(c(q, t))) if c.m else jnp.zeros(())
+        return qdd, mu, ratio, out
+
+    return jax.vmap(one)(Q, QD, ts)
+
+
+def post_kinds(problem: Problem, n_drivers: int) -> dict[str, str]:
+    kinds = reaction_kinds(problem.c)
+    for d in problem.c.drivers[:n_drivers]:
+        kinds[d.name] = d.effort_kind
+        kinds[f"{d.name}.power"] = "power"
+    for name in problem.unknown:
+        kinds[name] = problem.model.element(name).magnitude_kind
+        kinds[f"{name}.power"] = "power"
+    kinds.update(
+        {
+            "energy.kinetic": "energy",
+            "energy.potential": "energy",
+            "energy.total": "energy",
+            "work.nonconservative": "energy",
+            "work.constraints": "energy",
+            "constraint.violation": "length",
+        }
+    )
+    return kinds
+
+
+def _raise_failure(problem: Problem, traj, ts, method):
+    status = int(traj.status)
+    t = float(traj.t_fail)
+    k = int(np.searchsorted(ts, t, side="right")) - 1
+    q = np.asarray(traj.q[max(k, 0)])
+    J = np.asarray(problem.c.phi_q(jnp.asarray(q), jnp.asarray(ts[max(k, 0)])))
+    rows = dependent_rows(J, 1e-8) if J.size else []
+    names = []
+    for i in rows:
+        e = problem.c.element_names[problem.c.owners[problem.c.active[i]]]
+        if e not in names:
+            names.append(e)
+    _, s, _ = np.linalg.svd(J) if J.size else (None, np.ones(1), None)
+    singular = s.size and s[-1] < 1e-6 * s[0]
+    msg = f"{method} integrator failed: {STATUS_MESSAGES[status]}"
+    if singular:
+        raise SingularityError(
+            msg + "; the constraint Jacobian is (nearly) singular here", t, names
+        )
+    cls = StepSizeError if status == STEP_COLLAPSE else NumericalError
+    if status == NEWTON_FAILED:
+        from ..errors import ConvergenceError
+
+        cls = ConvergenceError
+    raise cls(msg, t, names if singular else ())
+
+
+def simulate(
+    kind: str,
+    problem: Problem,
+    ts,
+    q0,
+    qd0,
+    method: str,
+    options: dict,
+    n_drivers: int,
+    progress=None,
+) -> Result:
+    """Integrate ``problem`` from the consistent state ``(q0, qd0)`` and build the result."""
+    if method not in INTEGRATORS:
+        raise ModelError(
+            f"unknown integrator {method!r}; choose one of {', '.join(INTEGRATORS)}", "method"
+        )
+    opts = dict(options)
+    if method in FIXED_STEP:
+        if opts.get("dt") is None:
+            raise ModelError(
+                f"the {method} integrator has a fixed step: give dt [time], e.g. "
+                f"dt={(ts[-1] - ts[0]) / 2000:.3g}",
+                "dt",
+            )
+        opts.pop("rtol", None)
+        opts.pop("atol", None)
+    integrator = INTEGRATORS[method]
+    traj = integrator(problem, jnp.asarray(ts), q0, qd0, progress=progress, **opts)
+    if int(traj.status) != 0:
+        _raise_failure(problem, traj, ts, method)
+    Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
+    qdd, mu, ratio, cols = _post(
+        problem, jnp.asarray(ts), jnp.asarray(Q), jnp.asarray(QD), n_drivers
+    )
+    extra = {k: np.asarray(v) for k, v in cols.items()}
+    extra["work.nonconservative"] = W[:, 0]
+    extra["work.constraints"] = W[:, 1]
+    ratio = np.asarray(ratio)
+    if not np.all(np.isfinite(np.asarray(qdd))):
+        k = int(np.argmax(~np.all(np.isfinite(np.asarray(qdd)), axis=1)))
+        raise SingularityError(
+            "accelerations are not finite: singular equations of motion", float(ts[k])
+        )
+    stats = {
+        "method": method,
+        "options": {k: v for k, v in opts.items() if k != "progress"},
+        "steps": int(traj.steps),
+        "rejected_steps": int(traj.rejected),
+        "newton_iterations": int(traj.newton),
+        "max_violation_before_projection": float(traj.max_violation),
+        "max_violation": float(np.max(extra["constraint.violation"])),
+        "min_pivot_ratio": float(np.min(ratio)),
+        "constraint_rows": problem.c.active_labels,
+        "unknown_forces": problem.unknown,
+    }
+    return Result(
+        kind=kind,
+        model=problem.model,
+        t=ts,
+        q=Q,
+        qd=QD,
+        qdd=np.asarray(qdd),
+        extra=extra,
+        kinds=post_kinds(problem, n_drivers),
+        stats=stats,
+    )
+
+
+__all__ = ["consistent_state", "hold_drivers", "output_times", "require_masses", "simulate"]

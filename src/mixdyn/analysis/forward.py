@@ -1,0 +1,65 @@
+"""Forward dynamics: forces known, motion sought.
+
+``M qdd + Phi_q^T lambda = Q^A``, ``Phi_q qdd = gamma``, integrated in time by a chosen
+integrator. The model's drivers, if any, act as motion constraints; their efforts are reported.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..equations import Constraints
+from ..model import Model
+from ._problem import Problem
+from ._simulate import consistent_state, output_times, require_masses, simulate
+from ._structure import analyse
+from .result import Result
+
+
+def forward(
+    model: Model,
+    t,
+    *,
+    method: str = "projection",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    dt: float | None = None,
+    q0=None,
+    qd0=None,
+    hold=(),
+    progress=None,
+    **options,
+) -> Result:
+    """Simulate the mechanism under its forces from a consistent initial state.
+
+    Args:
+        model: the mechanism (every body with mass and inertia > 0).
+        t: (N,) increasing output times [time]; ``t[0]`` is the start.
+        method: ``"projection"`` (default; adaptive RK + projection), ``"baumgarte"``
+            (fixed-step RK4), ``"partitioning"`` (Wehage–Haug) or ``"generalized-alpha"``
+            (implicit, index 3).
+        rtol, atol: local error tolerances of the adaptive methods (on q and qd, model units).
+        dt: step [time] of the fixed-step methods (or a fixed step for the adaptive ones).
+        q0, qd0: (nq,) rough initial positions (default: the bodies' ``q0``) and velocities
+            (default 0); made consistent before the run.
+        hold: coordinates (``"crank.phi"``) kept at their given values while assembling.
+        progress: optional ``f(t)`` called at each output time (from inside the jitted loop).
+        **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
+            ``rho_inf``, ``max_steps``...).
+
+    Returns:
+        A :class:`Result` with the motion, the multipliers' physical meaning (joint reactions
+        ``{joint}.Fx``, ``.Fy``, ``.M``, driver efforts by driver name and their ``.power``),
+        energies (``energy.kinetic``, ``energy.potential``, ``energy.total``), accumulated
+        work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
+    """
+    ts = output_times(t)
+    require_masses(model)
+    c_full = Constraints.of(model)
+    q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
+    report, keep = analyse(model, np.asarray(q), float(ts[0]))
+    problem = Problem(model, c_full.with_active(keep))
+    opts = dict(options, rtol=rtol, atol=atol, dt=dt)
+    res = simulate("forward", problem, ts, q, qd, method, opts, len(model.drivers), progress)
+    res.stats["redundant_equations"] = report.redundant
+    return res

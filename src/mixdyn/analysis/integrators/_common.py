@@ -1,0 +1,163 @@
+"""What every integrator returns, and the adaptive step loop shared by the explicit ones."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+OK, MAX_STEPS, STEP_COLLAPSE, NEWTON_FAILED, NOT_FINITE = 0, 1, 2, 3, 4
+
+#: What each status code means, and what to do about it.
+STATUS_MESSAGES = {
+    OK: "ok",
+    MAX_STEPS: "the step limit was reached; raise max_steps or loosen the tolerances",
+    STEP_COLLAPSE: "the step size collapsed: the motion may be singular (a dead point or "
+    "lock-up) or the tolerances too tight for float64",
+    NEWTON_FAILED: "the Newton iteration of the implicit step did not converge; use a smaller "
+    "step or check for a singular configuration",
+    NOT_FINITE: "the solution became non-finite (NaN/inf): a singular configuration or a "
+    "diverging force",
+}
+
+
+class Trajectory(eqx.Module):
+    """States at the output times and the integrator's counters.
+
+    Attributes:
+        q, qd: (N, nq) coordinates and velocities at the output times.
+        w: (N, 2) accumulated work [energy]: non-conservative applied forces; constraint forces
+            (drivers, unknown forces).
+        steps, rejected, newton: counters (accepted steps, rejected steps, Newton iterations).
+        max_violation: largest position-constraint residual met before projection [length].
+        status: 0 on success, else a key of :data:`STATUS_MESSAGES`.
+        t_fail: time of the failure (or the end time).
+    """
+
+    q: jax.Array
+    qd: jax.Array
+    w: jax.Array
+    steps: jax.Array
+    rejected: jax.Array
+    newton: jax.Array
+    max_violation: jax.Array
+    status: jax.Array
+    t_fail: jax.Array
+
+
+def rms_error(y0, y1, yerr, rtol, atol):
+    """Hairer's scaled RMS norm of an error estimate over a pytree of arrays."""
+    num, cnt = 0.0, 0
+    for a, b, e in zip(
+        jax.tree.leaves(y0), jax.tree.leaves(y1), jax.tree.leaves(yerr), strict=True
+    ):
+        scale = atol + rtol * jnp.maximum(jnp.abs(a), jnp.abs(b))
+        num = num + jnp.sum((e / scale) ** 2)
+        cnt += e.size
+    return jnp.sqrt(num / max(cnt, 1))
+
+
+SOLVERS = {
+    "tsit5": (diffrax.Tsit5, 5),
+    "dopri5": (diffrax.Dopri5, 5),
+    "dopri8": (diffrax.Dopri8, 8),
+}
+
+
+def adaptive_loop(
+    step: Callable,
+    accept: Callable,
+    ts,
+    y0,
+    args0,
+    *,
+    rtol,
+    atol,
+    order: int,
+    dt,
+    h0,
+    max_steps,
+    progress=None,
+):
+    """Adaptive (or fixed-step, with ``dt``) explicit integration landing on every output time.
+
+    Args:
+        step: ``(t0, t1, y, args) -> (y1, y_err, y_controlled, y1_controlled)``: one step and
+            the parts of ``y``/``y1`` under error control.
+        accept: ``(t1, y1, args) -> (y1, args, violation)``: called on each accepted step
+            (projection, re-partitioning).
+        ts: (N,) output times; ``ts[0]`` is the start.
+        y0, args0: initial state (pytree) and loop-carried data.
+        order: order of the method (the error estimate is of order ``order - 1``).
+        dt: fixed step (None for adaptive control).
+        h0: initial step guess.
+        max_steps: step limit.
+        progress: optional ``f(t)`` called (via ``jax.debug.callback``) at each output.
+
+    Returns:
+        ``(outputs (pytree stacked over N), args, steps, rejected, max_violation, status, t)``.
+    """
+    N = ts.shape[0]
+    fixed = dt is not None
+    outs0 = jax.tree.map(lambda a: jnp.zeros((N, *a.shape), a.dtype).at[0].set(a), y0)
+    init = (
+        ts[0],
+        y0,
+        args0,
+        jnp.asarray(dt if fixed else h0, dtype=ts.dtype),
+        jnp.asarray(1),
+        outs0,
+        jnp.asarray(0),
+        jnp.asarray(0),
+        jnp.asarray(0.0),
+        jnp.asarray(OK),
+    )
+
+    def cond(s):
+        _, _, _, _, k, _, n, _, _, status = s
+        return (k < N) & (status == OK)
+
+    def body(s):
+        t, y, args, h, k, outs, n, nrej, viol, status = s
+        target = ts[jnp.minimum(k, N - 1)]
+        hit = (target - t) <= h * (1 + 1e-8)
+        t1 = jnp.where(hit, target, t + h)
+        y1, yerr, yc0, yc1 = step(t, t1, y, args)
+        finite = jnp.all(jnp.array([jnp.all(jnp.isfinite(a)) for a in jax.tree.leaves(y1)]))
+        if fixed:
+            err = jnp.where(finite, 0.0, jnp.inf)
+        else:
+            err = jnp.where(finite, rms_error(yc0, yc1, yerr, rtol, atol), jnp.inf)
+        ok = err <= 1.0
+        y1p, args1, v = accept(t1, y1, args)
+        y = jax.tree.map(lambda a, b: jnp.where(ok, a, b), y1p, y)
+        args = jax.tree.map(lambda a, b: jnp.where(ok, a, b), args1, args)
+        store = ok & hit
+        outs = jax.tree.map(lambda o, a: jnp.where(store, o.at[k].set(a), o), outs, y)
+        if progress is not None:
+            jax.lax.cond(store, lambda: jax.debug.callback(progress, t1), lambda: None)
+        t_new = jnp.where(ok, t1, t)
+        k = k + store.astype(int)
+        viol = jnp.where(ok, jnp.maximum(viol, v), viol)
+        if fixed:
+            h_new = jnp.asarray(dt, dtype=ts.dtype)
+        else:
+            factor = jnp.clip(0.9 * jnp.where(err > 0, err, 1e-10) ** (-1.0 / order), 0.2, 10.0)
+            h_used = t1 - t
+            h_new = h_used * jnp.where(ok, factor, jnp.minimum(factor, 0.9))
+            # A step shortened to land on an output does not shrink the next one.
+            h_new = jnp.where(ok & hit & (h_used < h), jnp.maximum(h_new, h), h_new)
+        status = jnp.where(n + 1 >= max_steps, MAX_STEPS, status)
+        if fixed:
+            status = jnp.where(finite, status, NOT_FINITE)
+        else:
+            too_small = h_new < 1e-13 * jnp.maximum(jnp.abs(t_new), 1.0)
+            status = jnp.where(too_small, jnp.where(finite, STEP_COLLAPSE, NOT_FINITE), status)
+        nrej = nrej + (~ok).astype(int)
+        return (t_new, y, args, h_new, k, outs, n + 1, nrej, viol, status)
+
+    t, _, args, _, _, outs, n, nrej, viol, status = jax.lax.while_loop(cond, body, init)
+    return outs, args, n - nrej, nrej, viol, status, t

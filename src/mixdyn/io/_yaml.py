@@ -1,0 +1,192 @@
+"""Safe YAML reading that keeps the line of every value and refuses aliases.
+
+The text is composed into YAML nodes by PyYAML's safe loader (no Python tags, no code), then
+turned into plain data by hand so that
+
+* anchors and aliases are refused (no "billion laughs" expansion),
+* duplicate keys in a mapping are refused (YAML would silently keep the last one),
+* the line of every value is recorded under its path, e.g. ``("joints", 2, "point_i")``.
+"""
+
+from __future__ import annotations
+
+import re
+
+import yaml
+
+#: Largest model file read [bytes]; a mechanism description is a few kilobytes.
+MAX_BYTES = 2_000_000
+#: Deepest nesting of mappings and sequences accepted.
+MAX_DEPTH = 40
+
+Path = tuple[str | int, ...]
+
+
+class YamlError(ValueError):
+    """The text is not acceptable YAML. Attributes: ``line`` (1-based or None), ``problem``,
+    ``hint``."""
+
+    def __init__(self, problem: str, line: int | None = None, hint: str = ""):
+        self.problem = problem
+        self.line = line
+        self.hint = hint
+        super().__init__(problem)
+
+
+class _Loader(yaml.SafeLoader):
+    """Safe loader whose composer refuses anchors and aliases."""
+
+    def compose_node(self, parent, index):
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            raise YamlError(
+                f"YAML alias '*{event.anchor}' is not allowed",
+                event.start_mark.line + 1,
+                "write the value out in full; model files do not use anchors or aliases",
+            )
+        event = self.peek_event()
+        anchor = getattr(event, "anchor", None)
+        if anchor is not None:
+            raise YamlError(
+                f"YAML anchor '&{anchor}' is not allowed",
+                event.start_mark.line + 1,
+                "remove the anchor; model files do not use anchors or aliases",
+            )
+        return super().compose_node(parent, index)
+
+
+# YAML 1.1 reads 1e-8 as a string; accept the exponent forms YAML 1.2 reads as numbers.
+_Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?(?:[eE][-+]?[0-9]+)
+        |[-+]?\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$""",
+        re.X,
+    ),
+    list("-+0123456789."),
+)
+
+
+def _line(node) -> int:
+    return node.start_mark.line + 1
+
+
+def read_yaml(text: str) -> tuple[object, dict[Path, int]]:
+    """Parse ``text`` to plain data (dicts, lists, str, int, float, bool, None).
+
+    Returns:
+        ``(data, lines)``: the data and the 1-based line of every value by its path.
+
+    Raises:
+        YamlError: bad syntax, aliases or anchors, duplicate keys, non-string keys, tags,
+            too large or too deeply nested.
+    """
+    if len(text) > MAX_BYTES:
+        raise YamlError(
+            f"the file is larger than {MAX_BYTES} bytes",
+            None,
+            "a model file should hold a description, not data",
+        )
+    loader = _Loader(text)
+    try:
+        try:
+            node = loader.get_single_node()
+        except yaml.MarkedYAMLError as e:
+            mark = e.problem_mark or e.context_mark
+            raise YamlError(
+                f"YAML syntax error: {e.problem or e.context}",
+                mark.line + 1 if mark else None,
+                "check the indentation, colons and quotes near that line",
+            ) from None
+        except yaml.YAMLError as e:
+            raise YamlError(f"YAML error: {e}", None, "check the file's syntax") from None
+        except RecursionError:
+            raise YamlError(
+                "the YAML is nested too deeply", None, "flatten the structure"
+            ) from None
+        lines: dict[Path, int] = {}
+        if node is None:
+            return None, lines
+        data = _to_data(loader, node, (), lines, 0)
+        return data, lines
+    finally:
+        loader.dispose()
+
+
+def _to_data(loader, node, path: Path, lines: dict, depth: int):
+    if depth > MAX_DEPTH:
+        raise YamlError(
+            f"the YAML is nested more than {MAX_DEPTH} levels deep",
+            _line(node),
+            "flatten the structure",
+        )
+    lines[path] = _line(node)
+    if isinstance(node, yaml.MappingNode):
+        out = {}
+        for key_node, value_node in node.value:
+            if key_node.tag == "tag:yaml.org,2002:merge":
+                raise YamlError(
+                    "YAML merge keys ('<<') are not allowed",
+                    _line(key_node),
+                    "write the keys out in full",
+                )
+            if not isinstance(key_node, yaml.ScalarNode):
+                raise YamlError(
+                    "a mapping key must be a plain name", _line(key_node), "use a plain name"
+                )
+            key = _scalar(loader, key_node)
+            if not isinstance(key, str):
+                key = (
+                    str(key) if isinstance(key, int | float) and not isinstance(key, bool) else key
+                )
+            if not isinstance(key, str):
+                raise YamlError(
+                    f"mapping key {key!r} is not a name", _line(key_node), "quote the key"
+                )
+            if key in out:
+                raise YamlError(
+                    f"duplicate key {key!r}",
+                    _line(key_node),
+                    "every key of a mapping must be unique; remove or rename one",
+                )
+            out[key] = _to_data(loader, value_node, (*path, key), lines, depth + 1)
+        return out
+    if isinstance(node, yaml.SequenceNode):
+        return [
+            _to_data(loader, item, (*path, i), lines, depth + 1)
+            for i, item in enumerate(node.value)
+        ]
+    return _scalar(loader, node)
+
+
+_SAFE_TAGS = {
+    "tag:yaml.org,2002:str",
+    "tag:yaml.org,2002:int",
+    "tag:yaml.org,2002:float",
+    "tag:yaml.org,2002:bool",
+    "tag:yaml.org,2002:null",
+}
+
+
+def _scalar(loader, node):
+    if node.tag not in _SAFE_TAGS:
+        raise YamlError(
+            f"YAML tag {node.tag!r} is not allowed",
+            _line(node),
+            "write plain numbers and strings (quote the value)",
+        )
+    try:
+        return loader.construct_object(node, deep=True)
+    except yaml.YAMLError as e:
+        raise YamlError(f"bad value: {e}", _line(node), "quote the value") from None
+
+
+def line_of(lines: dict[Path, int], path: Path) -> int | None:
+    """The line of ``path`` or of its nearest ancestor recorded in ``lines``."""
+    path = tuple(path)
+    while True:
+        if path in lines:
+            return lines[path]
+        if not path:
+            return None
+        path = path[:-1]
