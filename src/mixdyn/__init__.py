@@ -16,7 +16,10 @@ from .analysis import (  # noqa: E402
     assemble,
     degrees_of_freedom,
     forward,
+    inverse,
     kinematic,
+    mixed,
+    prescribe,
 )
 from .errors import (  # noqa: E402
     AssemblyError,
@@ -56,6 +59,10 @@ __all__ = [
     "assemble",
     "degrees_of_freedom",
     "errors",
+    "forward",
+    "inverse",
+    "mixed",
+    "prescribe",
     "kinematic",
     *_model_all,
 ]

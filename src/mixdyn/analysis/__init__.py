@@ -3,15 +3,22 @@
 from ._assembly import Assembly, assemble
 from ._structure import DofReport, degrees_of_freedom
 from .forward import forward
+from .integrators import INTEGRATORS
+from .inverse import inverse
 from .kinematic import kinematic
+from .mixed import mixed, prescribe
 from .result import Result
 
 __all__ = [
+    "INTEGRATORS",
     "Assembly",
     "DofReport",
     "Result",
     "assemble",
     "degrees_of_freedom",
     "forward",
+    "inverse",
     "kinematic",
+    "mixed",
+    "prescribe",
 ]

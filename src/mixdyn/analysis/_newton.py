@@ -6,11 +6,10 @@ import jax
 import jax.numpy as jnp
 
 from ..equations import Constraints
-from ..linalg import lu_solve_checked
 
 
 def newton_positions(c: Constraints, q, t, tol, max_iter):
-    """Solve the square system ``Phi(q, t) = 0`` from the guess ``q``.
+    """Solve ``Phi(q, t) = 0`` (square, or with redundant rows of known rank) from ``q``.
 
     Converged when the largest residual is below ``tol`` [length] after a step whose size is
     below ``sqrt(tol)``-ish relative motion; the iteration count, the final residual and the
@@ -27,7 +26,7 @@ def newton_positions(c: Constraints, q, t, tol, max_iter):
     def body(s):
         q, it, _, ratio = s
         Phi = c(q, t)
-        dq, r = lu_solve_checked(c.phi_q(q, t), Phi)
+        dq, r = c.solve(c.phi_q(q, t), Phi)
         q = q - dq
         res = jnp.max(jnp.abs(c(q, t)))
         return q, it + 1, res, jnp.minimum(ratio, r)
@@ -36,6 +35,6 @@ def newton_positions(c: Constraints, q, t, tol, max_iter):
     q, it, res, ratio = jax.lax.while_loop(cond, body, (q, jnp.asarray(0), res0, jnp.asarray(1.0)))
     # One more step for full precision at the converged point costs little and tightens
     # the answer to rounding level; keep the pivot ratio of the final Jacobian.
-    dq, r = lu_solve_checked(c.phi_q(q, t), c(q, t))
+    dq, r = c.solve(c.phi_q(q, t), c(q, t))
     q = jnp.where(jnp.isfinite(res), q - dq, q)
     return q, it, jnp.max(jnp.abs(c(q, t))), jnp.minimum(ratio, r)

@@ -101,7 +101,7 @@ class Problem(eqx.Module):
         Q = self.known_forces(q, qd, t)
         if self.solver == "partition":
             return self._partition(q, qd, t, C, gam, Q)
-        return solve_kkt(self.Minv, C, self.G(q, qd, t, C), Q, gam)
+        return solve_kkt(self.Minv, C, self.G(q, qd, t, C), Q, gam, self.c.rank)
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""
@@ -162,7 +162,7 @@ class Problem(eqx.Module):
             r = self.c(q, t)
             J = self.c.phi_q(q, t)
             MJ = self.Minv[:, None] * J.T
-            y, _ = lu_solve_checked(J @ MJ, r)
+            y, _ = self.c.solve(J @ MJ, r)
             return jnp.where(jnp.max(jnp.abs(r)) > tol, q - MJ @ y, q)
 
         return jax.lax.fori_loop(0, iters, body, q)
@@ -172,5 +172,5 @@ class Problem(eqx.Module):
         J = self.c.phi_q(q, t)
         r = J @ qd + self.c.phi_t(q, t)
         MJ = self.Minv[:, None] * J.T
-        y, _ = lu_solve_checked(J @ MJ, r)
+        y, _ = self.c.solve(J @ MJ, r)
         return qd - MJ @ y

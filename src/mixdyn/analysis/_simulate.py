@@ -17,6 +17,7 @@ from ._problem import Problem
 from ._reactions import driver_efforts, reaction_columns, reaction_kinds
 from .integrators import INTEGRATORS, STATUS_MESSAGES
 from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE
+from .kinematic import output_times
 from .result import Result
 
 FIXED_STEP = ("baumgarte", "generalized-alpha")
@@ -32,17 +33,6 @@ def require_masses(model: Model) -> None:
                 "centre of mass, or weld it to a body that has them)",
                 b.name,
             )
-
-
-def output_times(t) -> np.ndarray:
-    ts = np.atleast_1d(np.asarray(t, dtype=float))
-    if ts.ndim != 1 or ts.size < 2 or np.any(np.diff(ts) <= 0) or not np.all(np.isfinite(ts)):
-        raise ModelError(
-            "output times must be an increasing sequence of at least two finite "
-            "times (e.g. numpy.linspace(0, 2, 201))",
-            "t",
-        )
-    return ts
 
 
 @eqx.filter_jit
@@ -184,7 +174,7 @@ def simulate(
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)
     Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
-    qdd, mu, ratio, cols = _post(
+    qdd, _, ratio, cols = _post(
         problem, jnp.asarray(ts), jnp.asarray(Q), jnp.asarray(QD), n_drivers
     )
     extra = {k: np.asarray(v) for k, v in cols.items()}

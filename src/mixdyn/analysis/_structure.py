@@ -109,6 +109,16 @@ def degrees_of_freedom(model: Model, q=None, t: float = 0.0, drivers=None) -> Do
 
 def require_balanced(report: DofReport, what: str = "kinematic analysis") -> None:
     """Raise a clear error unless the drivers fix every degree of freedom once."""
+    if report.n_drivers > report.dof:
+        raise DegreesOfFreedomError(
+            f"{what}: the mechanism has {report.dof} degree(s) of freedom but "
+            f"{report.n_drivers} driver(s); remove {report.n_drivers - report.dof} driver(s)"
+            + (
+                f" (redundant: {', '.join(report.redundant_drivers)})"
+                if report.redundant_drivers
+                else ""
+            )
+        )
     if report.redundant_drivers:
         raise RedundantConstraintError(
             f"{what}: driver(s) {', '.join(report.redundant_drivers)} prescribe a motion that "

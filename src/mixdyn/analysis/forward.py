@@ -58,7 +58,10 @@ def forward(
     c_full = Constraints.of(model)
     q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), float(ts[0]))
-    problem = Problem(model, c_full.with_active(keep))
+    # The partitioning integrator needs independent rows; the others solve redundant
+    # constraints in the least-squares sense (robust where the redundancy moves).
+    c = c_full.with_active(keep) if method == "partitioning" else c_full.with_rank(len(keep))
+    problem = Problem(model, c)
     opts = dict(options, rtol=rtol, atol=atol, dt=dt)
     res = simulate("forward", problem, ts, q, qd, method, opts, len(model.drivers), progress)
     res.stats["redundant_equations"] = report.redundant

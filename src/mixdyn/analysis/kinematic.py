@@ -15,12 +15,26 @@ import numpy as np
 
 from ..equations import Constraints
 from ..errors import ConvergenceError, SingularityError
-from ..linalg import dependent_rows, lu_solve_checked
+from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import assemble, length_scale
 from ._newton import newton_positions
 from ._structure import analyse, require_balanced
 from .result import Result
+
+
+def output_times(t, minimum: int = 2) -> np.ndarray:
+    """Check and convert output times: increasing, finite, at least ``minimum`` of them."""
+    from ..errors import ModelError
+
+    ts = np.atleast_1d(np.asarray(t, dtype=float))
+    if ts.ndim != 1 or ts.size < minimum or np.any(np.diff(ts) <= 0) or not np.all(np.isfinite(ts)):
+        raise ModelError(
+            f"output times must be an increasing sequence of at least {minimum} "
+            "finite times (e.g. numpy.linspace(0, 2, 201))",
+            "t",
+        )
+    return ts
 
 
 @eqx.filter_jit
@@ -31,8 +45,8 @@ def _kinematic_scan(c: Constraints, q_start, ts, tol, max_iter):
         guess = q + qd * dt + 0.5 * qdd * dt**2
         q, it, res, ratio = newton_positions(c, guess, t, tol, max_iter)
         J = c.phi_q(q, t)
-        qd, r1 = lu_solve_checked(J, -c.phi_t(q, t))
-        qdd, r2 = lu_solve_checked(J, c.gamma(q, qd, t))
+        qd, r1 = c.solve(J, -c.phi_t(q, t))
+        qdd, r2 = c.solve(J, c.gamma(q, qd, t))
         ratio = jnp.minimum(ratio, jnp.minimum(r1, r2))
         return (q, qd, qdd, t), (q, qd, qdd, it, res, ratio)
 
@@ -95,7 +109,7 @@ def kinematic(
     assemble_first: bool = True,
     tol: float | None = None,
     max_iter: int = 25,
-    singular_tol: float = 1e-10,
+    singular_tol: float = 1e-7,
 ) -> Result:
     """Positions, velocities and accelerations of a fully driven mechanism over time.
 
@@ -117,16 +131,14 @@ def kinematic(
         DegreesOfFreedomError: the drivers do not match the degrees of freedom.
         AssemblyError, ConvergenceError, SingularityError: with the time and the elements.
     """
-    ts = np.atleast_1d(np.asarray(t, dtype=float))
-    if ts.ndim != 1 or np.any(np.diff(ts) <= 0):
-        raise ValueError("output times must be a 1-D increasing sequence")
+    ts = output_times(t, minimum=1)
     drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     if assemble_first:
         q = jnp.asarray(assemble(model, q).q)
     report, keep = analyse(model, q, float(ts[0]), drivers)
     require_balanced(report)
-    c = Constraints.of(model, drivers).with_active(keep)
+    c = Constraints.of(model, drivers).with_rank(len(keep))
     tol = 1e-12 * length_scale(model) if tol is None else tol
     q_all, qd, qdd, it, res, ratio = _kinematic_scan(
         c, q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)

@@ -37,8 +37,9 @@ class Constraints(eqx.Module):
     labels: tuple[str, ...] = eqx.field(static=True)
     owners: tuple[int, ...] = eqx.field(static=True)
     nq: int = eqx.field(static=True)
+    rank: int | None = eqx.field(static=True)
 
-    def __init__(self, joints, drivers, nq: int, active=None):
+    def __init__(self, joints, drivers, nq: int, active=None, rank=None):
         self.joints = tuple(joints)
         self.drivers = tuple(drivers)
         labels, owners = [], []
@@ -52,6 +53,7 @@ class Constraints(eqx.Module):
         self.owners = tuple(owners)
         self.nq = nq
         self.active = tuple(range(len(labels))) if active is None else tuple(int(i) for i in active)
+        self.rank = None if rank is None or rank == len(self.active) else int(rank)
 
     @classmethod
     def of(cls, model: Model, drivers=None) -> Constraints:
@@ -61,6 +63,19 @@ class Constraints(eqx.Module):
     def with_active(self, active) -> Constraints:
         """The same set keeping only rows ``active`` (indices into the full set)."""
         return Constraints(self.joints, self.drivers, self.nq, active)
+
+    def with_rank(self, rank: int) -> Constraints:
+        """The full set, declared of rank ``rank``: if it has redundant rows, every solve with
+        it becomes a least-squares (truncated SVD) solve, robust wherever the redundancy moves
+        from row to row (a parallelogram passing through its singular positions)."""
+        return Constraints(self.joints, self.drivers, self.nq, None, rank)
+
+    def solve(self, A, b, extra_rank: int = 0):
+        """Solve with a matrix built from ``Phi_q`` whose rank is ``self.rank + extra_rank``
+        (LU when no row is redundant); returns ``(x, ratio)``."""
+        from ..linalg import solve_ranked
+
+        return solve_ranked(A, b, None if self.rank is None else self.rank + extra_rank)
 
     # ------------------------------------------------------------------ sizes
     @property

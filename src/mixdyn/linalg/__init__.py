@@ -7,6 +7,7 @@ from ._dense import (
     min_norm_step,
     min_pivot,
     solve_kkt,
+    solve_ranked,
 )
 
 __all__ = [
@@ -16,4 +17,5 @@ __all__ = [
     "min_norm_step",
     "min_pivot",
     "solve_kkt",
+    "solve_ranked",
 ]

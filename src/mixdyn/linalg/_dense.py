@@ -30,6 +30,25 @@ def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
     return jsl.lu_solve((lu, piv), b), ratio
 
 
+def solve_ranked(A: jax.Array, b: jax.Array, rank: int | None = None):
+    """Solve ``A x = b`` (least squares, minimum norm) knowing ``rank(A)``; ``(x, ratio)``.
+
+    With ``rank=None`` and a square ``A`` this is :func:`lu_solve_checked`. Otherwise a truncated
+    SVD keeps the ``rank`` largest singular values: redundant but consistent equations (a
+    parallelogram's extra link) are solved exactly, and the multipliers of redundant constraints
+    come out as the minimum-norm set. ``ratio = s[rank-1] / s[0]`` tells a loss of rank.
+    """
+    if rank is None and A.shape[0] == A.shape[1]:
+        return lu_solve_checked(A, b)
+    U, s, Vt = jnp.linalg.svd(A, full_matrices=False)
+    r = min(A.shape) if rank is None else rank
+    inv = jnp.where(jnp.arange(s.shape[0]) < r, 1.0 / jnp.where(s > 0, s, 1.0), 0.0)
+    Ub = U.T @ b
+    x = Vt.T @ (inv[:, None] * Ub if b.ndim == 2 else inv * Ub)
+    ratio = s[r - 1] / jnp.maximum(s[0], jnp.finfo(A.dtype).tiny) if r > 0 else jnp.ones(())
+    return x, ratio
+
+
 def min_pivot(A: jax.Array) -> jax.Array:
     """Smallest ``|U_ii|`` of the partial-pivoting LU of the square ``A``: compare choices of
     a square block of one matrix by it (it is not scale free, unlike the pivot ratio)."""
@@ -39,7 +58,7 @@ def min_pivot(A: jax.Array) -> jax.Array:
     return jnp.min(jnp.abs(jnp.diag(lu)))
 
 
-def solve_kkt(Minv, C, G, Q, rhs) -> tuple[jax.Array, jax.Array, jax.Array]:
+def solve_kkt(Minv, C, G, Q, rhs, rank=None) -> tuple[jax.Array, jax.Array, jax.Array]:
     """Solve the constrained equations of motion for accelerations and multipliers.
 
     Solves ``M qdd + G mu = Q``, ``C qdd = rhs`` with ``M = diag(1/Minv)``, by the Schur
@@ -53,13 +72,14 @@ def solve_kkt(Minv, C, G, Q, rhs) -> tuple[jax.Array, jax.Array, jax.Array]:
         G: (n, m) force directions of the unknowns ``mu``.
         Q: (n,) known generalized forces.
         rhs: (m,) right-hand side of the acceleration constraints (``gamma``).
+        rank: rank of ``C`` when some rows are redundant (least-squares solve), else None.
 
     Returns:
         ``(qdd (n,), mu (m,), pivot_ratio)``.
     """
     MinvG = Minv[:, None] * G
     S = C @ MinvG
-    mu, ratio = lu_solve_checked(S, C @ (Minv * Q) - rhs)
+    mu, ratio = solve_ranked(S, C @ (Minv * Q) - rhs, rank)
     qdd = Minv * Q - MinvG @ mu
     return qdd, mu, ratio
 
@@ -136,4 +156,5 @@ __all__ = [
     "min_norm_step",
     "min_pivot",
     "solve_kkt",
+    "solve_ranked",
 ]

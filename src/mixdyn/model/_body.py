@@ -7,15 +7,19 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..errors import ModelError
+
 GROUND_NAME = "ground"
 
 
-def _points(points) -> dict[str, jax.Array]:
+def _points(points, owner: str) -> dict[str, jax.Array]:
     out = {}
     for key, value in dict(points or {}).items():
         arr = np.asarray(value, dtype=float)
         if arr.shape != (2,) or not np.all(np.isfinite(arr)):
-            raise ValueError(f"point {key!r} must be two finite numbers (x, y), got {value!r}")
+            raise ModelError(
+                f"point {key!r} must be two finite numbers (x, y), got {value!r}", owner
+            )
         out[str(key)] = jnp.asarray(arr)
     return out
 
@@ -31,7 +35,7 @@ class Ground(eqx.Module):
     name: str = eqx.field(static=True, default=GROUND_NAME)
 
     def __init__(self, points=None):
-        self.points = _points(points)
+        self.points = _points(points, GROUND_NAME)
         self.name = GROUND_NAME
 
 
@@ -59,22 +63,22 @@ class Body(eqx.Module):
 
     def __init__(self, name, mass=0.0, inertia=0.0, q0=(0.0, 0.0, 0.0), points=None, vectors=None):
         if not isinstance(name, str) or not name or "." in name:
-            raise ValueError(f"body name must be a non-empty string without '.', got {name!r}")
+            raise ModelError(f"body name must be a non-empty string without '.', got {name!r}")
         if name == GROUND_NAME:
-            raise ValueError(f"{GROUND_NAME!r} is reserved for the fixed frame")
+            raise ModelError(f"{GROUND_NAME!r} is reserved for the fixed frame")
         self.name = name
         for label, v in (("mass", mass), ("inertia", inertia)):
             if not np.isfinite(float(v)) or float(v) < 0:
-                raise ValueError(f"body {name!r}: {label} must be a finite number >= 0, got {v!r}")
+                raise ModelError(f"{label} must be a finite number >= 0, got {v!r}", name)
         self.mass = jnp.asarray(float(mass))
         self.inertia = jnp.asarray(float(inertia))
         q0 = np.asarray(q0, dtype=float)
         if q0.shape != (3,) or not np.all(np.isfinite(q0)):
-            raise ValueError(f"body {name!r}: q0 must be three finite numbers [x, y, phi]")
+            raise ModelError("q0 must be three finite numbers [x, y, phi]", name)
         self.q0 = jnp.asarray(q0)
-        self.points = _points(points)
-        vecs = _points(vectors)
+        self.points = _points(points, name)
+        vecs = _points(vectors, name)
         for key, v in vecs.items():
             if float(jnp.linalg.norm(v)) == 0.0:
-                raise ValueError(f"body {name!r}: vector {key!r} has zero length")
+                raise ModelError(f"vector {key!r} has zero length", name)
         self.vectors = vecs

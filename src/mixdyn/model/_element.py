@@ -93,6 +93,14 @@ class Resolver:
         return jnp.asarray(v / n)
 
 
+def static_direction(value):
+    """A direction given as the name of a body vector (kept as is) or as numbers, stored as a
+    tuple of floats: static fields must be hashable, which NumPy and JAX arrays are not."""
+    if isinstance(value, str):
+        return value
+    return tuple(float(x) for x in np.ravel(np.asarray(value, dtype=float)))
+
+
 def moving(*bodies: int) -> tuple[int, ...]:
     """The distinct moving bodies among ``bodies`` (the ground dropped), in order."""
     out = []

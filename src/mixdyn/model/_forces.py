@@ -18,7 +18,7 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
-from ._element import Element, Resolver, moving
+from ._element import Element, Resolver, moving, static_direction
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._laws import Law, as_law
 
@@ -112,7 +112,9 @@ class PointForce(ForceElement):
     """
 
     point: str = eqx.field(static=True)
-    along: tuple = eqx.field(static=True, default=(1.0, 0.0))
+    along: tuple[float, ...] = eqx.field(
+        static=True, default=(1.0, 0.0), converter=static_direction
+    )
     law: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
     frame: str = eqx.field(static=True, default="ground")
     b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
@@ -126,7 +128,7 @@ class PointForce(ForceElement):
         b, s = r.point(self.point, self.name)
         if b == GROUND:
             raise ModelError("a force on the ground has no effect; apply it to a body", self.name)
-        u = r.vector(tuple(float(x) for x in self.along), GROUND, self.name)
+        u = r.vector(self.along, GROUND, self.name)
         return dataclasses.replace(self, b=b, s=s, u=u)
 
     def body_indices(self):

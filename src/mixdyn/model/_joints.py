@@ -17,7 +17,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ._element import Element, Resolver, moving
+from ._element import Element, Resolver, moving, static_direction
 from ._geometry import angle, cross, point, vector
 
 _UNBOUND = -2
@@ -122,7 +122,9 @@ class Translational(_TwoPoint):
     ``phi_j - phi_i - angle = 0``.
     """
 
-    axis: object = eqx.field(static=True, default=(1.0, 0.0))
+    axis: str | tuple[float, ...] = eqx.field(
+        static=True, default=(1.0, 0.0), converter=static_direction
+    )
     angle: jax.Array = eqx.field(default=0.0, converter=_f64)
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
     n_equations: ClassVar[int] = 2
@@ -130,8 +132,7 @@ class Translational(_TwoPoint):
 
     def bind(self, r: Resolver):
         kw = self._bind_points(r)
-        axis = self.axis if isinstance(self.axis, str) else tuple(float(a) for a in self.axis)
-        return dataclasses.replace(self, u=r.vector(axis, kw["bi"], self.name), **kw)
+        return dataclasses.replace(self, u=r.vector(self.axis, kw["bi"], self.name), **kw)
 
     def residual(self, q):
         n = cross(vector(q, self.bi, self.u), self._d(q))

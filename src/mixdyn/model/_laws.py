@@ -15,6 +15,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..errors import ModelError
+
 
 def _f64(x) -> jax.Array:
     return jnp.asarray(x, dtype=jnp.float64)
@@ -124,20 +126,20 @@ def Spline(t, y, kind: str = "cubic", bc_type="not-a-knot") -> PiecewisePolynomi
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
     if t.ndim != 1 or t.shape != y.shape or t.size < 2:
-        raise ValueError("spline samples: t and y must be 1-D arrays of equal length >= 2")
+        raise ModelError("spline samples: t and y must be 1-D arrays of equal length >= 2")
     if np.any(np.diff(t) <= 0):
-        raise ValueError("spline samples: times must be strictly increasing")
+        raise ModelError("spline samples: times must be strictly increasing")
     if kind == "cubic":
         pp = CubicSpline(t, y, bc_type=bc_type if t.size > 3 else "natural")
         return PiecewisePolynomial(pp.x, pp.c)
     if kind == "quintic":
         if t.size < 6:
-            raise ValueError("a quintic spline needs at least 6 samples")
+            raise ModelError("a quintic spline needs at least 6 samples")
         pp = PPoly.from_spline(make_interp_spline(t, y, k=5))
         # Drop the zero-length pieces at the ends that from_spline adds.
         keep = np.diff(pp.x) > 0
         return PiecewisePolynomial(np.concatenate([pp.x[:-1][keep], [pp.x[-1]]]), pp.c[:, keep])
-    raise ValueError(f"unknown spline kind {kind!r}; use 'cubic' or 'quintic'")
+    raise ModelError(f"unknown spline kind {kind!r}; use 'cubic' or 'quintic'")
 
 
 def QuinticHermite(t, y, yd, ydd) -> PiecewisePolynomial:
@@ -152,7 +154,7 @@ def QuinticHermite(t, y, yd, ydd) -> PiecewisePolynomial:
     """
     t, y, yd, ydd = (np.asarray(a, dtype=float) for a in (t, y, yd, ydd))
     if np.any(np.diff(t) <= 0):
-        raise ValueError("Hermite samples: times must be strictly increasing")
+        raise ModelError("Hermite samples: times must be strictly increasing")
     h = np.diff(t)
     y0, y1, v0, v1, a0, a1 = y[:-1], y[1:], yd[:-1], yd[1:], ydd[:-1], ydd[1:]
     # p(s) = c0 + c1 s + c2 s^2 + c3 s^3 + c4 s^4 + c5 s^5, s = tau - t_i in [0, h]

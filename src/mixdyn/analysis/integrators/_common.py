@@ -117,7 +117,7 @@ def adaptive_loop(
     )
 
     def cond(s):
-        _, _, _, _, k, _, n, _, _, status = s
+        _, _, _, _, k, _, _, _, _, status = s
         return (k < N) & (status == OK)
 
     def body(s):
@@ -136,7 +136,8 @@ def adaptive_loop(
         y = jax.tree.map(lambda a, b: jnp.where(ok, a, b), y1p, y)
         args = jax.tree.map(lambda a, b: jnp.where(ok, a, b), args1, args)
         store = ok & hit
-        outs = jax.tree.map(lambda o, a: jnp.where(store, o.at[k].set(a), o), outs, y)
+        kk = jnp.minimum(k, N - 1)
+        outs = jax.tree.map(lambda o, a: o.at[kk].set(jnp.where(store, a, o[kk])), outs, y)
         if progress is not None:
             jax.lax.cond(store, lambda: jax.debug.callback(progress, t1), lambda: None)
         t_new = jnp.where(ok, t1, t)

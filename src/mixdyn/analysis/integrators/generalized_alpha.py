@@ -12,7 +12,6 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ...linalg import lu_solve_checked
 from .._problem import Problem
 from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory
 
@@ -103,7 +102,7 @@ def generalized_alpha(
         def body(s):
             x, it, _, _ = s
             J = jax.jacfwd(residual)(x)
-            dx, ratio = lu_solve_checked(J, residual(x))
+            dx, ratio = problem.c.solve(J, residual(x), extra_rank=n)
             x = x - dx
             return x, it + 1, error(x), ratio
 
@@ -164,6 +163,6 @@ def generalized_alpha(
         Q, QD, W = Q.at[k].set(state[0]), QD.at[k].set(state[1]), W.at[k].set(state[5])
         return k + 1, state, Q, QD, W, nsteps + i, status, t, viol
 
-    k, state, Q, QD, W, nsteps, status, t, viol = jax.lax.while_loop(outer_cond, outer_body, init)
+    _, state, Q, QD, W, nsteps, status, t, viol = jax.lax.while_loop(outer_cond, outer_body, init)
     del max_steps
     return Trajectory(Q, QD, W, nsteps, jnp.asarray(0), state[6], viol, status, t)

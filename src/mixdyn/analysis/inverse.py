@@ -1,0 +1,56 @@
+"""Inverse dynamics: motion fully prescribed; driver efforts and joint reactions sought.
+
+The motion comes from the kinematic analysis (positions, velocities, accelerations from the
+drivers alone); the multipliers then solve ``Phi_q^T lambda = Q^A - M qdd`` (through the same
+constrained solve as forward dynamics). Each driver's effort is ``-lambda`` of its row.
+"""
+
+from __future__ import annotations
+
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import Constraints
+from ..model import Model
+from ._problem import Problem
+from ._simulate import _post, output_times, post_kinds, require_masses
+from ._structure import analyse
+from .kinematic import kinematic
+from .result import Result
+
+
+def inverse(model: Model, t, *, q0=None, **kinematic_options) -> Result:
+    """Driver efforts and joint reactions of a fully driven mechanism over time.
+
+    Args:
+        model: the mechanism; its drivers must fix every degree of freedom, and every body
+            needs mass and inertia > 0.
+        t: (N,) increasing output times [time].
+        q0: (nq,) rough starting configuration.
+        **kinematic_options: passed to :func:`~mixdyn.kinematic` (``tol``, ``max_iter``...).
+
+    Returns:
+        A :class:`Result` with the motion, each driver's effort (force or torque, column named
+        after the driver) and power (``{driver}.power``), the joint reactions and the energies.
+    """
+    ts = output_times(t)
+    require_masses(model)
+    kin = kinematic(model, ts, q0=q0, **kinematic_options)
+    _, keep = analyse(model, kin.q[0], float(ts[0]))
+    problem = Problem(model, Constraints.of(model).with_rank(len(keep)))
+    _, _, ratio, cols = _post(
+        problem, jnp.asarray(ts), jnp.asarray(kin.q), jnp.asarray(kin.qd), len(model.drivers)
+    )
+    extra = {k: np.asarray(v) for k, v in cols.items()}
+    stats = dict(kin.stats, min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))))
+    return Result(
+        kind="inverse",
+        model=model,
+        t=ts,
+        q=kin.q,
+        qd=kin.qd,
+        qdd=kin.qdd,
+        extra=extra,
+        kinds=post_kinds(problem, len(model.drivers)),
+        stats=stats,
+    )

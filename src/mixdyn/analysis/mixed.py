@@ -1,0 +1,287 @@
+"""Mixed dynamics: some forces unknown, as many motions prescribed, the rest free.
+
+Two solvers share one problem definition (see :mod:`._problem`):
+
+* ``"partition"`` — the paper's method, equations (28)–(29): each unknown force acts along one
+  coordinate ``j`` whose motion is prescribed; the independent coordinates ``i`` are chosen
+  automatically by pivoted LU (or given, as the paper gives "the rotation of body 3") and
+  chosen again where ``Phi_qk`` becomes ill-conditioned.
+* ``"augmented"`` — the general form ``[M, Phi_q^T, -B; Phi_q, 0, 0; Psi_q, 0, 0]``: any
+  driver type as prescribed motion, any force element of unknown magnitude, collocated or not.
+
+Both integrate with the forward-dynamics integrators; the prescribed motions are rheonomic
+constraints. Before running, solvability is checked: as many unknown forces as prescribed
+motions, each prescribed motion free of the joints, and the unknown forces able to produce the
+prescribed accelerations (the matrix ``W = Psi_q N (N^T M N)^-1 N^T B`` non-singular, with ``N``
+a basis of the motions the joints allow).
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import jax.numpy as jnp
+import numpy as np
+import scipy.linalg as sl
+
+from ..equations import Constraints, force_directions
+from ..errors import ModelError, SolvabilityError
+from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
+from ..model._element import Resolver
+from ._problem import Problem
+from ._simulate import consistent_state, output_times, require_masses, simulate
+from ._structure import analyse
+from .result import Result
+
+SOLVERS = ("augmented", "partition")
+
+
+def prescribe(result: Result, coordinate: str, name: str | None = None) -> Driver:
+    """A prescribed motion that replays a coordinate of an earlier result.
+
+    The law is a quintic Hermite interpolant of the result's positions, velocities and
+    accelerations at its output times, so the replayed motion is C2 and matches the samples'
+    derivatives exactly.
+
+    Args:
+        result: an earlier result (forward, kinematic...).
+        coordinate: ``"body.x"``, ``"body.y"``, ``"body.phi"`` or a point coordinate
+            ``"body.point.x"`` / ``"body.point.y"``.
+        name: the driver's name (default ``"prescribed <coordinate>"``).
+    """
+    name = name or f"prescribed {coordinate}"
+    parts = coordinate.split(".")
+    if len(parts) == 2:
+        k = result.model.coordinate_index(coordinate)
+        law = QuinticHermite(result.t, result.q[:, k], result.qd[:, k], result.qdd[:, k])
+        return CoordinateDriver(name, parts[0], parts[1], law=law)
+    if len(parts) == 3 and parts[2] in ("x", "y"):
+        ref = f"{parts[0]}.{parts[1]}"
+        p, v, a = result.point(ref)
+        c = "xy".index(parts[2])
+        return PointDriver(
+            name, ref, parts[2], law=QuinticHermite(result.t, p[:, c], v[:, c], a[:, c])
+        )
+    raise ModelError("use 'body.x', 'body.y', 'body.phi' or 'body.point.x'", coordinate)
+
+
+def _null_space(A):
+    return sl.null_space(A) if A.size else np.eye(A.shape[1])
+
+
+def _mobility(problem_c: Constraints, model: Model, q, qd, t, mk: int, names):
+    """``W`` (p, len(names)): prescribed accelerations produced per unit of each force."""
+    J = np.asarray(problem_c.phi_q(jnp.asarray(q), jnp.asarray(t)))
+    Phi_q, Psi_q = J[:mk], J[mk:]
+    N = _null_space(Phi_q)
+    Mdiag = np.asarray(model.mass_diagonal)
+    B = np.asarray(
+        force_directions(model, tuple(names), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
+    )
+    red = N.T @ (Mdiag[:, None] * N)
+    return Psi_q @ N @ np.linalg.solve(red, N.T @ B), Psi_q @ N
+
+
+def _check_solvable(model, c, q, qd, t, mk, unknown, prescribed):
+    p = len(unknown)
+    W, PsiN = _mobility(c, model, q, qd, t, mk, unknown)
+    pnames = [d.name for d in prescribed]
+    # Prescribed motions must be independent of the joints and of each other.
+    s_psi = np.linalg.svd(PsiN, compute_uv=False) if PsiN.size else np.zeros(0)
+    if p and (s_psi.size < p or s_psi[-1] < 1e-9 * max(s_psi[0], 1e-300)):
+        raise SolvabilityError(
+            "the prescribed motions are not independent: the joints (or the "
+            "other prescribed motions) already fix them; prescribe another "
+            "coordinate",
+            ", ".join(pnames),
+        )
+    s = np.linalg.svd(W, compute_uv=False)
+    if s[-1] > 1e-9 * max(np.abs(W).max(), 1e-300):
+        return
+    scale = max(np.abs(W).max(), 1e-300)
+    # Name what cannot act on what, and suggest forces of the model that could.
+    candidates = [f.name for f in model.forces if f.has_magnitude]
+    Wc, _ = _mobility(c, model, q, qd, t, mk, candidates) if candidates else (None, None)
+    suggestion = ""
+    if candidates:
+        for combo in itertools.combinations(range(len(candidates)), p):
+            sub = Wc[:, combo]
+            sv = np.linalg.svd(sub, compute_uv=False)
+            if sv[-1] > 1e-6 * max(np.abs(Wc).max(), 1e-300):
+                suggestion = (
+                    " Forces of the model that could produce these motions: "
+                    + ", ".join(candidates[i] for i in combo)
+                    + "."
+                )
+                break
+    for a, name in enumerate(unknown):
+        if np.abs(W[:, a]).max() <= 1e-9 * scale or np.abs(W).max() <= 1e-300:
+            raise SolvabilityError(
+                f"the unknown force cannot affect the prescribed motion(s) "
+                f"{', '.join(pnames)} (it acts only on motions the joints or the prescribed "
+                f"motions already fix).{suggestion}",
+                name,
+            )
+    for b, pname in enumerate(pnames):
+        if np.abs(W[b]).max() <= 1e-9 * scale:
+            raise SolvabilityError(
+                f"no unknown force ({', '.join(unknown)}) can act on this prescribed motion."
+                f"{suggestion}",
+                pname,
+            )
+    raise SolvabilityError(
+        f"the unknown forces {', '.join(unknown)} cannot produce the prescribed motions "
+        f"{', '.join(pnames)} independently (the pairing matrix is singular).{suggestion}",
+        ", ".join(unknown),
+    )
+
+
+def _collocation(model, unknown, prescribed, q, qd, t):
+    """Coordinates ``j`` of the partition solver, checking each unknown force is collocated."""
+    B = np.asarray(
+        force_directions(model, tuple(unknown), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
+    )
+    driven = {d.index: d.name for d in prescribed if isinstance(d, CoordinateDriver)}
+    j = []
+    for a, name in enumerate(unknown):
+        col = B[:, a]
+        nz = np.flatnonzero(np.abs(col) > 1e-12 * max(np.abs(col).max(), 1e-300))
+        if nz.size != 1 or int(nz[0]) not in driven:
+            raise SolvabilityError(
+                "the partition solver needs every unknown force to act along a single "
+                "coordinate (x, y force at a centre of mass, or a torque) whose motion is "
+                "prescribed by a coordinate driver; use solver='augmented' for this problem",
+                name,
+            )
+        j.append(int(nz[0]))
+    if len(set(j)) != len(j) or set(j) != set(driven):
+        raise SolvabilityError(
+            "each prescribed coordinate needs exactly one unknown force "
+            "along it for the partition solver; use solver='augmented'",
+            ", ".join(unknown),
+        )
+    return j
+
+
+def mixed(
+    model: Model,
+    t,
+    *,
+    prescribed,
+    unknown,
+    solver: str = "augmented",
+    independent=None,
+    method: str = "projection",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    dt: float | None = None,
+    q0=None,
+    qd0=None,
+    hold=(),
+    progress=None,
+    **options,
+) -> Result:
+    """Mixed dynamics: find the unknown forces that produce the prescribed motions while the
+    rest of the mechanism moves freely under its known forces.
+
+    Args:
+        model: the mechanism (every body with mass and inertia > 0).
+        t: (N,) increasing output times [time].
+        prescribed: drivers (any type) prescribing ``p`` motions; see also :func:`prescribe`.
+        unknown: names of ``p`` force elements of the model whose magnitude is unknown (their
+            law in the model is ignored; an actuator's spring and damper still act).
+        solver: ``"augmented"`` (general) or ``"partition"`` (the paper's method).
+        independent: for ``"partition"``, the independent coordinates ``i`` (e.g.
+            ``["coupler.phi"]``); default: chosen by pivoted LU.
+        method, rtol, atol, dt, q0, qd0, hold, progress, **options: as in
+            :func:`~mixdyn.forward`.
+
+    Returns:
+        A :class:`Result` with the motion, a column per unknown force (named after it, in force
+        or torque units) and its power (``{name}.power``), joint reactions and energies.
+
+    Raises:
+        SolvabilityError: the counts differ, an unknown force cannot affect the prescribed
+            motions, a prescribed motion is already fixed, or the partition is singular.
+    """
+    if solver not in SOLVERS:
+        raise ModelError(
+            f"unknown mixed solver {solver!r}; use 'augmented' or 'partition'", "solver"
+        )
+    ts = output_times(t)
+    require_masses(model)
+    unknown = tuple(unknown)
+    r = Resolver(model.ground, model.bodies)
+    prescribed = tuple(d.bind(r) for d in prescribed)
+    if len(unknown) != len(prescribed):
+        raise SolvabilityError(
+            f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); a "
+            "mixed problem needs one prescribed motion per unknown force",
+            ", ".join(unknown) or "unknown",
+        )
+    if not unknown:
+        raise SolvabilityError("no unknown force: use forward dynamics instead", "unknown")
+    existing = {e.name for e in (*model.joints, *model.drivers, *model.forces)}
+    for d in prescribed:
+        if d.name in existing:
+            raise ModelError("a prescribed motion needs a name not used by the model", d.name)
+    if len(set(unknown)) != len(unknown):
+        raise SolvabilityError("an unknown force is named twice", ", ".join(unknown))
+    for name in unknown:
+        f = model.element(name)
+        if not getattr(f, "has_magnitude", False):
+            raise SolvabilityError(
+                "only a force element with a magnitude (point force, torque, "
+                "actuator) can be unknown",
+                name,
+            )
+    drivers = (*model.drivers, *prescribed)
+    c_full = Constraints(model.joints, drivers, model.nq)
+    q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
+    report, keep = analyse(model, np.asarray(q), float(ts[0]), drivers)
+    bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
+    if bad:
+        raise SolvabilityError(
+            "this prescribed motion is already fixed by the joints or other "
+            "drivers; prescribe a coordinate that is free",
+            ", ".join(bad),
+        )
+    independent_rows_only = solver == "partition" or method == "partitioning"
+    c = c_full.with_active(keep) if independent_rows_only else c_full.with_rank(len(keep))
+    mk = c.m - len(prescribed)
+    _check_solvable(model, c, q, qd, float(ts[0]), mk, unknown, prescribed)
+    j_index, i_index = (), ()
+    if solver == "partition":
+        j_index = _collocation(model, unknown, prescribed, q, qd, float(ts[0]))
+        n_i = model.nq - len(j_index) - mk
+        if independent is not None:
+            i_index = [model.coordinate_index(x) for x in independent]
+            if len(i_index) != n_i:
+                raise SolvabilityError(
+                    f"the partition needs {n_i} independent coordinate(s) (3n - j - k), got "
+                    f"{len(i_index)}",
+                    ", ".join(independent),
+                )
+            if set(i_index) & set(j_index):
+                raise SolvabilityError(
+                    "an independent coordinate cannot be prescribed", ", ".join(independent)
+                )
+            k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
+            J = np.asarray(c.phi_q(jnp.asarray(q), jnp.asarray(float(ts[0]))))[:mk]
+            sv = np.linalg.svd(J[:, k_index], compute_uv=False)
+            if sv.size and sv[-1] < 1e-9 * sv[0]:
+                raise SolvabilityError(
+                    "with these independent coordinates the dependent block Phi_qk is singular "
+                    "(the remaining coordinates cannot be solved from the joints); choose other "
+                    "independent coordinates or leave the choice automatic",
+                    ", ".join(independent),
+                )
+    problem = Problem(model, c, unknown, solver, j_index, i_index)
+    opts = dict(options, rtol=rtol, atol=atol, dt=dt)
+    res = simulate("mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress)
+    res.stats.update(
+        solver=solver,
+        independent=tuple(independent or ()),
+        prescribed=tuple(d.name for d in prescribed),
+    )
+    return res
