@@ -79,12 +79,16 @@ def _mobility(problem_c: Constraints, model: Model, q, qd, t, mk: int, names):
         force_directions(model, tuple(names), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
     )
     red = N.T @ (Mdiag[:, None] * N)
-    return Psi_q @ N @ np.linalg.solve(red, N.T @ B), Psi_q @ N
+    # Accelerations of the prescribed motions per unit generalized force, (p, nq); its norm
+    # times |B| is the scale against which W is judged singular.
+    A = Psi_q @ N @ np.linalg.solve(red, N.T)
+    scale = np.linalg.norm(A, 2) * max(np.max(np.linalg.norm(B, axis=0), initial=0.0), 1e-300)
+    return A @ B, Psi_q @ N, scale
 
 
 def _check_solvable(model, c, q, qd, t, mk, unknown, prescribed):
     p = len(unknown)
-    W, PsiN = _mobility(c, model, q, qd, t, mk, unknown)
+    W, PsiN, scale = _mobility(c, model, q, qd, t, mk, unknown)
     pnames = [d.name for d in prescribed]
     # Prescribed motions must be independent of the joints and of each other.
     s_psi = np.linalg.svd(PsiN, compute_uv=False) if PsiN.size else np.zeros(0)
@@ -96,26 +100,26 @@ def _check_solvable(model, c, q, qd, t, mk, unknown, prescribed):
             ", ".join(pnames),
         )
     s = np.linalg.svd(W, compute_uv=False)
-    if s[-1] > 1e-9 * max(np.abs(W).max(), 1e-300):
+    if s[-1] > 1e-9 * scale:
         return
-    scale = max(np.abs(W).max(), 1e-300)
     # Name what cannot act on what, and suggest forces of the model that could.
     candidates = [f.name for f in model.forces if f.has_magnitude]
-    Wc, _ = _mobility(c, model, q, qd, t, mk, candidates) if candidates else (None, None)
+    Wc, _, cscale = _mobility(c, model, q, qd, t, mk, candidates) if candidates else (None,) * 3
     suggestion = ""
     if candidates:
+        working = []
         for combo in itertools.combinations(range(len(candidates)), p):
-            sub = Wc[:, combo]
-            sv = np.linalg.svd(sub, compute_uv=False)
-            if sv[-1] > 1e-6 * max(np.abs(Wc).max(), 1e-300):
-                suggestion = (
-                    " Forces of the model that could produce these motions: "
-                    + ", ".join(candidates[i] for i in combo)
-                    + "."
-                )
-                break
+            sv = np.linalg.svd(Wc[:, combo], compute_uv=False)
+            if sv[-1] > 1e-6 * cscale:
+                working.append(", ".join(candidates[i] for i in combo))
+        if working:
+            suggestion = (
+                " Forces of the model that could produce these motions: "
+                + "; or ".join(working[:5])
+                + "."
+            )
     for a, name in enumerate(unknown):
-        if np.abs(W[:, a]).max() <= 1e-9 * scale or np.abs(W).max() <= 1e-300:
+        if np.abs(W[:, a]).max() <= 1e-9 * scale:
             raise SolvabilityError(
                 f"the unknown force cannot affect the prescribed motion(s) "
                 f"{', '.join(pnames)} (it acts only on motions the joints or the prescribed "
