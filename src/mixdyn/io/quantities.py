@@ -27,7 +27,8 @@ _NUMBER = re.compile(r"^\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*$")
 _NUMBER_PREFIX = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 _UNIT_NAME = r"[A-Za-z_\u00b0\u00b5\u03bc\u03a9][A-Za-z0-9_\u00b0\u00b5\u03bc\u03a9]*"
 _EXPONENT = r"(?:\s*(?:\*\*|\^)\s*[-+]?\d{1,2}|[\u00b2\u00b3])?"
-_FACTOR = rf"(?:{_UNIT_NAME}{_EXPONENT}|\(\s*{_UNIT_NAME}{_EXPONENT}(?:\s*[*/ ]\s*{_UNIT_NAME}{_EXPONENT})*\s*\){_EXPONENT})"
+_POWER = rf"{_UNIT_NAME}{_EXPONENT}"
+_FACTOR = rf"(?:{_POWER}|\(\s*{_POWER}(?:\s*[*/ ]\s*{_POWER})*\s*\){_EXPONENT})"
 _UNIT = re.compile(rf"^\s*(?:1\s*/\s*)?{_FACTOR}(?:\s*(?:\*|/|\s)\s*{_FACTOR})*\s*$")
 
 _DIM_KEYS = ("[length]", "[mass]", "[time]")
@@ -41,6 +42,36 @@ class QuantityError(ModelError):
         self.problem = problem
         self.hint = hint
         super().__init__(problem + (f"; {hint}" if hint else ""))
+
+
+class DimensionError(QuantityError):
+    """A unit of the wrong dimension (a length where a torque is expected)."""
+
+
+Kind = str | tuple[int, int, int]
+"""A kind of quantity: a key of :data:`mixdyn.units.DIMENSIONS` or exponents of (length,
+mass, time)."""
+
+
+def dimension(kind: Kind) -> tuple[int, int, int]:
+    """Exponents of (length, mass, time) of a kind of quantity."""
+    if isinstance(kind, str):
+        return tuple(DIMENSIONS[kind])
+    return tuple(int(e) for e in kind)
+
+
+def model_unit(kind: Kind, units: UnitSystem) -> str:
+    """The model's unit of a kind (``"rad"`` for angles, ``""`` for dimensionless)."""
+    if isinstance(kind, str):
+        return units.unit(kind)
+    return unit_for(dimension(kind), units)
+
+
+def kind_name(kind: Kind) -> str:
+    """A readable name of a kind (``"torque"``, ``"force per time"``)."""
+    if isinstance(kind, str):
+        return kind.replace("_", " ")
+    return kind_of(dimension(kind)).replace("_", " ")
 
 
 @functools.cache
@@ -109,7 +140,7 @@ def unit_for(exps: tuple[int, int, int], units: UnitSystem) -> str:
     return text
 
 
-def factor(unit_text: str, kind: str | None, units: UnitSystem) -> float:
+def factor(unit_text: str, kind: Kind | None, units: UnitSystem) -> float:
     """How many model units of ``kind`` one ``unit_text`` is (e.g. ``"N"`` -> 1000 in a
     kg/mm/s system). ``kind=None`` accepts any mechanical dimension.
 
@@ -117,30 +148,29 @@ def factor(unit_text: str, kind: str | None, units: UnitSystem) -> float:
         QuantityError: unknown unit, or a dimension other than that of ``kind``.
     """
     exps = exponents(unit_text)
-    if kind is not None:
-        want = tuple(DIMENSIONS[kind])
-        if exps != want:
-            raise QuantityError(
-                f"{unit_text!r} is a unit of {kind_of(exps)}, expected {_article(kind)} "
-                f"({units.unit(kind) or 'dimensionless'})",
-                f"give the value in a unit of {kind.replace('_', ' ')}",
-            )
+    if kind is not None and exps != dimension(kind):
+        name = kind_name(kind)
+        raise DimensionError(
+            f"{unit_text!r} is a unit of {kind_of(exps).replace('_', ' ')}, expected "
+            f"{_article(name)} ({model_unit(kind, units) or 'dimensionless'})",
+            f"give the value in a unit of {name}",
+        )
     target = unit_for(exps, units)
     q = registry().Quantity(1.0, _unit(unit_text))
     value = q.to(target).magnitude if target else q.to("dimensionless").magnitude
     return float(value)
 
 
-def _article(kind: str) -> str:
-    k = kind.replace("_", " ")
-    return ("an " if k[0] in "aeiou" else "a ") + k
+def _article(name: str) -> str:
+    return ("an " if name[0] in "aeiou" else "a ") + name
 
 
 def convert(
     value,
-    kind: str | None,
+    kind: Kind | None,
     units: UnitSystem,
     constants: dict[str, float] | None = None,
+    scale: float = 1.0,
 ) -> float:
     """A scalar of a model file in the model's unit of ``kind``.
 
@@ -148,10 +178,12 @@ def convert(
         value: a number (already in model units) or a string: a number or a constant
             expression (numbers, ``pi``, ``e``, the names in ``constants``, arithmetic, the
             functions of :mod:`mixdyn.io.expressions`) optionally followed by a unit.
-        kind: a key of :data:`mixdyn.units.DIMENSIONS`, or None for any dimension (the value
-            is then expressed in the model's base units of its own dimension).
+        kind: a key of :data:`mixdyn.units.DIMENSIONS` or exponents (length, mass, time), or
+            None for any dimension (the value is then expressed in the model's base units of
+            its own dimension).
         units: the model's unit system.
         constants: named values usable in the expression (the file's parameters).
+        scale: factor applied to values written without a unit (default 1: model units).
 
     Raises:
         QuantityError: not a number, unknown unit, or a unit of the wrong dimension.
@@ -159,7 +191,7 @@ def convert(
     if isinstance(value, bool) or value is None:
         raise QuantityError(f"{value!r} is not a number", _example_hint(kind, units))
     if isinstance(value, int | float):
-        out = float(value)
+        out = float(value) * scale
         if not math.isfinite(out):
             raise QuantityError(f"{value!r} is not a finite number", _example_hint(kind, units))
         return out
@@ -171,10 +203,10 @@ def convert(
     if len(text) > MAX_LENGTH:
         raise QuantityError(f"the value is longer than {MAX_LENGTH} characters", "")
     if _NUMBER.match(text):
-        return _finite(float(text), value, kind, units)
+        return _finite(float(text) * scale, value, kind, units)
     magnitude, unit = _split(text, constants or {}, kind, units)
-    scale = 1.0 if unit is None else factor(unit, kind, units)
-    return _finite(magnitude * scale, value, kind, units)
+    f = scale if unit is None else factor(unit, kind, units)
+    return _finite(magnitude * f, value, kind, units)
 
 
 def _finite(x: float, value, kind, units) -> float:
@@ -191,7 +223,7 @@ def _split(text: str, constants, kind, units) -> tuple[float, str | None]:
     if m and m.group(2) and _UNIT.match(m.group(2)):
         return float(m.group(1)), m.group(2)
     words = text.split()
-    first_error = None
+    with_unit, without_unit = None, None
     for k in range(len(words), 0, -1):
         head, tail = " ".join(words[:k]), " ".join(words[k:])
         if tail and not _UNIT.match(tail):
@@ -199,13 +231,22 @@ def _split(text: str, constants, kind, units) -> tuple[float, str | None]:
         try:
             v = constant_value(head, constants)
         except ExpressionError as e:
-            first_error = first_error or e
+            if re.search(r"[0-9()*/+^-]", head):  # an attempt at an expression
+                if tail and with_unit is None:
+                    with_unit = e
+                elif not tail:
+                    without_unit = e
             continue
         return v, (tail or None)
+    error = with_unit or without_unit
+    if error is not None:
+        raise QuantityError(
+            f"cannot read {text!r}: {error.message}", error.hint or _example_hint(kind, units)
+        )
     raise QuantityError(f"cannot read {text!r} as a number with a unit", _example_hint(kind, units))
 
 
-def _example_hint(kind: str | None, units: UnitSystem) -> str:
+def _example_hint(kind: Kind | None, units: UnitSystem) -> str:
     examples = {
         "length": "'25' (in {u}) or '25 mm'",
         "mass": "'0.02' (in {u}) or '20 g'",
@@ -217,5 +258,9 @@ def _example_hint(kind: str | None, units: UnitSystem) -> str:
     }
     if kind is None:
         return "write a number or a number with units, e.g. '10 N'"
-    ex = examples.get(kind, "a number (in {u}) or a number with units")
-    return "write " + ex.format(u=units.unit(kind) or "model units")
+    ex = (
+        examples.get(kind, "a number (in {u}) or a number with units")
+        if isinstance(kind, str)
+        else "a number (in {u}) or a number with units"
+    )
+    return "write " + ex.format(u=model_unit(kind, units) or "model units")
