@@ -83,6 +83,8 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int):
         out = reaction_columns(c, C, mu, q)
         powers = problem.powers(q, qd, t, mu, C)
         out.update(driver_efforts(c, mu, powers, n_drivers))
+        for k in range(c.m - problem.p):
+            out[f"lambda.{c.labels[c.active[k]]}"] = mu[k]
         for k, name in enumerate(problem.unknown):
             out[name] = mu[c.m - problem.p + k]
             out[f"{name}.power"] = powers[c.m - problem.p + k]
@@ -97,6 +99,15 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int):
 
 def post_kinds(problem: Problem, n_drivers: int) -> dict[str, str]:
     kinds = reaction_kinds(problem.c)
+    c = problem.c
+    for k in range(c.m - problem.p):
+        row = c.active[k]
+        owner = c.owners[row]
+        if owner >= len(c.joints):
+            kind = c.drivers[owner - len(c.joints)].effort_kind
+        else:
+            kind = "torque" if c.labels[row].endswith(".angle") else "force"
+        kinds[f"lambda.{c.labels[row]}"] = kind
     for d in problem.c.drivers[:n_drivers]:
         kinds[d.name] = d.effort_kind
         kinds[f"{d.name}.power"] = "power"

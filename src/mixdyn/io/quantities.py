@@ -215,6 +215,12 @@ def _finite(x: float, value, kind, units) -> float:
     return x
 
 
+def looks_like_quantity(text: str) -> bool:
+    """Whether ``text`` reads as a number followed by a unit (``"50 N"``, ``"3 furlongs"``)."""
+    m = _NUMBER_PREFIX.match(text)
+    return bool(m and m.group(2) and _UNIT.match(m.group(2)))
+
+
 def _split(text: str, constants, kind, units) -> tuple[float, str | None]:
     """Split ``"EXPR UNIT"`` into the expression's value and the unit text."""
     from .expressions import ExpressionError, constant_value
