@@ -15,7 +15,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-from ...linalg import lu_solve_checked, min_pivot
+from ...linalg import lu_solve_checked
 from .._problem import Problem, pivot_columns
 from ._common import SOLVERS, Trajectory, adaptive_loop
 
@@ -44,7 +44,8 @@ def _choose(problem: Problem, q, t):
 
 
 def _conditioning(problem: Problem, q, t, D):
-    return min_pivot(problem.c.phi_q(q, t)[:, D])
+    """Smallest singular value of ``Phi_qD``: how far the partition is from singular."""
+    return jnp.linalg.svd(problem.c.phi_q(q, t)[:, D], compute_uv=False)[-1]
 
 
 @eqx.filter_jit
@@ -73,7 +74,7 @@ def partitioning(
 
     def f(t, y, args):
         v, vd, _ = y
-        q_ref, D, I = args
+        q_ref, _, D, I = args
         q, qd = _complete(problem, q_ref, D, I, v, vd, t, tol)
         qdd, mu, _ = problem.accelerations(q, qd, t)
         return (vd, qdd[I], problem.work_rates(q, qd, t, mu))
@@ -83,19 +84,26 @@ def partitioning(
     def step(t0, t1, y, args):
         state = rk.init(term, t0, t1, y, args)
         y1, yerr, _, _, _ = rk.step(term, t0, t1, y, args, state, made_jump=False)
-        return y1, yerr[:2], y[:2], y1[:2]
+        # Control the error of every coordinate: an error dv of the independent ones moves
+        # the dependent ones by -Phi_qD^-1 Phi_qI dv, which may be much larger.
+        q_ref, qd_ref, D, I = args
+        J = problem.c.phi_q(q_ref, t0)
+        E, _ = lu_solve_checked(J[:, D], J[:, I] @ jnp.stack([yerr[0], yerr[1]], axis=1))
+        full_err = (jnp.concatenate([yerr[0], -E[:, 0]]), jnp.concatenate([yerr[1], -E[:, 1]]))
+        full0 = (jnp.concatenate([y[0], q_ref[D]]), jnp.concatenate([y[1], qd_ref[D]]))
+        return y1, full_err, full0, full0
 
     def accept(t1, y1, args):
         v, vd, w = y1
-        q_ref, D, I = args
+        q_ref, _, D, I = args
         q, qd = _complete(problem, q_ref, D, I, v, vd, t1, tol)
         viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
         # Choose again when the current dependent block is much worse than a fresh choice.
         D_new, I_new = _choose(problem, q, t1)
-        switch = _conditioning(problem, q, t1, D) < 0.1 * _conditioning(problem, q, t1, D_new)
+        switch = _conditioning(problem, q, t1, D) < 0.5 * _conditioning(problem, q, t1, D_new)
         D = jnp.where(switch, D_new, D)
         I = jnp.where(switch, I_new, I)
-        return (q[I], qd[I], w), (q, D, I), viol
+        return (q[I], qd[I], w), (q, qd, D, I), viol
 
     span = ts[-1] - ts[0]
     h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
@@ -111,8 +119,7 @@ def partitioning(
     def accept_full(t1, yfull, args):
         y, _ = yfull
         y1, args1, viol = accept(t1, y, args)
-        q, D, I = args1
-        _, qd = _complete(problem, q, D, I, y1[0], y1[1], t1, tol)
+        q, qd, _, _ = args1
         return (y1, (q, qd)), args1, viol
 
     outs, _, n, nrej, viol, status, t = adaptive_loop(
@@ -120,7 +127,7 @@ def partitioning(
         accept_full,
         ts,
         (y0, full0),
-        (q0, D0, I0),
+        (q0, qd0, D0, I0),
         rtol=rtol,
         atol=atol,
         order=order,
