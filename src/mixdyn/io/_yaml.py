@@ -121,6 +121,13 @@ def _to_data(loader, node, path: Path, lines: dict, depth: int):
             "flatten the structure",
         )
     lines[path] = _line(node)
+    expected = {yaml.MappingNode: _MAP, yaml.SequenceNode: _SEQ}.get(type(node))
+    if expected is not None and node.tag != expected:
+        raise YamlError(
+            f"YAML tag {node.tag!r} is not allowed",
+            _line(node),
+            "write plain mappings, lists, numbers and strings",
+        )
     if isinstance(node, yaml.MappingNode):
         out = {}
         for key_node, value_node in node.value:
@@ -159,6 +166,8 @@ def _to_data(loader, node, path: Path, lines: dict, depth: int):
     return _scalar(loader, node)
 
 
+_MAP = "tag:yaml.org,2002:map"
+_SEQ = "tag:yaml.org,2002:seq"
 _SAFE_TAGS = {
     "tag:yaml.org,2002:str",
     "tag:yaml.org,2002:int",

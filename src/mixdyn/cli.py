@@ -1,0 +1,628 @@
+"""The ``mixdyn`` command line: a thin shell over :mod:`mixdyn.io` and :mod:`mixdyn.viz`.
+
+Commands: ``check``, ``run``, ``plot``, ``animate``, ``schema``, ``dump``; ``--help`` on each.
+
+Exit codes: 0 success; 2 bad input (one line on stderr: ``FILE:LINE: element: problem; what to
+do``); 1 a numerical failure (singularity, divergence) with its time and cause.
+
+Compiled code is kept between invocations in JAX's persistent compilation cache, in
+``$MIXDYN_CACHE_DIR`` or ``$XDG_CACHE_HOME/mixdyn/jax`` (``~/.cache/mixdyn/jax``); set
+``MIXDYN_NO_CACHE=1`` to turn it off. ``MIXDYN_DEBUG=1`` shows tracebacks of unexpected errors.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import pathlib
+import re
+import sys
+import time
+from typing import Annotated
+
+import typer
+
+app = typer.Typer(
+    name="mixdyn",
+    help="Kinematics and forward, inverse and mixed dynamics of planar mechanisms, from model "
+    "files (YAML).",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+EXIT_OK, EXIT_NUMERICAL, EXIT_INPUT = 0, 1, 2
+
+FileArg = Annotated[pathlib.Path, typer.Argument(help="The model file (YAML).", show_default=False)]
+
+
+# --------------------------------------------------------------------------- plumbing
+def _say(text: str = "") -> None:
+    from rich.console import Console
+
+    Console(soft_wrap=True, highlight=False).print(text)
+
+
+def _esc(text) -> str:
+    """User text (names, paths) made safe inside rich markup."""
+    from rich.markup import escape
+
+    return escape(str(text))
+
+
+def _fail(code: int, line: str) -> None:
+    """Print one line on stderr and exit with ``code``."""
+    sys.stderr.write(" ".join(str(line).split()) + "\n")
+    sys.stderr.flush()
+    raise typer.Exit(code)
+
+
+@contextlib.contextmanager
+def _guard(file: pathlib.Path | str | None):
+    """Turn mixdyn's errors into one line and an exit code."""
+    from pydantic import ValidationError
+
+    from .errors import MixdynError, ModelError, NumericalError
+    from .io import FileError
+
+    where = str(file) if file is not None else "mixdyn"
+    try:
+        yield
+    except typer.Exit:
+        raise
+    except FileError as e:
+        _fail(EXIT_INPUT, e.one_line())
+    except NumericalError as e:
+        run = getattr(e, "run", None)
+        what = f"run {run!r}: " if run else ""
+        _fail(
+            EXIT_NUMERICAL,
+            f"{getattr(e, 'file', where)}: {what}numerical failure ({type(e).__name__}): {e}",
+        )
+    except ModelError as e:
+        _fail(EXIT_INPUT, f"{where}: {e}")
+    except MixdynError as e:
+        _fail(EXIT_NUMERICAL, f"{where}: {type(e).__name__}: {e}")
+    except ValidationError as e:
+        first = e.errors()[0]
+        loc = ".".join(str(p) for p in first["loc"])
+        _fail(EXIT_INPUT, f"{where}: {loc}: {first['msg']}")
+    except KeyboardInterrupt:
+        _fail(130, f"{where}: interrupted")
+    except Exception as e:
+        if os.environ.get("MIXDYN_DEBUG"):
+            raise
+        _fail(
+            EXIT_NUMERICAL,
+            f"{where}: internal error ({type(e).__name__}: {e}); please report it "
+            "(MIXDYN_DEBUG=1 shows the traceback)",
+        )
+
+
+def _version(value: bool):
+    if value:
+        from . import __version__
+
+        typer.echo(f"mixdyn {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Show the version and exit."
+        ),
+    ] = False,
+):
+    """Kinematics and forward, inverse and mixed dynamics of planar mechanisms.
+
+    A model file (YAML) describes the mechanism in one unit system and named runs of analyses
+    on it; see examples/ and `mixdyn schema`.
+    """
+
+
+def configure_cache() -> str | None:
+    """Turn on JAX's persistent compilation cache (see the module's documentation).
+
+    Returns:
+        The cache folder, or None when turned off.
+    """
+    if os.environ.get("MIXDYN_NO_CACHE", "").strip() not in ("", "0"):
+        return None
+    folder = os.environ.get("MIXDYN_CACHE_DIR")
+    if not folder:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        folder = os.path.join(base, "mixdyn", "jax")
+    try:
+        os.makedirs(folder, exist_ok=True)
+        import jax
+
+        jax.config.update("jax_compilation_cache_dir", folder)
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+        jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    except Exception:  # a cache is an optimisation, never a failure
+        return None
+    return folder
+
+
+# --------------------------------------------------------------------------- check
+@app.command()
+def check(file: FileArg):
+    """Check a model file: form, names, units, expressions, degrees of freedom, and that
+    every run is well posed. Prints the degrees of freedom, redundant equations, the
+    driver/DOF balance of each run and warnings; changes nothing."""
+    with _guard(file):
+        from . import analysis as an
+        from .io import Runner, read
+        from .io import schema as s
+
+        spec = read(file)
+        runner = Runner(spec)
+        model = runner.model
+        asm = an.assemble(model, hold=spec.assembly.hold)
+        report = an.degrees_of_freedom(model, asm.q)
+        _say(f"[bold]{_esc(file)}[/bold]: {_esc(model.summary())}")
+        _say(f"assembled start: residual {asm.residual:.2e} in {asm.iterations} iteration(s)")
+        _say(f"degrees of freedom: {report.dof}")
+        _say(f"redundant joint equations: {', '.join(report.redundant) or 'none'}")
+        _say(
+            f"model drivers: {report.n_drivers}"
+            + (
+                f" (redundant: {', '.join(report.redundant_drivers)})"
+                if report.redundant_drivers
+                else ""
+            )
+        )
+        warnings = _warnings(spec, model, report)
+        for plan in runner.order():
+            r = plan.spec
+            if r.kind != "kinematic":
+                runner.check_masses(plan)
+            rep = runner.mobility(plan)
+            extra = ""
+            if isinstance(r, s.MixedRunSpec):
+                extra = f", unknown {', '.join(r.unknown)}, solver {r.solver}"
+            n = rep.n_drivers
+            state = "balanced" if n == rep.dof else f"{rep.dof - n} free degree(s) of freedom"
+            _say(
+                f"run [bold]{_esc(r.name)}[/bold] ({r.kind}): {len(plan.times)} output times "
+                f"{plan.times[0]:g}..{plan.times[-1]:g} {model.units.time}, "
+                f"{n} prescribed motion(s) for {rep.dof} DOF ({state}){extra}"
+            )
+        for w in warnings:
+            _say(f"[yellow]warning[/yellow]: {_esc(w)}")
+        _say("[green]ok[/green]")
+
+
+def _warnings(spec, model, report) -> list[str]:
+    out = []
+    if not spec.runs:
+        out.append("the file has no runs; `mixdyn run` has nothing to do")
+    if report.redundant:
+        out.append(
+            f"redundant joint equations {', '.join(report.redundant)} are dropped by the solvers "
+            "(their reactions are not unique)"
+        )
+    used = set()
+    for j in (*model.joints, *model.drivers, *model.forces):
+        used.update(j.body_indices())
+    for i, b in enumerate(model.bodies):
+        if i not in used:
+            out.append(f"body {b.name!r} is not connected to anything")
+    if model.forces and spec.runs and all(r.kind == "kinematic" for r in spec.runs):
+        out.append("the forces have no effect: every run is kinematic")
+    return out
+
+
+# --------------------------------------------------------------------------- run
+@app.command()
+def run(
+    file: FileArg,
+    runs: Annotated[
+        list[str] | None,
+        typer.Option("--run", "-r", help="Run only this run (and the runs it needs); repeatable."),
+    ] = None,
+    out: Annotated[
+        pathlib.Path, typer.Option("--out", "-o", help="Output folder; each run writes OUT/NAME/.")
+    ] = pathlib.Path("results"),
+    parquet: Annotated[bool, typer.Option("--parquet", help="Also write results.parquet.")] = False,
+    figures: Annotated[
+        bool,
+        typer.Option(
+            "--figures/--no-figures", help="Write the plots and animations the file asks for."
+        ),
+    ] = True,
+    progress: Annotated[
+        bool | None,
+        typer.Option(
+            "--progress/--no-progress",
+            help="--progress: a bar per run following the simulated time (dynamic runs then "
+            "skip the persistent compilation cache: the bar is a callback inside the compiled "
+            "loop); --no-progress: nothing. Default: one line per run with its elapsed time, "
+            "when the terminal is interactive.",
+        ),
+    ] = None,
+):
+    """Run the file's runs (or those named by --run) and write, per run, OUT/NAME/results.csv
+    (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name),
+    OUT/NAME/meta.json (units of every column, solver, tolerances, counters, version) and the
+    figures and animation the run asks for."""
+    with _guard(file):
+        from .io import Runner, read
+
+        spec = read(file)
+        runner = Runner(spec)
+        if not spec.runs:
+            from .io import FileError
+
+            raise FileError(
+                "the file has no runs", "runs", file=str(file), hint="add a runs: section"
+            )
+        plans = runner.order(runs or None)
+        for plan in plans:  # fail fast on ill-posed runs, before any long computation
+            if plan.spec.kind != "kinematic":
+                runner.check_masses(plan)
+            runner.mobility(plan)
+        if progress is None:
+            mode = "runs" if sys.stderr.isatty() else "off"
+        else:
+            mode = "steps" if progress else "off"
+        written = _execute(runner, plans, out, parquet, figures, mode, file)
+        _say(f"wrote {len(written)} file(s) under {_esc(out)}")
+
+
+def _execute(runner, plans, out, parquet, figures, mode, file):
+    """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
+    ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time)."""
+    from rich.console import Console
+    from rich.progress import (
+        BarColumn,
+        Progress,
+        SpinnerColumn,
+        TaskProgressColumn,
+        TextColumn,
+        TimeElapsedColumn,
+    )
+
+    from .io.results import run_settings, write_result
+
+    written = []
+    console = Console(stderr=True)
+    columns = (
+        SpinnerColumn(),
+        TextColumn("{task.description}"),
+        BarColumn(),
+        TaskProgressColumn(),
+        TimeElapsedColumn(),
+    )
+    with Progress(*columns, console=console, disable=mode == "off", transient=False) as bar:
+        tasks = {}
+        for plan in plans:
+            span = float(plan.times[-1] - plan.times[0]) or 1.0
+            tasks[plan.name] = bar.add_task(
+                f"{plan.name} ({plan.spec.kind})",
+                total=span if mode == "steps" else None,
+                start=False,
+            )
+
+        def hook(plan):
+            if mode != "steps" or plan.spec.kind in ("kinematic", "inverse"):
+                return None
+            task, t0 = tasks[plan.name], float(plan.times[0])
+
+            def at(t):
+                bar.update(task, completed=float(t) - t0)
+
+            return at
+
+        def done(plan, result, seconds):
+            total = bar.tasks[tasks[plan.name]].total or 1.0
+            bar.update(tasks[plan.name], total=total, completed=total)
+            folder = pathlib.Path(out) / plan.name
+            figs = [p.file for p in plan.spec.plots] if figures else []
+            anim = []
+            if figures and plan.spec.animation is not None:
+                a = plan.spec.animation
+                anim = [a.file] + (
+                    [str(pathlib.Path(a.file).with_suffix(".html"))] if a.html else []
+                )
+            written.extend(
+                write_result(
+                    result,
+                    folder,
+                    parquet=parquet,
+                    settings=run_settings(plan.spec),
+                    extra={
+                        "file": str(file),
+                        "run": plan.name,
+                        "wall_time_s": round(seconds, 3),
+                        "figures": figs,
+                        "animation": anim,
+                    },
+                )
+            )
+            if figures:
+                written.extend(_figures(runner, plan, result, folder))
+            console.print(
+                f"{plan.name}: {result.kind}, {len(result.t)} rows, {seconds:.2f} s -> {folder}",
+                highlight=False,
+                soft_wrap=True,
+            )
+
+        runner.execute(
+            [p.name for p in plans],
+            progress=hook,
+            on_start=lambda plan: bar.start_task(tasks[plan.name]),
+            on_done=done,
+        )
+    return written
+
+
+def _figures(runner, plan, result, folder) -> list[pathlib.Path]:
+    """The plots and animation a run asks for."""
+    from .viz import animate, html, plot_columns, result_columns
+
+    out = []
+    for k, p in enumerate(plan.spec.plots):
+        try:
+            cols, units = result_columns(result, p.columns)
+        except KeyError as e:
+            runner.fail((*plan.path, "plots", k, "columns"), str(e.args[0]), "fix the column name")
+        reference = None
+        if p.reference is not None:
+            reference = (
+                result.t,
+                _reference(runner, p.reference, result.t),
+                p.reference.label or p.reference.expr,
+            )
+        out.append(
+            plot_columns(
+                cols,
+                p.columns,
+                folder / p.file,
+                units=units,
+                title=p.title,
+                ylabel=p.ylabel,
+                reference=reference,
+            )
+        )
+    a = plan.spec.animation
+    if a is not None:
+        path = folder / a.file
+        out.append(animate(result, path, fps=a.fps, frames=a.frames, trace=a.trace))
+        if a.html:
+            out.append(
+                html(
+                    result,
+                    path.with_suffix(".html"),
+                    fps=a.fps,
+                    frames=max(a.frames, 200),
+                    trace=a.trace,
+                )
+            )
+    return out
+
+
+def _reference(runner, ref, t):
+    import numpy as np
+
+    from .io import ExpressionLaw
+    from .io.quantities import factor
+
+    scale = 1.0 if ref.unit is None else factor(ref.unit, None, runner.b.units)
+    law = ExpressionLaw(ref.expr, runner.b.parameters, ref.unit, scale)
+    return np.asarray(law(np.asarray(t, dtype=float)))
+
+
+# --------------------------------------------------------------------------- plot
+@app.command()
+def plot(
+    results: Annotated[
+        pathlib.Path,
+        typer.Argument(help="A run's output folder (OUT/NAME) or its results.csv / .parquet."),
+    ],
+    columns: Annotated[
+        list[str],
+        typer.Option("--column", "-c", help="A column to plot against t; repeatable."),
+    ],
+    output: Annotated[
+        pathlib.Path | None,
+        typer.Option("--output", "-o", help="The figure (.png, .svg or .pdf)."),
+    ] = None,
+    title: Annotated[str | None, typer.Option("--title", help="The figure's title.")] = None,
+):
+    """Plot chosen columns of written results against time, to PNG, SVG or PDF."""
+    with _guard(results):
+        from .io import FileError, read_result
+        from .viz import PLOT_SUFFIXES, plot_columns
+
+        try:
+            table, meta = read_result(results)
+        except FileNotFoundError as e:
+            raise FileError(
+                str(e), file=str(results), hint="give a folder written by `mixdyn run`"
+            ) from None
+        missing = [c for c in columns if c not in table.columns]
+        if missing:
+            raise FileError(
+                f"no column {missing[0]!r}",
+                "--column",
+                file=str(results),
+                hint="columns: " + ", ".join(map(str, table.columns)),
+            )
+        if output is None:
+            folder = results if results.is_dir() else results.parent
+            stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", "_".join(columns))[:80]
+            output = folder / f"{stem}.png"
+        if output.suffix.lower() not in PLOT_SUFFIXES:
+            raise FileError(
+                f"cannot write a plot to {output.name!r}",
+                "--output",
+                file=str(results),
+                hint=f"use {', '.join(PLOT_SUFFIXES)}",
+            )
+        plot_columns(table, columns, output, units=meta.get("units"), title=title)
+        _say(f"wrote {_esc(output)}")
+
+
+# --------------------------------------------------------------------------- animate
+@app.command()
+def animate(
+    file: FileArg,
+    run_name: Annotated[str, typer.Option("--run", "-r", help="The run to animate.")],
+    output: Annotated[
+        list[pathlib.Path],
+        typer.Option(
+            "--output",
+            "-o",
+            help="Output: .gif, .mp4 (needs ffmpeg) or .html; without a suffix, both "
+            "OUT.gif and OUT.html. Repeatable.",
+        ),
+    ],
+    results: Annotated[
+        pathlib.Path | None,
+        typer.Option(
+            "--results", help="Take the motion from this run's written results instead of running."
+        ),
+    ] = None,
+    fps: Annotated[int | None, typer.Option(help="Frames per second.", min=1, max=120)] = None,
+    frames: Annotated[int | None, typer.Option(help="Most frames.", min=2, max=2000)] = None,
+    trace: Annotated[
+        list[str] | None, typer.Option("--trace", help="A point whose path is drawn; repeatable.")
+    ] = None,
+):
+    """Animate the mechanism moving in a run: a GIF (MP4 only if ffmpeg exists) and a
+    self-contained HTML page."""
+    with _guard(file):
+        import numpy as np
+
+        from .io import FileError, Runner, read, read_result
+        from .viz import animate as write_animation
+
+        spec = read(file)
+        runner = Runner(spec)
+        plan = runner.order([run_name])[-1]
+        a = plan.spec.animation
+        fps = fps or (a.fps if a else 20)
+        frames = frames or (a.frames if a else 80)
+        trace = list(trace or (a.trace if a else []))
+        for k, ref in enumerate(trace):
+            runner.b.point(ref, ("--trace", k))
+        targets = []
+        for o in output:
+            if o.suffix == "":
+                targets += [o.with_suffix(".gif"), o.with_suffix(".html")]
+            elif o.suffix.lower() in (".gif", ".mp4", ".html"):
+                targets.append(o)
+            else:
+                raise FileError(
+                    f"cannot write an animation to {o.name!r}",
+                    "--output",
+                    file=str(file),
+                    hint="use .gif, .mp4 or .html",
+                )
+        model = runner.model
+        if results is not None:
+            try:
+                table, _ = read_result(results)
+            except FileNotFoundError as e:
+                raise FileError(str(e), "--results", file=str(file)) from None
+            names = [f"{b.name}.{c}" for b in model.bodies for c in ("x", "y", "phi")]
+            missing = [n for n in names if n not in table.columns]
+            if missing:
+                raise FileError(
+                    f"the results lack column {missing[0]!r}; they are not of this model",
+                    "--results",
+                    file=str(file),
+                    hint="give the results of this file's run",
+                )
+            t, q = table["t"].to_numpy(), table[names].to_numpy()
+        else:
+            for p in runner.order([run_name]):
+                if p.spec.kind != "kinematic":
+                    runner.check_masses(p)
+                runner.mobility(p)
+            res = runner.execute([run_name])[run_name]
+            t, q = res.t, res.q
+        for target in targets:
+            if target.suffix.lower() == ".mp4":
+                import shutil
+
+                if shutil.which("ffmpeg") is None:
+                    raise FileError(
+                        "writing MP4 needs ffmpeg, which is not installed",
+                        "--output",
+                        file=str(file),
+                        hint="write a .gif or .html instead",
+                    )
+            write_animation(
+                None,
+                target,
+                model=model,
+                t=np.asarray(t),
+                q=np.asarray(q),
+                fps=fps,
+                frames=frames if target.suffix.lower() != ".html" else max(frames, 200),
+                trace=trace,
+            )
+            _say(f"wrote {_esc(target)}")
+
+
+# --------------------------------------------------------------------------- schema, dump
+@app.command()
+def schema(
+    output: Annotated[
+        pathlib.Path | None, typer.Option("--output", "-o", help="Write to this file.")
+    ] = None,
+):
+    """Print (or write) the JSON Schema of model files, for editors and validators."""
+    import json
+
+    from .io import json_schema
+
+    text = json.dumps(json_schema(), indent=2)
+    if output is None:
+        typer.echo(text)
+    else:
+        output.write_text(text + "\n", encoding="utf-8")
+        _say(f"wrote {_esc(output)}")
+
+
+@app.command()
+def dump(
+    file: FileArg,
+    output: Annotated[
+        pathlib.Path | None, typer.Option("--output", "-o", help="Write to this file.")
+    ] = None,
+):
+    """Read, validate and build a model file, then write it back in normal form (defaults
+    left out); loading the output gives the same model."""
+    with _guard(file):
+        from .io import build, dumps, read
+
+        spec = read(file)
+        build(spec)
+        text = dumps(spec)
+        if output is None:
+            typer.echo(text, nl=False)
+        else:
+            output.write_text(text, encoding="utf-8")
+            _say(f"wrote {_esc(output)}")
+
+
+def main() -> None:
+    """Entry point of the ``mixdyn`` command."""
+    configure_cache()
+    t0 = time.perf_counter()
+    try:
+        app()
+    finally:
+        if os.environ.get("MIXDYN_TIMING"):
+            sys.stderr.write(f"mixdyn: {time.perf_counter() - t0:.2f} s\n")
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

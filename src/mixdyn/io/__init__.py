@@ -1,0 +1,51 @@
+"""Model files: read, validate, build, run and write back.
+
+A model file (YAML) describes a mechanism in one unit system and named runs of analyses on it.
+It is read safely (no code, no aliases), validated by a pydantic schema
+(:class:`ModelFile`, exportable as JSON Schema), and built into a :class:`mixdyn.Model`;
+quantities may carry units (``"500 N*mm"``) and laws of time are safe expressions
+(``"10*sin(pi*t/2)"``). Every fault is a :class:`FileError` naming the file, line and element.
+
+Example::
+
+    import mixdyn.io as mio
+    spec = mio.read("examples/antonya.yaml")
+    model = mio.build(spec)
+    results = mio.execute(spec)          # every run, by name
+    mio.write_result(results["forward"], "out/forward")
+"""
+
+from ._errors import FileError
+from .dump import describe, dump, dumps
+from .expressions import FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
+from .load import build, load, read, reads, source_of
+from .quantities import DimensionError, QuantityError, convert
+from .results import read_result, write_result
+from .runs import Plan, Runner, execute
+from .schema import ModelFile, json_schema
+
+__all__ = [
+    "FUNCTIONS",
+    "DimensionError",
+    "ExpressionError",
+    "ExpressionFunction",
+    "ExpressionLaw",
+    "FileError",
+    "ModelFile",
+    "Plan",
+    "QuantityError",
+    "Runner",
+    "build",
+    "convert",
+    "describe",
+    "dump",
+    "dumps",
+    "execute",
+    "json_schema",
+    "load",
+    "read",
+    "read_result",
+    "reads",
+    "source_of",
+    "write_result",
+]

@@ -1,0 +1,272 @@
+"""Write a description (or a model built in Python) back to a model file.
+
+``reads(dumps(spec)) == spec`` for every description, and ``build(reads(dumps(model)))`` equals
+``model`` for a model whose laws a file can hold (constants, polynomials, harmonics, splines,
+piecewise polynomials, expressions; not Python functions).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+import numpy as np
+import yaml
+
+from .. import model as m
+from ..errors import ModelError
+from . import schema as s
+from .expressions import ExpressionFunction, ExpressionLaw
+
+
+class _Dumper(yaml.SafeDumper):
+    """Safe dumper: short lists of scalars in flow style; strings that would read back as
+    numbers quoted."""
+
+
+_Dumper.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?(?:[eE][-+]?[0-9]+)
+        |[-+]?\.[0-9_]+(?:[eE][-+]?[0-9]+)?)$""",
+        re.X,
+    ),
+    list("-+0123456789."),
+)
+
+
+def _represent_list(dumper, data):
+    flow = len(data) <= 12 and all(
+        isinstance(x, int | float | str) and (not isinstance(x, str) or len(x) < 30) for x in data
+    )
+    return dumper.represent_sequence("tag:yaml.org,2002:seq", data, flow_style=flow)
+
+
+_Dumper.add_representer(list, _represent_list)
+
+
+def to_data(spec: s.ModelFile) -> dict:
+    """Plain data of a description, defaults left out (``mixdyn``, names and kinds kept)."""
+    data = spec.model_dump(mode="json", exclude_defaults=True)
+    data["units"] = spec.units.model_dump(mode="json")
+    data["runs"] = [{"name": r["name"], "kind": r["kind"], **r} for r in data.get("runs", [])]
+    if not data["runs"]:
+        del data["runs"]
+    order = [k for k in s.ModelFile.model_fields if k in data]
+    return {"mixdyn": s.FORMAT_VERSION, **{k: data[k] for k in order if k != "mixdyn"}}
+
+
+def dumps(obj) -> str:
+    """YAML text of a description (:class:`~mixdyn.io.schema.ModelFile`) or a
+    :class:`mixdyn.Model`."""
+    spec = describe(obj) if isinstance(obj, m.Model) else obj
+    if not isinstance(spec, s.ModelFile):
+        raise TypeError(f"expected a ModelFile or a Model, got {type(obj).__name__}")
+    return yaml.dump(
+        to_data(spec),
+        Dumper=_Dumper,
+        sort_keys=False,
+        allow_unicode=True,
+        width=100,
+        default_flow_style=False,
+    )
+
+
+def dump(obj, path) -> None:
+    """Write :func:`dumps` of ``obj`` to ``path``."""
+    text = dumps(obj)
+    tmp = os.fspath(path) + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+# --------------------------------------------------------------------------- Model -> description
+def _f(x) -> float:
+    return float(np.asarray(x))
+
+
+def _v(x) -> list[float]:
+    return [float(v) for v in np.asarray(x).ravel()]
+
+
+class _Describer:
+    def __init__(self, model: m.Model):
+        self.model = model
+        self.parameters: dict[str, float] = {}
+
+    def law(self, law, element: str):
+        if law is None:
+            return 0.0
+        if isinstance(law, m.StateFunction):
+            fn = law.fn
+            if not isinstance(fn, ExpressionFunction):
+                raise ModelError(
+                    "a force given by a Python function cannot be written to a file; write it "
+                    "as an expression of t and body states",
+                    element,
+                )
+            return self._expr(fn.source, fn.parameters, fn.unit, element)
+        if isinstance(law, ExpressionLaw):
+            return self._expr(law.source, law.parameters, law.unit, element)
+        if isinstance(law, m.Constant):
+            return _f(law.value)
+        if isinstance(law, m.Polynomial):
+            return {"polynomial": _v(law.coeffs)}
+        if isinstance(law, m.Harmonic):
+            return {
+                "harmonic": {
+                    "amplitude": _f(law.amplitude),
+                    "omega": _f(law.omega),
+                    "phase": _f(law.phase),
+                    "offset": _f(law.offset),
+                }
+            }
+        if isinstance(law, m.PiecewisePolynomial):
+            c = np.asarray(law.coeffs, dtype=float)
+            return {"piecewise": {"breaks": _v(law.breaks), "coeffs": c.tolist()}}
+        raise ModelError(
+            f"a law of type {type(law).__name__} cannot be written to a file; use an expression, "
+            "a polynomial, a harmonic or a spline",
+            element,
+        )
+
+    def _expr(self, source, params, unit, element):
+        for k, v in params.items():
+            if k in self.parameters and self.parameters[k] != v:
+                raise ModelError(
+                    f"parameter {k!r} has two values ({self.parameters[k]:g} and {v:g}) in "
+                    "different expressions; a file has one value per parameter",
+                    element,
+                )
+            self.parameters[k] = v
+        return {"expr": source} if unit is None else {"expr": source, "unit": unit}
+
+    def joint(self, j):
+        base = {"name": j.name, "point_i": j.point_i, "point_j": j.point_j}
+        if isinstance(j, m.PinInSlot):
+            return s.PinInSlotSpec(type="pin_in_slot", axis=self.axis(j.axis), **base)
+        if isinstance(j, m.Translational):
+            return s.TranslationalSpec(
+                type="translational", axis=self.axis(j.axis), angle=_f(j.angle), **base
+            )
+        if isinstance(j, m.Revolute):
+            return s.RevoluteSpec(type="revolute", **base)
+        if isinstance(j, m.Weld):
+            return s.WeldSpec(type="weld", angle=_f(j.angle), **base)
+        if isinstance(j, m.Distance):
+            return s.DistanceSpec(type="distance", length=_f(j.length), **base)
+        raise ModelError(f"a {type(j).__name__} joint cannot be written to a file", j.name)
+
+    @staticmethod
+    def axis(a):
+        return a if isinstance(a, str) else tuple(float(x) for x in a)
+
+    def driver(self, d):
+        law = self.law(d.law, d.name)
+        if isinstance(d, m.CoordinateDriver):
+            return s.CoordinateDriverSpec(
+                type="coordinate", name=d.name, coordinate=f"{d.body}.{d.coordinate}", law=law
+            )
+        if isinstance(d, m.PointDriver):
+            if not isinstance(d.point, str):
+                raise ModelError("a point given by coordinates cannot be written", d.name)
+            return s.PointDriverSpec(
+                type="point", name=d.name, point=d.point, coordinate=d.coordinate, law=law
+            )
+        if isinstance(d, m.RelativeAngleDriver):
+            return s.RelativeAngleDriverSpec(
+                type="relative_angle", name=d.name, body_i=d.body_i, body_j=d.body_j, law=law
+            )
+        if isinstance(d, m.DistanceDriver):
+            return s.DistanceDriverSpec(
+                type="distance", name=d.name, point_i=d.point_i, point_j=d.point_j, law=law
+            )
+        raise ModelError(f"a {type(d).__name__} driver cannot be written to a file", d.name)
+
+    def force(self, f):
+        if isinstance(f, m.PointForce):
+            return s.PointForceSpec(
+                type="point_force",
+                name=f.name,
+                point=f.point,
+                along=tuple(float(x) for x in f.along),
+                frame=f.frame,
+                law=self.law(f.law, f.name),
+            )
+        if isinstance(f, m.Torque):
+            return s.TorqueSpec(
+                type="torque",
+                name=f.name,
+                body=f.body,
+                law=self.law(f.law, f.name),
+                reaction=f.reaction,
+            )
+        if isinstance(f, m.SpringDamper):
+            return s.SpringDamperSpec(
+                type="spring_damper",
+                name=f.name,
+                point_i=f.point_i,
+                point_j=f.point_j,
+                stiffness=_f(f.stiffness),
+                damping=_f(f.damping),
+                free_length=_f(f.free_length),
+                actuator=self.law(f.actuator, f.name),
+            )
+        if isinstance(f, m.RotarySpringDamper):
+            return s.RotarySpringDamperSpec(
+                type="rotary_spring_damper",
+                name=f.name,
+                body_i=f.body_i,
+                body_j=f.body_j,
+                stiffness=_f(f.stiffness),
+                damping=_f(f.damping),
+                free_angle=_f(f.free_angle),
+                actuator=self.law(f.actuator, f.name),
+            )
+        raise ModelError(
+            f"a {type(f).__name__} force (a Python function) cannot be written to a file", f.name
+        )
+
+
+def describe(model: m.Model, runs=()) -> s.ModelFile:
+    """The description of a model built in Python (numbers in the model's units).
+
+    Args:
+        model: the model.
+        runs: run descriptions to include (:class:`~mixdyn.io.schema.ModelFile` runs).
+
+    Raises:
+        ModelError: an element that a file cannot hold (a Python function).
+    """
+    d = _Describer(model)
+    bodies = [
+        s.BodySpec(
+            name=b.name,
+            mass=_f(b.mass),
+            inertia=_f(b.inertia),
+            q0=tuple(_v(b.q0)),
+            points={k: tuple(_v(v)) for k, v in b.points.items()},
+            vectors={k: tuple(_v(v)) for k, v in b.vectors.items()},
+        )
+        for b in model.bodies
+    ]
+    joints = [d.joint(j) for j in model.joints]
+    drivers = [d.driver(x) for x in model.drivers]
+    forces = [d.force(f) for f in model.forces]
+    u = model.units
+    return s.ModelFile(
+        name=model.name,
+        units=s.UnitsSpec(length=u.length, mass=u.mass, time=u.time),
+        gravity=tuple(_v(model.gravity)),
+        parameters=dict(d.parameters),
+        ground=s.GroundSpec(points={k: tuple(_v(v)) for k, v in model.ground.points.items()}),
+        bodies=bodies,
+        joints=joints,
+        drivers=drivers,
+        forces=forces,
+        runs=list(runs),
+    )
+
+
+__all__ = ["describe", "dump", "dumps", "to_data"]

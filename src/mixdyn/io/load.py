@@ -1,0 +1,715 @@
+"""Read a model file and build the :class:`mixdyn.Model` it describes.
+
+Three stages, each with its own errors, all reported as :class:`FileError` (one line: file,
+line, element, problem, what to do):
+
+1. text -> plain data (:mod:`._yaml`: safe YAML, no aliases, line of every value);
+2. data -> :class:`~mixdyn.io.schema.ModelFile` (pydantic: the form);
+3. description -> :class:`mixdyn.Model` (:func:`build`: names, units, expressions).
+
+Example::
+
+    import mixdyn.io as mio
+    spec = mio.read("examples/antonya.yaml")   # the validated description
+    model = mio.build(spec)                    # the mechanism
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+import os
+import re
+from typing import NoReturn
+
+import numpy as np
+from pydantic import ValidationError
+
+from .. import model as m
+from ..errors import ModelError
+from ..units import UnitSystem
+from . import schema as s
+from ._errors import FileError
+from ._yaml import YamlError, line_of, read_yaml
+from .expressions import CONSTANTS, FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
+from .expressions import parse as parse_expression
+from .quantities import (
+    DimensionError,
+    QuantityError,
+    convert,
+    dimension,
+    factor,
+    looks_like_quantity,
+)
+
+_SECTIONS = {
+    "bodies": "body",
+    "joints": "joint",
+    "drivers": "driver",
+    "forces": "force",
+    "runs": "run",
+}
+_IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
+_RESERVED = {"t", *CONSTANTS, *FUNCTIONS}
+
+
+@dataclasses.dataclass(frozen=True)
+class Source:
+    """Where a description came from: the file name, the line of every value, the raw data."""
+
+    file: str
+    lines: dict
+    data: object
+
+
+# --------------------------------------------------------------------------- reading
+def read(path) -> s.ModelFile:
+    """Read and validate a model file (the description; see :func:`build` for the model).
+
+    Raises:
+        FileError: unreadable file, bad YAML, or a description of the wrong form.
+    """
+    file = os.fspath(path)
+    try:
+        with open(file, "rb") as f:
+            raw = f.read(_MAX_READ + 1)
+    except FileNotFoundError:
+        raise FileError("no such file", file=file, hint="check the path") from None
+    except IsADirectoryError:
+        raise FileError(
+            "is a folder, not a model file", file=file, hint="give a .yaml file"
+        ) from None
+    except OSError as e:
+        raise FileError(f"cannot read the file ({e.strerror})", file=file) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as e:
+        raise FileError(
+            f"not UTF-8 text (byte {e.start})", file=file, hint="save the file as UTF-8"
+        ) from None
+    return reads(text, file)
+
+
+_MAX_READ = 2_000_000
+
+
+def reads(text: str, file: str = "<string>") -> s.ModelFile:
+    """Validate a model file given as text (see :func:`read`)."""
+    try:
+        data, lines = read_yaml(text)
+    except YamlError as e:
+        raise FileError(e.problem, file=file, line=e.line, hint=e.hint) from None
+    if not isinstance(data, dict):
+        raise FileError(
+            "the file must be a mapping with keys such as units, bodies, joints, runs",
+            file=file,
+            line=1,
+            hint="start from one of the files in examples/",
+        )
+    try:
+        spec = s.ModelFile.model_validate(data)
+    except ValidationError as e:
+        raise _pydantic_error(e, data, lines, file) from None
+    object.__setattr__(spec, "_mixdyn_source", Source(file, lines, data))
+    return spec
+
+
+def source_of(spec: s.ModelFile) -> Source | None:
+    """Where ``spec`` was read from, or None if it was made in Python."""
+    return getattr(spec, "_mixdyn_source", None)
+
+
+def _walk(data, loc) -> tuple:
+    """The YAML path of a pydantic error location (tags of unions left out)."""
+    path, cur = [], data
+    for part in loc:
+        if (isinstance(cur, dict) and part in cur) or (
+            isinstance(cur, list) and isinstance(part, int) and 0 <= part < len(cur)
+        ):
+            path.append(part)
+            cur = cur[part]
+        elif isinstance(cur, dict) and isinstance(part, str) and not path_is_tag(cur, part):
+            path.append(part)  # a missing key: point at its parent's line
+            cur = None
+        # else: a union tag (e.g. 'revolute', 'scalar') not present in the data
+    return tuple(path)
+
+
+def path_is_tag(cur: dict, part: str) -> bool:
+    tags = {cur.get("type"), cur.get("kind"), "scalar", *s.LAW_KEYS}
+    return part in tags or part.startswith(("function-", "tuple[", "list[", "dict["))
+
+
+def _pydantic_error(e: ValidationError, data, lines, file) -> FileError:
+    errors = e.errors()
+    err = errors[0]
+    path = _walk(data, err["loc"])
+    msg = err["msg"]
+    if msg.startswith("Value error, "):
+        msg = msg[len("Value error, ") :]
+    typ = err["type"]
+    field = path[-1] if path else None
+    hint = ""
+    if typ == "missing":
+        missing = err["loc"][-1]
+        msg = f"missing field {missing!r}"
+        hint = f"add '{missing}:'"
+    elif typ == "extra_forbidden":
+        parent = _allowed_fields(data, path[:-1])
+        msg = f"unknown field {field!r}"
+        hint = "remove it or fix its spelling" + (
+            f"; allowed fields: {', '.join(parent)}" if parent else ""
+        )
+    elif typ == "union_tag_invalid":
+        ctx = err.get("ctx", {})
+        key = ctx.get("discriminator", "type").strip("'")
+        msg = f"unknown {key} {ctx.get('tag')!r}"
+        hint = f"use one of: {ctx.get('expected_tags', '').replace(chr(39), '')}"
+    elif typ == "union_tag_not_found":
+        key = err.get("ctx", {}).get("discriminator", "type").strip("'")
+        msg = f"missing field {key!r}"
+        hint = f"add '{key}:' to say what kind of element this is"
+    elif typ == "value_error" and ("got True" in msg or "got False" in msg):
+        hint = "YAML reads yes/no/on/off as true/false: write a number"
+    elif typ in ("float_parsing", "float_type", "int_parsing", "int_type", "int_from_float"):
+        hint = "write a number"
+    elif typ in ("list_type", "tuple_type", "dict_type", "model_type", "model_attributes_type"):
+        hint = "check the structure against examples/ or `mixdyn schema`"
+    elif typ == "literal_error":
+        hint = "use one of the allowed values"
+    elif typ == "too_short" or typ == "too_long":
+        hint = "check the number of items"
+    more = f" (and {len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
+    return FileError(
+        msg + more,
+        element_name(data, path),
+        file=file,
+        line=line_of(lines, path),
+        hint=hint,
+    )
+
+
+def _allowed_fields(data, path) -> list[str]:
+    """Field names of the part of the schema that the mapping at ``path`` is (for hints)."""
+    cur = data
+    for part in path:
+        cur = cur[part]
+    if not isinstance(cur, dict):
+        return []
+    best, score = None, 0
+    for obj in vars(s).values():
+        if not (isinstance(obj, type) and issubclass(obj, s.Spec) and obj is not s.Spec):
+            continue
+        fields = obj.model_fields
+        tagged = [k for k in ("type", "kind") if k in fields and k in cur]
+        if tagged and all(repr(cur[k]) in str(fields[k].annotation) for k in tagged):
+            return list(fields)
+        n = sum(k in fields for k in cur)
+        if n > score:
+            best, score = obj, n
+    return list(best.model_fields) if best is not None else []
+
+
+def element_name(data, path) -> str | None:
+    """A readable name of the element at ``path``: ``"joint 'A', point_i"``."""
+    if not path:
+        return None
+    head, rest = path[0], list(path[1:])
+    label = str(head)
+    if head in _SECTIONS and rest and isinstance(rest[0], int):
+        i = rest.pop(0)
+        items = data.get(head) if isinstance(data, dict) else None
+        name = None
+        if isinstance(items, list) and i < len(items) and isinstance(items[i], dict):
+            name = items[i].get("name")
+        label = f"{_SECTIONS[head]} {name!r}" if isinstance(name, str) else f"{head}[{i}]"
+    elif head == "parameters" and rest:
+        label = f"parameter {rest.pop(0)!r}"
+    if rest:
+        text = ""
+        for p in rest:
+            text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else str(p))
+        label += f", {text}"
+    return label
+
+
+# --------------------------------------------------------------------------- building
+def load(path) -> m.Model:
+    """Read a model file and build its model."""
+    return build(read(path))
+
+
+def build(spec: s.ModelFile) -> m.Model:
+    """The :class:`mixdyn.Model` a description describes.
+
+    Raises:
+        FileError: unknown names, duplicate names, wrong dimensions, bad expressions...
+    """
+    return Builder(spec).model()
+
+
+class Builder:
+    """Builds a model from a description, reporting faults with their file position."""
+
+    def __init__(self, spec: s.ModelFile):
+        self.spec = spec
+        src = source_of(spec)
+        self.file = src.file if src else "<model>"
+        self.lines = src.lines if src else {}
+        self.data = src.data if src else spec.model_dump()
+        self.units = self._units()
+        self.parameters = self._parameters()
+        self.body_names = [b.name for b in spec.bodies]
+        self.body_index = {n: i for i, n in enumerate(self.body_names)}
+
+    # ----------------------------------------------------------------- errors
+    def fail(self, path, problem: str, hint: str = "") -> NoReturn:
+        path = tuple(path)
+        raise FileError(
+            problem,
+            element_name(self.data, path),
+            file=self.file,
+            line=line_of(self.lines, path),
+            hint=hint,
+        )
+
+    def path_of(self, name: str) -> tuple:
+        """The path of the body or element called ``name`` (for errors of the model)."""
+        for section in ("bodies", "joints", "drivers", "forces", "runs"):
+            for i, it in enumerate(getattr(self.spec, section)):
+                if it.name == name:
+                    return (section, i)
+        return ()
+
+    # ----------------------------------------------------------------- values
+    def scalar(self, value, kind, path, *, scale: float = 1.0) -> float:
+        """A scalar in model units (see :func:`mixdyn.io.quantities.convert`)."""
+        try:
+            return convert(value, kind, self.units, self.parameters, scale)
+        except ExpressionError as e:
+            self.fail(path, e.message, e.hint)
+        except QuantityError as e:
+            shown = repr(value)
+            self.fail(path, e.problem if shown in e.problem else f"{shown}: {e.problem}", e.hint)
+
+    def factor(self, unit: str, kind, path) -> float:
+        try:
+            return factor(unit, kind, self.units)
+        except QuantityError as e:
+            self.fail(path, e.problem, e.hint)
+
+    def vec2(self, value, kind, path) -> tuple[float, float]:
+        return tuple(self.scalar(v, kind, (*path, k)) for k, v in enumerate(value))
+
+    def direction(self, value, path) -> tuple[float, float]:
+        v = self.vec2(value, "dimensionless", path)
+        if math.hypot(*v) == 0.0:
+            self.fail(path, "the direction has zero length", "give a non-zero vector [x, y]")
+        return v
+
+    def _units(self) -> UnitSystem:
+        u = self.spec.units
+        for kind in ("length", "mass", "time"):
+            text = getattr(u, kind)
+            try:
+                factor(text, kind, UnitSystem())
+            except QuantityError as e:
+                self.fail(("units", kind), f"{text!r}: {e.problem}", e.hint)
+        return UnitSystem(u.length, u.mass, u.time)
+
+    def _parameters(self) -> dict[str, float]:
+        out: dict[str, float] = {}
+        bodies = {b.name for b in self.spec.bodies}
+        for name, value in self.spec.parameters.items():
+            path = ("parameters", name)
+            if not _IDENTIFIER.match(name):
+                self.fail(path, f"{name!r} is not a valid parameter name", "use letters, digits, _")
+            if name in _RESERVED or name in bodies:
+                self.fail(
+                    path,
+                    f"the name {name!r} is taken (time, a constant, a function or a body)",
+                    "rename the parameter",
+                )
+            try:
+                out[name] = convert(value, None, self.units, out)
+            except ExpressionError as e:
+                self.fail(path, e.message, e.hint)
+            except QuantityError as e:
+                self.fail(path, f"{value!r}: {e.problem}", e.hint)
+        return out
+
+    # ----------------------------------------------------------------- references
+    def body(self, name: str, path, *, ground: bool = True) -> str:
+        if name == m.Ground().name:
+            if not ground:
+                self.fail(path, "the ground cannot be used here", "name a moving body")
+            return name
+        if name not in self.body_index:
+            self.fail(
+                path,
+                f"unknown body {name!r}",
+                "known bodies: " + ", ".join(["ground", *self.body_names]),
+            )
+        return name
+
+    def point(self, ref: str, path, *, ground: bool = True) -> str:
+        """Check ``"body"`` or ``"body.point"``; returns the reference."""
+        parts = ref.split(".")
+        if len(parts) > 2:
+            self.fail(path, f"{ref!r} is not a point reference", "write 'body' or 'body.point'")
+        body = self.body(parts[0], path, ground=ground)
+        if len(parts) == 2:
+            if body == "ground":
+                points = self.spec.ground.points
+            else:
+                points = self.spec.bodies[self.body_index[body]].points
+            if parts[1] not in points:
+                self.fail(
+                    path,
+                    f"body {body!r} has no point {parts[1]!r}",
+                    f"its points: {', '.join(points) or '(none; add them under points:)'}",
+                )
+        return ref
+
+    def coordinate(self, ref: str, path) -> tuple[str, str]:
+        """``("crank", "phi")`` from ``"crank.phi"``."""
+        parts = ref.split(".")
+        if len(parts) != 2 or parts[1] not in m._model.COORDINATES:
+            self.fail(
+                path,
+                f"{ref!r} is not a coordinate",
+                "write 'body.x', 'body.y' or 'body.phi'",
+            )
+        self.body(parts[0], path, ground=False)
+        return parts[0], parts[1]
+
+    # ----------------------------------------------------------------- laws
+    def law(self, spec, kind, path, *, state: bool = False):
+        """A :class:`mixdyn.Law` (or, with ``state``, possibly a StateFunction) of ``kind``."""
+        path = tuple(path)
+        if isinstance(spec, int | float):
+            return m.Constant(float(spec))
+        if isinstance(spec, str):
+            try:
+                return m.Constant(convert(spec, kind, self.units, self.parameters))
+            except DimensionError as e:
+                self.fail(path, f"{spec!r}: {e.problem}", e.hint)
+            except QuantityError as e:
+                if looks_like_quantity(spec):
+                    self.fail(path, f"{spec!r}: {e.problem}", e.hint)
+            except ExpressionError:
+                pass
+            return self.expression(spec, None, kind, path, state)
+        if isinstance(spec, s.ExpressionSpec):
+            return self.expression(spec.expr, spec.unit, kind, (*path, "expr"), state)
+        if isinstance(spec, s.ConstantSpec):
+            return m.Constant(self.scalar(spec.constant, kind, (*path, "constant")))
+        dim = dimension(kind)
+        if isinstance(spec, s.PolynomialSpec):
+            f = 1.0 if spec.unit is None else self.factor(spec.unit, kind, (*path, "unit"))
+            coeffs = [
+                self.scalar(c, _per_time(dim, k), (*path, "polynomial", k), scale=f)
+                for k, c in enumerate(spec.polynomial)
+            ]
+            return m.Polynomial(coeffs)
+        if isinstance(spec, s.RampSpec):
+            p = (*path, "ramp")
+            return m.Ramp(
+                self.scalar(spec.ramp.start, kind, (*p, "start")),
+                self.scalar(spec.ramp.rate, _per_time(dim, 1), (*p, "rate")),
+            )
+        if isinstance(spec, s.HarmonicSpec):
+            h, p = spec.harmonic, (*path, "harmonic")
+            return m.Harmonic(
+                self.scalar(h.amplitude, kind, (*p, "amplitude")),
+                self.scalar(h.omega, "angular_velocity", (*p, "omega")),
+                self.scalar(h.phase, "angle", (*p, "phase")),
+                self.scalar(h.offset, kind, (*p, "offset")),
+            )
+        if isinstance(spec, s.SplineSpec):
+            a, p = spec.spline, (*path, "spline")
+            f = 1.0 if a.unit is None else self.factor(a.unit, kind, (*p, "unit"))
+            t = self.times(a.t, (*p, "t"))
+            y = [self.scalar(v, kind, (*p, "y", k), scale=f) for k, v in enumerate(a.y)]
+            if len(y) != len(t):
+                self.fail((*p, "y"), f"{len(y)} values for {len(t)} times", "give one per time")
+            try:
+                return m.Spline(t, y, a.kind)
+            except ValueError as e:
+                self.fail(p, str(e))
+        if isinstance(spec, s.HermiteSpec):
+            a, p = spec.hermite, (*path, "hermite")
+            f = 1.0 if a.unit is None else self.factor(a.unit, kind, (*p, "unit"))
+            t = self.times(a.t, (*p, "t"))
+            cols = []
+            for k, key in enumerate(("y", "yd", "ydd")):
+                vals = [
+                    self.scalar(v, _per_time(dim, k), (*p, key, i), scale=f)
+                    for i, v in enumerate(getattr(a, key))
+                ]
+                if len(vals) != len(t):
+                    self.fail((*p, key), f"{len(vals)} values for {len(t)} times", "one per time")
+                cols.append(vals)
+            return m.QuinticHermite(t, *cols)
+        if isinstance(spec, s.PiecewiseSpec):
+            a, p = spec.piecewise, (*path, "piecewise")
+            breaks = np.asarray(a.breaks, dtype=float)
+            if np.any(np.diff(breaks) <= 0) or not np.all(np.isfinite(breaks)):
+                self.fail((*p, "breaks"), "break points must increase", "sort them")
+            widths = {len(r) for r in a.coeffs}
+            if widths != {len(breaks) - 1}:
+                self.fail(
+                    (*p, "coeffs"),
+                    f"each row of coeffs needs {len(breaks) - 1} entries (one per interval)",
+                    "use the scipy PPoly layout",
+                )
+            return m.PiecewisePolynomial(breaks, np.asarray(a.coeffs, dtype=float))
+        raise AssertionError(type(spec))  # pragma: no cover
+
+    def times(self, values, path) -> list[float]:
+        t = [self.scalar(v, "time", (*path, k)) for k, v in enumerate(values)]
+        if any(b <= a for a, b in itertools.pairwise(t)):
+            self.fail(path, "times must be strictly increasing", "sort them and drop repeats")
+        return t
+
+    def expression(self, text, unit, kind, path, state: bool):
+        scale = 1.0 if unit is None else self.factor(unit, kind, (*path[:-1], "unit"))
+        try:
+            p = parse_expression(text, self.parameters, bodies=self.body_index)
+        except ExpressionError as e:
+            self.fail(path, e.message, e.hint or "a law is an expression of t, e.g. '2*t'")
+        if p.uses_state:
+            if not state:
+                self.fail(
+                    path,
+                    f"expression {text!r} uses the state of a body",
+                    "a prescribed motion may depend on t only; body states may be used in "
+                    "force magnitudes",
+                )
+            fn = ExpressionFunction.of(text, self.body_names, self.parameters, unit, scale)
+            return m.StateFunction(fn)
+        return ExpressionLaw(text, self.parameters, unit, scale)
+
+    # ----------------------------------------------------------------- the model
+    def model(self) -> m.Model:
+        spec = self.spec
+        self._check_names()
+        ground = m.Ground(
+            {
+                k: self.vec2(v, "length", ("ground", "points", k))
+                for k, v in spec.ground.points.items()
+            }
+        )
+        bodies = [self._body(i, b) for i, b in enumerate(spec.bodies)]
+        joints = [self._joint(i, j) for i, j in enumerate(spec.joints)]
+        drivers = [self.driver(d, ("drivers", i)) for i, d in enumerate(spec.drivers)]
+        forces = [self._force(i, f) for i, f in enumerate(spec.forces)]
+        gravity = self.vec2(spec.gravity, "acceleration", ("gravity",))
+        for k, ref in enumerate(spec.assembly.hold):
+            self.coordinate(ref, ("assembly", "hold", k))
+        try:
+            return m.Model(
+                bodies,
+                joints,
+                drivers,
+                forces,
+                ground=ground,
+                gravity=gravity,
+                units=self.units,
+                name=spec.name,
+            )
+        except ModelError as e:
+            element = e.element
+            msg = str(e)
+            if element and msg.startswith(f"{element}: "):
+                msg = msg[len(element) + 2 :]
+            self.fail(self.path_of(element) if element else (), msg)
+
+    def _check_names(self):
+        seen: dict[str, tuple] = {}
+        for i, b in enumerate(self.spec.bodies):
+            path = ("bodies", i, "name")
+            if b.name == "ground":
+                self.fail(path, "'ground' is the fixed frame's name", "rename the body")
+            if b.name in seen:
+                self.fail(path, f"duplicate body name {b.name!r}", "every body needs its own name")
+            seen[b.name] = path
+            for section in ("points", "vectors"):
+                for key in getattr(b, section):
+                    if not _IDENTIFIER.match(key):
+                        self.fail(
+                            ("bodies", i, section, key),
+                            f"{key!r} is not a valid name",
+                            "use letters, digits and _",
+                        )
+        for key in self.spec.ground.points:
+            if not _IDENTIFIER.match(key):
+                self.fail(("ground", "points", key), f"{key!r} is not a valid name", "use letters")
+        elements: dict[str, tuple] = {}
+        for section in ("joints", "drivers", "forces"):
+            for i, e in enumerate(getattr(self.spec, section)):
+                path = (section, i, "name")
+                if e.name in elements:
+                    other = element_name(self.data, elements[e.name][:2])
+                    self.fail(
+                        path,
+                        f"duplicate name {e.name!r} (also {other})",
+                        "joints, drivers and forces need names unique among them all",
+                    )
+                if e.name == "t":
+                    self.fail(path, "'t' is reserved for the time column", "rename it")
+                elements[e.name] = path
+        runs: set[str] = set()
+        for i, r in enumerate(self.spec.runs):
+            if r.name in runs:
+                self.fail(("runs", i, "name"), f"duplicate run name {r.name!r}", "rename it")
+            runs.add(r.name)
+
+    def _body(self, i, b: s.BodySpec) -> m.Body:
+        p = ("bodies", i)
+        mass = self.scalar(b.mass, "mass", (*p, "mass"))
+        inertia = self.scalar(b.inertia, "inertia", (*p, "inertia"))
+        if mass < 0:
+            self.fail((*p, "mass"), f"negative mass {mass:g}", "a mass must be >= 0")
+        if inertia < 0:
+            self.fail((*p, "inertia"), f"negative inertia {inertia:g}", "an inertia must be >= 0")
+        q0 = (
+            self.scalar(b.q0[0], "length", (*p, "q0", 0)),
+            self.scalar(b.q0[1], "length", (*p, "q0", 1)),
+            self.scalar(b.q0[2], "angle", (*p, "q0", 2)),
+        )
+        points = {k: self.vec2(v, "length", (*p, "points", k)) for k, v in b.points.items()}
+        vectors = {k: self.direction(v, (*p, "vectors", k)) for k, v in b.vectors.items()}
+        return m.Body(b.name, mass, inertia, q0=q0, points=points, vectors=vectors)
+
+    def _two_points(self, p, j):
+        self.point(j.point_i, (*p, "point_i"))
+        self.point(j.point_j, (*p, "point_j"))
+        bi, bj = j.point_i.split(".")[0], j.point_j.split(".")[0]
+        if bi == bj:
+            self.fail(p, f"both points are on {bi!r}", "connect two different bodies")
+
+    def _axis(self, j, p):
+        if isinstance(j.axis, str):
+            body = j.point_i.split(".")[0]
+            vecs = {} if body == "ground" else self.spec.bodies[self.body_index[body]].vectors
+            if j.axis not in vecs:
+                self.fail(
+                    (*p, "axis"),
+                    f"body {body!r} has no vector {j.axis!r}",
+                    f"its vectors: {', '.join(vecs) or '(none)'}; or give [x, y]",
+                )
+            return j.axis
+        return self.direction(j.axis, (*p, "axis"))
+
+    def _joint(self, i, j) -> m.Joint:
+        p = ("joints", i)
+        self._two_points(p, j)
+        if isinstance(j, s.RevoluteSpec):
+            return m.Revolute(j.name, j.point_i, j.point_j)
+        if isinstance(j, s.WeldSpec):
+            return m.Weld(
+                j.name, j.point_i, j.point_j, self.scalar(j.angle, "angle", (*p, "angle"))
+            )
+        if isinstance(j, s.TranslationalSpec):
+            return m.Translational(
+                j.name,
+                j.point_i,
+                j.point_j,
+                axis=self._axis(j, p),
+                angle=self.scalar(j.angle, "angle", (*p, "angle")),
+            )
+        if isinstance(j, s.PinInSlotSpec):
+            return m.PinInSlot(j.name, j.point_i, j.point_j, axis=self._axis(j, p))
+        if isinstance(j, s.DistanceSpec):
+            length = self.scalar(j.length, "length", (*p, "length"))
+            if not length > 0:
+                self.fail((*p, "length"), f"length {length:g} is not positive", "give a length > 0")
+            return m.Distance(j.name, j.point_i, j.point_j, length=length)
+        raise AssertionError(type(j))  # pragma: no cover
+
+    def driver(self, d, p) -> m.Driver:
+        """A driver from its description at path ``p`` (also used for prescribed motions)."""
+        p = tuple(p)
+        if isinstance(d, s.CoordinateDriverSpec):
+            body, coord = self.coordinate(d.coordinate, (*p, "coordinate"))
+            kind = "angle" if coord == "phi" else "length"
+            return m.CoordinateDriver(d.name, body, coord, law=self.law(d.law, kind, (*p, "law")))
+        if isinstance(d, s.PointDriverSpec):
+            self.point(d.point, (*p, "point"), ground=False)
+            return m.PointDriver(
+                d.name, d.point, d.coordinate, law=self.law(d.law, "length", (*p, "law"))
+            )
+        if isinstance(d, s.RelativeAngleDriverSpec):
+            self.body(d.body_i, (*p, "body_i"))
+            self.body(d.body_j, (*p, "body_j"))
+            if d.body_i == d.body_j:
+                self.fail(p, "body_i and body_j are the same body", "name two different bodies")
+            return m.RelativeAngleDriver(
+                d.name, d.body_i, d.body_j, law=self.law(d.law, "angle", (*p, "law"))
+            )
+        if isinstance(d, s.DistanceDriverSpec):
+            self._two_points(p, d)
+            return m.DistanceDriver(
+                d.name, d.point_i, d.point_j, law=self.law(d.law, "length", (*p, "law"))
+            )
+        raise AssertionError(type(d))  # pragma: no cover
+
+    def _force(self, i, f) -> m.ForceElement:
+        p = ("forces", i)
+        if isinstance(f, s.PointForceSpec):
+            self.point(f.point, (*p, "point"), ground=False)
+            return m.PointForce(
+                f.name,
+                f.point,
+                along=self.direction(f.along, (*p, "along")),
+                law=self.law(f.law, "force", (*p, "law"), state=True),
+                frame=f.frame,
+            )
+        if isinstance(f, s.TorqueSpec):
+            self.body(f.body, (*p, "body"), ground=False)
+            if f.reaction is not None:
+                self.body(f.reaction, (*p, "reaction"))
+                if f.reaction == f.body:
+                    self.fail((*p, "reaction"), "the reaction acts on the same body", "")
+            return m.Torque(
+                f.name,
+                f.body,
+                law=self.law(f.law, "torque", (*p, "law"), state=True),
+                reaction=None if f.reaction in (None, "ground") else f.reaction,
+            )
+        if isinstance(f, s.SpringDamperSpec):
+            self._two_points(p, f)
+            return m.SpringDamper(
+                f.name,
+                f.point_i,
+                f.point_j,
+                stiffness=self.scalar(f.stiffness, "stiffness", (*p, "stiffness")),
+                damping=self.scalar(f.damping, "damping", (*p, "damping")),
+                free_length=self.scalar(f.free_length, "length", (*p, "free_length")),
+                actuator=self.law(f.actuator, "force", (*p, "actuator"), state=True),
+            )
+        if isinstance(f, s.RotarySpringDamperSpec):
+            self.body(f.body_i, (*p, "body_i"))
+            self.body(f.body_j, (*p, "body_j"))
+            if f.body_i == f.body_j:
+                self.fail(p, "body_i and body_j are the same body", "name two different bodies")
+            return m.RotarySpringDamper(
+                f.name,
+                f.body_i,
+                f.body_j,
+                stiffness=self.scalar(f.stiffness, "rotational_stiffness", (*p, "stiffness")),
+                damping=self.scalar(f.damping, "rotational_damping", (*p, "damping")),
+                free_angle=self.scalar(f.free_angle, "angle", (*p, "free_angle")),
+                actuator=self.law(f.actuator, "torque", (*p, "actuator"), state=True),
+            )
+        raise AssertionError(type(f))  # pragma: no cover
+
+
+def _per_time(dim, k: int) -> tuple[int, int, int]:
+    """The dimension of ``dim`` per time**k."""
+    return (dim[0], dim[1], dim[2] - k)
+
+
+__all__ = ["Builder", "FileError", "Source", "build", "element_name", "load", "read", "reads"]

@@ -1,0 +1,145 @@
+"""Results on disk: ``results.csv`` (or Parquet) and ``meta.json`` per run.
+
+``results.csv`` has a column ``t`` and every column of the :class:`mixdyn.Result` (body
+coordinates ``{body}.x`` ..., reactions ``{joint}.Fx`` ..., driver efforts and unknown forces by
+name, energies), in the model's units, at full precision. ``meta.json`` holds the unit of every
+column, the run's settings (solver, tolerances), the solver's counters and the mixdyn version.
+"""
+
+from __future__ import annotations
+
+import datetime
+import json
+import math
+import os
+import pathlib
+from typing import Any
+
+import numpy as np
+
+from ..analysis import Result
+
+RESULTS_CSV = "results.csv"
+RESULTS_PARQUET = "results.parquet"
+META_JSON = "meta.json"
+
+
+def jsonable(value: Any) -> Any:
+    """``value`` with numpy scalars and arrays, tuples and odd floats made JSON-friendly."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.generic):
+        return jsonable(value.item())
+    if isinstance(value, float):
+        return value if math.isfinite(value) else str(value)
+    if isinstance(value, str | int | bool) or value is None:
+        return value
+    try:
+        return jsonable(np.asarray(value).tolist())
+    except Exception:
+        return str(value)
+
+
+def write_result(
+    result: Result,
+    folder,
+    *,
+    parquet: bool = False,
+    settings: dict | None = None,
+    extra: dict | None = None,
+) -> list[pathlib.Path]:
+    """Write ``result`` to ``folder/results.csv`` (and ``.parquet``) and ``folder/meta.json``.
+
+    Args:
+        result: the analysis result.
+        folder: the output folder (created).
+        parquet: also write ``results.parquet``.
+        settings: the run's settings (analysis kind, solver, tolerances...) for ``meta.json``.
+        extra: further entries of ``meta.json``.
+
+    Returns:
+        The files written.
+    """
+    from .. import __version__
+
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    df = result.table().reset_index()
+    written = []
+    csv = folder / RESULTS_CSV
+    df.to_csv(csv, index=False, float_format="%.17g")
+    written.append(csv)
+    if parquet:
+        pq = folder / RESULTS_PARQUET
+        df.to_parquet(pq, index=False)
+        written.append(pq)
+    units = result.units()
+    meta = {
+        "mixdyn_version": __version__,
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "model": result.model.name,
+        "kind": result.kind,
+        "unit_system": {
+            "length": result.model.units.length,
+            "mass": result.model.units.mass,
+            "time": result.model.units.time,
+            "angle": "rad",
+        },
+        "rows": len(df),
+        "columns": list(df.columns),
+        "units": {c: units.get(c, "") for c in df.columns},
+        "settings": jsonable(settings or {}),
+        "stats": jsonable(result.stats),
+    }
+    meta.update(jsonable(extra or {}))
+    path = folder / META_JSON
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    written.append(path)
+    return written
+
+
+def read_result(path):
+    """Read results written by :func:`write_result`.
+
+    Args:
+        path: the run's folder, or its ``results.csv`` / ``results.parquet``.
+
+    Returns:
+        ``(table, meta)``: a pandas DataFrame with a column ``t`` and the ``meta.json`` dict
+        (empty if absent). The units are also in ``table.attrs["units"]``.
+
+    Raises:
+        FileNotFoundError: no results there.
+    """
+    import pandas as pd
+
+    p = pathlib.Path(path)
+    if p.is_dir():
+        folder = p
+        p = folder / RESULTS_CSV
+        if not p.exists() and (folder / RESULTS_PARQUET).exists():
+            p = folder / RESULTS_PARQUET
+    else:
+        folder = p.parent
+    if not p.exists():
+        raise FileNotFoundError(f"no results at {path} (expected {RESULTS_CSV} or a run folder)")
+    df = pd.read_parquet(p) if p.suffix == ".parquet" else pd.read_csv(p)
+    meta_path = folder / META_JSON
+    meta = json.loads(meta_path.read_text(encoding="utf-8")) if meta_path.exists() else {}
+    df.attrs["units"] = meta.get("units", {})
+    return df, meta
+
+
+def run_settings(spec) -> dict:
+    """The settings of a run description worth recording (kind, solver, tolerances...)."""
+    data = spec.model_dump(mode="json", exclude={"plots", "animation"})
+    return data
+
+
+__all__ = ["META_JSON", "RESULTS_CSV", "RESULTS_PARQUET", "jsonable", "read_result", "write_result"]

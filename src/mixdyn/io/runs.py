@@ -1,0 +1,537 @@
+"""The runs of a model file: checked, ordered by their dependencies, and executed.
+
+A run names an analysis (``kinematic``, ``forward``, ``inverse``, ``mixed``), its output times,
+solver settings and, for mixed runs, the unknown forces and the prescribed motions. A prescribed
+motion may replay a coordinate of another run's result (``from_run``), so a file can hold the
+paper's round trip: a forward run, then a mixed run that recovers the force from its motion.
+
+Example::
+
+    import mixdyn.io as mio
+    spec = mio.read("examples/antonya.yaml")
+    results = mio.execute(spec)            # {"forward": Result, "mixed": Result}
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time as _time
+from collections.abc import Callable
+
+import numpy as np
+
+from .. import analysis as an
+from .. import model as m
+from ..errors import ModelError, NumericalError
+from . import schema as s
+from ._errors import FileError
+from .expressions import ExpressionError
+from .expressions import parse as parse_expression
+from .load import Builder
+
+#: Suffixes of the per-body columns of a result.
+BODY_COLUMNS = ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")
+#: Column prefixes present in dynamic results besides bodies, joints and drivers.
+OTHER_PREFIXES = ("energy", "work", "constraint")
+
+
+@dataclasses.dataclass(frozen=True)
+class Plan:
+    """A checked run ready to execute.
+
+    Attributes:
+        spec: the run's description.
+        index: its position in the file's ``runs``.
+        times: (N,) output times [model time unit].
+        depends: names of the runs whose results it needs (``from_run``).
+    """
+
+    spec: s.KinematicRunSpec | s.ForwardRunSpec | s.InverseRunSpec | s.MixedRunSpec
+    index: int
+    times: np.ndarray
+    depends: tuple[str, ...]
+
+    @property
+    def name(self) -> str:
+        return self.spec.name
+
+    @property
+    def path(self) -> tuple:
+        return ("runs", self.index)
+
+
+class Runner:
+    """Checks and executes the runs of one description.
+
+    Args:
+        spec: the validated description.
+        model: its model (built if not given).
+    """
+
+    def __init__(self, spec: s.ModelFile, model: m.Model | None = None):
+        self.spec = spec
+        self.b = Builder(spec)
+        self.model = model if model is not None else self.b.model()
+        self.plans = {r.name: self._plan(i, r) for i, r in enumerate(spec.runs)}
+        self._check_cycles()
+
+    # ----------------------------------------------------------------- checking
+    def fail(self, path, problem, hint=""):
+        self.b.fail(path, problem, hint)
+
+    def _times(self, t: s.TimeSpec, path) -> np.ndarray:
+        b = self.b
+        if t.values is not None:
+            ts = np.asarray(b.times(t.values, (*path, "values")), dtype=float)
+        else:
+            t0 = b.scalar(t.span[0], "time", (*path, "span", 0))
+            t1 = b.scalar(t.span[1], "time", (*path, "span", 1))
+            if not t1 > t0:
+                self.fail(
+                    (*path, "span"), f"the span [{t0:g}, {t1:g}] is empty", "give [start, stop]"
+                )
+            if t.n is not None:
+                ts = np.linspace(t0, t1, t.n)
+            else:
+                step = b.scalar(t.step, "time", (*path, "step"))
+                if not step > 0:
+                    self.fail((*path, "step"), "the step must be positive", "")
+                n = int(np.floor((t1 - t0) / step * (1 + 1e-12))) + 1
+                if n > 1_000_000:
+                    self.fail(
+                        (*path, "step"), f"{n} output times are too many", "use a larger step"
+                    )
+                ts = t0 + step * np.arange(n)
+        return ts
+
+    def _plan(self, index: int, r) -> Plan:
+        path = ("runs", index)
+        b = self.b
+        ts = self._times(r.time, (*path, "time"))
+        if r.kind != "kinematic" and ts.size < 2:
+            self.fail((*path, "time"), "a dynamic run needs at least two output times", "")
+        model_drivers = {d.name for d in self.model.drivers}
+        if r.drivers is not None:
+            for k, name in enumerate(r.drivers):
+                if name not in model_drivers:
+                    self.fail(
+                        (*path, "drivers", k),
+                        f"unknown driver {name!r}",
+                        f"the model's drivers: {', '.join(model_drivers) or '(none)'}",
+                    )
+        for k, ref in enumerate(r.hold or ()):
+            b.coordinate(ref, (*path, "hold", k))
+        if r.velocities and r.kind in ("kinematic", "inverse"):
+            self.fail(
+                (*path, "velocities"),
+                f"initial velocities have no effect in a {r.kind} run (the drivers fix them)",
+                "remove them",
+            )
+        for key, kind_of in (("initial", _position_kind), ("velocities", _velocity_kind)):
+            for ref, value in getattr(r, key).items():
+                _, coord = b.coordinate(ref, (*path, key, ref))
+                b.scalar(value, kind_of(coord), (*path, key, ref))
+        depends = []
+        names = {e.name for e in (*self.model.joints, *self.model.drivers, *self.model.forces)}
+        for k, p in enumerate(r.prescribed):
+            pp = (*path, "prescribed", k)
+            self._prescribed_ref(p.coordinate, (*pp, "coordinate"))
+            if p.name is not None and p.name in names:
+                self.fail((*pp, "name"), f"the name {p.name!r} is taken by the model", "rename")
+            if p.from_run is not None:
+                if p.from_run == r.name:
+                    self.fail((*pp, "from_run"), "a run cannot replay itself", "name another run")
+                src = next((x for x in self.spec.runs if x.name == p.from_run), None)
+                if src is None:
+                    self.fail(
+                        (*pp, "from_run"),
+                        f"unknown run {p.from_run!r}",
+                        f"runs: {', '.join(x.name for x in self.spec.runs)}",
+                    )
+                depends.append(p.from_run)
+            else:
+                self._prescribed_driver(p, pp)
+        if isinstance(r, s.MixedRunSpec):
+            self._check_mixed(r, path)
+        for k, plot in enumerate(r.plots):
+            pp = (*path, "plots", k)
+            for c, col in enumerate(plot.columns):
+                self._check_column(col, r, (*pp, "columns", c))
+            if plot.reference is not None:
+                try:
+                    parse_expression(plot.reference.expr, self.b.parameters)
+                except ExpressionError as e:
+                    self.fail((*pp, "reference", "expr"), e.message, e.hint)
+                if plot.reference.unit is not None:
+                    b.factor(plot.reference.unit, None, (*pp, "reference", "unit"))
+        if r.animation is not None:
+            for k, ref in enumerate(r.animation.trace):
+                b.point(ref, (*path, "animation", "trace", k))
+        if getattr(r, "dt", None) is not None:
+            dt = b.scalar(r.dt, "time", (*path, "dt"))
+            if not dt > 0:
+                self.fail((*path, "dt"), "dt must be positive", "")
+        return Plan(r, index, ts, tuple(dict.fromkeys(depends)))
+
+    def _prescribed_ref(self, ref: str, path):
+        parts = ref.split(".")
+        if len(parts) == 3:
+            self.b.point(f"{parts[0]}.{parts[1]}", path, ground=False)
+            if parts[2] not in ("x", "y"):
+                self.fail(path, f"{ref!r}: a point coordinate is x or y", "write body.point.x")
+            return
+        self.b.coordinate(ref, path)
+
+    def _prescribed_driver(self, p: s.PrescribedSpec, path) -> m.Driver:
+        parts = p.coordinate.split(".")
+        name = p.name or f"prescribed {p.coordinate}"
+        if len(parts) == 3:
+            law = self.b.law(p.law, "length", (*path, "law"))
+            return m.PointDriver(name, f"{parts[0]}.{parts[1]}", parts[2], law=law)
+        kind = "angle" if parts[1] == "phi" else "length"
+        return m.CoordinateDriver(
+            name, parts[0], parts[1], law=self.b.law(p.law, kind, (*path, "law"))
+        )
+
+    def _check_mixed(self, r: s.MixedRunSpec, path):
+        forces = {f.name: f for f in self.model.forces}
+        seen = set()
+        for k, name in enumerate(r.unknown):
+            pp = (*path, "unknown", k)
+            if name not in forces:
+                self.fail(
+                    pp,
+                    f"unknown force {name!r}",
+                    f"the model's forces: {', '.join(forces) or '(none)'}",
+                )
+            if not forces[name].has_magnitude:
+                self.fail(pp, f"force {name!r} has no magnitude that could be unknown", "")
+            if name in seen:
+                self.fail(pp, f"force {name!r} is listed twice", "list it once")
+            seen.add(name)
+        if len(r.unknown) != len(r.prescribed):
+            self.fail(
+                path,
+                f"{len(r.unknown)} unknown force(s) but {len(r.prescribed)} prescribed motion(s)",
+                "a mixed run needs one prescribed motion per unknown force",
+            )
+        for k, ref in enumerate(r.independent or ()):
+            self.b.coordinate(ref, (*path, "independent", k))
+
+    def _check_column(self, col: str, r, path):
+        parts = col.split(".")
+        bodies = set(self.b.body_names)
+        elements = {e.name for e in (*self.model.joints, *self.model.drivers, *self.model.forces)}
+        elements |= {p.name or f"prescribed {p.coordinate}" for p in r.prescribed}
+        ok = (
+            col == "t"
+            or (len(parts) == 2 and parts[0] in bodies and parts[1] in BODY_COLUMNS)
+            or parts[0] in elements
+            or col in elements
+            or parts[0] in OTHER_PREFIXES
+            or col.startswith("prescribed ")
+        )
+        if len(parts) == 3 and parts[0] in bodies:
+            self.b.point(f"{parts[0]}.{parts[1]}", path)
+            ok = parts[2] in ("x", "y", "vx", "vy", "ax", "ay")
+        if not ok:
+            self.fail(
+                path,
+                f"no column {col!r}",
+                "columns are t, body.x/.y/.phi/.vx/.vy/.omega/.ax/.ay/.alpha, body.point.x, "
+                "joint.Fx/.Fy/.M, driver and unknown-force names, energy.*",
+            )
+
+    def _check_cycles(self):
+        state: dict[str, int] = {}
+
+        def visit(name, chain):
+            if state.get(name) == 2:
+                return
+            if state.get(name) == 1:
+                plan = self.plans[name]
+                self.fail(
+                    (*plan.path, "prescribed"),
+                    "runs depend on each other in a cycle: " + " -> ".join([*chain, name]),
+                    "break the cycle",
+                )
+            state[name] = 1
+            for d in self.plans[name].depends:
+                visit(d, [*chain, name])
+            state[name] = 2
+
+        for name in self.plans:
+            visit(name, [])
+
+    # ----------------------------------------------------------------- ordering
+    def order(self, names=None) -> list[Plan]:
+        """The plans to execute for runs ``names`` (default all), dependencies first."""
+        if names is None:
+            names = list(self.plans)
+        for n in names:
+            if n not in self.plans:
+                known = ", ".join(self.plans) or "(the file has no runs)"
+                raise FileError(
+                    f"no run {n!r}", "--run", file=self.b.file, hint=f"runs in the file: {known}"
+                )
+        out: list[str] = []
+
+        def add(n):
+            for d in self.plans[n].depends:
+                add(d)
+            if n not in out:
+                out.append(n)
+
+        for n in names:
+            add(n)
+        return [self.plans[n] for n in out]
+
+    # ----------------------------------------------------------------- checks needing numbers
+    def q_start(self, plan: Plan, model: m.Model):
+        """Rough starting coordinates of a run: the bodies' q0 with the run's ``initial``."""
+        q = np.array(model.q0, dtype=float)
+        for ref, value in plan.spec.initial.items():
+            _, coord = ref.split(".")
+            q[model.coordinate_index(ref)] = self.b.scalar(
+                value, _position_kind(coord), (*plan.path, "initial", ref)
+            )
+        return q
+
+    def qd_start(self, plan: Plan, model: m.Model):
+        if not plan.spec.velocities:
+            return None
+        qd = np.zeros(model.nq)
+        for ref, value in plan.spec.velocities.items():
+            _, coord = ref.split(".")
+            qd[model.coordinate_index(ref)] = self.b.scalar(
+                value, _velocity_kind(coord), (*plan.path, "velocities", ref)
+            )
+        return qd
+
+    def hold(self, plan: Plan) -> tuple[str, ...]:
+        h = plan.spec.hold if plan.spec.hold is not None else self.spec.assembly.hold
+        return tuple(h)
+
+    def run_model(self, plan: Plan, drivers=()) -> m.Model:
+        """The model of a run: the model's drivers it selects, plus extra drivers."""
+        r = plan.spec
+        selected = (
+            self.model.drivers
+            if r.drivers is None
+            else tuple(d for d in self.model.drivers if d.name in set(r.drivers))
+        )
+        all_drivers = (*selected, *drivers)
+        if tuple(all_drivers) == tuple(self.model.drivers):
+            return self.model
+        return self.model.replace(drivers=all_drivers)
+
+    def mobility(self, plan: Plan):
+        """Degrees of freedom of a run's model with its drivers (and prescribed motions), at
+        the assembled start; raises a :class:`FileError` if a kinematic or inverse run is not
+        fully driven, or a dynamic run over-driven."""
+        r = plan.spec
+        dummy = [
+            self._dummy_driver(k, p)
+            if p.from_run is not None
+            else self._prescribed_driver(p, (*plan.path, "prescribed", k))
+            for k, p in enumerate(r.prescribed)
+        ]
+        model = self.run_model(plan, () if isinstance(r, s.MixedRunSpec) else dummy)
+        drivers = (*model.drivers, *dummy) if isinstance(r, s.MixedRunSpec) else model.drivers
+        try:
+            q = an.assemble(model, self.q_start(plan, model), hold=self.hold(plan)).q
+        except ModelError as e:
+            self._model_error(plan, e)
+        report = an.degrees_of_freedom(model, q, float(plan.times[0]), drivers=drivers)
+        n = report.n_drivers
+        if r.kind in ("kinematic", "inverse"):
+            if report.redundant_drivers:
+                self.fail(
+                    plan.path,
+                    f"driver(s) {', '.join(report.redundant_drivers)} prescribe a motion the "
+                    "joints or other drivers already fix",
+                    "remove them or drive another coordinate",
+                )
+            if n != report.dof:
+                more = "remove" if n > report.dof else "add"
+                self.fail(
+                    plan.path,
+                    f"the mechanism has {report.dof} degree(s) of freedom but the {r.kind} run "
+                    f"has {n} driver(s)",
+                    f"{more} {abs(n - report.dof)} driver(s) (drivers: or prescribed:)",
+                )
+        elif n > report.dof or report.redundant_drivers:
+            self.fail(
+                plan.path,
+                f"the mechanism has {report.dof} degree(s) of freedom but the run prescribes "
+                f"{n} motion(s)"
+                + (
+                    f" (redundant: {', '.join(report.redundant_drivers)})"
+                    if report.redundant_drivers
+                    else ""
+                ),
+                "prescribe fewer motions",
+            )
+        return report
+
+    def check_masses(self, plan: Plan) -> None:
+        """A dynamic run needs every body's mass and inertia > 0."""
+        if plan.spec.kind == "kinematic":
+            return
+        for i, body in enumerate(self.model.bodies):
+            for key in ("mass", "inertia"):
+                if not float(getattr(body, key)) > 0:
+                    self.fail(
+                        ("bodies", i, key),
+                        f"{key} is {float(getattr(body, key)):g}, but run {plan.name!r} "
+                        f"({plan.spec.kind}) is dynamic",
+                        f"give the body a {key} > 0, or make the run kinematic",
+                    )
+
+    def _dummy_driver(self, k, p: s.PrescribedSpec) -> m.Driver:
+        parts = p.coordinate.split(".")
+        name = p.name or f"prescribed {p.coordinate}"
+        if len(parts) == 3:
+            return m.PointDriver(name, f"{parts[0]}.{parts[1]}", parts[2], law=0.0)
+        return m.CoordinateDriver(name, parts[0], parts[1], law=0.0)
+
+    def _model_error(self, plan: Plan, e: ModelError):
+        element = e.element
+        msg = str(e)
+        path = plan.path
+        if element and msg.startswith(f"{element}: "):
+            msg = msg[len(element) + 2 :]
+        if element in self.b.body_index:
+            path = self.b.path_of(element)
+            element = None
+        elif element in ("method", "dt", "solver"):
+            path = (*path, element)
+            element = None
+        prefix = f"{element}: " if element else ""
+        self.fail(path, prefix + msg)
+
+    # ----------------------------------------------------------------- executing
+    def execute_one(self, plan: Plan, results: dict, progress: Callable | None = None):
+        """Run one plan (its dependencies' results in ``results``) and return its Result."""
+        r = plan.spec
+        drivers = []
+        for k, p in enumerate(r.prescribed):
+            if p.from_run is not None:
+                src = results[p.from_run]
+                t0, t1 = float(src.t[0]), float(src.t[-1])
+                if plan.times[0] < t0 - 1e-12 or plan.times[-1] > t1 + 1e-12:
+                    self.fail(
+                        (*plan.path, "prescribed", k, "from_run"),
+                        f"run {p.from_run!r} covers t = {t0:g}..{t1:g}, this run needs "
+                        f"{plan.times[0]:g}..{plan.times[-1]:g}",
+                        "run the source over at least this run's time span",
+                    )
+                try:
+                    drivers.append(an.prescribe(src, p.coordinate, p.name))
+                except ModelError as e:
+                    self._model_error(plan, e)
+            else:
+                drivers.append(self._prescribed_driver(p, (*plan.path, "prescribed", k)))
+        mixed = isinstance(r, s.MixedRunSpec)
+        model = self.run_model(plan, () if mixed else drivers)
+        q0 = self.q_start(plan, model)
+        qd0 = self.qd_start(plan, model)
+        hold = self.hold(plan)
+        ts = plan.times
+        opts = dict(getattr(r, "options", {}) or {})
+        dt = None
+        if getattr(r, "dt", None) is not None:
+            dt = self.b.scalar(r.dt, "time", (*plan.path, "dt"))
+        try:
+            try:
+                if r.kind in ("kinematic", "inverse"):
+                    if hold:
+                        q0 = an.assemble(model, q0, hold=hold).q
+                    if r.kind == "kinematic":
+                        kw = {"max_iter": r.max_iter}
+                        if r.tol is not None:
+                            kw["tol"] = r.tol
+                        return an.kinematic(model, ts, q0=q0, **kw)
+                    return an.inverse(model, ts, q0=q0, **opts)
+                common = dict(
+                    method=r.method,
+                    rtol=r.rtol,
+                    atol=r.atol,
+                    dt=dt,
+                    q0=q0,
+                    qd0=qd0,
+                    hold=hold,
+                    **opts,
+                )
+                if progress is not None:
+                    common["progress"] = progress
+                if r.kind == "forward":
+                    return an.forward(model, ts, **common)
+                return an.mixed(
+                    model,
+                    ts,
+                    prescribed=drivers,
+                    unknown=list(r.unknown),
+                    solver=r.solver,
+                    independent=None if r.independent is None else list(r.independent),
+                    **common,
+                )
+            except TypeError as e:
+                if "unexpected keyword argument" in str(e):
+                    self.fail((*plan.path, "options"), f"unknown option ({e})", "remove the option")
+                raise
+        except FileError:
+            raise
+        except ModelError as e:
+            self._model_error(plan, e)
+        except NumericalError as e:
+            e.run = plan.name
+            e.file = self.b.file
+            raise
+
+    def execute(
+        self,
+        names=None,
+        *,
+        progress: Callable | None = None,
+        on_start: Callable | None = None,
+        on_done: Callable | None = None,
+    ) -> dict[str, an.Result]:
+        """Execute runs ``names`` (default all) and the runs they depend on.
+
+        Args:
+            names: run names, or None for every run.
+            progress: optional ``progress(plan) -> f(t)`` giving a per-time callback for the
+                dynamic runs (see ``mixdyn.forward``'s ``progress``).
+            on_start, on_done: optional callbacks ``(plan)`` and ``(plan, result, seconds)``.
+
+        Returns:
+            The results by run name, in execution order.
+        """
+        results: dict[str, an.Result] = {}
+        for plan in self.order(names):
+            if on_start is not None:
+                on_start(plan)
+            t0 = _time.perf_counter()
+            cb = progress(plan) if progress is not None else None
+            res = self.execute_one(plan, results, cb)
+            results[plan.name] = res
+            if on_done is not None:
+                on_done(plan, res, _time.perf_counter() - t0)
+        return results
+
+
+def _position_kind(coord: str) -> str:
+    return "angle" if coord == "phi" else "length"
+
+
+def _velocity_kind(coord: str) -> str:
+    return "angular_velocity" if coord == "phi" else "velocity"
+
+
+def execute(spec: s.ModelFile, names=None, **kwargs) -> dict[str, an.Result]:
+    """Execute the runs of a description (see :meth:`Runner.execute`)."""
+    return Runner(spec).execute(names, **kwargs)
+
+
+__all__ = ["BODY_COLUMNS", "Plan", "Runner", "execute"]

@@ -1,0 +1,95 @@
+"""Plots and animations: files of the right kind, size and frame count, and not blank."""
+
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import mixdyn as md
+from fixtures import four_bar, slider_crank
+from mixdyn.viz import Scene, animate, html, plot_columns, result_columns
+
+
+@pytest.fixture(scope="module")
+def motion():
+    model = slider_crank()
+    return md.kinematic(model, np.linspace(0, math.pi, 61))
+
+
+def test_png_plot(motion, tmp_path):
+    cols, units = result_columns(motion, ["slider.x", "crank.A.y", "rod.B.vx"])
+    assert units["crank.A.y"] == "m" and units["rod.B.vx"] == "m/s"
+    np.testing.assert_allclose(cols["crank.A.y"], 0.1 * np.sin(2 * motion.t), atol=1e-12)
+    path = plot_columns(
+        cols,
+        ["slider.x", "crank.A.y"],
+        tmp_path / "p.png",
+        units=units,
+        title="slider",
+        reference=(motion.t, 0.1 * np.sin(2 * motion.t), "exact"),
+        size=(6, 4),
+        dpi=100,
+    )
+    with Image.open(path) as im:
+        assert im.size == (600, 400)
+        assert len(im.convert("RGB").getcolors(maxcolors=100_000)) > 50
+
+
+def test_svg_and_bad_suffix(motion, tmp_path):
+    cols, units = result_columns(motion, ["slider.x"])
+    text = plot_columns(cols, ["slider.x"], tmp_path / "p.svg", units=units).read_text()
+    assert text.lstrip().startswith("<?xml") and "<svg" in text and len(text) > 5000
+    with pytest.raises(ValueError, match=r"use \.png"):
+        plot_columns(cols, ["slider.x"], tmp_path / "p.txt")
+    with pytest.raises(KeyError, match="no column"):
+        result_columns(motion, ["slider.nope"])
+
+
+def test_gif_frames_and_motion(motion, tmp_path):
+    path = animate(motion, tmp_path / "a.gif", frames=25, fps=10, trace=["crank.A"], dpi=60)
+    with Image.open(path) as gif:
+        assert gif.n_frames == 25
+        assert gif.size[0] >= 300 and gif.size[1] >= 150
+        assert gif.info["duration"] == 100
+        frames = []
+        for k in (0, 12):
+            gif.seek(k)
+            frames.append(np.asarray(gif.convert("RGB")))
+    assert np.mean(frames[0] != frames[1]) > 0.001
+
+
+def test_no_more_frames_than_outputs(tmp_path):
+    model = four_bar()
+    res = md.kinematic(model, np.linspace(0, 1, 7))
+    path = animate(None, tmp_path / "a.gif", model=model, t=res.t, q=res.q, frames=50)
+    with Image.open(path) as gif:
+        assert gif.n_frames == 7
+
+
+def test_html_is_self_contained(motion, tmp_path):
+    page = html(motion, tmp_path / "a.html", frames=30, trace=["crank.A"]).read_text()
+    assert page.startswith("<!DOCTYPE html>") and "<canvas" in page and "<script>" in page
+    assert "src=" not in page and "http" not in page.split("<script>")[1]
+    assert '"crank"' in page and '"slider"' in page
+    assert page.count('"t":[') == 1
+
+
+def test_mp4_needs_ffmpeg(motion, tmp_path, monkeypatch):
+    import shutil
+
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    with pytest.raises(ValueError, match="ffmpeg"):
+        animate(motion, tmp_path / "a.mp4")
+    with pytest.raises(ValueError, match=r"use \.gif"):
+        animate(motion, tmp_path / "a.avi")
+
+
+def test_scene_outlines(motion):
+    scene = Scene(motion.model, motion.q[:3], trace=["rod.B"])
+    # the crank and rod are bars (their points are in a line); the slider, with none, a block
+    assert [o.shape[1] for o in scene.outlines] == [2, 2, 4]
+    np.testing.assert_allclose(scene.traces[0], motion.q[:3, 6:8], atol=1e-12)
+    x0, x1, y0, y1 = scene.bounds
+    assert x0 < 0 < 0.4 < x1 and y0 < 0 < y1
+    assert scene.guides.shape == (1, 2, 2)
