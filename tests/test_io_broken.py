@@ -236,9 +236,11 @@ def test_broken_file(cli, tmp_path, case, text, expected, line):
     assert "pwned" not in res.stdout
 
 
-def test_unsolvable_mixed_run(cli, tmp_path):
+@pytest.mark.parametrize("command", ["run", "check"])
+def test_unsolvable_mixed_run(cli, tmp_path, command):
     """The unknown force (a torque on the slider, which cannot turn) cannot produce the
-    prescribed crank motion: found when the run starts, exit 2, naming the run."""
+    prescribed crank motion: found by `check` before anything runs and by `run` when the run
+    starts; exit 2, naming the run and the force."""
     text = sub("unknown: [tq]", "unknown: [ts]", MIXED)
     text = sub(
         "  - {type: torque, name: tq, body: crank, law: 0}\n",
@@ -248,7 +250,8 @@ def test_unsolvable_mixed_run(cli, tmp_path):
     )
     path = tmp_path / "unsolvable.yaml"
     path.write_text(text, encoding="utf-8")
-    res = cli.invoke(app, ["run", str(path), "--run", "mix", "--out", str(tmp_path / "o")])
+    args = ["run", str(path), "--run", "mix", "--out", str(tmp_path / "o")]
+    res = cli.invoke(app, args if command == "run" else ["check", str(path)])
     assert res.exit_code == 2, res.output
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "Traceback" not in res.output

@@ -14,6 +14,7 @@ from .analysis import (  # noqa: E402
     DofReport,
     Result,
     assemble,
+    check_mixed,
     degrees_of_freedom,
     forward,
     inverse,
@@ -39,6 +40,16 @@ from .units import SI, UnitSystem  # noqa: E402
 
 __version__ = "0.1.0"
 
+
+def __getattr__(name):
+    # The file layer (pydantic, pint) and the plots (matplotlib) load on first use.
+    if name in ("io", "viz"):
+        import importlib
+
+        return importlib.import_module(f".{name}", __name__)
+    raise AttributeError(f"module 'mixdyn' has no attribute {name!r}")
+
+
 __all__ = [
     "SI",
     "Assembly",
@@ -57,6 +68,7 @@ __all__ = [
     "UnitSystem",
     "__version__",
     "assemble",
+    "check_mixed",
     "degrees_of_freedom",
     "errors",
     "forward",

@@ -182,6 +182,7 @@ def check(file: FileArg):
             if r.kind != "kinematic":
                 runner.check_masses(plan)
             rep = runner.mobility(plan)
+            runner.check_solvable(plan)
             extra = ""
             if isinstance(r, s.MixedRunSpec):
                 extra = f", unknown {', '.join(r.unknown)}, solver {r.solver}"

@@ -6,7 +6,7 @@ from .forward import forward
 from .integrators import INTEGRATORS
 from .inverse import inverse
 from .kinematic import kinematic
-from .mixed import mixed, prescribe
+from .mixed import check_mixed, mixed, prescribe
 from .result import Result
 
 __all__ = [
@@ -15,6 +15,7 @@ __all__ = [
     "DofReport",
     "Result",
     "assemble",
+    "check_mixed",
     "degrees_of_freedom",
     "forward",
     "inverse",

@@ -19,7 +19,7 @@ from .kinematic import kinematic
 from .result import Result
 
 
-def inverse(model: Model, t, *, q0=None, **kinematic_options) -> Result:
+def inverse(model: Model, t, *, q0=None, hold=(), **kinematic_options) -> Result:
     """Driver efforts and joint reactions of a fully driven mechanism over time.
 
     Args:
@@ -27,6 +27,7 @@ def inverse(model: Model, t, *, q0=None, **kinematic_options) -> Result:
             needs mass and inertia > 0.
         t: (N,) increasing output times [time].
         q0: (nq,) rough starting configuration.
+        hold: coordinates kept at their rough value while assembling.
         **kinematic_options: passed to :func:`~mixdyn.kinematic` (``tol``, ``max_iter``...).
 
     Returns:
@@ -35,7 +36,7 @@ def inverse(model: Model, t, *, q0=None, **kinematic_options) -> Result:
     """
     ts = output_times(t)
     require_masses(model)
-    kin = kinematic(model, ts, q0=q0, **kinematic_options)
+    kin = kinematic(model, ts, q0=q0, hold=hold, **kinematic_options)
     _, keep = analyse(model, kin.q[0], float(ts[0]))
     problem = Problem(model, Constraints.of(model).with_rank(len(keep)))
     _, _, ratio, cols = _post(

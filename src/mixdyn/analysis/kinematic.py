@@ -107,6 +107,7 @@ def kinematic(
     drivers=None,
     q0=None,
     assemble_first: bool = True,
+    hold=(),
     tol: float | None = None,
     max_iter: int = 25,
     singular_tol: float = 1e-7,
@@ -119,6 +120,7 @@ def kinematic(
         drivers: drivers to use instead of the model's.
         q0: (nq,) rough starting configuration (default: the bodies' ``q0``).
         assemble_first: close the joints from the rough pose before applying the drivers.
+        hold: coordinates (``"crank.phi"``) kept at their rough value while assembling.
         tol: Newton tolerance on the largest residual [length] (default ``1e-12 x`` size).
         max_iter: Newton iterations per time.
         singular_tol: a pivot ratio of ``Phi_q`` below this is reported as a singularity.
@@ -135,7 +137,7 @@ def kinematic(
     drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     if assemble_first:
-        q = jnp.asarray(assemble(model, q).q)
+        q = jnp.asarray(assemble(model, q, hold=hold).q)
     report, keep = analyse(model, q, float(ts[0]), drivers)
     require_balanced(report)
     c = Constraints.of(model, drivers).with_rank(len(keep))

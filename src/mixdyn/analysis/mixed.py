@@ -167,6 +167,107 @@ def _collocation(model, unknown, prescribed, q, qd, t):
     return j
 
 
+def _setup(
+    model: Model, t0: float, prescribed, unknown, solver, independent, method, q0, qd0, hold
+):
+    """Everything a mixed run does before integrating: checks, consistent start, problem."""
+    if solver not in SOLVERS:
+        raise ModelError(
+            f"unknown mixed solver {solver!r}; use 'augmented' or 'partition'", "solver"
+        )
+    require_masses(model)
+    unknown = tuple(unknown)
+    r = Resolver(model.ground, model.bodies)
+    prescribed = tuple(d.bind(r) for d in prescribed)
+    if len(unknown) != len(prescribed):
+        raise SolvabilityError(
+            f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); a "
+            "mixed problem needs one prescribed motion per unknown force",
+            ", ".join(unknown) or "unknown",
+        )
+    if not unknown:
+        raise SolvabilityError("no unknown force: use forward dynamics instead", "unknown")
+    existing = {e.name for e in (*model.joints, *model.drivers, *model.forces)}
+    for d in prescribed:
+        if d.name in existing:
+            raise ModelError("a prescribed motion needs a name not used by the model", d.name)
+    if len(set(unknown)) != len(unknown):
+        raise SolvabilityError("an unknown force is named twice", ", ".join(unknown))
+    for name in unknown:
+        f = model.element(name)
+        if not getattr(f, "has_magnitude", False):
+            raise SolvabilityError(
+                "only a force element with a magnitude (point force, torque, "
+                "actuator) can be unknown",
+                name,
+            )
+    drivers = (*model.drivers, *prescribed)
+    c_full = Constraints(model.joints, drivers, model.nq)
+    q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
+    report, keep = analyse(model, np.asarray(q), t0, drivers)
+    bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
+    if bad:
+        raise SolvabilityError(
+            "this prescribed motion is already fixed by the joints or other "
+            "drivers; prescribe a coordinate that is free",
+            ", ".join(bad),
+        )
+    independent_rows_only = solver == "partition" or method == "partitioning"
+    c = c_full.with_active(keep) if independent_rows_only else c_full.with_rank(len(keep))
+    mk = c.m - len(prescribed)
+    _check_solvable(model, c, q, qd, t0, mk, unknown, prescribed)
+    j_index, i_index = (), ()
+    if solver == "partition":
+        j_index = _collocation(model, unknown, prescribed, q, qd, t0)
+        n_i = model.nq - len(j_index) - mk
+        if independent is not None:
+            i_index = [model.coordinate_index(x) for x in independent]
+            if len(i_index) != n_i:
+                raise SolvabilityError(
+                    f"the partition needs {n_i} independent coordinate(s) (3n - j - k), got "
+                    f"{len(i_index)}",
+                    ", ".join(independent),
+                )
+            if set(i_index) & set(j_index):
+                raise SolvabilityError(
+                    "an independent coordinate cannot be prescribed", ", ".join(independent)
+                )
+            k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
+            J = np.asarray(c.phi_q(jnp.asarray(q), jnp.asarray(t0)))[:mk]
+            sv = np.linalg.svd(J[:, k_index], compute_uv=False)
+            if sv.size and sv[-1] < 1e-9 * sv[0]:
+                raise SolvabilityError(
+                    "with these independent coordinates the dependent block Phi_qk is singular "
+                    "(the remaining coordinates cannot be solved from the joints); choose other "
+                    "independent coordinates or leave the choice automatic",
+                    ", ".join(independent),
+                )
+    problem = Problem(model, c, unknown, solver, j_index, i_index)
+    return problem, q, qd, prescribed
+
+
+def check_mixed(
+    model: Model,
+    prescribed,
+    unknown,
+    *,
+    t0: float = 0.0,
+    solver: str = "augmented",
+    independent=None,
+    q0=None,
+    qd0=None,
+    hold=(),
+) -> None:
+    """Check that a mixed problem is solvable, without integrating it.
+
+    Runs every check of :func:`mixed` at the start time ``t0`` [time]: the counts, the unknown
+    forces' names, a consistent start, the prescribed motions' independence, the pairing of
+    forces and motions, and (for ``solver="partition"``) the collocation and the partition.
+    Returns None; raises the same errors as :func:`mixed`.
+    """
+    _setup(model, t0, prescribed, unknown, solver, independent, "projection", q0, qd0, hold)
+
+
 def mixed(
     model: Model,
     t,
@@ -208,79 +309,10 @@ def mixed(
         SolvabilityError: the counts differ, an unknown force cannot affect the prescribed
             motions, a prescribed motion is already fixed, or the partition is singular.
     """
-    if solver not in SOLVERS:
-        raise ModelError(
-            f"unknown mixed solver {solver!r}; use 'augmented' or 'partition'", "solver"
-        )
     ts = output_times(t)
-    require_masses(model)
-    unknown = tuple(unknown)
-    r = Resolver(model.ground, model.bodies)
-    prescribed = tuple(d.bind(r) for d in prescribed)
-    if len(unknown) != len(prescribed):
-        raise SolvabilityError(
-            f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); a "
-            "mixed problem needs one prescribed motion per unknown force",
-            ", ".join(unknown) or "unknown",
-        )
-    if not unknown:
-        raise SolvabilityError("no unknown force: use forward dynamics instead", "unknown")
-    existing = {e.name for e in (*model.joints, *model.drivers, *model.forces)}
-    for d in prescribed:
-        if d.name in existing:
-            raise ModelError("a prescribed motion needs a name not used by the model", d.name)
-    if len(set(unknown)) != len(unknown):
-        raise SolvabilityError("an unknown force is named twice", ", ".join(unknown))
-    for name in unknown:
-        f = model.element(name)
-        if not getattr(f, "has_magnitude", False):
-            raise SolvabilityError(
-                "only a force element with a magnitude (point force, torque, "
-                "actuator) can be unknown",
-                name,
-            )
-    drivers = (*model.drivers, *prescribed)
-    c_full = Constraints(model.joints, drivers, model.nq)
-    q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
-    report, keep = analyse(model, np.asarray(q), float(ts[0]), drivers)
-    bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
-    if bad:
-        raise SolvabilityError(
-            "this prescribed motion is already fixed by the joints or other "
-            "drivers; prescribe a coordinate that is free",
-            ", ".join(bad),
-        )
-    independent_rows_only = solver == "partition" or method == "partitioning"
-    c = c_full.with_active(keep) if independent_rows_only else c_full.with_rank(len(keep))
-    mk = c.m - len(prescribed)
-    _check_solvable(model, c, q, qd, float(ts[0]), mk, unknown, prescribed)
-    j_index, i_index = (), ()
-    if solver == "partition":
-        j_index = _collocation(model, unknown, prescribed, q, qd, float(ts[0]))
-        n_i = model.nq - len(j_index) - mk
-        if independent is not None:
-            i_index = [model.coordinate_index(x) for x in independent]
-            if len(i_index) != n_i:
-                raise SolvabilityError(
-                    f"the partition needs {n_i} independent coordinate(s) (3n - j - k), got "
-                    f"{len(i_index)}",
-                    ", ".join(independent),
-                )
-            if set(i_index) & set(j_index):
-                raise SolvabilityError(
-                    "an independent coordinate cannot be prescribed", ", ".join(independent)
-                )
-            k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
-            J = np.asarray(c.phi_q(jnp.asarray(q), jnp.asarray(float(ts[0]))))[:mk]
-            sv = np.linalg.svd(J[:, k_index], compute_uv=False)
-            if sv.size and sv[-1] < 1e-9 * sv[0]:
-                raise SolvabilityError(
-                    "with these independent coordinates the dependent block Phi_qk is singular "
-                    "(the remaining coordinates cannot be solved from the joints); choose other "
-                    "independent coordinates or leave the choice automatic",
-                    ", ".join(independent),
-                )
-    problem = Problem(model, c, unknown, solver, j_index, i_index)
+    problem, q, qd, prescribed = _setup(
+        model, float(ts[0]), prescribed, unknown, solver, independent, method, q0, qd0, hold
+    )
     opts = dict(options, rtol=rtol, atol=atol, dt=dt)
     res = simulate("mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress)
     res.stats.update(

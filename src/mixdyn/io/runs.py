@@ -23,6 +23,7 @@ import numpy as np
 from .. import analysis as an
 from .. import model as m
 from ..errors import ModelError, NumericalError
+from ..model._element import Resolver
 from . import schema as s
 from ._errors import FileError
 from .expressions import ExpressionError
@@ -373,6 +374,36 @@ class Runner:
                 "prescribe fewer motions",
             )
         return report
+
+    def check_solvable(self, plan: Plan) -> None:
+        """For a mixed run, every solvability check of :func:`mixdyn.check_mixed` at the
+        assembled start, without integrating (a prescribed motion taken from another run is
+        held at its starting value for the check)."""
+        r = plan.spec
+        if not isinstance(r, s.MixedRunSpec):
+            return
+        model = self.run_model(plan, ())
+        try:
+            q = np.asarray(an.assemble(model, self.q_start(plan, model), hold=self.hold(plan)).q)
+            drivers = []
+            for k, p in enumerate(r.prescribed):
+                if p.from_run is None:
+                    drivers.append(self._prescribed_driver(p, (*plan.path, "prescribed", k)))
+                    continue
+                d = self._dummy_driver(k, p).bind(Resolver(model.ground, model.bodies))
+                drivers.append(dataclasses.replace(d, law=m.Constant(float(d.measure(q)))))
+            an.check_mixed(
+                model,
+                drivers,
+                tuple(r.unknown),
+                t0=float(plan.times[0]),
+                solver=r.solver,
+                independent=r.independent,
+                q0=q,
+                hold=self.hold(plan),
+            )
+        except ModelError as e:
+            self._model_error(plan, e)
 
     def check_masses(self, plan: Plan) -> None:
         """A dynamic run needs every body's mass and inertia > 0."""
