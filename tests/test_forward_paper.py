@@ -64,3 +64,56 @@ def test_constraints_and_energy_bookkeeping(runs):
     assert r.stats["max_violation"] < 1e-9
     E = r["energy.total"] - r["work.nonconservative"] - r["work.constraints"]
     assert np.max(np.abs(E - E[0])) <= 1e-8 * np.max(np.abs(r["energy.kinetic"]))
+
+
+def test_forward_and_mixed_compile_once_per_structure(monkeypatch):
+    """A second run of a model of equal structure with other numbers (masses, loads, a
+    length) is not traced again: compile once per structure, never per call."""
+    from mixdyn.equations import Constraints
+
+    count = {"n": 0}
+    original = Constraints.full
+
+    def counting(self, q, t):
+        count["n"] += 1
+        return original(self, q, t)
+
+    monkeypatch.setattr(Constraints, "full", counting)
+    ts = np.linspace(0.0, 0.2, 11)
+
+    def build(scale):
+        loads = [
+            md.Torque("T2 (compile test)", "crank", law=500.0 * scale),
+            md.Torque("T3", "coupler", law=-500.0),
+            md.PointForce(
+                "F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0 * scale, np.pi / 2)
+            ),
+        ]
+        m = paper_mechanism(forces=loads)
+        return m.replace(
+            bodies=[
+                md.Body(b.name, float(b.mass) * scale, float(b.inertia), q0=b.q0, points=b.points)
+                for b in m.bodies
+            ]
+        )
+
+    def runs(m):
+        fw = md.forward(m, ts, hold=HOLD, rtol=1e-9, atol=1e-9)
+        md.mixed(
+            m,
+            ts,
+            prescribed=[md.prescribe(fw, "slider.x")],
+            unknown=["F1"],
+            q0=fw.q[0],
+            qd0=fw.qd[0],
+            rtol=1e-9,
+            atol=1e-9,
+        )
+        return fw
+
+    fw1 = runs(build(1.0))
+    traced = count["n"]
+    assert traced > 0
+    fw2 = runs(build(1.3))
+    assert count["n"] == traced, "an equal structure was traced again"
+    assert np.max(np.abs(fw2["slider.x"] - fw1["slider.x"])) > 1e-3  # the numbers did change

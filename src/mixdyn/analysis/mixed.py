@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import itertools
 
+import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import scipy.linalg as sl
@@ -30,10 +31,13 @@ from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
 from ._problem import Problem
 from ._simulate import consistent_state, output_times, require_masses, simulate
-from ._structure import analyse
+from ._structure import _jac, analyse
 from .result import Result
 
 SOLVERS = ("augmented", "partition")
+
+#: ``B`` at one state, compiled once per model structure and list of names.
+_directions = eqx.filter_jit(force_directions)
 
 
 def prescribe(result: Result, coordinate: str, name: str | None = None) -> Driver:
@@ -71,12 +75,12 @@ def _null_space(A):
 
 def _mobility(problem_c: Constraints, model: Model, q, qd, t, mk: int, names):
     """``W`` (p, len(names)): prescribed accelerations produced per unit of each force."""
-    J = np.asarray(problem_c.phi_q(jnp.asarray(q), jnp.asarray(t)))
+    J = np.asarray(_jac(problem_c, jnp.asarray(q), jnp.asarray(t, dtype=jnp.float64)))
     Phi_q, Psi_q = J[:mk], J[mk:]
     N = _null_space(Phi_q)
     Mdiag = np.asarray(model.mass_diagonal)
     B = np.asarray(
-        force_directions(model, tuple(names), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
+        _directions(model, tuple(names), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
     )
     red = N.T @ (Mdiag[:, None] * N)
     # Accelerations of the prescribed motions per unit generalized force, (p, nq); its norm
@@ -143,7 +147,7 @@ def _check_solvable(model, c, q, qd, t, mk, unknown, prescribed):
 def _collocation(model, unknown, prescribed, q, qd, t):
     """Coordinates ``j`` of the partition solver, checking each unknown force is collocated."""
     B = np.asarray(
-        force_directions(model, tuple(unknown), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
+        _directions(model, tuple(unknown), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
     )
     driven = {d.index: d.name for d in prescribed if isinstance(d, CoordinateDriver)}
     j = []
@@ -233,7 +237,7 @@ def _setup(
                     "an independent coordinate cannot be prescribed", ", ".join(independent)
                 )
             k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
-            J = np.asarray(c.phi_q(jnp.asarray(q), jnp.asarray(t0)))[:mk]
+            J = np.asarray(_jac(c, jnp.asarray(q), jnp.asarray(t0, dtype=jnp.float64)))[:mk]
             sv = np.linalg.svd(J[:, k_index], compute_uv=False)
             if sv.size and sv[-1] < 1e-9 * sv[0]:
                 raise SolvabilityError(
