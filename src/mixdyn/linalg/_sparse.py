@@ -35,7 +35,11 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 #: Smallest block size: fewer, larger blocks amortize the scan's per-step overhead.
-MIN_BLOCK = 8
+MIN_BLOCK = 16
+UNROLL = 1
+#: ``"scan"`` (sequential block Cholesky, the default: measured fastest on CPU) or ``"cr"``
+#: (block cyclic reduction, log depth; 1.5x slower on CPU at 256 bodies, a GPU candidate).
+METHOD = "scan"
 
 #: ``"auto"`` takes the sparse path from this many constraint rows on (measured, see
 #: ``benchmarks/sparse_scaling.py``), when the reordered bandwidth is at most
@@ -87,6 +91,7 @@ class SchurStructure:
         k1 = np.concatenate(k1) if k1 else np.zeros(0, np.int64)
         k2 = np.concatenate(k2) if k2 else np.zeros(0, np.int64)
         cc = np.concatenate(cc) if cc else np.zeros(0, np.int64)
+        self.k1_all, self.k2_all, self.col_all = k1, k2, cc  # every product (klujax, tests)
         p1, p2 = inv[rows[k1]], inv[rows[k2]]
         b1, b2 = p1 // B, p2 // B
         keep = b1 >= b2  # diagonal blocks in full, the sub-diagonal blocks (i + 1, i)
@@ -101,6 +106,12 @@ class SchurStructure:
         self.size = (2 * nblk - 1) * B * B
         pad = np.arange(m, nblk * B)
         self.pad_slot = (pad // B * B + pad % B) * B + pad % B
+        # cyclic reduction: nblk padded to 2^L - 1 blocks; which pivots are real rows
+        self.method = METHOD
+        self.n_cr = 2 ** int(np.ceil(np.log2(nblk + 1))) - 1
+        real = np.zeros((self.n_cr, B), dtype=bool)
+        real.reshape(-1)[:m] = True
+        self.cr_real = np.concatenate(_cr_order(real))
 
     # ------------------------------------------------------------------ numeric
     def blocks(self, values, Minv):
@@ -125,13 +136,66 @@ class SchurStructure:
         rhs = bb[self.perm]
         rhs = jnp.concatenate([rhs, jnp.zeros((nblk * B - self.m, rhs.shape[1]), rhs.dtype)])
         rhs = rhs.reshape(nblk, B, -1)
-        L, W, y = _block_cholesky_forward(D, E, rhs)
-        x = _block_backward(L, W, y)
+        if self.method == "scan":
+            L, W, y = _block_cholesky_forward(D, E, rhs)
+            x = _block_backward(L, W, y)
+            d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: self.m] ** 2
+        else:
+            N = self.n_cr
+            eye = jnp.broadcast_to(jnp.eye(B, dtype=D.dtype), (N - nblk, B, B))
+            D = jnp.concatenate([D, eye])
+            E = jnp.concatenate([E, jnp.zeros((N - nblk, B, B), D.dtype)])
+            rhs = jnp.concatenate([rhs, jnp.zeros((N - nblk, *rhs.shape[1:]), rhs.dtype)])
+            x, pivots = _cyclic_reduction(D, E, rhs)
+            x = x[:nblk]
+            d = pivots[self.cr_real] ** 2
         x = x.reshape(nblk * B, -1)[: self.m][self.inv]
-        d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: self.m] ** 2
         ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(d.dtype).tiny)
         ratio = jnp.where(jnp.isfinite(ratio), ratio, 0.0)
         return (x[:, 0] if vec else x), ratio
+
+
+def _cr_order(a):
+    """The blocks of ``a`` (N, ...) in the order cyclic reduction eliminates them."""
+    if a.shape[0] == 1:
+        return [a.reshape(-1)]
+    return [a[0::2].reshape(-1), *_cr_order(a[1::2])]
+
+
+def _cho_solve(L, X):
+    return jax.vmap(lambda L, X: jsl.cho_solve((L, True), X))(L, X)
+
+
+def _cyclic_reduction(D, E, b):
+    """Solve the SPD block-tridiagonal system (diagonal blocks ``D`` (N, B, B), sub-diagonal
+    ``E`` (N - 1, B, B), ``E[i]`` = block ``(i + 1, i)``), ``N = 2^L - 1`` blocks, by block
+    cyclic reduction: each level eliminates the even blocks at once (batched Cholesky), so
+    the depth is ``L = log2(N + 1)`` and the work ``O(N B^3)``.
+
+    Returns ``(x (N, B, k), pivots)``: the diagonals of the Cholesky factors met, in
+    elimination order (:func:`_cr_order`).
+    """
+    Lc = jnp.linalg.cholesky(D[0::2])
+    piv = jnp.diagonal(Lc, axis1=1, axis2=2).reshape(-1)
+    if D.shape[0] == 1:
+        return _cho_solve(Lc, b), piv
+    El, Er = E[0::2], E[1::2]  # odd block j: E[j - 1] (left), E[j] (right, transposed)
+    ElT = jnp.swapaxes(El, 1, 2)
+    ErT = jnp.swapaxes(Er, 1, 2)
+    U = _cho_solve(Lc[:-1], ElT)  # D[j-1]^-1 E[j-1]^T
+    V = _cho_solve(Lc[1:], Er)  # D[j+1]^-1 E[j]
+    ue = _cho_solve(Lc, b[0::2])
+    Do = D[1::2] - El @ U - ErT @ V
+    bo = b[1::2] - El @ ue[:-1] - ErT @ ue[1:]
+    Eo = -El[1:] @ V[:-1]
+    xo, piv_o = _cyclic_reduction(Do, Eo, bo)
+    zero = jnp.zeros_like(xo[:1])
+    left = jnp.concatenate([zero, Er @ xo])  # E[2k-1] x[2k-1]
+    right = jnp.concatenate([ElT @ xo, zero])  # E[2k]^T x[2k+1]
+    xe = _cho_solve(Lc, b[0::2] - left - right)
+    x = jnp.stack([xe[:-1], xo], axis=1).reshape(-1, *xo.shape[1:])
+    x = jnp.concatenate([x, xe[-1:]])
+    return x, jnp.concatenate([piv, piv_o])
 
 
 def _block_cholesky_forward(D, E, rhs):
@@ -154,7 +218,7 @@ def _block_cholesky_forward(D, E, rhs):
         return (Li, yi), (Li, Wi, yi)
 
     init = (jnp.eye(B, dtype=D.dtype), jnp.zeros_like(rhs[0]))
-    _, (L, W, y) = jax.lax.scan(step, init, (D, Epad, rhs))
+    _, (L, W, y) = jax.lax.scan(step, init, (D, Epad, rhs), unroll=UNROLL)
     return L, W, y
 
 
@@ -167,7 +231,7 @@ def _block_backward(L, W, y):
         xi = jsl.solve_triangular(Li, yi - Wn.T @ xn, lower=True, trans="T")
         return xi, xi
 
-    _, x = jax.lax.scan(step, jnp.zeros_like(y[0]), (L, Wnext, y), reverse=True)
+    _, x = jax.lax.scan(step, jnp.zeros_like(y[0]), (L, Wnext, y), reverse=True, unroll=UNROLL)
     return x
 
 
