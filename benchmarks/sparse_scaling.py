@@ -123,10 +123,12 @@ def acc_runner(acc, count: int):
 
     @eqx.filter_jit
     def run(problem, q, qd, t):
-        def body(k, qd):
-            return qd + 1e-300 * acc(problem, q, qd, t)[0]
+        def body(k, y):  # q and qd both carried: nothing is hoisted out of the loop
+            q, qd = y
+            qdd = acc(problem, q, qd, t)[0]
+            return q + 1e-300 * qdd, qd + 1e-300 * qdd
 
-        return jax.lax.fori_loop(0, count, body, qd)
+        return jax.lax.fori_loop(0, count, body, (q, qd))
 
     return run
 
