@@ -75,6 +75,12 @@ class Problem(eqx.Module):
     def Minv(self):
         return 1.0 / self.model.mass_diagonal
 
+    @property
+    def sparse(self) -> bool:
+        """Whether the sparse linear-solver path is taken: the constraints ask for it and
+        the problem is a forward one (the mixed problems' systems stay dense)."""
+        return self.c.linear_solver == "sparse" and self.p == 0 and self.solver == "augmented"
+
     # ------------------------------------------------------------------ forces
     def known_forces(self, q, qd, t):
         """Known generalized forces ``Q`` (nq,)."""
@@ -94,6 +100,8 @@ class Problem(eqx.Module):
         With ``alpha``, ``beta`` [1/time] the acceleration constraints are Baumgarte-stabilized:
         ``C qdd = gamma - 2 alpha (Phi_q qd + Phi_t) - beta**2 Phi``.
         """
+        if self.sparse:
+            return self._sparse_accelerations(q, qd, t, alpha, beta)
         C = self.c.phi_q(q, t)
         gam = self.c.gamma(q, qd, t)
         if alpha is not None:
@@ -102,6 +110,18 @@ class Problem(eqx.Module):
         if self.solver == "partition":
             return self._partition(q, qd, t, C, gam, Q)
         return solve_kkt(self.Minv, C, self.G(q, qd, t, C), Q, gam, self.c.rank)
+
+    def _sparse_accelerations(self, q, qd, t, alpha, beta):
+        """The Schur complement solve on the sparse path (see :mod:`mixdyn.linalg`)."""
+        c, Minv = self.c, self.Minv
+        v = c.jacobian_values(q, t)
+        gam = c.gamma(q, qd, t)
+        if alpha is not None:
+            gam = gam - 2 * alpha * (c.matvec(v, qd) + c.phi_t(q, t)) - beta**2 * c(q, t)
+        Q = self.known_forces(q, qd, t)
+        mu, ratio = c.schur_solve(v, Minv, c.matvec(v, Minv * Q) - gam)
+        qdd = Minv * (Q - c.rmatvec(v, mu))
+        return qdd, mu, ratio
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""
@@ -150,6 +170,10 @@ class Problem(eqx.Module):
 
     def work_rates(self, q, qd, t, mu):
         """``[P_nonconservative_applied, P_constraints_and_unknowns]`` (2,) [power]."""
+        if self.sparse:
+            p_nc = nonconservative_power(self.model, q, qd, t, exclude=self.unknown)
+            p_c = -jnp.sum(self.c.matvec(self.c.jacobian_values(q, t), qd) * mu)
+            return jnp.stack([p_nc, p_c])
         C = self.c.phi_q(q, t)
         p_nc = nonconservative_power(self.model, q, qd, t, exclude=self.unknown)
         return jnp.stack([p_nc, jnp.sum(self.powers(q, qd, t, mu, C))])
@@ -158,8 +182,14 @@ class Problem(eqx.Module):
     def project_positions(self, q, t, tol, iters: int = 4):
         """Mass-weighted least-norm projection of ``q`` onto ``Phi(q, t) = 0``."""
 
+        c, Minv = self.c, self.Minv
+
         def body(_, q):
             r = self.c(q, t)
+            if self.c.linear_solver == "sparse":
+                v = c.jacobian_values(q, t)
+                y, _ = c.schur_solve(v, Minv, r)
+                return jnp.where(jnp.max(jnp.abs(r)) > tol, q - Minv * c.rmatvec(v, y), q)
             J = self.c.phi_q(q, t)
             MJ = self.Minv[:, None] * J.T
             y, _ = self.c.solve(J @ MJ, r)
@@ -169,6 +199,11 @@ class Problem(eqx.Module):
 
     def project_velocities(self, q, qd, t):
         """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``."""
+        if self.c.linear_solver == "sparse":
+            c, Minv = self.c, self.Minv
+            v = c.jacobian_values(q, t)
+            y, _ = c.schur_solve(v, Minv, c.matvec(v, qd) + c.phi_t(q, t))
+            return qd - Minv * c.rmatvec(v, y)
         J = self.c.phi_q(q, t)
         r = J @ qd + self.c.phi_t(q, t)
         MJ = self.Minv[:, None] * J.T

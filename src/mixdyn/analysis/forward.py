@@ -28,6 +28,7 @@ def forward(
     qd0=None,
     hold=(),
     progress=None,
+    linear_solver: str = "auto",
     **options,
 ) -> Result:
     """Simulate the mechanism under its forces from a consistent initial state.
@@ -44,6 +45,9 @@ def forward(
             (default 0); made consistent before the run.
         hold: coordinates (``"crank.phi"``) kept at their given values while assembling.
         progress: optional ``f(t)`` called at each output time (from inside the jitted loop).
+        linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
+            of small bandwidth without redundant constraints, see :mod:`mixdyn.linalg`):
+            the solve of the acceleration equations and of the projections.
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
             ``rho_inf``, ``max_steps``...).
 
@@ -61,7 +65,7 @@ def forward(
     # The partitioning integrator needs independent rows; the others solve redundant
     # constraints in the least-squares sense (robust where the redundancy moves).
     c = c_full.with_active(keep) if method == "partitioning" else c_full.with_rank(len(keep))
-    problem = Problem(model, c)
+    problem = Problem(model, c.with_linear_solver(linear_solver))
     opts = dict(options, rtol=rtol, atol=atol, dt=dt)
     res = simulate("forward", problem, ts, q, qd, method, opts, len(model.drivers), progress)
     res.stats["redundant_equations"] = report.redundant

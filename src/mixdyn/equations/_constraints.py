@@ -12,12 +12,23 @@ From it, exactly (no finite differences):
 
 from __future__ import annotations
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..errors import ModelError
 from ..model import Driver, Joint, Model
+
+#: The linear-solver paths (see :mod:`mixdyn.linalg`).
+LINEAR_SOLVERS = ("dense", "sparse", "auto")
+
+# Static fields that only name things (resolved into indices and arrays at binding): cleared
+# so that elements of one kind share one vectorized evaluation.
+_NAME_FIELDS = ("name", "point_i", "point_j", "point", "body", "body_i", "body_j")
+_BODY_FIELDS = ("b", "bi", "bj")
 
 
 class Constraints(eqx.Module):
@@ -38,8 +49,9 @@ class Constraints(eqx.Module):
     owners: tuple[int, ...] = eqx.field(static=True)
     nq: int = eqx.field(static=True)
     rank: int | None = eqx.field(static=True)
+    linear_solver: str = eqx.field(static=True)
 
-    def __init__(self, joints, drivers, nq: int, active=None, rank=None):
+    def __init__(self, joints, drivers, nq: int, active=None, rank=None, linear_solver="dense"):
         self.joints = tuple(joints)
         self.drivers = tuple(drivers)
         labels, owners = [], []
@@ -54,6 +66,34 @@ class Constraints(eqx.Module):
         self.nq = nq
         self.active = tuple(range(len(labels))) if active is None else tuple(int(i) for i in active)
         self.rank = None if rank is None or rank == len(self.active) else int(rank)
+        self.linear_solver = self._resolve_solver(linear_solver)
+
+    def _resolve_solver(self, linear_solver: str) -> str:
+        if linear_solver not in LINEAR_SOLVERS:
+            raise ModelError(
+                f"linear_solver must be one of {', '.join(LINEAR_SOLVERS)}, got {linear_solver!r}"
+            )
+        if linear_solver == "dense":
+            return "dense"
+        from ..linalg import choose_solver
+
+        local = self._local_ok()
+        if linear_solver == "auto":
+            if not local or self.rank is not None:
+                return "dense"
+            return choose_solver(self.m, self.schur_structure())
+        if not local:
+            raise ModelError(
+                "the sparse linear solver needs every joint and driver to refer to its bodies "
+                "through the fields b, bi, bj; use linear_solver='dense'"
+            )
+        if self.rank is not None:
+            raise ModelError(
+                "the sparse linear solver needs independent constraint equations, and this "
+                f"model has {self.m - self.rank} redundant one(s) (rank {self.rank} of "
+                f"{self.m}); use linear_solver='dense' (least-squares solve) or 'auto'"
+            )
+        return "sparse"
 
     @classmethod
     def of(cls, model: Model, drivers=None) -> Constraints:
@@ -62,13 +102,29 @@ class Constraints(eqx.Module):
 
     def with_active(self, active) -> Constraints:
         """The same set keeping only rows ``active`` (indices into the full set)."""
-        return Constraints(self.joints, self.drivers, self.nq, active)
+        return Constraints(
+            self.joints, self.drivers, self.nq, active, linear_solver=self.linear_solver
+        )
 
     def with_rank(self, rank: int) -> Constraints:
         """The full set, declared of rank ``rank``: if it has redundant rows, every solve with
         it becomes a least-squares (truncated SVD) solve, robust wherever the redundancy moves
         from row to row (a parallelogram passing through its singular positions)."""
-        return Constraints(self.joints, self.drivers, self.nq, None, rank)
+        return Constraints(
+            self.joints, self.drivers, self.nq, None, rank, linear_solver=self._downgrade(rank)
+        )
+
+    def _downgrade(self, rank) -> str:
+        """The solver kept by :meth:`with_rank`: redundant rows take the dense path."""
+        if self.linear_solver == "sparse" and rank is not None and rank != len(self.labels):
+            return "dense"
+        return self.linear_solver
+
+    def with_linear_solver(self, linear_solver: str) -> Constraints:
+        """The same set solved by ``linear_solver`` (``"dense"``, ``"sparse"``, ``"auto"``)."""
+        return Constraints(
+            self.joints, self.drivers, self.nq, self.active, self.rank, linear_solver
+        )
 
     def solve(self, A, b, extra_rank: int = 0):
         """Solve with a matrix built from ``Phi_q`` whose rank is ``self.rank + extra_rank``
@@ -110,6 +166,8 @@ class Constraints(eqx.Module):
 
     def __call__(self, q, t) -> jax.Array:
         """``Phi(q, t)`` (m,), the rows kept."""
+        if self.linear_solver == "sparse":
+            return self._local(_residual, q, t)
         Phi = self.full(q, t)
         if len(self.active) == self.n_full:
             return Phi
@@ -121,11 +179,15 @@ class Constraints(eqx.Module):
 
     def phi_t(self, q, t) -> jax.Array:
         """Partial time derivative ``Phi_t`` (m,)."""
+        if self.linear_solver == "sparse":
+            return self._local(_phi_t, q, jnp.asarray(t, dtype=jnp.float64))
         return jax.jacfwd(self.__call__, argnums=1)(q, jnp.asarray(t, dtype=jnp.float64))
 
     def gamma(self, q, qd, t) -> jax.Array:
         """Acceleration right-hand side ``gamma`` (m,)."""
         t = jnp.asarray(t, dtype=jnp.float64)
+        if self.linear_solver == "sparse":
+            return self._local(_gamma, q, t, qd)
 
         def path(s):
             return self(q + s * qd, t + s)
@@ -147,3 +209,156 @@ class Constraints(eqx.Module):
                 P[row : row + n, 3 * b : 3 * b + 3] = True
             row += n
         return P[np.asarray(self.active, dtype=int)]
+
+    # ------------------------------------------------------------------ sparse form
+    def _elements(self):
+        return (*self.joints, *self.drivers)
+
+    def _local_ok(self) -> bool:
+        try:
+            for e in self._elements():
+                _localize(e)
+        except ValueError:
+            return False
+        return True
+
+    def _layout(self):
+        """Static layout: per element its first full row, row count and coordinate columns."""
+        out, row = [], 0
+        for e in self._elements():
+            n = e.n_equations if isinstance(e, Joint) else 1
+            cols = [3 * b + k for b in e.body_indices() for k in range(3)]
+            out.append((row, n, np.asarray(cols, dtype=np.int64)))
+            row += n
+        return out
+
+    def _groups(self):
+        """Elements grouped by kind (same tree structure once localized): a list of
+        ``(indices of the elements, localized elements)``."""
+        groups: dict = {}
+        for i, e in enumerate(self._elements()):
+            loc = _localize(e)
+            key = (jax.tree_util.tree_structure(loc), len(e.body_indices()))
+            groups.setdefault(key, ([], []))
+            groups[key][0].append(i)
+            groups[key][1].append(loc)
+        return list(groups.values())
+
+    def _local(self, fn, q, t, qd=None):
+        """``fn(element, q_local, t, qd_local)`` (rows, ...) over every element, vectorized per
+        kind, stacked in row order; the rows kept."""
+        layout = self._layout()
+        outs, order = [], []
+        for idx, elems in self._groups():
+            stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *elems)
+            cols = np.stack([layout[i][2] for i in idx])
+            ql = q[cols]
+            qdl = ql if qd is None else qd[cols]
+            y = jax.vmap(fn, in_axes=(0, 0, None, 0))(stacked, ql, t, qdl)
+            outs.append(y.reshape(-1, *y.shape[2:]))
+            for i in idx:
+                order.extend(range(layout[i][0], layout[i][0] + layout[i][1]))
+        if not outs:
+            return jnp.zeros((0,))
+        allv = jnp.concatenate(outs)
+        pos = np.empty(len(order), dtype=np.int64)
+        pos[np.asarray(order, dtype=np.int64)] = np.arange(len(order))
+        return allv[pos[np.asarray(self.active, dtype=np.int64)]]
+
+    def coo(self) -> tuple[np.ndarray, np.ndarray]:
+        """Static pattern ``(rows, cols)`` of :meth:`jacobian_values` (rows of the kept set)."""
+        layout = self._layout()
+        where = {r: k for k, r in enumerate(self.active)}
+        rows, cols = [], []
+        for idx, _ in self._groups():
+            for i in idx:
+                r0, n, c = layout[i]
+                for r in range(r0, r0 + n):
+                    rows.append(np.full(c.size, where.get(r, -1)))
+                    cols.append(c)
+        rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
+        cols = np.concatenate(cols) if cols else np.zeros(0, np.int64)
+        keep = rows >= 0
+        return rows[keep], cols[keep]
+
+    def jacobian_values(self, q, t) -> jax.Array:
+        """Values (nnz,) of ``Phi_q`` on the pattern :meth:`coo`: each element's Jacobian
+        with respect to its own bodies' coordinates only (O(m) work)."""
+        layout = self._layout()
+        outs, keep, start = [], [], 0
+        active = set(self.active)
+        for idx, elems in self._groups():
+            stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *elems)
+            cols = np.stack([layout[i][2] for i in idx])
+            J = jax.vmap(_jac, in_axes=(0, 0, None))(stacked, q[cols], t)
+            outs.append(J.reshape(-1))
+            for i in idx:
+                r0, n, c = layout[i]
+                for r in range(r0, r0 + n):
+                    if r in active:
+                        keep.extend(range(start, start + c.size))
+                    start += c.size
+        if not outs:
+            return jnp.zeros((0,))
+        v = jnp.concatenate(outs)
+        return v if len(keep) == v.shape[0] else v[np.asarray(keep, dtype=np.int64)]
+
+    def schur_structure(self):
+        """Symbolic analysis of ``Phi_q M^-1 Phi_q^T`` (cached per pattern)."""
+        from ..linalg import schur_structure
+
+        rows, cols = self.coo()
+        return schur_structure(self.m, self.nq, rows, cols)
+
+    def matvec(self, values, x) -> jax.Array:
+        """``Phi_q x`` from the sparse values."""
+        rows, cols = self.coo()
+        return jax.ops.segment_sum(values * x[cols], jnp.asarray(rows), num_segments=self.m)
+
+    def rmatvec(self, values, y) -> jax.Array:
+        """``Phi_q^T y`` from the sparse values."""
+        rows, cols = self.coo()
+        return jax.ops.segment_sum(values * y[rows], jnp.asarray(cols), num_segments=self.nq)
+
+    def schur_solve(self, values, Minv, b):
+        """Solve ``(Phi_q M^-1 Phi_q^T) x = b`` on the sparse path; ``(x, pivot_ratio)``."""
+        return self.schur_structure().solve(values, Minv, b)
+
+
+def _localize(e):
+    """A copy of element ``e`` reading its bodies from a local vector ``[q_b0, q_b1, ...]``
+    (its ``body_indices()`` in order), with its naming fields cleared."""
+    bodies = e.body_indices()
+    where = {b: k for k, b in enumerate(bodies)}
+    names = {f.name for f in dataclasses.fields(e)}
+    if not names & set(_BODY_FIELDS) and bodies:
+        raise ValueError(type(e).__name__)
+    repl = {f: where.get(getattr(e, f), getattr(e, f)) for f in _BODY_FIELDS if f in names}
+    repl.update({f: "" for f in _NAME_FIELDS if f in names})
+    loc = dataclasses.replace(e, **repl)
+    if loc.body_indices() != tuple(range(len(bodies))):
+        raise ValueError(type(e).__name__)
+    return loc
+
+
+def _residual(e, ql, t, qdl=None):
+    return e.residual(ql) if isinstance(e, Joint) else e.residual(ql, t)
+
+
+def _jac(e, ql, t):
+    return jax.jacfwd(_residual, argnums=1)(e, ql, t)
+
+
+def _phi_t(e, ql, t, qdl=None):
+    return jax.jacfwd(_residual, argnums=2)(e, ql, t)
+
+
+def _gamma(e, ql, t, qdl):
+    def path(s):
+        return _residual(e, ql + s * qdl, t + s)
+
+    def rate(s):
+        return jax.jvp(path, (s,), (jnp.ones_like(s),))[1]
+
+    _, acc = jax.jvp(rate, (jnp.zeros(()),), (jnp.ones(()),))
+    return -acc
