@@ -24,6 +24,7 @@ from fixtures import (
     andrews_body_angles,
     andrews_mechanism,
     double_four_bar,
+    slider_crank,
 )
 
 DATA = pathlib.Path(__file__).parent / "data"
@@ -228,27 +229,10 @@ def test_double_fourbar_projection_loose(fourbar_exact):
     assert np.max(np.abs(vel - fourbar_exact[1])) <= 1e-7
 
 
-SINGULAR_REASON = (
-    "the adaptive step collapses at the first horizontal (singular) position of the double "
-    "four-bar, theta = pi/2 at t = 0.71435553 s: StepSizeError at t = 0.714356 from "
-    "projection (dopri8 at rtol = atol = 1e-10, tsit5 at 1e-12; dopri8 at 1e-11 passes that "
-    "crossing and fails at t = 3.17067) and from partitioning (dopri8, every rtol tried, 1e-8 "
-    "to 1e-10), after 40,000 to 80,000 attempted steps creeping to 2e-8 s (theta = pi/2 - "
-    "1e-7) before the crossing. The Schur-complement LU solve of the accelerations "
-    "(linalg.solve_kkt via Problem.accelerations) loses accuracy as the constraint Jacobian "
-    "loses rank: at an angle d from theta = pi/2 the crank's angular acceleration is wrong by "
-    "2.5e-9 (d = 1e-4), 4.6e-5 (d = 1e-6), 1.7 rad/s^2 (d = 1e-8), NaN at d = 0 (pivot ratio "
-    "1.8 d^2), so the error estimate rejects the steps near the singular point until "
-    "h -> 0."
-)
-
-
-@pytest.mark.slow  # 10-22 s: ~60,000 attempted steps before the step collapses
-@pytest.mark.xfail(raises=md.StepSizeError, strict=True, reason=SINGULAR_REASON)
 def test_double_fourbar_projection_tight(fourbar_exact):
     """Adaptive projection at a tight tolerance (dopri8, rtol = atol = 1e-10) through the first
-    singular position (0-1 s); expected to pass once the acceleration solve is robust at a
-    loss of rank."""
+    singular position (0-1 s): at the horizontal position the Schur complement loses rank for
+    an instant and the solve falls back to a truncated SVD (linalg.solve_kkt)."""
     model, qd0 = double_four_bar()
     ts = FOURBAR_TS[:21]
     res = md.forward(model, ts, rtol=1e-10, atol=1e-10, solver="dopri8", qd0=qd0)
@@ -256,27 +240,16 @@ def test_double_fourbar_projection_tight(fourbar_exact):
     assert np.max(np.abs(pos - fourbar_exact[0][:21])) <= 1e-8
 
 
-DIAGNOSIS_REASON = (
-    "the step-size collapse 1e-7 rad before the singular position is reported as a plain "
-    "StepSizeError without the joints involved: analysis/_simulate.py, _raise_failure, tests "
-    "the constraint Jacobian at the last *output* time (traj.q[k], k from ts <= t_fail: "
-    "t = 0.70 s here, where s_min/s_max of Phi_q is 0.012) instead of at the failure time "
-    "t = 0.714356 s (s_min/s_max = 1.7e-8 < 1e-6), so the SingularityError branch, which "
-    "would name the joints, is never taken; the Trajectory does not carry the state at the "
-    "failure."
-)
-
-
-@pytest.mark.slow  # 10-22 s, as test_double_fourbar_projection_tight
-@pytest.mark.xfail(raises=AssertionError, strict=True, reason=DIAGNOSIS_REASON)
-def test_double_fourbar_failure_is_diagnosed_as_singular():
-    """If the adaptive run fails at a singular position of the double four-bar, the error
-    says so: a SingularityError naming the joints involved (passes trivially once the run
-    no longer fails there)."""
-    model, qd0 = double_four_bar()
-    try:
-        md.forward(model, FOURBAR_TS[:21], rtol=1e-10, atol=1e-10, solver="dopri8", qd0=qd0)
-    except md.NumericalError as err:
-        assert isinstance(err, md.SingularityError), f"{type(err).__name__}: {err}"
-        assert err.elements
-        assert abs(err.time - 0.71435553) < 1e-4
+def test_failure_at_a_singular_position_is_diagnosed():
+    """A forward run whose driver pushes a slider–crank's slider past its dead point
+    (x > r + l) fails there, and the error says so: a SingularityError at about the dead-point
+    time, naming the elements involved (diagnosed at the failing state, not the last output)."""
+    r, l = 0.1, 0.3
+    # x(t) = 0.3 + 0.15 t reaches r + l = 0.4 at t = 2/3 s.
+    drive = md.CoordinateDriver("push", "slider", "x", law=md.Ramp(0.3, 0.15))
+    model = slider_crank(r, l, 1.0, theta0=np.pi / 2, drivers=[drive])
+    with pytest.raises(md.NumericalError) as err:
+        md.forward(model, np.linspace(0.0, 1.0, 11), rtol=1e-9, atol=1e-9)
+    assert isinstance(err.value, md.SingularityError), f"{type(err.value).__name__}: {err.value}"
+    assert err.value.elements
+    assert abs(err.value.time - 2.0 / 3.0) < 1e-2

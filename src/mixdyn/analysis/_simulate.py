@@ -15,6 +15,7 @@ from ..model import Model
 from ._assembly import assemble, hold_drivers, length_scale
 from ._problem import Problem
 from ._reactions import driver_efforts, reaction_columns, reaction_kinds
+from ._structure import _jac
 from .integrators import INTEGRATORS, STATUS_MESSAGES
 from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE
 from .kinematic import output_times
@@ -130,17 +131,18 @@ def post_kinds(problem: Problem, n_drivers: int) -> dict[str, str]:
 def _raise_failure(problem: Problem, traj, ts, method):
     status = int(traj.status)
     t = float(traj.t_fail)
-    k = int(np.searchsorted(ts, t, side="right")) - 1
-    q = np.asarray(traj.q[max(k, 0)])
-    J = np.asarray(problem.c.phi_q(jnp.asarray(q), jnp.asarray(ts[max(k, 0)])))
+    # Diagnose at the last accepted state (the failure), not at the last output time.
+    q = np.asarray(traj.q_last)
+    J = np.asarray(_jac(problem.c, jnp.asarray(q), jnp.asarray(t, dtype=jnp.float64)))
     rows = dependent_rows(J, 1e-8) if J.size else []
     names = []
     for i in rows:
         e = problem.c.element_names[problem.c.owners[problem.c.active[i]]]
         if e not in names:
             names.append(e)
-    _, s, _ = np.linalg.svd(J) if J.size else (None, np.ones(1), None)
-    singular = s.size and s[-1] < 1e-6 * s[0]
+    s = np.linalg.svd(J, compute_uv=False) if J.size else np.ones(1)
+    r = problem.c.rank or min(J.shape) if J.size else 1
+    singular = bool(s[r - 1] < 1e-6 * s[0])
     msg = f"{method} integrator failed: {STATUS_MESSAGES[status]}"
     if singular:
         raise SingularityError(

@@ -30,19 +30,27 @@ def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
     return jsl.lu_solve((lu, piv), b), ratio
 
 
-def solve_ranked(A: jax.Array, b: jax.Array, rank: int | None = None):
+#: Pivot ratio under which :func:`solve_kkt` switches to a truncated-SVD solve.
+SINGULAR_RATIO = 1e-10
+#: Relative singular-value cutoff of that solve.
+SINGULAR_RCOND = 1e-12
+
+
+def solve_ranked(A: jax.Array, b: jax.Array, rank: int | None = None, rcond: float = 0.0):
     """Solve ``A x = b`` (least squares, minimum norm) knowing ``rank(A)``; ``(x, ratio)``.
 
     With ``rank=None`` and a square ``A`` this is :func:`lu_solve_checked`. Otherwise a truncated
     SVD keeps the ``rank`` largest singular values: redundant but consistent equations (a
     parallelogram's extra link) are solved exactly, and the multipliers of redundant constraints
-    come out as the minimum-norm set. ``ratio = s[rank-1] / s[0]`` tells a loss of rank.
+    come out as the minimum-norm set; singular values below ``rcond * s_max`` are dropped too.
+    ``ratio = s[rank-1] / s[0]`` tells a loss of rank.
     """
-    if rank is None and A.shape[0] == A.shape[1]:
+    if rank is None and A.shape[0] == A.shape[1] and rcond == 0.0:
         return lu_solve_checked(A, b)
     U, s, Vt = jnp.linalg.svd(A, full_matrices=False)
     r = min(A.shape) if rank is None else rank
-    inv = jnp.where(jnp.arange(s.shape[0]) < r, 1.0 / jnp.where(s > 0, s, 1.0), 0.0)
+    keep = (jnp.arange(s.shape[0]) < r) & (s > rcond * s[0])
+    inv = jnp.where(keep, 1.0 / jnp.where(keep, s, 1.0), 0.0)
     Ub = U.T @ b
     x = Vt.T @ (inv[:, None] * Ub if b.ndim == 2 else inv * Ub)
     ratio = s[r - 1] / jnp.maximum(s[0], jnp.finfo(A.dtype).tiny) if r > 0 else jnp.ones(())
@@ -79,7 +87,16 @@ def solve_kkt(Minv, C, G, Q, rhs, rank=None) -> tuple[jax.Array, jax.Array, jax.
     """
     MinvG = Minv[:, None] * G
     S = C @ MinvG
-    mu, ratio = solve_ranked(S, C @ (Minv * Q) - rhs, rank)
+    b = C @ (Minv * Q) - rhs
+    mu, ratio = solve_ranked(S, b, rank)
+    if rank is None and S.shape[0] > 0:
+        # At a singular position (a bifurcation, a dead point) S loses rank for an instant:
+        # there the truncated-SVD least-squares solve keeps the accelerations bounded.
+        mu = jax.lax.cond(
+            ratio < SINGULAR_RATIO,
+            lambda: solve_ranked(S, b, None, rcond=SINGULAR_RCOND)[0],
+            lambda: mu,
+        )
     qdd = Minv * Q - MinvG @ mu
     return qdd, mu, ratio
 

@@ -35,6 +35,7 @@ class Trajectory(eqx.Module):
         max_violation: largest position-constraint residual met before projection [length].
         status: 0 on success, else a key of :data:`STATUS_MESSAGES`.
         t_fail: time of the failure (or the end time).
+        q_last: (nq,) coordinates at ``t_fail``, the last accepted state (for diagnosis).
     """
 
     q: jax.Array
@@ -46,6 +47,7 @@ class Trajectory(eqx.Module):
     max_violation: jax.Array
     status: jax.Array
     t_fail: jax.Array
+    q_last: jax.Array
 
 
 def rms_error(y0, y1, yerr, rtol, atol):
@@ -98,7 +100,8 @@ def adaptive_loop(
         progress: optional ``f(t)`` called (via ``jax.debug.callback``) at each output.
 
     Returns:
-        ``(outputs (pytree stacked over N), args, steps, rejected, max_violation, status, t)``.
+        ``(outputs (pytree stacked over N), args, steps, rejected, max_violation, status, t,
+        y)``, with ``t`` and ``y`` the last accepted time and state.
     """
     N = ts.shape[0]
     fixed = dt is not None
@@ -160,5 +163,5 @@ def adaptive_loop(
         nrej = nrej + (~ok).astype(int)
         return (t_new, y, args, h_new, k, outs, n + 1, nrej, viol, status)
 
-    t, _, args, _, _, outs, n, nrej, viol, status = jax.lax.while_loop(cond, body, init)
-    return outs, args, n - nrej, nrej, viol, status, t
+    t, y, args, _, _, outs, n, nrej, viol, status = jax.lax.while_loop(cond, body, init)
+    return outs, args, n - nrej, nrej, viol, status, t, y

@@ -60,7 +60,7 @@ def baumgarte(
         viol = jnp.max(jnp.abs(problem.c(y1[0], t1))) if problem.c.m else jnp.zeros(())
         return y1, args, viol
 
-    outs, _, n, nrej, viol, status, t = adaptive_loop(
+    outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
         step,
         accept,
         ts,
@@ -75,4 +75,4 @@ def baumgarte(
         progress=progress,
     )
     q, qd, w = outs
-    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t)
+    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])

@@ -165,4 +165,4 @@ def generalized_alpha(
 
     _, state, Q, QD, W, nsteps, status, t, viol = jax.lax.while_loop(outer_cond, outer_body, init)
     del max_steps
-    return Trajectory(Q, QD, W, nsteps, jnp.asarray(0), state[6], viol, status, t)
+    return Trajectory(Q, QD, W, nsteps, jnp.asarray(0), state[6], viol, status, t, state[0])

@@ -122,7 +122,7 @@ def partitioning(
         q, qd, _, _ = args1
         return (y1, (q, qd)), args1, viol
 
-    outs, _, n, nrej, viol, status, t = adaptive_loop(
+    outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
         step_full,
         accept_full,
         ts,
@@ -137,4 +137,4 @@ def partitioning(
         progress=progress,
     )
     (_, _, w), (q, qd) = outs
-    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t)
+    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[1][0])

@@ -66,7 +66,7 @@ def projection(
 
     span = ts[-1] - ts[0]
     h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
-    outs, _, n, nrej, viol, status, t = adaptive_loop(
+    outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
         step,
         accept,
         ts,
@@ -81,4 +81,4 @@ def projection(
         progress=progress,
     )
     q, qd, w = outs
-    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t)
+    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])
