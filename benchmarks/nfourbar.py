@@ -14,13 +14,13 @@ import time
 
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_enable_concurrency_optimized_scheduler=false")
 
-import numpy as np  # noqa: E402
-from scipy.integrate import solve_ivp  # noqa: E402
+import numpy as np
+from scipy.integrate import solve_ivp
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 
-import mixdyn as md  # noqa: E402
-from fixtures import double_four_bar  # noqa: E402
+import mixdyn as md
+from fixtures import double_four_bar
 
 G = 9.81
 T_END = 10.0
@@ -29,8 +29,14 @@ T_END = 10.0
 def exact_tip(n: int) -> np.ndarray:
     """Crank-0 tip at 10 s from ``thetaddot = k sin(theta)``, ``k = g 3(3N+1) / (2(4N+1))``."""
     k = G * 3 * (3 * n + 1) / (2 * (4 * n + 1))
-    sol = solve_ivp(lambda t, y: [y[1], k * math.sin(y[0])], (0.0, T_END), [0.0, 1.0],
-                    method="DOP853", rtol=1e-12, atol=1e-12)
+    sol = solve_ivp(
+        lambda t, y: [y[1], k * math.sin(y[0])],
+        (0.0, T_END),
+        [0.0, 1.0],
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-12,
+    )
     th = sol.y[0, -1]
     return np.array([math.sin(th), math.cos(th)])
 
@@ -83,9 +89,14 @@ def run_exudyn(n: int, h: float = 1e-3) -> dict:
     for k in range(n):
         mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m1[2 * k], m0[2 * k + 1]]))
         mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m1[2 * k + 2], m1[2 * k + 1]]))
-    tip = mbs.AddSensor(SensorBody(bodyNumber=bodies[0], localPosition=[0.5, 0, 0],
-                                   storeInternal=True,
-                                   outputVariableType=exu.OutputVariableType.Position))
+    tip = mbs.AddSensor(
+        SensorBody(
+            bodyNumber=bodies[0],
+            localPosition=[0.5, 0, 0],
+            storeInternal=True,
+            outputVariableType=exu.OutputVariableType.Position,
+        )
+    )
     mbs.Assemble()
     ss = exu.SimulationSettings()
     ss.timeIntegration.numberOfSteps = round(T_END / h)
@@ -114,12 +125,16 @@ def main(argv=None):
             ex = {"run_s": float("nan"), "err": float("nan")}
         rows.append((n, mx, ex))
         print(f"N={n}: mixdyn {mx} exudyn {ex}", flush=True)
-    print("\n| N | bars | mixdyn projection dopri8 rtol 1e-9: run [s] | compile [s] | tip error [m] "
-          "| Exudyn gen-alpha h=1e-3: run [s] | tip error [m] | run ratio mixdyn/Exudyn |")
+    print(
+        "\n| N | bars | mixdyn projection dopri8 rtol 1e-9: run [s] | compile [s] | tip error [m] "
+        "| Exudyn gen-alpha h=1e-3: run [s] | tip error [m] | run ratio mixdyn/Exudyn |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for n, mx, ex in rows:
-        print(f"| {n} | {2 * n + 1} | {mx['run_s']:.3g} | {mx['compile_s']:.3g} | {mx['err']:.2e} "
-              f"| {ex['run_s']:.3g} | {ex['err']:.2e} | {mx['run_s'] / ex['run_s']:.2g} |")
+        print(
+            f"| {n} | {2 * n + 1} | {mx['run_s']:.3g} | {mx['compile_s']:.3g} | {mx['err']:.2e} "
+            f"| {ex['run_s']:.3g} | {ex['err']:.2e} | {mx['run_s'] / ex['run_s']:.2g} |"
+        )
     if len(rows) > 1:
         x = np.log([2 * n + 1 for n, _, _ in rows])
         for label, key in (("mixdyn", 1), ("Exudyn", 2)):
