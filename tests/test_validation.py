@@ -253,3 +253,17 @@ def test_failure_at_a_singular_position_is_diagnosed():
     assert isinstance(err.value, md.SingularityError), f"{type(err.value).__name__}: {err.value}"
     assert err.value.elements
     assert abs(err.value.time - 2.0 / 3.0) < 1e-2
+
+
+def test_double_fourbar_sparse_path_crosses_singular_position(fourbar_exact):
+    """The sparse linear-solver path (banded block Cholesky) through the first singular
+    position (0-1 s): where its factor loses rank it falls back to a truncated SVD, like the
+    dense path, and follows the exact reduction (measured 3.5e-7 m at 1 s, against 1e-8 on the
+    dense path: the fallback engages farther from the singular point)."""
+    model, qd0 = double_four_bar()
+    ts = FOURBAR_TS[:21]
+    res = md.forward(
+        model, ts, rtol=1e-10, atol=1e-10, solver="dopri8", qd0=qd0, linear_solver="sparse"
+    )
+    pos = res.point("crank0.B")[0]
+    assert np.max(np.abs(pos - fourbar_exact[0][:21])) <= 1e-6

@@ -22,7 +22,8 @@ import jax.scipy.linalg as jsl
 import numpy as np
 
 from ..equations import Constraints, applied_forces, force_directions, nonconservative_power
-from ..linalg import lu_solve_checked, min_pivot, solve_kkt
+from ..linalg import lu_solve_checked, min_pivot, solve_kkt, solve_ranked
+from ..linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
 from ..model import Model
 
 
@@ -119,7 +120,17 @@ class Problem(eqx.Module):
         if alpha is not None:
             gam = gam - 2 * alpha * (c.matvec(v, qd) + c.phi_t(q, t)) - beta**2 * c(q, t)
         Q = self.known_forces(q, qd, t)
-        mu, ratio = c.schur_solve(v, Minv, c.matvec(v, Minv * Q) - gam)
+        rhs = c.matvec(v, Minv * Q) - gam
+        mu, ratio = c.schur_solve(v, Minv, rhs)
+
+        def truncated_svd():
+            # At a singular position (a bifurcation) the Cholesky factor loses rank for an
+            # instant: there, as on the dense path, a truncated-SVD solve keeps it bounded.
+            C = c.phi_q(q, t)
+            S = C @ (Minv[:, None] * C.T)
+            return solve_ranked(S, rhs, None, rcond=SINGULAR_RCOND)[0]
+
+        mu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: mu)
         qdd = Minv * (Q - c.rmatvec(v, mu))
         return qdd, mu, ratio
 
