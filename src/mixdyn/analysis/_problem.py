@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
 
-from ..equations import Constraints, applied_forces, force_directions, nonconservative_power
+from ..equations import Constraints, applied_forces, force_directions, potential_energy
 from ..linalg import lu_solve_checked, min_pivot, solve_kkt, solve_ranked
 from ..linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
 from ..model import Model
@@ -179,15 +179,18 @@ class Problem(eqx.Module):
         G = self.G(q, qd, t, C)
         return -(G.T @ qd) * mu
 
-    def work_rates(self, q, qd, t, mu):
-        """``[P_nonconservative_applied, P_constraints_and_unknowns]`` (2,) [power]."""
-        if self.sparse:
-            p_nc = nonconservative_power(self.model, q, qd, t, exclude=self.unknown)
-            p_c = -jnp.sum(self.c.matvec(self.c.jacobian_values(q, t), qd) * mu)
-            return jnp.stack([p_nc, p_c])
-        C = self.c.phi_q(q, t)
-        p_nc = nonconservative_power(self.model, q, qd, t, exclude=self.unknown)
-        return jnp.stack([p_nc, jnp.sum(self.powers(q, qd, t, mu, C))])
+    def work_rates(self, q, qd, t, qdd):
+        """``[P_nonconservative_applied, P_constraints_and_unknowns]`` (2,) [power].
+
+        By the equations of motion the constraint forces (joints, drivers, unknown forces) on
+        the bodies are ``-G mu = M qdd - Q``, so their power needs no Jacobian:
+        ``(M qdd - Q) . qd``.
+        """
+        Q = self.known_forces(q, qd, t)
+        dV = jax.grad(lambda qq: potential_energy(self.model, qq))(q)
+        p_nc = jnp.dot(Q + dV, qd)
+        p_c = jnp.dot(self.model.mass_diagonal * qdd - Q, qd)
+        return jnp.stack([p_nc, p_c])
 
     # ------------------------------------------------------------------ projections
     def project_positions(self, q, t, tol, iters: int = 4):

@@ -38,8 +38,8 @@ def baumgarte(
 
     def f(t, y):
         q, qd, _ = y
-        qdd, mu, _ = problem.accelerations(q, qd, t, alpha, beta)
-        return (qd, qdd, problem.work_rates(q, qd, t, mu))
+        qdd, _, _ = problem.accelerations(q, qd, t, alpha, beta)
+        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
 
     def step(t0, t1, y, args):
         h = t1 - t0

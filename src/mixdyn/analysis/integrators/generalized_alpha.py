@@ -113,8 +113,8 @@ def generalized_alpha(
         qdd1, mu1 = x[:n], x[n:]
         if project_velocities:
             qd1 = problem.project_velocities(q1, qd1, t1)
-        rates0 = problem.work_rates(q, qd, t1 - h, mu)
-        rates1 = problem.work_rates(q1, qd1, t1, mu1)
+        rates0 = problem.work_rates(q, qd, t1 - h, qdd)
+        rates1 = problem.work_rates(q1, qd1, t1, qdd1)
         w1 = w + 0.5 * h * (rates0 + rates1)
         ok = res <= 1.0
         return (q1, qd1, a1, qdd1, mu1, w1, newt + it), ok, jnp.isfinite(res)

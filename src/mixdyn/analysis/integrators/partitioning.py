@@ -76,8 +76,8 @@ def partitioning(
         v, vd, _ = y
         q_ref, _, D, I = args
         q, qd = _complete(problem, q_ref, D, I, v, vd, t, tol)
-        qdd, mu, _ = problem.accelerations(q, qd, t)
-        return (vd, qdd[I], problem.work_rates(q, qd, t, mu))
+        qdd, _, _ = problem.accelerations(q, qd, t)
+        return (vd, qdd[I], problem.work_rates(q, qd, t, qdd))
 
     term = diffrax.ODETerm(f)
 

@@ -15,8 +15,8 @@ from ._common import SOLVERS, Trajectory, adaptive_loop
 def _vector_field(problem: Problem):
     def f(t, y, args):
         q, qd, _ = y
-        qdd, mu, _ = problem.accelerations(q, qd, t)
-        return (qd, qdd, problem.work_rates(q, qd, t, mu))
+        qdd, _, _ = problem.accelerations(q, qd, t)
+        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
 
     return diffrax.ODETerm(f)
 
