@@ -1,12 +1,15 @@
-"""The IFToMM N-four-bar of growing N (N parallelograms, 2N + 1 bars): mixdyn against Exudyn,
-0-10 s, crank-0 tip error at 10 s against the exact 1-DOF reduction.
+"""The IFToMM N-four-bar (N parallelograms, 2N + 1 bars; N = 2 is the "double four-bar"):
+mixdyn against Exudyn, crank-0 tip error at the end against the exact 1-DOF reduction.
 
-Run: ``python benchmarks/nfourbar.py [N ...]`` (default 2 4 8 16). Prints a markdown table
-for ``benchmarks/RESULTS.md``. Peers come from the ``bench`` extra; nothing is installed here.
+Run: ``python benchmarks/nfourbar.py [N ...] [--t-end 10] [--exudyn-h 1e-3 5e-4]
+[--rtol 1e-9]``. Prints a Markdown table for ``benchmarks/RESULTS.md``. Peers come from the
+``bench`` extra; nothing is installed here. ``benchmarks/run.py`` reuses the builders below
+for its N = 2 table.
 """
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
@@ -23,38 +26,53 @@ import mixdyn as md
 from fixtures import double_four_bar
 
 G = 9.81
-T_END = 10.0
 
 
-def exact_tip(n: int) -> np.ndarray:
-    """Crank-0 tip at 10 s from ``thetaddot = k sin(theta)``, ``k = g 3(3N+1) / (2(4N+1))``."""
+def exact_tip(n: int, t_end: float = 10.0) -> np.ndarray:
+    """Crank-0 tip (x, y) [m] at ``t_end`` from the exact reduction ``thetaddot = k sin(theta)``,
+    ``k = g 3(3N+1) / (2(4N+1))`` (``theta`` from the upward vertical; derivation in
+    ``tests/test_validation.py``)."""
     k = G * 3 * (3 * n + 1) / (2 * (4 * n + 1))
     sol = solve_ivp(
         lambda t, y: [y[1], k * math.sin(y[0])],
-        (0.0, T_END),
+        (0.0, t_end),
         [0.0, 1.0],
         method="DOP853",
-        rtol=1e-12,
-        atol=1e-12,
+        rtol=1e-13,
+        atol=1e-13,
     )
     th = sol.y[0, -1]
     return np.array([math.sin(th), math.cos(th)])
 
 
-def run_mixdyn(n: int, **opts) -> dict:
+def run_mixdyn(n: int, t_end: float = 10.0, method: str = "projection", **opts) -> dict:
+    """mixdyn's run, called twice (the first call's extra time is the compilation)."""
     model, qd0 = double_four_bar(n)
-    ts = np.linspace(0.0, T_END, 101)
+    ts = np.linspace(0.0, t_end, round(10 * t_end) + 1)
     t0 = time.perf_counter()
-    md.forward(model, ts, qd0=qd0, **opts)
+    md.forward(model, ts, method=method, qd0=qd0, **opts)
     first = time.perf_counter() - t0
     t0 = time.perf_counter()
-    res = md.forward(model, ts, qd0=qd0, **opts)
+    res = md.forward(model, ts, method=method, qd0=qd0, **opts)
     run = time.perf_counter() - t0
-    err = float(np.max(np.abs(res.point("crank0.B")[0][-1] - exact_tip(n))))
-    return {"run_s": run, "compile_s": first - run, "err": err, "steps": res.stats["steps"]}
+    E = np.asarray(res["energy.total"])
+    return {
+        "code": "mixdyn",
+        "run_s": run,
+        "compile_s": first - run,
+        "tip_error": float(np.max(np.abs(res.point("crank0.B")[0][-1] - exact_tip(n, t_end)))),
+        "energy_error": float(np.max(np.abs(E - E[0]))),
+        "steps": int(res.stats["steps"]),
+        "linear_solver": res.stats.get("linear_solver", "?"),
+    }
 
 
-def run_exudyn(n: int, h: float = 1e-3) -> dict:
+def run_exudyn(
+    n: int, h: float = 1e-3, t_end: float = 10.0, sparse: bool | None = None, rho_inf=0.95
+) -> dict:
+    """Exudyn's N-four-bar (its ``TestModels/fourBarMechanismIftomm.py`` generalised to N):
+    ``ObjectRigidBody2D`` + ``ObjectJointRevolute2D``, generalized-alpha with modified Newton;
+    ``sparse`` picks its ``EigenSparse`` linear solver (default: from N = 8 on)."""
     import exudyn as exu
     from exudyn.itemInterface import (
         LoadMassProportional,
@@ -68,6 +86,7 @@ def run_exudyn(n: int, h: float = 1e-3) -> dict:
         SensorBody,
     )
 
+    sparse = n >= 8 if sparse is None else sparse
     SC = exu.SystemContainer()
     mbs = SC.AddSystem()
     m0, m1, bodies = [], [], []
@@ -89,57 +108,101 @@ def run_exudyn(n: int, h: float = 1e-3) -> dict:
     for k in range(n):
         mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m1[2 * k], m0[2 * k + 1]]))
         mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[m1[2 * k + 2], m1[2 * k + 1]]))
-    tip = mbs.AddSensor(
-        SensorBody(
-            bodyNumber=bodies[0],
-            localPosition=[0.5, 0, 0],
-            storeInternal=True,
-            outputVariableType=exu.OutputVariableType.Position,
+    ov = exu.OutputVariableType
+
+    def sensor(b, kind, local=None):
+        extra = {} if local is None else {"localPosition": local}
+        return mbs.AddSensor(
+            SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=kind, **extra)
         )
-    )
+
+    states = [(sensor(b, ov.Position), sensor(b, ov.Velocity)) for b in bodies]
+    omegas = [sensor(b, ov.AngularVelocity) for b in bodies]
+    tip = sensor(bodies[0], ov.Position, [0.5, 0, 0])
     mbs.Assemble()
     ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = round(T_END / h)
-    ss.timeIntegration.endTime = T_END
+    ss.timeIntegration.numberOfSteps = round(t_end / h)
+    ss.timeIntegration.endTime = t_end
     ss.timeIntegration.verboseMode = 0
     ss.solution.file.write = False
     ss.solution.sensors.writePeriod = 0.1
-    ss.timeIntegration.generalizedAlpha.spectralRadius = 0.95
+    ss.timeIntegration.generalizedAlpha.spectralRadius = rho_inf
     ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
     ss.timeIntegration.newton.useModifiedNewton = True
+    if sparse:
+        ss.linearSolverType = exu.LinearSolverType.EigenSparse
     t0 = time.perf_counter()
-    mbs.SolveDynamic(ss)
+    try:
+        mbs.SolveDynamic(ss)
+    except Exception as exc:
+        return {
+            "code": "exudyn",
+            "run_s": float("nan"),
+            "tip_error": float("nan"),
+            "energy_error": float("nan"),
+            "failed": f"{type(exc).__name__}: {exc}",
+        }
     run = time.perf_counter() - t0
+    E = 0.0
+    for (sp, sv), sw in zip(states, omegas, strict=True):
+        p = mbs.GetSensorStoredData(sp)[:, 1:3]
+        v = mbs.GetSensorStoredData(sv)[:, 1:3]
+        w = mbs.GetSensorStoredData(sw)[:, 3]
+        E = E + 0.5 * np.sum(v**2, axis=1) + 0.5 / 12 * w**2 + G * p[:, 1]
     pos = mbs.GetSensorStoredData(tip)[-1, 1:3]
-    return {"run_s": run, "err": float(np.max(np.abs(pos - exact_tip(n))))}
+    return {
+        "code": "exudyn",
+        "method": f"generalized-alpha (h={h:g}, rho_inf={rho_inf:g})",
+        "linear_solver": "EigenSparse" if sparse else "dense",
+        "compile_s": 0.0,
+        "run_s": run,
+        "tip_error": float(np.max(np.abs(pos - exact_tip(n, t_end)))),
+        "energy_error": float(np.max(np.abs(E - E[0]))),
+    }
 
 
 def main(argv=None):
-    ns = [int(a) for a in (argv or sys.argv[1:])] or [2, 4, 8, 16]
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("n", nargs="*", type=int, default=[2, 4, 8, 16])
+    ap.add_argument("--t-end", type=float, default=10.0)
+    ap.add_argument("--rtol", type=float, nargs="*", default=[1e-9])
+    ap.add_argument("--exudyn-h", type=float, nargs="*", default=[1e-3])
+    ap.add_argument("--linear-solver", default="auto")
+    args = ap.parse_args(argv)
     rows = []
-    for n in ns:
-        mx = run_mixdyn(n, rtol=1e-9, atol=1e-9, solver="dopri8")
-        try:
-            ex = run_exudyn(n)
-        except ImportError:
-            ex = {"run_s": float("nan"), "err": float("nan")}
-        rows.append((n, mx, ex))
-        print(f"N={n}: mixdyn {mx} exudyn {ex}", flush=True)
+    for n in args.n:
+        for rtol in args.rtol:
+            r = run_mixdyn(
+                n,
+                args.t_end,
+                rtol=rtol,
+                atol=rtol,
+                solver="dopri8",
+                linear_solver=args.linear_solver,
+            )
+            r["method"] = f"projection dopri8 rtol={rtol:g}"
+            rows.append((n, r))
+            print(f"N={n}: {r}", flush=True)
+        for h in args.exudyn_h:
+            try:
+                r = run_exudyn(n, h, args.t_end)
+            except ImportError:
+                break
+            rows.append((n, r))
+            print(f"N={n}: {r}", flush=True)
+    print(f"\n0-{args.t_end:g} s\n")
     print(
-        "\n| N | bars | mixdyn projection dopri8 rtol 1e-9: run [s] | compile [s] | tip error [m] "
-        "| Exudyn gen-alpha h=1e-3: run [s] | tip error [m] | run ratio mixdyn/Exudyn |"
+        "| N | bars | code | method | linear solve | run [s] | compile [s] | tip error [m] "
+        "| max energy error [J] |"
     )
-    print("|---|---|---|---|---|---|---|---|")
-    for n, mx, ex in rows:
+    print("|---|---|---|---|---|---|---|---|---|")
+    for n, r in rows:
         print(
-            f"| {n} | {2 * n + 1} | {mx['run_s']:.3g} | {mx['compile_s']:.3g} | {mx['err']:.2e} "
-            f"| {ex['run_s']:.3g} | {ex['err']:.2e} | {mx['run_s'] / ex['run_s']:.2g} |"
+            f"| {n} | {2 * n + 1} | {r['code']} | {r.get('method', '')} "
+            f"| {r.get('linear_solver', '')} | {r['run_s']:.3g} | {r.get('compile_s', 0):.3g} "
+            f"| {r['tip_error']:.2e} | {r['energy_error']:.2e} |"
+            + (f" failed: {r['failed']}" if "failed" in r else "")
         )
-    if len(rows) > 1:
-        x = np.log([2 * n + 1 for n, _, _ in rows])
-        for label, key in (("mixdyn", 1), ("Exudyn", 2)):
-            y = np.log([r[key]["run_s"] for r in rows])
-            print(f"\n{label}: log-log slope of run time against bars {np.polyfit(x, y, 1)[0]:.2f}")
 
 
 if __name__ == "__main__":

@@ -45,19 +45,20 @@ import warnings
 import jax
 import jax.numpy as jnp
 import numpy as np
-from scipy.integrate import solve_ivp
 
 import mixdyn as md
 from mixdyn.equations import Constraints
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import nfourbar  # noqa: E402
 
 from fixtures import (  # noqa: E402
     ANDREWS_BODIES,
     andrews_angles,
     andrews_mechanism,
-    double_four_bar,
     pendulum_chain,
 )
 
@@ -300,125 +301,19 @@ def chain_mujoco(n: int, T: float, h: float) -> dict:
 
 
 # ------------------------------------------------------------------ double four-bar
-FOURBAR_K = G * 3 * 7 / (2 * 9)  # thetaddot = k sin(theta), N = 2 (tests/test_validation.py)
-
-
-def fourbar_exact():
-    sol = solve_ivp(
-        lambda t, y: [y[1], FOURBAR_K * math.sin(y[0])],
-        (0.0, 10.0),
-        [0.0, 1.0],
-        method="DOP853",
-        rtol=1e-12,
-        atol=1e-12,
-    )
-    th = sol.y[0, -1]
-    return np.array([math.sin(th), math.cos(th)])
+# The N-four-bar's exact solution and Exudyn model live in benchmarks/nfourbar.py (N = 2 here).
 
 
 def fourbar_mixdyn(method: str, **opts) -> dict:
-    model, qd0 = double_four_bar()
-    ts = np.linspace(0.0, 10.0, 101)
-    first, run, res = timed(lambda: md.forward(model, ts, method=method, qd0=qd0, **opts))
-    tip = res.point("crank0.B")[0][-1]
-    E = res["energy.total"]
+    r = nfourbar.run_mixdyn(2, 10.0, method, **opts)
     label = ", ".join(f"{k}={float(v):g}" for k, v in opts.items() if k != "solver")
     if "solver" in opts:
         label = f"{opts['solver']}, {label}"
-    return {
-        "code": "mixdyn",
-        "method": f"{method} ({label})",
-        "compile_s": first - run,
-        "run_s": run,
-        "tip_error": float(np.max(np.abs(tip - fourbar_exact()))),
-        "energy_error": float(np.max(np.abs(E - E[0]))),
-    }
+    return dict(r, method=f"{method} ({label})")
 
 
 def fourbar_exudyn(h: float = 1e-3) -> dict:
-    import exudyn as exu
-    from exudyn.itemInterface import (
-        LoadMassProportional,
-        MarkerBodyMass,
-        MarkerBodyPosition,
-        MarkerBodyRigid,
-        NodeRigidBody2D,
-        ObjectGround,
-        ObjectJointRevolute2D,
-        ObjectRigidBody2D,
-        SensorBody,
-    )
-
-    SC = exu.SystemContainer()
-    mbs = SC.AddSystem()
-    ref = [
-        [0, 0.5, 0.5 * math.pi],
-        [0.5, 1, 0],
-        [1, 0.5, 0.5 * math.pi],
-        [1.5, 1, 0],
-        [2, 0.5, 0.5 * math.pi],
-    ]
-    vel = [[0.5, 0, -1], [1, 0, 0], [0.5, 0, -1], [1, 0, 0], [0.5, 0, -1]]
-    m0, m1, bodies, nodes = [], [], [], []
-    for r, v in zip(ref, vel, strict=True):
-        nd = mbs.AddNode(NodeRigidBody2D(referenceCoordinates=r, initialVelocities=v))
-        b = mbs.AddObject(ObjectRigidBody2D(nodeNumber=nd, mass=1.0, inertia=1 / 12))
-        mm = mbs.AddMarker(MarkerBodyMass(bodyNumber=b))
-        mbs.AddLoad(LoadMassProportional(markerNumber=mm, loadVector=[0, -G, 0]))
-        m0.append(mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[-0.5, 0, 0])))
-        m1.append(mbs.AddMarker(MarkerBodyPosition(bodyNumber=b, localPosition=[0.5, 0, 0])))
-        bodies.append(b)
-        nodes.append(nd)
-    gnd = mbs.AddObject(ObjectGround())
-    mg = [
-        mbs.AddMarker(MarkerBodyRigid(bodyNumber=gnd, localPosition=[x, 0, 0])) for x in (0, 1, 2)
-    ]
-    pairs = [(mg[0], m0[0]), (mg[1], m0[2]), (mg[2], m0[4]), (m1[0], m0[1]), (m1[1], m0[3])]
-    pairs += [(m1[2], m0[3]), (m1[3], m1[4])]
-    for a, b in pairs:
-        mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[a, b]))
-    ov = exu.OutputVariableType
-    sensors = [
-        mbs.AddSensor(SensorBody(bodyNumber=b, storeInternal=True, outputVariableType=t))
-        for b in bodies
-        for t in (ov.Position, ov.Velocity, ov.AngularVelocity)
-    ]
-    tip = mbs.AddSensor(
-        SensorBody(
-            bodyNumber=bodies[0],
-            localPosition=[0.5, 0, 0],
-            storeInternal=True,
-            outputVariableType=ov.Position,
-        )
-    )
-    mbs.Assemble()
-    ss = exu.SimulationSettings()
-    ss.timeIntegration.numberOfSteps = round(10.0 / h)
-    ss.timeIntegration.endTime = 10.0
-    ss.timeIntegration.verboseMode = 0
-    ss.solution.file.write = False
-    ss.solution.sensors.writePeriod = 0.1
-    ss.timeIntegration.generalizedAlpha.spectralRadius = 0.95
-    ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
-    ss.timeIntegration.newton.useModifiedNewton = True
-    t0 = time.perf_counter()
-    mbs.SolveDynamic(ss)
-    run = time.perf_counter() - t0
-    E = 0.0
-    for i in range(5):
-        p = mbs.GetSensorStoredData(sensors[3 * i])[:, 1:3]
-        v = mbs.GetSensorStoredData(sensors[3 * i + 1])[:, 1:3]
-        w = mbs.GetSensorStoredData(sensors[3 * i + 2])[:, 3]
-        E = E + 0.5 * np.sum(v**2, axis=1) + 0.5 / 12 * w**2 + G * p[:, 1]
-    pos = mbs.GetSensorStoredData(tip)[-1, 1:3]
-    return {
-        "code": "exudyn",
-        "method": f"generalized-alpha (h={h:g}, rho_inf=0.95)",
-        "compile_s": 0.0,
-        "run_s": run,
-        "tip_error": float(np.max(np.abs(pos - fourbar_exact()))),
-        "energy_error": float(np.max(np.abs(E - E[0]))),
-    }
+    return nfourbar.run_exudyn(2, h, 10.0, sparse=False)
 
 
 # --------------------------------------------------------------------------- Andrews

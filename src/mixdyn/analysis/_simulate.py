@@ -208,6 +208,7 @@ def simulate(
         "max_violation_before_projection": float(traj.max_violation),
         "max_violation": float(np.max(extra["constraint.violation"])),
         "min_pivot_ratio": float(np.min(ratio)),
+        "linear_solver": problem.c.linear_solver,
         "constraint_rows": problem.c.active_labels,
         "unknown_forces": problem.unknown,
     }
