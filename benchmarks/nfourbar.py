@@ -130,7 +130,7 @@ def run_exudyn(
     ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
     ss.timeIntegration.newton.useModifiedNewton = True
     if sparse:
-        ss.linearSolverType = exu.LinearSolverType.EigenSparse
+        ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
     t0 = time.perf_counter()
     try:
         mbs.SolveDynamic(ss)

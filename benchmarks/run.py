@@ -130,12 +130,16 @@ def chain_energy(x, y, vx, vy, omega, m=1.0, J=1.0 / 12.0):
     return float(np.sum(0.5 * m * (vx**2 + vy**2) + 0.5 * J * omega**2 + m * G * y))
 
 
-def chain_mixdyn(n: int, T: float, h: float, method: str) -> dict:
+def chain_mixdyn(n: int, T: float, h: float | None, method: str, **extra) -> dict:
+    """mixdyn on the chain of ``n`` links over ``T`` s: fixed step ``h`` or, for the adaptive
+    methods, ``extra`` options (``solver``, ``rtol``, ``atol``)."""
     model = pendulum_chain(n, theta0=THETA0)
     ts = np.array([0.0, min(0.1, T), T]) if T > 0.1 else np.array([0.0, T])
-    opts = dict(method=method, dt=jnp.asarray(h))
+    opts = dict(method=method, **extra)
+    if h is not None:
+        opts["dt"] = jnp.asarray(h)
     if method == "generalized-alpha":
-        opts["rho_inf"] = 0.9
+        opts.setdefault("rho_inf", 0.9)
     first, run, res = timed(lambda: md.forward(model, ts, **opts))
     E = res["energy.total"]
     tip = res.point(f"link{n - 1}.B")[0]
@@ -153,10 +157,14 @@ def chain_mixdyn(n: int, T: float, h: float, method: str) -> dict:
         "E0": float(E[0]),
         "drift": float(abs(E[-1] - E[0])),
         "tip_0.1": tip[1].tolist() if len(ts) == 3 else None,
+        "tip_T": tip[-1].tolist(),
+        "steps": int(res.stats["steps"]),
     }
 
 
-def chain_exudyn(n: int, T: float, h: float) -> dict:
+def chain_exudyn(n: int, T: float, h: float, sparse: bool | None = None) -> dict:
+    """Exudyn's generalized-alpha on the chain (``EigenSparse`` from 16 links unless
+    ``sparse`` says otherwise)."""
     import exudyn as exu
     from exudyn.itemInterface import (
         LoadMassProportional,
@@ -202,7 +210,7 @@ def chain_exudyn(n: int, T: float, h: float) -> dict:
         ss.timeIntegration.generalizedAlpha.spectralRadius = 0.9
         ss.timeIntegration.generalizedAlpha.computeInitialAccelerations = True
         ss.timeIntegration.newton.useModifiedNewton = True
-        if n >= 16:
+        if (n >= 16) if sparse is None else sparse:
             ss.linearSolver.solverType = exu.LinearSolverType.EigenSparse
         return ss
 
@@ -225,6 +233,7 @@ def chain_exudyn(n: int, T: float, h: float) -> dict:
     mbs.SolveDynamic(settings(T))
     run = time.perf_counter() - t0
     E1 = energy(mbs, nodes)[0]
+    tip_T = tip(mbs, nodes)
     _sc2, mbs2, nodes2 = build()
     mbs2.SolveDynamic(settings(min(0.1, T)))
     return {
@@ -238,6 +247,7 @@ def chain_exudyn(n: int, T: float, h: float) -> dict:
         "E0": E0,
         "drift": abs(E1 - E0),
         "tip_0.1": tip(mbs2, nodes2),
+        "tip_T": tip_T,
     }
 
 
@@ -282,6 +292,7 @@ def chain_mujoco(n: int, T: float, h: float) -> dict:
     run = time.perf_counter() - t0
     mujoco.mj_forward(model, data)
     E1 = float(np.sum(data.energy))
+    tip_T = tip(data)
     d2 = start()
     for _ in range(round(min(0.1, T) / h)):
         mujoco.mj_step(model, d2)
@@ -297,6 +308,7 @@ def chain_mujoco(n: int, T: float, h: float) -> dict:
         "E0": E0,
         "drift": abs(E1 - E0),
         "tip_0.1": tip(d2),
+        "tip_T": tip_T,
     }
 
 

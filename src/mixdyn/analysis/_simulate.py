@@ -95,7 +95,9 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int):
         out["constraint.violation"] = jnp.max(jnp.abs(c(q, t))) if c.m else jnp.zeros(())
         return qdd, mu, ratio, out
 
-    return jax.vmap(one)(Q, QD, ts)
+    # lax.map, not vmap: under vmap the singular-position fallbacks (lax.cond to a dense
+    # truncated SVD) would become selects and run at every output time.
+    return jax.lax.map(lambda a: one(*a), (Q, QD, ts))
 
 
 def post_kinds(problem: Problem, n_drivers: int) -> dict[str, str]:
