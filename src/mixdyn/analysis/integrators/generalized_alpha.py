@@ -150,7 +150,7 @@ def generalized_alpha(
     ptol = 1e-13 * lscale
 
     def one_step(state, h, t1):
-        q, qd, a, qdd, mu, w, newt = state
+        q, qd, a, qdd, mu, w, newt, x_old, h_old = state
         beta_p = h**2 * bt * (1 - af) / (1 - am)
 
         def predict(qdd1):
@@ -216,7 +216,9 @@ def generalized_alpha(
                 full = full | slow
             return x1, r1, lin1, res1, it + 1, full
 
-        x0 = jnp.concatenate([qdd, mu])
+        # Starting iterate: (qdd, mu) extrapolated linearly from the last two steps.
+        x_last = jnp.concatenate([qdd, mu])
+        x0 = x_last + (h / h_old) * (x_last - x_old)
         r0, lin0 = residual(x0)
         init = (x0, r0, lin0, error(r0), 0, jnp.asarray(newton == "full"))
         x, _, _, res, it, _ = jax.lax.while_loop(cond, body, init)
@@ -228,13 +230,23 @@ def generalized_alpha(
         rates1 = problem.work_rates(q1, qd1, t1, qdd1)
         w1 = w + 0.5 * h * (rates0 + rates1)
         ok = res <= 1.0
-        return (q1, qd1, a1, qdd1, mu1, w1, newt + it), ok, jnp.isfinite(res)
+        return (q1, qd1, a1, qdd1, mu1, w1, newt + it, x_last, h), ok, jnp.isfinite(res)
 
     N = ts.shape[0]
     zeros = jnp.zeros((N, n))
     init = (
         jnp.asarray(1),
-        (q0, qd0, qdd0, qdd0, mu0, jnp.zeros(2), jnp.asarray(0)),
+        (
+            q0,
+            qd0,
+            qdd0,
+            qdd0,
+            mu0,
+            jnp.zeros(2),
+            jnp.asarray(0),
+            jnp.concatenate([qdd0, mu0]),
+            jnp.ones((), ts.dtype),
+        ),
         zeros.at[0].set(q0),
         zeros.at[0].set(qd0),
         jnp.zeros((N, 2)),
