@@ -30,10 +30,13 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import jax.scipy.linalg as jsl
 
+from ...equations import force_directions
 from ...errors import ModelError
-from ...linalg import solve_kkt, solve_ranked
+from ...linalg import solve_ranked
 from ...linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
+from ...linalg._sparse import _block_backward, _block_cholesky_forward
 from .._problem import Problem
 from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory
 
@@ -53,49 +56,113 @@ def coefficients(rho_inf):
     return am, af, g, b
 
 
-def _linear_algebra(problem: Problem):
-    """``(linearize, constraint_force, kkt_solve)`` on the problem's linear-solver path.
+def _constraint_terms(problem: Problem):
+    """``f(q, qd, t, mu) -> (G mu (nq,), Phi (m,))``, by one reverse-mode pass through
+    ``Phi``: ``G mu = Phi_q^T lambda - B u`` needs no Jacobian matrix."""
+    c, p, m = problem.c, problem.p, problem.c.m
 
-    ``linearize(q, t)``: ``Phi_q`` (dense (m, nq), or its values on the sparse pattern);
-    ``constraint_force(q, qd, t, lin, mu)``: ``G mu`` (nq,);
-    ``kkt_solve(q, qd, t, lin, r1, r2)``: ``(dqdd, dmu)`` solving
-    ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``.
-    """
+    def terms(q, qd, t, mu):
+        phi, pull = jax.vjp(lambda q: c(q, t), q)
+        if p == 0:
+            return pull(mu)[0], phi
+        mk = m - p
+        (f,) = pull(jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)]))
+        B = force_directions(problem.model, problem.unknown, q, qd, t)
+        return f - B @ mu[mk:], phi
+
+    return terms
+
+
+def _svd_inverse(S, keep):
+    """``(U, 1/s, Vt)`` of ``S`` with the singular values not kept zeroed."""
+    U, s, Vt = jnp.linalg.svd(S, full_matrices=False)
+    keep = keep(s)
+    return U, jnp.where(keep, 1.0 / jnp.where(keep, s, 1.0), 0.0), Vt
+
+
+def _schur_factor_dense(S, rank):
+    """``solve(b)`` with the Schur complement ``S``, factorized once, solved as
+    :func:`~mixdyn.linalg.solve_kkt` solves it: truncated SVD when ``rank`` is given (redundant
+    rows), else LU with a truncated-SVD fallback at a singular position."""
+    m = S.shape[0]
+    if rank is not None:
+        U, sinv, Vt = _svd_inverse(S, lambda s: (jnp.arange(m) < rank) & (s > 0))
+        return lambda b: Vt.T @ (sinv * (U.T @ b))
+    lu, piv = jsl.lu_factor(S)
+    d = jnp.abs(jnp.diag(lu))
+    singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))
+    U, sinv, Vt = jax.lax.cond(
+        singular,
+        lambda: _svd_inverse(S, lambda s: s > SINGULAR_RCOND * s[0]),
+        lambda: (jnp.zeros_like(S), jnp.zeros(m, S.dtype), jnp.zeros_like(S)),
+    )
+    return lambda b: jax.lax.cond(
+        singular, lambda: Vt.T @ (sinv * (U.T @ b)), lambda: jsl.lu_solve((lu, piv), b)
+    )
+
+
+def _schur_factor_sparse(c, v, Minv, dense_C):
+    """``solve(b)`` with ``S = C M^-1 C^T`` from the sparse values ``v``: its banded block
+    Cholesky factors computed once (:mod:`mixdyn.linalg._sparse`), two block triangular sweeps
+    per solve; a dense truncated-SVD solve at a singular position (``dense_C()`` then)."""
+    st = c.schur_structure()
+    B, nblk = st.block, st.nblk
+    D, E = st.blocks(v, Minv)
+    L, W, _ = _block_cholesky_forward(D, E, jnp.zeros((nblk, B, 1), D.dtype))
+    d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: st.m] ** 2
+    singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))  # NaN: a failed factorization
+
+    def factored(b):
+        rhs = jnp.concatenate([b[st.perm], jnp.zeros(nblk * B - st.m, b.dtype)])
+
+        def step(yp, xs):
+            Li, Wi, ri = xs
+            yi = jsl.solve_triangular(Li, ri - Wi @ yp, lower=True)
+            return yi, yi
+
+        _, y = jax.lax.scan(step, jnp.zeros((B, 1), b.dtype), (L, W, rhs.reshape(nblk, B, 1)))
+        return _block_backward(L, W, y).reshape(-1)[: st.m][st.inv]
+
+    def truncated_svd(b):
+        C = dense_C()
+        return solve_ranked(C @ (Minv[:, None] * C.T), b, None, rcond=SINGULAR_RCOND)[0]
+
+    return lambda b: jax.lax.cond(singular, truncated_svd, factored, b)
+
+
+def _iteration_matrix(problem: Problem, sparse: bool):
+    """``factorize(q, qd, t) -> kkt``: the modified Newton matrix ``[[M, G], [C, 0]]`` at one
+    state, factorized (through its Schur complement ``C M^-1 G``); ``kkt(r1, r2)`` returns
+    ``(dqdd, dmu)`` solving ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
     c, Minv = problem.c, problem.Minv
-    if problem.sparse:
+    if c.m == 0:
+        return lambda q, qd, t: lambda r1, r2: (Minv * r1, r2)
+    if sparse:
 
-        def linearize(q, t):
-            return c.jacobian_values(q, t)
+        def factorize(q, qd, t):
+            v = c.jacobian_values(q, t)
+            solve = _schur_factor_sparse(c, v, Minv, lambda: c.phi_q(q, t))
 
-        def constraint_force(q, qd, t, v, mu):
-            return c.rmatvec(v, mu)
+            def kkt(r1, r2):
+                dmu = solve(c.matvec(v, Minv * r1) - r2)
+                return Minv * (r1 - c.rmatvec(v, dmu)), dmu
 
-        def kkt_solve(q, qd, t, v, r1, r2):
-            rhs = c.matvec(v, Minv * r1) - r2
-            dmu, ratio = c.schur_solve(v, Minv, rhs)
+            return kkt
 
-            def truncated_svd():
-                # At a singular position, as in Problem.accelerations (dense only there).
-                C = c.phi_q(q, t)
-                S = C @ (Minv[:, None] * C.T)
-                return solve_ranked(S, rhs, None, rcond=SINGULAR_RCOND)[0]
+        return factorize
 
-            dmu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: dmu)
-            return Minv * (r1 - c.rmatvec(v, dmu)), dmu
+    def factorize(q, qd, t):
+        C = c.phi_q(q, t)
+        MinvG = Minv[:, None] * problem.G(q, qd, t, C)
+        solve = _schur_factor_dense(C @ MinvG, c.rank)
 
-        return linearize, constraint_force, kkt_solve
+        def kkt(r1, r2):
+            dmu = solve(C @ (Minv * r1) - r2)
+            return Minv * r1 - MinvG @ dmu, dmu
 
-    def linearize(q, t):
-        return c.phi_q(q, t)
+        return kkt
 
-    def constraint_force(q, qd, t, C, mu):
-        return problem.G(q, qd, t, C) @ mu
-
-    def kkt_solve(q, qd, t, C, r1, r2):
-        dqdd, dmu, _ = solve_kkt(Minv, C, problem.G(q, qd, t, C), r1, r2, c.rank)
-        return dqdd, dmu
-
-    return linearize, constraint_force, kkt_solve
+    return factorize
 
 
 @eqx.filter_jit
@@ -138,8 +205,10 @@ def generalized_alpha(
     am, af, gm, bt = coefficients(rho_inf)
     Mdiag = problem.model.mass_diagonal
     n = q0.shape[0]
-    m = problem.c.m
-    linearize, constraint_force, kkt_solve = _linear_algebra(problem)
+    # The sparse path for forward problems (G = C^T); mixed problems take the dense one.
+    sparse = problem.sparse and problem.p == 0
+    constraint_terms = _constraint_terms(problem)
+    factorize = _iteration_matrix(problem, sparse)
     qdd0, mu0, _ = problem.accelerations(q0, qd0, ts[0])
     fscale = jnp.maximum(
         jnp.max(jnp.abs(Mdiag * qdd0)) + jnp.max(jnp.abs(problem.known_forces(q0, qd0, ts[0]))),
@@ -160,17 +229,11 @@ def generalized_alpha(
             return q1, qd1, a1
 
         def residual(x):
-            """``(r (nq + m,), lin)``: the residual and ``Phi_q`` at the iterate's ``q1``."""
             qdd1, mu1 = x[:n], x[n:]
             q1, qd1, _ = predict(qdd1)
-            lin = linearize(q1, t1)
-            r1 = (
-                Mdiag * qdd1
-                + constraint_force(q1, qd1, t1, lin, mu1)
-                - problem.known_forces(q1, qd1, t1)
-            )
-            r2 = problem.c(q1, t1) / beta_p
-            return jnp.concatenate([r1, r2]), lin
+            Gmu, phi = constraint_terms(q1, qd1, t1, mu1)
+            r1 = Mdiag * qdd1 + Gmu - problem.known_forces(q1, qd1, t1)
+            return jnp.concatenate([r1, phi / beta_p])
 
         def error(r):
             # Force residual against ftol; position residual (r2 * beta_p) against ptol.
@@ -178,29 +241,33 @@ def generalized_alpha(
                 jnp.max(jnp.abs(r[:n])) / ftol, jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0) / ptol
             )
 
-        def modified_dx(x, r, lin):
-            q1, qd1, _ = predict(x[:n])
-            dqdd, dmu = kkt_solve(q1, qd1, t1, lin, r[:n], r[n:])
-            return jnp.concatenate([dqdd, dmu])
+        # Starting iterate: (qdd, mu) extrapolated linearly from the last two steps.
+        x_last = jnp.concatenate([qdd, mu])
+        x0 = x_last + (h / h_old) * (x_last - x_old)
+        # The modified Newton matrix, at the predicted state, factorized once per step.
+        kkt = None if newton == "full" else factorize(*predict(x0[:n])[:2], t1)
 
-        def full_dx(x, r, lin):
-            J = jax.jacfwd(lambda x: residual(x)[0])(x)
+        def modified_dx(x, r):
+            return jnp.concatenate(kkt(r[:n], r[n:]))
+
+        def full_dx(x, r):
+            J = jax.jacfwd(residual)(x)
             return problem.c.solve(J, r, extra_rank=n)[0]
 
         def cond(s):
-            _, _, _, res, it, _ = s
+            _, _, res, it, _ = s
             return (res > 1.0) & (it < max_newton) & jnp.isfinite(res)
 
         def body(s):
-            x, r, lin, res, it, full = s
+            x, r, res, it, full = s
             if newton == "modified":
-                dx = modified_dx(x, r, lin)
+                dx = modified_dx(x, r)
             elif newton == "full":
-                dx = full_dx(x, r, lin)
+                dx = full_dx(x, r)
             else:
-                dx = jax.lax.cond(full, full_dx, modified_dx, x, r, lin)
+                dx = jax.lax.cond(full, full_dx, modified_dx, x, r)
             x1 = x - dx
-            r1, lin1 = residual(x1)
+            r1 = residual(x1)
             res1 = error(r1)
             if newton == "auto":
                 # A modified iteration that contracts poorly, or has used half the budget,
@@ -208,20 +275,15 @@ def generalized_alpha(
                 slow = ~full & ~(res1 <= 1.0)
                 slow = slow & (~(res1 <= SWITCH_RATE * res) | (it + 1 >= max_newton // 2))
                 back = slow & ~(res1 < res)
-                x1, r1, lin1, res1 = jax.tree.map(
-                    lambda old, new: jnp.where(back, old, new),
-                    (x, r, lin, res),
-                    (x1, r1, lin1, res1),
+                x1, r1, res1 = jax.tree.map(
+                    lambda old, new: jnp.where(back, old, new), (x, r, res), (x1, r1, res1)
                 )
                 full = full | slow
-            return x1, r1, lin1, res1, it + 1, full
+            return x1, r1, res1, it + 1, full
 
-        # Starting iterate: (qdd, mu) extrapolated linearly from the last two steps.
-        x_last = jnp.concatenate([qdd, mu])
-        x0 = x_last + (h / h_old) * (x_last - x_old)
-        r0, lin0 = residual(x0)
-        init = (x0, r0, lin0, error(r0), 0, jnp.asarray(newton == "full"))
-        x, _, _, res, it, _ = jax.lax.while_loop(cond, body, init)
+        r0 = residual(x0)
+        init = (x0, r0, error(r0), 0, jnp.asarray(newton == "full"))
+        x, r, res, it, _ = jax.lax.while_loop(cond, body, init)
         q1, qd1, a1 = predict(x[:n])
         qdd1, mu1 = x[:n], x[n:]
         if project_velocities:
@@ -230,7 +292,10 @@ def generalized_alpha(
         rates1 = problem.work_rates(q1, qd1, t1, qdd1)
         w1 = w + 0.5 * h * (rates0 + rates1)
         ok = res <= 1.0
-        return (q1, qd1, a1, qdd1, mu1, w1, newt + it, x_last, h), ok, jnp.isfinite(res)
+        # Phi(q1), from the last residual: the position violation before any projection.
+        viol = jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0)
+        new = (q1, qd1, a1, qdd1, mu1, w1, newt + it, x_last, h)
+        return new, ok, jnp.isfinite(res), viol
 
     N = ts.shape[0]
     zeros = jnp.zeros((N, n))
@@ -273,9 +338,8 @@ def generalized_alpha(
         def inner_body(c):
             i, state, st, t, viol = c
             t1 = ts[k - 1] + (i + 1) * h
-            new, ok, finite = one_step(state, h, t1)
+            new, ok, finite, v = one_step(state, h, t1)
             st = jnp.where(ok, st, jnp.where(finite, NEWTON_FAILED, NOT_FINITE))
-            v = jnp.max(jnp.abs(problem.c(new[0], t1))) if m else jnp.zeros(())
             return i + 1, new, st, jnp.where(ok, t1, t), jnp.maximum(viol, v)
 
         i, state, status, t, viol = jax.lax.while_loop(
