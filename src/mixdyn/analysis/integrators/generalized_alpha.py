@@ -56,6 +56,27 @@ def coefficients(rho_inf):
     return am, af, g, b
 
 
+#: Placeholder length of the steps before the first one [time]: with it the extrapolation of
+#: the first two steps is constant, then linear.
+_NO_STEP = 1e100
+
+
+def _start_history(x):
+    """``(x_prev, x_prev2, h_prev, h_prev2)`` before the first step."""
+    return x, x, jnp.asarray(_NO_STEP, x.dtype), jnp.asarray(_NO_STEP, x.dtype)
+
+
+def _extrapolate(x, hist, h):
+    """The Newton start at the next step: the quadratic through the last three values of
+    ``x = (qdd, mu)`` (``x`` now, ``x_prev`` a step ``h1`` ago, ``x_prev2`` a further ``h2``
+    ago) at ``h`` ahead (``3 x - 3 x_prev + x_prev2`` at constant step); Lagrange weights."""
+    x1, x2, h1, h2 = hist
+    w0 = (h + h1) / h1 * (h + h1 + h2) / (h1 + h2)
+    w1 = -h / h1 * (h + h1 + h2) / h2
+    w2 = h / (h1 + h2) * (h + h1) / h2
+    return w0 * x + w1 * x1 + w2 * x2
+
+
 def _constraint_terms(problem: Problem):
     """``f(q, qd, t, mu) -> (G mu (nq,), Phi (m,))``, by one reverse-mode pass through
     ``Phi``: ``G mu = Phi_q^T lambda - B u`` needs no Jacobian matrix."""
@@ -219,7 +240,7 @@ def generalized_alpha(
     ptol = 1e-13 * lscale
 
     def one_step(state, h, t1):
-        q, qd, a, qdd, mu, w, newt, x_old, h_old = state
+        q, qd, a, qdd, mu, w, newt, hist = state
         beta_p = h**2 * bt * (1 - af) / (1 - am)
 
         def predict(qdd1):
@@ -241,9 +262,8 @@ def generalized_alpha(
                 jnp.max(jnp.abs(r[:n])) / ftol, jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0) / ptol
             )
 
-        # Starting iterate: (qdd, mu) extrapolated linearly from the last two steps.
         x_last = jnp.concatenate([qdd, mu])
-        x0 = x_last + (h / h_old) * (x_last - x_old)
+        x0 = _extrapolate(x_last, hist, h)
         # The modified Newton matrix, at the predicted state, factorized once per step.
         kkt = None if newton == "full" else factorize(*predict(x0[:n])[:2], t1)
 
@@ -294,7 +314,7 @@ def generalized_alpha(
         ok = res <= 1.0
         # Phi(q1), from the last residual: the position violation before any projection.
         viol = jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0)
-        new = (q1, qd1, a1, qdd1, mu1, w1, newt + it, x_last, h)
+        new = (q1, qd1, a1, qdd1, mu1, w1, newt + it, (x_last, hist[0], h, hist[2]))
         return new, ok, jnp.isfinite(res), viol
 
     N = ts.shape[0]
@@ -309,8 +329,7 @@ def generalized_alpha(
             mu0,
             jnp.zeros(2),
             jnp.asarray(0),
-            jnp.concatenate([qdd0, mu0]),
-            jnp.ones((), ts.dtype),
+            _start_history(jnp.concatenate([qdd0, mu0])),
         ),
         zeros.at[0].set(q0),
         zeros.at[0].set(qd0),
