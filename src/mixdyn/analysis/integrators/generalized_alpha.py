@@ -21,8 +21,9 @@ of ``G mu`` with respect to ``q``, ``C = Phi_q``). Two iterations are available:
   (``h^2 K / M`` not small) where the modified iteration contracts slowly or diverges.
 
 ``newton="auto"`` (the default) starts each step with the modified iteration and switches,
-within the step, to full Newton from the best iterate as soon as an iteration contracts the
-error by less than :data:`SWITCH_RATE` (or diverges), or half of ``max_newton`` is used.
+within the step, to full Newton from the better of the last two iterates as soon as an
+iteration contracts the error by less than :data:`SWITCH_RATE` (or diverges), or when, at the
+rate measured, it would not converge within half of ``max_newton`` iterations.
 """
 
 from __future__ import annotations
@@ -290,10 +291,13 @@ def generalized_alpha(
             r1 = residual(x1)
             res1 = error(r1)
             if newton == "auto":
-                # A modified iteration that contracts poorly, or has used half the budget,
-                # hands the step to full Newton, from the better of the last two iterates.
-                slow = ~full & ~(res1 <= 1.0)
-                slow = slow & (~(res1 <= SWITCH_RATE * res) | (it + 1 >= max_newton // 2))
+                # A modified iteration that contracts poorly, or would at its rate need more
+                # than half the budget, hands the step to full Newton, from the better of the
+                # last two iterates.
+                rate = res1 / res
+                need = jnp.log(res1) / -jnp.log(rate)  # iterations still needed at this rate
+                slow = ~(rate <= SWITCH_RATE) | ~(it + 1 + need <= max_newton // 2)
+                slow = slow & ~full & ~(res1 <= 1.0)
                 back = slow & ~(res1 < res)
                 x1, r1, res1 = jax.tree.map(
                     lambda old, new: jnp.where(back, old, new), (x, r, res), (x1, r1, res1)
