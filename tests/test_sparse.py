@@ -110,6 +110,25 @@ def test_forward_paper_sparse_agrees():
         assert float(np.max(np.abs(s[col] - d[col]))) <= 1e-12 * scale, col
 
 
+def test_generalized_alpha_sparse_agrees():
+    """Generalized-alpha on the sparse path (the modified Newton matrix through the banded
+    Cholesky of its Schur complement, G mu by a reverse pass through Phi, no dense Phi_q)
+    against the dense path on a 12-link chain (two Cholesky blocks) over 0.2 s at
+    dt = 1e-3: coordinates, velocities and reactions agree to 1e-10 of their scale (measured
+    4e-14, 6e-14 for the reactions), both with about two Newton iterations per step
+    (measured 1.87)."""
+    model = chain(12)
+    ts = np.linspace(0.0, 0.2, 5)
+    kw = dict(method="generalized-alpha", dt=1e-3, rho_inf=0.9)
+    d = md.forward(model, ts, linear_solver="dense", **kw)
+    s = md.forward(model, ts, linear_solver="sparse", **kw)
+    for col in ("b11.x", "b11.y", "b5.phi", "b11.vx", "b8.omega", "J3.Fx", "J11.Fy"):
+        scale = max(float(np.max(np.abs(d[col]))), 1.0)
+        assert float(np.max(np.abs(s[col] - d[col]))) <= 1e-10 * scale, col
+    for r in (d, s):
+        assert r.stats["newton_iterations"] <= 2.5 * r.stats["steps"]
+
+
 def test_gradient_through_sparse_solve():
     model = chain(20)
     ps = Problem(model, Constraints.of(model).with_linear_solver("sparse"))

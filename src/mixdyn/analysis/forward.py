@@ -47,9 +47,14 @@ def forward(
         progress: optional ``f(t)`` called at each output time (from inside the jitted loop).
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
             of small bandwidth without redundant constraints, see :mod:`mixdyn.linalg`):
-            the solve of the acceleration equations and of the projections.
+            the solve of the acceleration equations, of the projections and of
+            generalized-alpha's Newton iterations.
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
-            ``rho_inf``, ``max_steps``...).
+            ``rho_inf``, ``max_steps``...). Generalized-alpha: ``rho_inf`` (default 0.9),
+            ``newton`` (``"auto"``, the default: modified Newton on the acceleration-level
+            KKT matrix, switching within a step to the exact Newton matrix where it contracts
+            poorly, e.g. a stiff spring at a large step; ``"modified"``; ``"full"``),
+            ``tol``, ``max_newton``, ``project_velocities``.
 
     Returns:
         A :class:`Result` with the motion, the multipliers' physical meaning (joint reactions

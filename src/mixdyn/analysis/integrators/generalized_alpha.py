@@ -4,6 +4,26 @@
 Second order; numerical damping set by ``rho_inf`` (1: none, 0: asymptotic annihilation).
 After each step the velocities are projected onto ``Phi_q qd + Phi_t = 0`` (optional), which
 removes the index-3 velocity drift.
+
+The Newton iteration of a step solves for ``x = (qdd1, mu1)`` the residual
+``r1 = M qdd1 + G(q1) mu1 - Q(q1, qd1)``, ``r2 = Phi(q1) / beta'``, where
+``q1 = q_pred + beta' qdd1``, ``qd1 = qd_pred + gamma' qdd1`` (``beta' ~ h^2 / 4``). Its exact
+Jacobian is ``[[M + beta' (K_c - Q_q) - gamma' Q_qd, G], [C, 0]]`` (``K_c`` the derivative
+of ``G mu`` with respect to ``q``, ``C = Phi_q``). Two iterations are available:
+
+* *modified* Newton drops the ``O(beta')`` stiffness and damping terms: the matrix
+  ``[[M, G], [C(q1), 0]]`` is the acceleration-level KKT matrix, solved by the Schur
+  complement ``C M^-1 G`` (dense, or sparse on the sparse path) without any Jacobian of the
+  residual. It contracts by a factor ``~ beta' |K| / M`` per iteration (``~1e-3`` for
+  pendulum chains at ``h = 1e-3``);
+* *full* Newton builds the exact matrix by forward differentiation of the residual (dense,
+  ``(nq + m)`` directions) and solves it by dense LU: quadratic convergence, for stiff forces
+  (``h^2 K / M`` not small) where the modified iteration contracts slowly or diverges.
+
+``newton="auto"`` (the default) starts each step with the modified iteration and switches,
+within the step, to full Newton from the better of the last two iterates as soon as an
+iteration contracts the error by less than :data:`SWITCH_RATE` (or diverges), or when, at the
+rate measured, it would not converge within half of ``max_newton`` iterations.
 """
 
 from __future__ import annotations
@@ -11,9 +31,21 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import jax.scipy.linalg as jsl
 
+from ...equations import force_directions
+from ...errors import ModelError
+from ...linalg import solve_ranked
+from ...linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
+from ...linalg._sparse import _block_backward, _block_cholesky_forward
 from .._problem import Problem
 from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory
+
+#: The Newton iterations of ``newton=...`` (see the module docstring).
+NEWTON_CHOICES = ("auto", "modified", "full")
+#: ``newton="auto"``: an iteration of the modified Newton method that does not reduce the
+#: scaled error at least by this factor makes the step switch to full Newton.
+SWITCH_RATE = 0.5
 
 
 def coefficients(rho_inf):
@@ -23,6 +55,136 @@ def coefficients(rho_inf):
     g = 0.5 + af - am
     b = 0.25 * (g + 0.5) ** 2
     return am, af, g, b
+
+
+#: Placeholder length of the steps before the first one [time]: with it the extrapolation of
+#: the first two steps is constant, then linear.
+_NO_STEP = 1e100
+
+
+def _start_history(x):
+    """``(x_prev, x_prev2, h_prev, h_prev2)`` before the first step."""
+    return x, x, jnp.asarray(_NO_STEP, x.dtype), jnp.asarray(_NO_STEP, x.dtype)
+
+
+def _extrapolate(x, hist, h):
+    """The Newton start at the next step: the quadratic through the last three values of
+    ``x = (qdd, mu)`` (``x`` now, ``x_prev`` a step ``h1`` ago, ``x_prev2`` a further ``h2``
+    ago) at ``h`` ahead (``3 x - 3 x_prev + x_prev2`` at constant step); Lagrange weights."""
+    x1, x2, h1, h2 = hist
+    w0 = (h + h1) / h1 * (h + h1 + h2) / (h1 + h2)
+    w1 = -h / h1 * (h + h1 + h2) / h2
+    w2 = h / (h1 + h2) * (h + h1) / h2
+    return w0 * x + w1 * x1 + w2 * x2
+
+
+def _constraint_terms(problem: Problem):
+    """``f(q, qd, t, mu) -> (G mu (nq,), Phi (m,))``, by one reverse-mode pass through
+    ``Phi``: ``G mu = Phi_q^T lambda - B u`` needs no Jacobian matrix."""
+    c, p, m = problem.c, problem.p, problem.c.m
+
+    def terms(q, qd, t, mu):
+        phi, pull = jax.vjp(lambda q: c(q, t), q)
+        if p == 0:
+            return pull(mu)[0], phi
+        mk = m - p
+        (f,) = pull(jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)]))
+        B = force_directions(problem.model, problem.unknown, q, qd, t)
+        return f - B @ mu[mk:], phi
+
+    return terms
+
+
+def _svd_inverse(S, keep):
+    """``(U, 1/s, Vt)`` of ``S`` with the singular values not kept zeroed."""
+    U, s, Vt = jnp.linalg.svd(S, full_matrices=False)
+    keep = keep(s)
+    return U, jnp.where(keep, 1.0 / jnp.where(keep, s, 1.0), 0.0), Vt
+
+
+def _schur_factor_dense(S, rank):
+    """``solve(b)`` with the Schur complement ``S``, factorized once, solved as
+    :func:`~mixdyn.linalg.solve_kkt` solves it: truncated SVD when ``rank`` is given (redundant
+    rows), else LU with a truncated-SVD fallback at a singular position."""
+    m = S.shape[0]
+    if rank is not None:
+        U, sinv, Vt = _svd_inverse(S, lambda s: (jnp.arange(m) < rank) & (s > 0))
+        return lambda b: Vt.T @ (sinv * (U.T @ b))
+    lu, piv = jsl.lu_factor(S)
+    d = jnp.abs(jnp.diag(lu))
+    singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))
+    U, sinv, Vt = jax.lax.cond(
+        singular,
+        lambda: _svd_inverse(S, lambda s: s > SINGULAR_RCOND * s[0]),
+        lambda: (jnp.zeros_like(S), jnp.zeros(m, S.dtype), jnp.zeros_like(S)),
+    )
+    return lambda b: jax.lax.cond(
+        singular, lambda: Vt.T @ (sinv * (U.T @ b)), lambda: jsl.lu_solve((lu, piv), b)
+    )
+
+
+def _schur_factor_sparse(c, v, Minv, dense_C):
+    """``solve(b)`` with ``S = C M^-1 C^T`` from the sparse values ``v``: its banded block
+    Cholesky factors computed once (:mod:`mixdyn.linalg._sparse`), two block triangular sweeps
+    per solve; a dense truncated-SVD solve at a singular position (``dense_C()`` then)."""
+    st = c.schur_structure()
+    B, nblk = st.block, st.nblk
+    D, E = st.blocks(v, Minv)
+    L, W, _ = _block_cholesky_forward(D, E, jnp.zeros((nblk, B, 1), D.dtype))
+    d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: st.m] ** 2
+    singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))  # NaN: a failed factorization
+
+    def factored(b):
+        rhs = jnp.concatenate([b[st.perm], jnp.zeros(nblk * B - st.m, b.dtype)])
+
+        def step(yp, xs):
+            Li, Wi, ri = xs
+            yi = jsl.solve_triangular(Li, ri - Wi @ yp, lower=True)
+            return yi, yi
+
+        _, y = jax.lax.scan(step, jnp.zeros((B, 1), b.dtype), (L, W, rhs.reshape(nblk, B, 1)))
+        return _block_backward(L, W, y).reshape(-1)[: st.m][st.inv]
+
+    def truncated_svd(b):
+        C = dense_C()
+        return solve_ranked(C @ (Minv[:, None] * C.T), b, None, rcond=SINGULAR_RCOND)[0]
+
+    return lambda b: jax.lax.cond(singular, truncated_svd, factored, b)
+
+
+def _iteration_matrix(problem: Problem, sparse: bool):
+    """``factorize(q, qd, t) -> kkt``: the modified Newton matrix ``[[M, G], [C, 0]]`` at one
+    state, factorized (through its Schur complement ``C M^-1 G``); ``kkt(r1, r2)`` returns
+    ``(dqdd, dmu)`` solving ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
+    c, Minv = problem.c, problem.Minv
+    if c.m == 0:
+        return lambda q, qd, t: lambda r1, r2: (Minv * r1, r2)
+    if sparse:
+
+        def factorize(q, qd, t):
+            v = c.jacobian_values(q, t)
+            solve = _schur_factor_sparse(c, v, Minv, lambda: c.phi_q(q, t))
+
+            def kkt(r1, r2):
+                dmu = solve(c.matvec(v, Minv * r1) - r2)
+                return Minv * (r1 - c.rmatvec(v, dmu)), dmu
+
+            return kkt
+
+        return factorize
+
+    def factorize(q, qd, t):
+        C = c.phi_q(q, t)
+        MinvG = Minv[:, None] * problem.G(q, qd, t, C)
+        solve = _schur_factor_dense(C @ MinvG, c.rank)
+
+        def kkt(r1, r2):
+            dmu = solve(C @ (Minv * r1) - r2)
+            return Minv * r1 - MinvG @ dmu, dmu
+
+        return kkt
+
+    return factorize
 
 
 @eqx.filter_jit
@@ -36,6 +198,7 @@ def generalized_alpha(
     rho_inf=0.9,
     tol=None,
     max_newton=20,
+    newton="auto",
     project_velocities=True,
     max_steps=10_000_000,
     progress=None,
@@ -51,13 +214,23 @@ def generalized_alpha(
         rho_inf: spectral radius at infinite frequency, in [0, 1].
         tol: Newton tolerance on the scaled residual (default ``1e-10 x`` force scale).
         max_newton: Newton iterations per step.
+        newton: ``"auto"`` (default: modified Newton, switching to full Newton within a step
+            where it contracts poorly, e.g. a stiff spring at a large step), ``"modified"``
+            (the acceleration-level KKT matrix only: cheap, no Jacobian of the residual,
+            sparse on the sparse path) or ``"full"`` (the exact Newton matrix, dense).
         project_velocities: project velocities onto the velocity constraints after a step.
     """
+    if newton not in NEWTON_CHOICES:
+        raise ModelError(
+            f"newton must be one of {', '.join(NEWTON_CHOICES)}, got {newton!r}", "newton"
+        )
     am, af, gm, bt = coefficients(rho_inf)
-    Minv = problem.Minv
     Mdiag = problem.model.mass_diagonal
     n = q0.shape[0]
-    m = problem.c.m
+    # The sparse path for forward problems (G = C^T); mixed problems take the dense one.
+    sparse = problem.sparse and problem.p == 0
+    constraint_terms = _constraint_terms(problem)
+    factorize = _iteration_matrix(problem, sparse)
     qdd0, mu0, _ = problem.accelerations(q0, qd0, ts[0])
     fscale = jnp.maximum(
         jnp.max(jnp.abs(Mdiag * qdd0)) + jnp.max(jnp.abs(problem.known_forces(q0, qd0, ts[0]))),
@@ -66,15 +239,12 @@ def generalized_alpha(
     lscale = jnp.maximum(jnp.max(jnp.abs(q0)), 1.0)
     ftol = 1e-10 * fscale if tol is None else tol
     ptol = 1e-13 * lscale
-    del Minv
 
     def one_step(state, h, t1):
-        q, qd, a, qdd, mu, w, newt = state
+        q, qd, a, qdd, mu, w, newt, hist = state
         beta_p = h**2 * bt * (1 - af) / (1 - am)
-        gamma_p = h * gm * (1 - af) / (1 - am)
 
-        def predict(x):
-            qdd1, _ = x[:n], x[n:]
+        def predict(qdd1):
             a1 = ((1 - af) * qdd1 + af * qdd - am * a) / (1 - am)
             q1 = q + h * qd + h**2 * (0.5 - bt) * a + h**2 * bt * a1
             qd1 = qd + h * (1 - gm) * a + h * gm * a1
@@ -82,34 +252,63 @@ def generalized_alpha(
 
         def residual(x):
             qdd1, mu1 = x[:n], x[n:]
-            q1, qd1, _ = predict(x)
-            C = problem.c.phi_q(q1, t1)
-            r1 = Mdiag * qdd1 + problem.G(q1, qd1, t1, C) @ mu1 - problem.known_forces(q1, qd1, t1)
-            r2 = problem.c(q1, t1) / beta_p
-            return jnp.concatenate([r1, r2])
+            q1, qd1, _ = predict(qdd1)
+            Gmu, phi = constraint_terms(q1, qd1, t1, mu1)
+            r1 = Mdiag * qdd1 + Gmu - problem.known_forces(q1, qd1, t1)
+            return jnp.concatenate([r1, phi / beta_p])
 
-        def error(x):
-            r = residual(x)
+        def error(r):
             # Force residual against ftol; position residual (r2 * beta_p) against ptol.
             return jnp.maximum(
                 jnp.max(jnp.abs(r[:n])) / ftol, jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0) / ptol
             )
 
+        x_last = jnp.concatenate([qdd, mu])
+        x0 = _extrapolate(x_last, hist, h)
+        # The modified Newton matrix, at the predicted state, factorized once per step.
+        kkt = None if newton == "full" else factorize(*predict(x0[:n])[:2], t1)
+
+        def modified_dx(x, r):
+            return jnp.concatenate(kkt(r[:n], r[n:]))
+
+        def full_dx(x, r):
+            J = jax.jacfwd(residual)(x)
+            return problem.c.solve(J, r, extra_rank=n)[0]
+
         def cond(s):
-            _, it, res, _ = s
+            _, _, res, it, _ = s
             return (res > 1.0) & (it < max_newton) & jnp.isfinite(res)
 
         def body(s):
-            x, it, _, _ = s
-            J = jax.jacfwd(residual)(x)
-            dx, ratio = problem.c.solve(J, residual(x), extra_rank=n)
-            x = x - dx
-            return x, it + 1, error(x), ratio
+            x, r, res, it, full = s
+            if newton == "modified":
+                dx = modified_dx(x, r)
+            elif newton == "full":
+                dx = full_dx(x, r)
+            else:
+                dx = jax.lax.cond(full, full_dx, modified_dx, x, r)
+            x1 = x - dx
+            r1 = residual(x1)
+            res1 = error(r1)
+            if newton == "auto":
+                # A modified iteration that contracts poorly, or would at its rate need more
+                # than half the budget, hands the step to full Newton, from the better of the
+                # last two iterates.
+                rate = res1 / res
+                need = jnp.log(res1) / -jnp.log(rate)  # iterations still needed at this rate
+                slow = ~(rate <= SWITCH_RATE) | ~(it + 1 + need <= max_newton // 2)
+                slow = slow & ~full & ~(res1 <= 1.0)
+                back = slow & ~(res1 < res)
+                x1, r1, res1 = jax.tree.map(
+                    lambda old, new: jnp.where(back, old, new), (x, r, res), (x1, r1, res1)
+                )
+                full = full | slow
+            return x1, r1, res1, it + 1, full
 
-        x0 = jnp.concatenate([qdd, mu])
-        x, it, res, _ = jax.lax.while_loop(cond, body, (x0, 0, error(x0), jnp.asarray(1.0)))
-        del gamma_p
-        q1, qd1, a1 = predict(x)
+        r0 = residual(x0)
+        init = (x0, r0, error(r0), 0, jnp.asarray(newton == "full"))
+        x, r, res, it, _ = jax.lax.while_loop(cond, body, init)
+        q1, qd1, a1 = predict(x[:n])
         qdd1, mu1 = x[:n], x[n:]
         if project_velocities:
             qd1 = problem.project_velocities(q1, qd1, t1)
@@ -117,13 +316,25 @@ def generalized_alpha(
         rates1 = problem.work_rates(q1, qd1, t1, qdd1)
         w1 = w + 0.5 * h * (rates0 + rates1)
         ok = res <= 1.0
-        return (q1, qd1, a1, qdd1, mu1, w1, newt + it), ok, jnp.isfinite(res)
+        # Phi(q1), from the last residual: the position violation before any projection.
+        viol = jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0)
+        new = (q1, qd1, a1, qdd1, mu1, w1, newt + it, (x_last, hist[0], h, hist[2]))
+        return new, ok, jnp.isfinite(res), viol
 
     N = ts.shape[0]
     zeros = jnp.zeros((N, n))
     init = (
         jnp.asarray(1),
-        (q0, qd0, qdd0, qdd0, mu0, jnp.zeros(2), jnp.asarray(0)),
+        (
+            q0,
+            qd0,
+            qdd0,
+            qdd0,
+            mu0,
+            jnp.zeros(2),
+            jnp.asarray(0),
+            _start_history(jnp.concatenate([qdd0, mu0])),
+        ),
         zeros.at[0].set(q0),
         zeros.at[0].set(qd0),
         jnp.zeros((N, 2)),
@@ -150,9 +361,8 @@ def generalized_alpha(
         def inner_body(c):
             i, state, st, t, viol = c
             t1 = ts[k - 1] + (i + 1) * h
-            new, ok, finite = one_step(state, h, t1)
+            new, ok, finite, v = one_step(state, h, t1)
             st = jnp.where(ok, st, jnp.where(finite, NEWTON_FAILED, NOT_FINITE))
-            v = jnp.max(jnp.abs(problem.c(new[0], t1))) if m else jnp.zeros(())
             return i + 1, new, st, jnp.where(ok, t1, t), jnp.maximum(viol, v)
 
         i, state, status, t, viol = jax.lax.while_loop(
