@@ -73,9 +73,17 @@ def analyse(
     keep_k, red_k, rank_k = independent_rows(J[:nk], rtol)
     redundant_drivers = []
     keep = list(keep_k)
-    # Add drivers one by one: a driver that does not raise the rank is redundant.
+    drivers_rows = list(range(nk, c.n_full))
+    # Drivers that together raise the rank by their number are all independent (one
+    # factorization); otherwise add them one by one: a driver that does not raise the rank is
+    # redundant.
+    if drivers_rows and independent_rows(J[[*keep, *drivers_rows]], rtol)[2] == rank_k + len(
+        drivers_rows
+    ):
+        keep += drivers_rows
+        drivers_rows = []
     rank = rank_k
-    for k in range(nk, c.n_full):
+    for k in drivers_rows:
         _, _, r = independent_rows(J[[*keep, k]], rtol)
         if r > rank:
             keep.append(k)
