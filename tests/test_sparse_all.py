@@ -165,6 +165,22 @@ def test_elements_with_laws_of_different_shapes_group_apart():
     assert float(jnp.max(jnp.abs(c.phi_q(q, 0.5) - J))) <= 1e-15
 
 
+def test_rank_analysis_fast_path_agrees_with_the_qr(monkeypatch):
+    """The O(m) certificate of independent rows gives the report the rank-revealing QR gives
+    (and declines where a row is redundant)."""
+    from mixdyn.analysis import _structure
+
+    models = [DRIVEN[name]()[0] for name in DRIVEN]
+    models.append(parallelogram_with_extra_link())
+    models.append(slider_crank(drivers=[md.CoordinateDriver("lift", "slider", "y", law=0.0)]))
+    fast = [_structure.analyse(m) for m in models]
+    assert _structure._full_row_rank(np.eye(3)[:2])
+    assert not _structure._full_row_rank(np.ones((2, 3)))
+    monkeypatch.setattr(_structure, "_full_row_rank", lambda A: False)
+    for m, f in zip(models, fast, strict=True):
+        assert _structure.analyse(m) == f, m.name
+
+
 # ------------------------------------------------------------------ kinematics
 @pytest.mark.parametrize("name", list(DRIVEN))
 def test_kinematic_and_inverse_agree(name):
