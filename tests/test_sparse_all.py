@@ -375,3 +375,13 @@ def test_model_file_run_takes_the_linear_solver():
     assert res.stats["linear_solver"] == "sparse"
     # the default normal form does not change: 'auto' is the default
     assert "linear_solver" not in mio.dumps(mio.read(EXAMPLES / "four_bar.yaml"))
+
+
+@pytest.mark.parametrize("linear_solver", ["dense", "sparse", "auto"])
+def test_free_body_without_constraints(linear_solver):
+    """No constraint equation at all: nothing to solve on either path (it used to fail on an
+    empty reduction)."""
+    model = md.Model([md.Body("b", 1.0, 0.1)], gravity=(0.0, -9.81), units=md.SI)
+    ts = np.linspace(0.0, 0.1, 3)
+    res = md.forward(model, ts, linear_solver=linear_solver, method="baumgarte", dt=0.01)
+    np.testing.assert_allclose(res["b.y"], -9.81 * ts**2 / 2, atol=1e-12)

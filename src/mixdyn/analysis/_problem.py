@@ -237,11 +237,12 @@ class Problem(eqx.Module):
             if self.c.linear_solver == "sparse":
                 v = c.jacobian_values(q, t)
                 y, _ = c.schur_solve(v, Minv, r)
-                return jnp.where(jnp.max(jnp.abs(r)) > tol, q - Minv * c.rmatvec(v, y), q)
+                far = jnp.max(jnp.abs(r), initial=0.0) > tol
+                return jnp.where(far, q - Minv * c.rmatvec(v, y), q)
             J = self.c.phi_q(q, t)
             MJ = self.Minv[:, None] * J.T
             y, _ = self.c.solve(J @ MJ, r)
-            return jnp.where(jnp.max(jnp.abs(r)) > tol, q - MJ @ y, q)
+            return jnp.where(jnp.max(jnp.abs(r), initial=0.0) > tol, q - MJ @ y, q)
 
         return jax.lax.fori_loop(0, iters, body, q)
 

@@ -46,7 +46,7 @@ def _velocity_fix(c: Constraints, q, qd, t, hold_idx):
         rhs = jnp.concatenate([rhs, qd[hold_idx]])
     r = rhs - J @ qd
     dqd, *_ = jnp.linalg.lstsq(J, r)
-    return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)))
+    return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)), initial=0.0)
 
 
 @eqx.filter_jit
@@ -58,7 +58,7 @@ def _velocity_fix_sparse(c: Constraints, q, qd, t, weights):
     phi_t = c.phi_t(q, t)
     solve, ratio = c.min_norm_solver(v, weights, refine=1)
     qd = qd - solve(c.matvec(v, qd) + phi_t)
-    return qd, jnp.max(jnp.abs(c.matvec(v, qd) + phi_t)), ratio
+    return qd, jnp.max(jnp.abs(c.matvec(v, qd) + phi_t), initial=0.0), ratio
 
 
 def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None, hold=()):

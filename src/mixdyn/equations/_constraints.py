@@ -74,13 +74,13 @@ class Constraints(eqx.Module):
             raise ModelError(
                 f"linear_solver must be one of {', '.join(LINEAR_SOLVERS)}, got {linear_solver!r}"
             )
-        if linear_solver == "dense":
+        if linear_solver == "dense" or self.m == 0:  # no equation: nothing to solve
             return "dense"
-        from ..linalg import choose_solver
+        from ..linalg import AUTO_MIN_ROWS, choose_solver
 
         local = self._local_ok()
         if linear_solver == "auto":
-            if not local or self.rank is not None:
+            if not local or self.rank is not None or self.m < AUTO_MIN_ROWS:
                 return "dense"
             return choose_solver(self.m, self.schur_structure())
         if not local:

@@ -62,6 +62,9 @@ class SchurStructure:
 
     def __init__(self, m: int, n: int, rows: np.ndarray, cols: np.ndarray, min_block: int):
         self.m, self.n = m, n
+        if m == 0:  # nothing to factorize: solve and factor return at once
+            self.bandwidth, self.block, self.nblk = 0, 1, 0
+            return
         rows = np.asarray(rows, dtype=np.int64)
         cols = np.asarray(cols, dtype=np.int64)
         C = sp.coo_matrix((np.ones(rows.size), (rows, cols)), shape=(m, n)).tocsc()
