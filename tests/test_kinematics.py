@@ -234,16 +234,18 @@ def test_parallelogram_kinematics_through_vertical_links():
 # ---------------------------------------------------------------- compile once
 @pytest.fixture
 def trace_counter(monkeypatch):
-    """Counts evaluations of ``Constraints.full``: every analysis evaluates it only inside
-    ``jit``-compiled functions, so the count is the number of traces."""
+    """Counts evaluations of the constraint equations (``Constraints._local``, through which
+    ``Phi``, ``Phi_t`` and ``gamma`` of the built-in elements are evaluated): every analysis
+    evaluates them only inside ``jit``-compiled functions, so the count is the number of
+    traces."""
     calls = {"n": 0}
-    original = Constraints.full
+    original = Constraints._local
 
-    def counting(self, q, t):
+    def counting(self, *args, **kwargs):
         calls["n"] += 1
-        return original(self, q, t)
+        return original(self, *args, **kwargs)
 
-    monkeypatch.setattr(Constraints, "full", counting)
+    monkeypatch.setattr(Constraints, "_local", counting)
     return calls
 
 

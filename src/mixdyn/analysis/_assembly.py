@@ -54,9 +54,20 @@ def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
 
 @eqx.filter_jit
 def _gn_step(c: Constraints, q, t, damping):
+    """One damped Gauss–Newton step ``dq = -J^T (J J^T + damping I)^-1 Phi``; returns the new
+    ``q`` and the pivot ratio of the solve (1 on the dense path, which does not report it)."""
     r = c(q, t)
+    if c.linear_solver == "sparse":
+        solve, ratio = c.min_norm_solver(c.jacobian_values(q, t), shift=damping)
+        return q - solve(r), ratio
     J = c.phi_q(q, t)
-    return q + min_norm_step(J, r, damping=damping), r
+    return q + min_norm_step(J, r, damping=damping), jnp.ones(())
+
+
+#: On the sparse path a step whose pivot ratio (of ``J``, the square root of ``J J^T``'s) is
+#: below this, or not finite, is taken again on the dense path (LU of the damped ``J J^T``):
+#: redundant joint equations make ``J J^T`` singular once the damping has faded.
+SPARSE_STEP_MIN_RATIO = 1e-8
 
 
 @eqx.filter_jit
@@ -72,6 +83,7 @@ def assemble(
     drivers=(),
     tol: float | None = None,
     max_iter: int = 100,
+    linear_solver: str = "auto",
 ) -> Assembly:
     """Close the joints (and optional drivers) starting from a rough pose.
 
@@ -86,6 +98,10 @@ def assemble(
         drivers: drivers to satisfy as well (none by default).
         tol: largest residual accepted [length] (default ``1e-12 x`` the model's size).
         max_iter: iteration limit.
+        linear_solver: ``"dense"`` (LU of ``J J^T``), ``"sparse"`` (banded Cholesky of
+            ``J J^T``, falling back to the dense step where it is singular: redundant joint
+            equations) or ``"auto"`` (sparse for large mechanisms of small bandwidth, see
+            :mod:`mixdyn.linalg`).
 
     Raises:
         AssemblyError: naming the joint equations that could not be closed.
@@ -94,7 +110,12 @@ def assemble(
     if q.shape != (model.nq,):
         raise ModelError(f"q must have shape ({model.nq},), got {tuple(q.shape)}", model.name)
     hold = tuple(hold)
-    c = Constraints(model.joints, [*hold_drivers(model, hold, q), *drivers], model.nq)
+    c = Constraints(
+        model.joints,
+        [*hold_drivers(model, hold, q), *drivers],
+        model.nq,
+        linear_solver=linear_solver,
+    )
     L = length_scale(model)
     tol = 1e-12 * L if tol is None else tol
     t = jnp.asarray(t, dtype=jnp.float64)
@@ -105,7 +126,11 @@ def assemble(
     while err > tol and it < max_iter:
         # Levenberg–Marquardt damping from the residual size keeps the step bounded far away.
         damping = jnp.asarray(min(err / L, 1.0) * 1e-3)
-        q_new, _ = _gn_step(c, q, t, damping)
+        q_new, ratio = _gn_step(c, q, t, damping)
+        if c.linear_solver == "sparse" and not (
+            float(ratio) >= SPARSE_STEP_MIN_RATIO and bool(jnp.all(jnp.isfinite(q_new)))
+        ):
+            q_new, _ = _gn_step(c.with_linear_solver("dense"), q, t, damping)
         r_new = _residual(c, q_new, t)
         err_new = float(jnp.max(jnp.abs(r_new)))
         if not np.isfinite(err_new):

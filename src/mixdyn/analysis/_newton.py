@@ -11,6 +11,10 @@ from ..equations import Constraints
 def newton_positions(c: Constraints, q, t, tol, max_iter):
     """Solve ``Phi(q, t) = 0`` (square, or with redundant rows of known rank) from ``q``.
 
+    Each step solves ``Phi_q dq = Phi`` on the constraint set's linear-solver path
+    (:meth:`~mixdyn.equations.Constraints.jacobian_solver`: LU, or on the sparse path the
+    minimum-norm step ``Phi_q^T (Phi_q Phi_q^T)^-1 Phi`` by a banded Cholesky factorization).
+
     Converged when the largest residual is below ``tol`` [length] after a step whose size is
     below ``sqrt(tol)``-ish relative motion; the iteration count, the final residual and the
     smallest pivot ratio met are returned for diagnosis.
@@ -25,8 +29,7 @@ def newton_positions(c: Constraints, q, t, tol, max_iter):
 
     def body(s):
         q, it, _, ratio = s
-        Phi = c(q, t)
-        dq, r = c.solve(c.phi_q(q, t), Phi)
+        dq, r = c.jacobian_solver(q, t)(c(q, t))
         q = q - dq
         res = jnp.max(jnp.abs(c(q, t)))
         return q, it + 1, res, jnp.minimum(ratio, r)
@@ -35,6 +38,6 @@ def newton_positions(c: Constraints, q, t, tol, max_iter):
     q, it, res, ratio = jax.lax.while_loop(cond, body, (q, jnp.asarray(0), res0, jnp.asarray(1.0)))
     # One more step for full precision at the converged point costs little and tightens
     # the answer to rounding level; keep the pivot ratio of the final Jacobian.
-    dq, r = c.solve(c.phi_q(q, t), c(q, t))
+    dq, r = c.jacobian_solver(q, t)(c(q, t))
     q = jnp.where(jnp.isfinite(res), q - dq, q)
     return q, it, jnp.max(jnp.abs(c(q, t))), jnp.minimum(ratio, r)

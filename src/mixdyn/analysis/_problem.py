@@ -51,6 +51,9 @@ class Problem(eqx.Module):
         solver: ``"augmented"`` or ``"partition"``.
         j_index: (p,) coordinates along which the unknown forces act (partition solver).
         i_index: user-chosen independent coordinates, or ``()`` for automatic choice.
+        collocated: for each unknown force, the prescribed motion (0..p-1) along whose
+            gradient it acts (``B[:, a] = s_a Psi_q[b]^T``), or ``()``: with it the augmented
+            system is symmetric, ``G = C^T diag(1, -1/s)``, and can take the sparse path.
     """
 
     model: Model
@@ -59,14 +62,18 @@ class Problem(eqx.Module):
     solver: str = eqx.field(static=True)
     j_index: tuple[int, ...] = eqx.field(static=True)
     i_index: tuple[int, ...] = eqx.field(static=True)
+    collocated: tuple[int, ...] = eqx.field(static=True)
 
-    def __init__(self, model, c, unknown=(), solver="augmented", j_index=(), i_index=()):
+    def __init__(
+        self, model, c, unknown=(), solver="augmented", j_index=(), i_index=(), collocated=()
+    ):
         self.model = model
         self.c = c
         self.unknown = tuple(unknown)
         self.solver = solver
         self.j_index = tuple(int(i) for i in j_index)
         self.i_index = tuple(int(i) for i in i_index)
+        self.collocated = tuple(int(i) for i in collocated)
 
     @property
     def p(self) -> int:
@@ -78,9 +85,15 @@ class Problem(eqx.Module):
 
     @property
     def sparse(self) -> bool:
-        """Whether the sparse linear-solver path is taken: the constraints ask for it and
-        the problem is a forward one (the mixed problems' systems stay dense)."""
-        return self.c.linear_solver == "sparse" and self.p == 0 and self.solver == "augmented"
+        """Whether the sparse linear-solver path is taken: the constraints ask for it and the
+        system is symmetric (forward and inverse dynamics, mixed dynamics with the augmented
+        solver and collocated unknown forces; the partition solver and non-collocated mixed
+        problems stay dense)."""
+        return (
+            self.c.linear_solver == "sparse"
+            and self.solver == "augmented"
+            and (self.p == 0 or len(self.collocated) == self.p)
+        )
 
     # ------------------------------------------------------------------ forces
     def known_forces(self, q, qd, t):
@@ -121,6 +134,7 @@ class Problem(eqx.Module):
             gam = gam - 2 * alpha * (c.matvec(v, qd) + c.phi_t(q, t)) - beta**2 * c(q, t)
         Q = self.known_forces(q, qd, t)
         rhs = c.matvec(v, Minv * Q) - gam
+        # the symmetric system M qdd + C^T y = Q, C qdd = gam
         mu, ratio = c.schur_solve(v, Minv, rhs)
 
         def truncated_svd():
@@ -132,6 +146,16 @@ class Problem(eqx.Module):
 
         mu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: mu)
         qdd = Minv * (Q - c.rmatvec(v, mu))
+        if self.p:
+            # Collocated unknown forces: -B[:, a] u_a = Psi_q[b]^T y_b with B[:, a] = s_a
+            # Psi_q[b]^T, so u_a = -y_b / s_a.
+            p, mk = self.p, c.m - self.p
+            rows = mk + np.asarray(self.collocated, dtype=int)
+            B = force_directions(self.model, self.unknown, q, qd, t)
+            E = jnp.zeros((c.m, p)).at[rows, np.arange(p)].set(1.0)
+            PsiT = jax.vmap(lambda e: c.rmatvec(v, e), in_axes=1, out_axes=1)(E)  # (nq, p)
+            scale = jnp.sum(B * PsiT, axis=0) / jnp.sum(PsiT**2, axis=0)
+            mu = jnp.concatenate([mu[:mk], -mu[rows] / scale])
         return qdd, mu, ratio
 
     def _partition(self, q, qd, t, C, gam, Q):
@@ -174,10 +198,20 @@ class Problem(eqx.Module):
         return qdd, jnp.concatenate([lam, u]), jnp.minimum(ratio, r2)
 
     # ------------------------------------------------------------------ work
-    def powers(self, q, qd, t, mu, C):
-        """Power of each multiplier's force (m,): ``-(G[:, r] mu_r) . qd``."""
-        G = self.G(q, qd, t, C)
-        return -(G.T @ qd) * mu
+    def powers(self, q, qd, t, mu):
+        """Power of each multiplier's force (m,): ``-(G[:, r] mu_r) . qd``, with
+        ``G^T qd = [Phi_q qd; -B^T qd]`` (``Phi_q qd`` from the sparse values where the
+        elements allow it)."""
+        c = self.c
+        if c._local_ok():
+            Cqd = c.matvec(c.jacobian_values(q, t), qd)
+        else:
+            Cqd = c.phi_q(q, t) @ qd
+        Gqd = Cqd[: c.m - self.p]
+        if self.p:
+            B = force_directions(self.model, self.unknown, q, qd, t)
+            Gqd = jnp.concatenate([Gqd, -(B.T @ qd)])
+        return -Gqd * mu
 
     def work_rates(self, q, qd, t, qdd):
         """``[P_nonconservative_applied, P_constraints_and_unknowns]`` (2,) [power].
@@ -203,11 +237,12 @@ class Problem(eqx.Module):
             if self.c.linear_solver == "sparse":
                 v = c.jacobian_values(q, t)
                 y, _ = c.schur_solve(v, Minv, r)
-                return jnp.where(jnp.max(jnp.abs(r)) > tol, q - Minv * c.rmatvec(v, y), q)
+                far = jnp.max(jnp.abs(r), initial=0.0) > tol
+                return jnp.where(far, q - Minv * c.rmatvec(v, y), q)
             J = self.c.phi_q(q, t)
             MJ = self.Minv[:, None] * J.T
             y, _ = self.c.solve(J @ MJ, r)
-            return jnp.where(jnp.max(jnp.abs(r)) > tol, q - MJ @ y, q)
+            return jnp.where(jnp.max(jnp.abs(r), initial=0.0) > tol, q - MJ @ y, q)
 
         return jax.lax.fori_loop(0, iters, body, q)
 

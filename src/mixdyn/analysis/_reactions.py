@@ -3,15 +3,21 @@
 The constraint force on the bodies is ``-Phi_q^T lambda``. For a joint between bodies i and j,
 its rows give on body j a force ``F`` [force] at the body origin and a moment about it; the
 reported moment ``M`` is taken about the joint's point on body j. The force on body i is ``-F``.
+
+Only the entries of ``Phi_q`` in the joint's rows and body j's columns take part: where every
+element refers to its bodies through ``b``, ``bi``, ``bj`` (all the built-in ones) they are
+taken from the per-element Jacobian values (:meth:`~mixdyn.equations.Constraints.jacobian_values`)
+by one segment sum, without a dense ``Phi_q``; otherwise from the dense ``Phi_q``.
 """
 
 from __future__ import annotations
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints
-from ..model._geometry import GROUND, cross, vector
+from ..model._geometry import GROUND
 
 
 def reaction_kinds(c: Constraints) -> dict[str, str]:
@@ -24,43 +30,96 @@ def reaction_kinds(c: Constraints) -> dict[str, str]:
     return kinds
 
 
-def reaction_columns(c: Constraints, Phi_q, lam, q) -> dict:
-    """Reaction columns for every joint, from one time's ``Phi_q`` (m, nq), ``lam`` (m,) and
-    ``q`` (nq,). Vectorize over time with ``jax.vmap``.
-
-    Returns values keyed ``{joint}.Fx``, ``{joint}.Fy`` (and ``{joint}.M``): the force and the
-    moment (about the joint point) that body i exerts on body j (on the ground if j is it).
-    """
-    Qc = -(Phi_q * lam[:, None])  # (m, nq): generalized constraint force of each row
-    owners = np.asarray([c.owners[i] for i in c.active])
-    out = {}
-    for k, j in enumerate(c.joints):
-        rows = np.where(owners == k)[0]
+def _reaction_bodies(c: Constraints):
+    """Per joint: the body the reaction is reported on, the point (body frame) the moment is
+    taken about, and the sign (-1 where body j is the ground and body i reports instead)."""
+    out = []
+    for j in c.joints:
         b, s = j.reaction_point()
         if b == GROUND:  # report on body i instead, with the sign flipped
-            b, s, sign = j.bi, j.si, -1.0
+            out.append((j.bi, j.si, -1.0))
         else:
-            sign = 1.0
-        if rows.size:
-            w = sign * jnp.sum(Qc[rows, 3 * b : 3 * b + 3], axis=0)
-        else:
-            w = jnp.zeros(3)
-        F = w[:2]
-        M = w[2] - cross(vector(q, b, s), F)
-        out[f"{j.name}.Fx"], out[f"{j.name}.Fy"] = F[0], F[1]
+            out.append((b, s, 1.0))
+    return out
+
+
+def _sparse_map(c: Constraints, bodies):
+    """Static map of the nonzeros of ``Phi_q`` onto the reactions: the nonzeros taken (in a
+    joint's rows and its reporting body's columns), their slot ``3 k + (x, y, phi)`` in the
+    (n_joints, 3) reactions, and their sign."""
+    rows, cols = c.coo()
+    owners = np.asarray([c.owners[i] for i in c.active], dtype=np.int64)
+    own = owners[rows]
+    nj = len(c.joints)
+    joint = own < nj
+    body = np.full(rows.size, -2, dtype=np.int64)
+    sign = np.zeros(rows.size)
+    rb = np.asarray([b for b, _, _ in bodies], dtype=np.int64)
+    rs = np.asarray([sg for _, _, sg in bodies])
+    body[joint] = rb[own[joint]]
+    sign[joint] = rs[own[joint]]
+    take = np.flatnonzero(joint & (cols // 3 == body))
+    return take, 3 * own[take] + cols[take] % 3, sign[take]
+
+
+def joint_reactions(c: Constraints, q, t, lam) -> jax.Array:
+    """Reactions (n_joints, 3) ``[Fx, Fy, M]`` of every joint at one time: the force and the
+    moment (about the joint point) that body i exerts on body j (on body i, sign flipped, if j
+    is the ground), from ``q`` (nq,), ``t`` and the multipliers ``lam`` (m,). Vectorize over
+    time with ``jax.vmap`` or ``jax.lax.map``."""
+    nj = len(c.joints)
+    if nj == 0:
+        return jnp.zeros((0, 3))
+    bodies = _reaction_bodies(c)
+    if c._local_ok():
+        rows, _ = c.coo()
+        take, slot, sign = _sparse_map(c, bodies)
+        v = c.jacobian_values(q, t)
+        contrib = -(v[take] * lam[rows[take]]) * sign
+        w = jax.ops.segment_sum(contrib, jnp.asarray(slot), num_segments=3 * nj)
+        w = w.reshape(nj, 3)
+    else:
+        Qc = -(c.phi_q(q, t) * lam[:, None])  # (m, nq): generalized force of each row
+        owners = np.asarray([c.owners[i] for i in c.active])
+        parts = []
+        for k, (b, _, sign) in enumerate(bodies):
+            rows = np.where(owners == k)[0]
+            if rows.size:
+                parts.append(sign * jnp.sum(Qc[rows, 3 * b : 3 * b + 3], axis=0))
+            else:
+                parts.append(jnp.zeros(3))
+        w = jnp.stack(parts)
+    b = np.asarray([b for b, _, _ in bodies], dtype=np.int64)
+    s = jnp.stack([jnp.asarray(s, dtype=q.dtype) for _, s, _ in bodies])
+    phi = q[3 * b + 2]
+    cos, sin = jnp.cos(phi), jnp.sin(phi)
+    rx = cos * s[:, 0] - sin * s[:, 1]  # the point's vector from the body origin, global
+    ry = sin * s[:, 0] + cos * s[:, 1]
+    F = w[:, :2]
+    M = w[:, 2] - (rx * F[:, 1] - ry * F[:, 0])
+    return jnp.concatenate([F, M[:, None]], axis=1)
+
+
+def reaction_columns(c: Constraints, R) -> dict:
+    """The reaction columns ``{joint}.Fx``, ``{joint}.Fy`` (and ``{joint}.M`` where the joint
+    carries a moment) from :func:`joint_reactions`' values ``R`` (..., n_joints, 3)."""
+    out = {}
+    for k, j in enumerate(c.joints):
+        out[f"{j.name}.Fx"], out[f"{j.name}.Fy"] = R[..., k, 0], R[..., k, 1]
         if j.carries_moment:
-            out[f"{j.name}.M"] = M
+            out[f"{j.name}.M"] = R[..., k, 2]
     return out
 
 
 def driver_efforts(c: Constraints, lam, powers, n_drivers: int) -> dict:
     """The first ``n_drivers`` drivers' efforts ``-lambda`` (force or torque) keyed by name,
-    and their powers keyed ``{name}.power``."""
+    and their powers keyed ``{name}.power``, from ``lam`` and ``powers`` (..., m)."""
     out = {}
     pos = {row: i for i, row in enumerate(c.active)}
     nk = c.n_joint_rows
+    zero = np.zeros(lam.shape[:-1])
     for k, d in enumerate(c.drivers[:n_drivers]):
         row = nk + k
-        out[d.name] = -lam[pos[row]] if row in pos else jnp.zeros(())
-        out[f"{d.name}.power"] = powers[pos[row]] if row in pos else jnp.zeros(())
+        out[d.name] = -lam[..., pos[row]] if row in pos else zero
+        out[f"{d.name}.power"] = powers[..., pos[row]] if row in pos else zero
     return out

@@ -14,7 +14,7 @@ from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import assemble, hold_drivers, length_scale
 from ._problem import Problem
-from ._reactions import driver_efforts, reaction_columns, reaction_kinds
+from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
 from ._structure import _jac
 from .integrators import INTEGRATORS, STATUS_MESSAGES
 from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE
@@ -46,7 +46,19 @@ def _velocity_fix(c: Constraints, q, qd, t, hold_idx):
         rhs = jnp.concatenate([rhs, qd[hold_idx]])
     r = rhs - J @ qd
     dqd, *_ = jnp.linalg.lstsq(J, r)
-    return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)))
+    return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)), initial=0.0)
+
+
+@eqx.filter_jit
+def _velocity_fix_sparse(c: Constraints, q, qd, t, weights):
+    """:func:`_velocity_fix` on the sparse path: the least change ``dqd = -W J^T (J W J^T)^-1
+    (J qd + Phi_t)``, ``W`` zero on the held coordinates (so the same least-squares solution),
+    with one step of iterative refinement; returns ``(qd, residual, pivot_ratio)``."""
+    v = c.jacobian_values(q, t)
+    phi_t = c.phi_t(q, t)
+    solve, ratio = c.min_norm_solver(v, weights, refine=1)
+    qd = qd - solve(c.matvec(v, qd) + phi_t)
+    return qd, jnp.max(jnp.abs(c.matvec(v, qd) + phi_t), initial=0.0), ratio
 
 
 def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None, hold=()):
@@ -54,16 +66,27 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
 
     Positions: assembled from ``q0`` (default the bodies' ``q0``) keeping the ``hold``
     coordinates; velocities: the least change of ``qd0`` (default 0) that satisfies the velocity
-    constraints, keeping the held coordinates' velocities.
+    constraints, keeping the held coordinates' velocities. Both on ``c``'s linear-solver path
+    (the sparse one falls back to the dense least-squares solve where ``Phi_q`` is rank
+    deficient: redundant equations, too many held coordinates).
     """
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
-    asm = assemble(model, q, hold=hold, t=t0, drivers=c.drivers)
+    asm = assemble(model, q, hold=hold, t=t0, drivers=c.drivers, linear_solver=c.linear_solver)
     q = jnp.asarray(asm.q)
     qd = jnp.zeros(model.nq) if qd0 is None else jnp.asarray(qd0, dtype=jnp.float64)
     if qd.shape != (model.nq,):
         raise ModelError(f"qd0 must have shape ({model.nq},)", model.name)
-    hold_idx = jnp.asarray([model.coordinate_index(h) for h in hold], dtype=int)
-    qd, err = _velocity_fix(c, q, qd, jnp.asarray(t0), hold_idx)
+    hold_idx = [model.coordinate_index(h) for h in hold]
+    qd_in, ok = qd, False
+    if c.linear_solver == "sparse":
+        W = np.ones(model.nq)
+        W[hold_idx] = 0.0
+        qd, err, ratio = _velocity_fix_sparse(c, q, qd_in, jnp.asarray(t0), jnp.asarray(W))
+        ok = float(ratio) >= 1e-8 and bool(jnp.all(jnp.isfinite(qd)))
+    if not ok:
+        qd, err = _velocity_fix(
+            c.with_linear_solver("dense"), q, qd_in, jnp.asarray(t0), jnp.asarray(hold_idx, int)
+        )
     scale = length_scale(model)
     if not float(err) < 1e-8 * max(scale, 1.0) * max(1.0, float(jnp.max(jnp.abs(qd)))):
         raise ModelError(
@@ -75,29 +98,48 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
 
 
 @eqx.filter_jit
-def _post(problem: Problem, ts, Q, QD, n_drivers: int):
+def _post_arrays(problem: Problem, ts, Q, QD):
+    """Per output time: accelerations, multipliers, pivot ratio, joint reactions (n_joints, 3),
+    multipliers' powers, energies ``[T, V, T + V]`` and the constraint violation.
+
+    ``lax.map`` (one time after the other), not ``vmap``: under ``vmap`` the fallback of the
+    acceleration solve at singular positions (a ``lax.cond``) would run at every time.
+    Everything is computed from the constraints' sparse form where the elements allow it: no
+    dense ``Phi_q`` on the sparse path.
+    """
     c = problem.c
 
-    def one(q, qd, t):
+    def one(x):
+        q, qd, t = x
         qdd, mu, ratio = problem.accelerations(q, qd, t)
-        C = c.phi_q(q, t)
-        out = reaction_columns(c, C, mu, q)
-        powers = problem.powers(q, qd, t, mu, C)
-        out.update(driver_efforts(c, mu, powers, n_drivers))
-        for k in range(c.m - problem.p):
-            out[f"lambda.{c.labels[c.active[k]]}"] = mu[k]
-        for k, name in enumerate(problem.unknown):
-            out[name] = mu[c.m - problem.p + k]
-            out[f"{name}.power"] = powers[c.m - problem.p + k]
+        R = joint_reactions(c, q, t, mu)
+        powers = problem.powers(q, qd, t, mu)
         T = kinetic_energy(problem.model, qd)
         V = potential_energy(problem.model, q)
-        out["energy.kinetic"], out["energy.potential"], out["energy.total"] = T, V, T + V
-        out["constraint.violation"] = jnp.max(jnp.abs(c(q, t))) if c.m else jnp.zeros(())
-        return qdd, mu, ratio, out
+        viol = jnp.max(jnp.abs(c(q, t))) if c.m else jnp.zeros(())
+        return qdd, mu, ratio, R, powers, jnp.stack([T, V, T + V]), viol
 
-    # lax.map, not vmap: under vmap the singular-position fallbacks (lax.cond to a dense
-    # truncated SVD) would become selects and run at every output time.
-    return jax.lax.map(lambda a: one(*a), (Q, QD, ts))
+    return jax.lax.map(one, (Q, QD, ts))
+
+
+def _post(problem: Problem, ts, Q, QD, n_drivers: int):
+    """Accelerations, multipliers and pivot ratios (N, ...) at the output times ``ts`` of the
+    states ``Q``, ``QD`` (N, nq), and the result columns in physical terms (NumPy arrays):
+    reactions, driver efforts and powers, ``lambda.*``, unknown forces and their powers,
+    energies and the constraint violation."""
+    c = problem.c
+    qdd, mu, ratio, R, powers, E, viol = _post_arrays(problem, ts, Q, QD)
+    mu, R, powers, E = (np.asarray(a) for a in (mu, R, powers, E))
+    out = reaction_columns(c, R)
+    out.update(driver_efforts(c, mu, powers, n_drivers))
+    for k in range(c.m - problem.p):
+        out[f"lambda.{c.labels[c.active[k]]}"] = mu[:, k]
+    for k, name in enumerate(problem.unknown):
+        out[name] = mu[:, c.m - problem.p + k]
+        out[f"{name}.power"] = powers[:, c.m - problem.p + k]
+    out["energy.kinetic"], out["energy.potential"], out["energy.total"] = E[:, 0], E[:, 1], E[:, 2]
+    out["constraint.violation"] = np.asarray(viol)
+    return qdd, mu, ratio, out
 
 
 def post_kinds(problem: Problem, n_drivers: int) -> dict[str, str]:
@@ -210,9 +252,9 @@ def simulate(
         "max_violation_before_projection": float(traj.max_violation),
         "max_violation": float(np.max(extra["constraint.violation"])),
         "min_pivot_ratio": float(np.min(ratio)),
-        "linear_solver": problem.c.linear_solver,
         "constraint_rows": problem.c.active_labels,
         "unknown_forces": problem.unknown,
+        "linear_solver": "sparse" if problem.sparse else "dense",
     }
     return Result(
         kind=kind,

@@ -7,6 +7,9 @@ import dataclasses
 import jax
 import jax.numpy as jnp
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+from scipy.sparse.linalg import splu
 
 from ..equations import Constraints
 from ..errors import DegreesOfFreedomError, RedundantConstraintError
@@ -61,6 +64,37 @@ def _jac(c: Constraints, q, t):
     return c.phi_q(q, t)
 
 
+#: :func:`_full_row_rank` certifies full row rank above this ratio (the rank decision's own
+#: tolerance is ``rtol = 1e-9``; the margin covers the unpivoted factorization).
+FULL_RANK_RATIO = 1e-6
+
+
+def _full_row_rank(A) -> bool:
+    """Whether the rows of ``A`` (m, n) are clearly independent, in O(m) work for a sparse,
+    banded ``A``: the pivots of the Cholesky factorization of ``A_n A_n^T`` (rows scaled to
+    unit norm, bandwidth-reducing order, sparse LU without pivoting), their ratio
+    ``sqrt(min / max)`` above :data:`FULL_RANK_RATIO`. False means "not certain": the caller
+    then takes the rank-revealing QR."""
+    m = A.shape[0]
+    if m == 0:
+        return True
+    norms = np.linalg.norm(A, axis=1)
+    if np.any(norms == 0):
+        return False
+    C = sp.csr_matrix(A / norms[:, None])
+    S = (C @ C.T).tocsr()
+    perm = reverse_cuthill_mckee(S, symmetric_mode=True)
+    S = S[perm][:, perm].tocsc()
+    try:
+        lu = splu(S, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+    except RuntimeError:  # exactly singular
+        return False
+    d = lu.U.diagonal()
+    if not (np.all(np.isfinite(d)) and np.all(d > 0)):
+        return False
+    return bool(np.sqrt(d.min() / d.max()) > FULL_RANK_RATIO)
+
+
 def analyse(
     model: Model, q=None, t: float = 0.0, drivers=None, rtol: float = 1e-9
 ) -> tuple[DofReport, tuple[int, ...]]:
@@ -70,12 +104,24 @@ def analyse(
     q = model.q0 if q is None else jnp.asarray(q, dtype=jnp.float64)
     J = np.asarray(_jac(c, q, jnp.asarray(t, dtype=jnp.float64)))
     nk = c.n_joint_rows
+    if _full_row_rank(J):  # the usual case, in O(m): every row independent
+        keep = tuple(range(c.n_full))
+        report = DofReport(model.nq, nk, nk, model.nq - nk, (), c.n_full - nk, ())
+        return report, keep
     keep_k, red_k, rank_k = independent_rows(J[:nk], rtol)
     redundant_drivers = []
     keep = list(keep_k)
-    # Add drivers one by one: a driver that does not raise the rank is redundant.
+    drivers_rows = list(range(nk, c.n_full))
+    # Drivers that together raise the rank by their number are all independent (one
+    # factorization); otherwise add them one by one: a driver that does not raise the rank is
+    # redundant.
+    if drivers_rows and independent_rows(J[[*keep, *drivers_rows]], rtol)[2] == rank_k + len(
+        drivers_rows
+    ):
+        keep += drivers_rows
+        drivers_rows = []
     rank = rank_k
-    for k in range(nk, c.n_full):
+    for k in drivers_rows:
         _, _, r = independent_rows(J[[*keep, k]], rtol)
         if r > rank:
             keep.append(k)

@@ -47,8 +47,9 @@ def forward(
         progress: optional ``f(t)`` called at each output time (from inside the jitted loop).
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
             of small bandwidth without redundant constraints, see :mod:`mixdyn.linalg`):
-            the solve of the acceleration equations, of the projections and of
-            generalized-alpha's Newton iterations.
+            the path of every linear solve of the run: the consistent start (assembly and
+            velocities), the acceleration equations, the projections, generalized-alpha's
+            Newton iterations and the reactions at the output times.
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
             ``rho_inf``, ``max_steps``...). Generalized-alpha: ``rho_inf`` (default 0.9),
             ``newton`` (``"auto"``, the default: modified Newton on the acceleration-level
@@ -64,7 +65,7 @@ def forward(
     """
     ts = output_times(t)
     require_masses(model)
-    c_full = Constraints.of(model)
+    c_full = Constraints.of(model).with_linear_solver(linear_solver)
     q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), float(ts[0]))
     # The partitioning integrator needs independent rows; the others solve redundant

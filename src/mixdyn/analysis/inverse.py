@@ -19,7 +19,9 @@ from .kinematic import kinematic
 from .result import Result
 
 
-def inverse(model: Model, t, *, q0=None, hold=(), **kinematic_options) -> Result:
+def inverse(
+    model: Model, t, *, q0=None, hold=(), linear_solver: str = "auto", **kinematic_options
+) -> Result:
     """Driver efforts and joint reactions of a fully driven mechanism over time.
 
     Args:
@@ -28,6 +30,9 @@ def inverse(model: Model, t, *, q0=None, hold=(), **kinematic_options) -> Result
         t: (N,) increasing output times [time].
         q0: (nq,) rough starting configuration.
         hold: coordinates kept at their rough value while assembling.
+        linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
+            of small bandwidth without redundant constraints, see :mod:`mixdyn.linalg`): the
+            path of the kinematic analysis and of the multipliers' solve.
         **kinematic_options: passed to :func:`~mixdyn.kinematic` (``tol``, ``max_iter``...).
 
     Returns:
@@ -36,14 +41,19 @@ def inverse(model: Model, t, *, q0=None, hold=(), **kinematic_options) -> Result
     """
     ts = output_times(t)
     require_masses(model)
-    kin = kinematic(model, ts, q0=q0, hold=hold, **kinematic_options)
+    kin = kinematic(model, ts, q0=q0, hold=hold, linear_solver=linear_solver, **kinematic_options)
     _, keep = analyse(model, kin.q[0], float(ts[0]))
-    problem = Problem(model, Constraints.of(model).with_rank(len(keep)))
+    c = Constraints.of(model).with_rank(len(keep)).with_linear_solver(linear_solver)
+    problem = Problem(model, c)
     _, _, ratio, cols = _post(
         problem, jnp.asarray(ts), jnp.asarray(kin.q), jnp.asarray(kin.qd), len(model.drivers)
     )
     extra = {k: np.asarray(v) for k, v in cols.items()}
-    stats = dict(kin.stats, min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))))
+    stats = dict(
+        kin.stats,
+        min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))),
+        linear_solver=c.linear_solver,
+    )
     return Result(
         kind="inverse",
         model=model,

@@ -44,9 +44,11 @@ def _kinematic_scan(c: Constraints, q_start, ts, tol, max_iter):
         dt = t - t_prev
         guess = q + qd * dt + 0.5 * qdd * dt**2
         q, it, res, ratio = newton_positions(c, guess, t, tol, max_iter)
-        J = c.phi_q(q, t)
-        qd, r1 = c.solve(J, -c.phi_t(q, t))
-        qdd, r2 = c.solve(J, c.gamma(q, qd, t))
+        # one factorization for both solves; on the sparse path one step of iterative
+        # refinement each (the Schur complement squares the condition number)
+        solve = c.jacobian_solver(q, t, refine=1)
+        qd, r1 = solve(-c.phi_t(q, t))
+        qdd, r2 = solve(c.gamma(q, qd, t))
         ratio = jnp.minimum(ratio, jnp.minimum(r1, r2))
         return (q, qd, qdd, t), (q, qd, qdd, it, res, ratio)
 
@@ -111,6 +113,7 @@ def kinematic(
     tol: float | None = None,
     max_iter: int = 25,
     singular_tol: float = 1e-7,
+    linear_solver: str = "auto",
 ) -> Result:
     """Positions, velocities and accelerations of a fully driven mechanism over time.
 
@@ -124,6 +127,12 @@ def kinematic(
         tol: Newton tolerance on the largest residual [length] (default ``1e-12 x`` size).
         max_iter: Newton iterations per time.
         singular_tol: a pivot ratio of ``Phi_q`` below this is reported as a singularity.
+        linear_solver: ``"dense"`` (LU of ``Phi_q``), ``"sparse"`` (minimum-norm solves
+            through the banded Cholesky factorization of ``Phi_q Phi_q^T``, with one step of
+            iterative refinement for velocities and accelerations; the pivot ratio compared
+            with ``singular_tol`` is the square root of that factorization's) or ``"auto"``
+            (sparse for large mechanisms of small bandwidth without redundant equations, see
+            :mod:`mixdyn.linalg`). The assembly takes the same path.
 
     Returns:
         A :class:`Result` with the body coordinates, velocities and accelerations and, in
@@ -137,10 +146,10 @@ def kinematic(
     drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     if assemble_first:
-        q = jnp.asarray(assemble(model, q, hold=hold).q)
+        q = jnp.asarray(assemble(model, q, hold=hold, linear_solver=linear_solver).q)
     report, keep = analyse(model, q, float(ts[0]), drivers)
     require_balanced(report)
-    c = Constraints.of(model, drivers).with_rank(len(keep))
+    c = Constraints.of(model, drivers).with_rank(len(keep)).with_linear_solver(linear_solver)
     tol = 1e-12 * length_scale(model) if tol is None else tol
     q_all, qd, qdd, it, res, ratio = _kinematic_scan(
         c, q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)
@@ -161,6 +170,7 @@ def kinematic(
             "min_pivot_ratio": float(np.min(ratio)),
             "redundant_equations": report.redundant,
             "tolerance": tol,
+            "linear_solver": c.linear_solver,
         },
     )
 

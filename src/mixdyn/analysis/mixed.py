@@ -171,8 +171,47 @@ def _collocation(model, unknown, prescribed, q, qd, t):
     return j
 
 
+def _collocated(model, c: Constraints, q, qd, t, mk: int, unknown):
+    """For each unknown force ``a``, the prescribed motion ``b`` (0..p-1) along whose gradient
+    it acts, ``B[:, a] = s_a Psi_q[b]^T`` (a force along the coordinate or the distance it
+    prescribes, a torque on the body whose angle it prescribes); None where some force has no
+    such partner. Checked at the start and at two perturbed states, so that a direction that
+    is parallel only by coincidence of the start pose is not taken."""
+    p = len(unknown)
+    rng = np.random.default_rng(0)
+    q, qd = np.asarray(q), np.asarray(qd)
+    ok = np.ones((p, p), dtype=bool)
+    for k in range(3):
+        dq = 0.0 if k == 0 else 1e-2 * (np.abs(q) + 1.0) * rng.normal(size=q.size)
+        dqd = 0.0 if k == 0 else rng.normal(size=q.size)
+        qk, qdk, tk = q + dq, qd + dqd, t
+        Psi = np.asarray(_jac(c, jnp.asarray(qk), jnp.asarray(tk, dtype=jnp.float64)))[mk:]
+        B = np.asarray(
+            _directions(model, tuple(unknown), jnp.asarray(qk), jnp.asarray(qdk), jnp.asarray(tk))
+        )
+        nB = np.linalg.norm(B, axis=0)
+        nP = np.linalg.norm(Psi, axis=1)
+        dot = B.T @ Psi.T  # (p unknowns, p prescribed)
+        ok &= (nB[:, None] > 0) & (nP[None, :] > 0)
+        ok &= np.abs(dot) >= (1.0 - 1e-12) * nB[:, None] * nP[None, :]
+    for perm in itertools.permutations(range(p)):
+        if all(ok[a, perm[a]] for a in range(p)):
+            return perm
+    return None
+
+
 def _setup(
-    model: Model, t0: float, prescribed, unknown, solver, independent, method, q0, qd0, hold
+    model: Model,
+    t0: float,
+    prescribed,
+    unknown,
+    solver,
+    independent,
+    method,
+    q0,
+    qd0,
+    hold,
+    linear_solver="auto",
 ):
     """Everything a mixed run does before integrating: checks, consistent start, problem."""
     if solver not in SOLVERS:
@@ -206,7 +245,7 @@ def _setup(
                 name,
             )
     drivers = (*model.drivers, *prescribed)
-    c_full = Constraints(model.joints, drivers, model.nq)
+    c_full = Constraints(model.joints, drivers, model.nq, linear_solver=linear_solver)
     q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), t0, drivers)
     bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
@@ -246,7 +285,26 @@ def _setup(
                     "independent coordinates or leave the choice automatic",
                     ", ".join(independent),
                 )
-    problem = Problem(model, c, unknown, solver, j_index, i_index)
+    collocated = None
+    if solver == "augmented":
+        collocated = _collocated(model, c, q, qd, t0, mk, unknown)
+    path = c.with_linear_solver(linear_solver).linear_solver
+    if path == "sparse" and collocated is None:
+        if linear_solver == "sparse":
+            why = (
+                "the partition solver is dense"
+                if solver == "partition"
+                else "the unknown forces do not act along the gradients of the prescribed "
+                "motions (not collocated), so the system is not symmetric"
+            )
+            raise ModelError(
+                f"the sparse linear solver cannot solve this mixed problem: {why}; use "
+                "linear_solver='dense' or 'auto'",
+                ", ".join(unknown),
+            )
+        path = "dense"
+    c = c.with_linear_solver(path)
+    problem = Problem(model, c, unknown, solver, j_index, i_index, collocated or ())
     return problem, q, qd, prescribed
 
 
@@ -261,6 +319,7 @@ def check_mixed(
     q0=None,
     qd0=None,
     hold=(),
+    linear_solver: str = "auto",
 ) -> None:
     """Check that a mixed problem is solvable, without integrating it.
 
@@ -269,7 +328,19 @@ def check_mixed(
     forces and motions, and (for ``solver="partition"``) the collocation and the partition.
     Returns None; raises the same errors as :func:`mixed`.
     """
-    _setup(model, t0, prescribed, unknown, solver, independent, "projection", q0, qd0, hold)
+    _setup(
+        model,
+        t0,
+        prescribed,
+        unknown,
+        solver,
+        independent,
+        "projection",
+        q0,
+        qd0,
+        hold,
+        linear_solver,
+    )
 
 
 def mixed(
@@ -288,6 +359,7 @@ def mixed(
     qd0=None,
     hold=(),
     progress=None,
+    linear_solver: str = "auto",
     **options,
 ) -> Result:
     """Mixed dynamics: find the unknown forces that produce the prescribed motions while the
@@ -304,6 +376,18 @@ def mixed(
             ``["coupler.phi"]``); default: chosen by pivoted LU.
         method, rtol, atol, dt, q0, qd0, hold, progress, **options: as in
             :func:`~mixdyn.forward`.
+        linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (the default: sparse for large
+            mechanisms of small bandwidth without redundant equations, see
+            :mod:`mixdyn.linalg`). The sparse path (banded Cholesky of the Schur complement
+            ``C M^-1 C^T``) needs a symmetric system: the ``"augmented"`` solver with
+            *collocated* unknown forces, each acting along the gradient of one prescribed
+            motion (``B = Psi_q^T`` up to a scale per force: a force along the coordinate or
+            distance it prescribes, a torque on the body whose angle it prescribes, as in the
+            paper's example). Non-collocated problems (``G != C^T``, a non-symmetric Schur
+            complement ``C M^-1 G``) and the ``"partition"`` solver stay on the dense path:
+            ``"auto"`` takes it silently, ``"sparse"`` raises a :class:`ModelError`. The
+            consistent start (assembly, velocities) takes the path asked for in any case; the
+            solvability checks of the start state are dense.
 
     Returns:
         A :class:`Result` with the motion, a column per unknown force (named after it, in force
@@ -312,10 +396,22 @@ def mixed(
     Raises:
         SolvabilityError: the counts differ, an unknown force cannot affect the prescribed
             motions, a prescribed motion is already fixed, or the partition is singular.
+        ModelError: ``linear_solver="sparse"`` for a problem the sparse path cannot solve
+            (see above), or a bad option.
     """
     ts = output_times(t)
     problem, q, qd, prescribed = _setup(
-        model, float(ts[0]), prescribed, unknown, solver, independent, method, q0, qd0, hold
+        model,
+        float(ts[0]),
+        prescribed,
+        unknown,
+        solver,
+        independent,
+        method,
+        q0,
+        qd0,
+        hold,
+        linear_solver,
     )
     opts = dict(options, rtol=rtol, atol=atol, dt=dt)
     res = simulate("mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress)
@@ -323,5 +419,6 @@ def mixed(
         solver=solver,
         independent=tuple(independent or ()),
         prescribed=tuple(d.name for d in prescribed),
+        collocated=bool(problem.collocated),
     )
     return res

@@ -3,7 +3,8 @@
 ``Phi(q, t)`` stacks the joints' equations ``Phi^K(q)`` and the drivers' ``Phi^D(q, t)``.
 From it, exactly (no finite differences):
 
-* ``Phi_q = dPhi/dq`` (m, n) by ``jax.jacfwd``;
+* ``Phi_q = dPhi/dq`` (m, n) by ``jax.jacfwd`` of each element's equations with respect to
+  its own bodies' coordinates (dense, or as values on a static sparsity pattern);
 * ``Phi_t = dPhi/dt`` (m,), so velocities solve ``Phi_q qd = -Phi_t``;
 * ``gamma = -(Phi_q qd)_q qd - 2 Phi_qt qd - Phi_tt`` (m,), the right-hand side of the
   acceleration equations ``Phi_q qdd = gamma``. It is minus the second derivative of
@@ -73,13 +74,13 @@ class Constraints(eqx.Module):
             raise ModelError(
                 f"linear_solver must be one of {', '.join(LINEAR_SOLVERS)}, got {linear_solver!r}"
             )
-        if linear_solver == "dense":
+        if linear_solver == "dense" or self.m == 0:  # no equation: nothing to solve
             return "dense"
-        from ..linalg import choose_solver
+        from ..linalg import AUTO_MIN_ROWS, choose_solver
 
         local = self._local_ok()
         if linear_solver == "auto":
-            if not local or self.rank is not None:
+            if not local or self.rank is not None or self.m < AUTO_MIN_ROWS:
                 return "dense"
             return choose_solver(self.m, self.schur_structure())
         if not local:
@@ -157,8 +158,15 @@ class Constraints(eqx.Module):
         return tuple(e.name for e in (*self.joints, *self.drivers))
 
     # ------------------------------------------------------------------ equations
+    # Wherever every element refers to its bodies through ``b``, ``bi``, ``bj`` (all the
+    # built-in ones), the equations and their derivatives are evaluated per element, vectorized
+    # over the elements of one kind (:meth:`_local`), on either linear-solver path: a small
+    # compiled program whatever the number of elements. Otherwise element by element, and the
+    # derivatives by automatic differentiation of the whole set.
     def full(self, q, t) -> jax.Array:
         """All rows ``Phi(q, t)`` (n_full,) before dropping redundant ones."""
+        if self._local_ok():
+            return self._local(_residual, q, t, rows=range(self.n_full))
         parts = [j.residual(q) for j in self.joints] + [d.residual(q, t) for d in self.drivers]
         if not parts:
             return jnp.zeros(0)
@@ -166,7 +174,7 @@ class Constraints(eqx.Module):
 
     def __call__(self, q, t) -> jax.Array:
         """``Phi(q, t)`` (m,), the rows kept."""
-        if self.linear_solver == "sparse":
+        if self._local_ok():
             return self._local(_residual, q, t)
         Phi = self.full(q, t)
         if len(self.active) == self.n_full:
@@ -174,19 +182,29 @@ class Constraints(eqx.Module):
         return Phi[np.asarray(self.active, dtype=int)]
 
     def phi_q(self, q, t) -> jax.Array:
-        """Jacobian ``Phi_q`` (m, nq)."""
+        """Jacobian ``Phi_q`` (m, nq), dense.
+
+        Scattered from the per-element Jacobians of :meth:`jacobian_values` where the elements
+        allow it: the same numbers as ``jax.jacfwd`` of :meth:`__call__`, at O(nnz) work and a
+        small compiled program instead of one forward pass per coordinate.
+        """
+        if self._local_ok():
+            rows, cols = self.coo()
+            v = self.jacobian_values(q, t)
+            return jnp.zeros((self.m, self.nq), v.dtype).at[rows, cols].add(v)
         return jax.jacfwd(self.__call__, argnums=0)(q, t)
 
     def phi_t(self, q, t) -> jax.Array:
         """Partial time derivative ``Phi_t`` (m,)."""
-        if self.linear_solver == "sparse":
-            return self._local(_phi_t, q, jnp.asarray(t, dtype=jnp.float64))
-        return jax.jacfwd(self.__call__, argnums=1)(q, jnp.asarray(t, dtype=jnp.float64))
+        t = jnp.asarray(t, dtype=jnp.float64)
+        if self._local_ok():
+            return self._local(_phi_t, q, t)
+        return jax.jacfwd(self.__call__, argnums=1)(q, t)
 
     def gamma(self, q, qd, t) -> jax.Array:
         """Acceleration right-hand side ``gamma`` (m,)."""
         t = jnp.asarray(t, dtype=jnp.float64)
-        if self.linear_solver == "sparse":
+        if self._local_ok():
             return self._local(_gamma, q, t, qd)
 
         def path(s):
@@ -238,15 +256,17 @@ class Constraints(eqx.Module):
         groups: dict = {}
         for i, e in enumerate(self._elements()):
             loc = _localize(e)
-            key = (jax.tree_util.tree_structure(loc), len(e.body_indices()))
+            # the leaves' shapes too: two polynomial laws of different degrees do not stack
+            shapes = tuple(np.shape(x) for x in jax.tree.leaves(loc))
+            key = (jax.tree_util.tree_structure(loc), shapes, len(e.body_indices()))
             groups.setdefault(key, ([], []))
             groups[key][0].append(i)
             groups[key][1].append(loc)
         return list(groups.values())
 
-    def _local(self, fn, q, t, qd=None):
+    def _local(self, fn, q, t, qd=None, rows=None):
         """``fn(element, q_local, t, qd_local)`` (rows, ...) over every element, vectorized per
-        kind, stacked in row order; the rows kept."""
+        kind, stacked in row order; the rows ``rows`` of the full set (default: those kept)."""
         layout = self._layout()
         outs, order = [], []
         for idx, elems in self._groups():
@@ -263,7 +283,8 @@ class Constraints(eqx.Module):
         allv = jnp.concatenate(outs)
         pos = np.empty(len(order), dtype=np.int64)
         pos[np.asarray(order, dtype=np.int64)] = np.arange(len(order))
-        return allv[pos[np.asarray(self.active, dtype=np.int64)]]
+        rows = self.active if rows is None else rows
+        return allv[pos[np.asarray(rows, dtype=np.int64)]]
 
     def coo(self) -> tuple[np.ndarray, np.ndarray]:
         """Static pattern ``(rows, cols)`` of :meth:`jacobian_values` (rows of the kept set)."""
@@ -324,6 +345,53 @@ class Constraints(eqx.Module):
         """Solve ``(Phi_q M^-1 Phi_q^T) x = b`` on the sparse path; ``(x, pivot_ratio)``."""
         return self.schur_structure().solve(values, Minv, b)
 
+    def min_norm_solver(self, values, weights=None, shift=None, refine: int = 0):
+        """On the sparse path, a function ``b -> x`` giving the solution of ``Phi_q x = b`` of
+        least ``W^-1``-norm, ``x = W Phi_q^T (Phi_q W Phi_q^T + shift I)^-1 b`` (for a square,
+        regular ``Phi_q``: the solution), with ``S = Phi_q W Phi_q^T`` factorized once.
+
+        The Schur complement squares the condition number of ``Phi_q``: ``refine`` steps of
+        iterative refinement on the residual ``b - Phi_q x`` (with the same factors) bring the
+        error back to that of a direct solve of ``Phi_q`` (without a shift).
+
+        Args:
+            values: (nnz,) :meth:`jacobian_values`.
+            weights: (nq,) diagonal ``W`` (default ones; zeros keep coordinates fixed).
+            shift: Levenberg–Marquardt damping added to the diagonal of ``S``.
+            refine: steps of iterative refinement.
+
+        Returns:
+            ``(solve, ratio)``: ``ratio`` is the square root of the pivot ratio of ``S``'s
+            Cholesky factors, comparable to the LU pivot ratio of ``Phi_q`` on the dense path
+            (0 when the factorization failed: ``Phi_q`` lost rank).
+        """
+        st = self.schur_structure()
+        W = jnp.ones(self.nq) if weights is None else weights
+        fac, ratio = st.factor(values, W, shift)
+
+        def once(b):
+            return W * self.rmatvec(values, st.solve_factored(fac, b))
+
+        def solve(b):
+            x = once(b)
+            for _ in range(refine):
+                x = x + once(b - self.matvec(values, x))
+            return x
+
+        return solve, jnp.sqrt(ratio)
+
+    def jacobian_solver(self, q, t, refine: int = 0):
+        """A function ``b -> (x, pivot_ratio)`` solving ``Phi_q(q, t) x = b`` on this set's
+        path: dense, LU of ``Phi_q`` (a truncated-SVD least-squares solve with redundant rows);
+        sparse, the minimum-norm solution through the Schur complement
+        (:meth:`min_norm_solver`, factorized once for every right-hand side, with ``refine``
+        steps of iterative refinement). The pivot ratios are comparable (see there)."""
+        if self.linear_solver == "sparse":
+            solve, ratio = self.min_norm_solver(self.jacobian_values(q, t), refine=refine)
+            return lambda b: (solve(b), ratio)
+        J = self.phi_q(q, t)
+        return lambda b: self.solve(J, b)
+
 
 def _localize(e):
     """A copy of element ``e`` reading its bodies from a local vector ``[q_b0, q_b1, ...]``
@@ -335,7 +403,12 @@ def _localize(e):
         raise ValueError(type(e).__name__)
     repl = {f: where.get(getattr(e, f), getattr(e, f)) for f in _BODY_FIELDS if f in names}
     repl.update({f: "" for f in _NAME_FIELDS if f in names})
-    loc = dataclasses.replace(e, **repl)
+    # A field-by-field copy: the element is already bound and checked, and
+    # ``dataclasses.replace`` (through ``__init__``) costs several times more, per element and
+    # per call (this runs for every element whenever a constraint set is built or traced).
+    loc = object.__new__(type(e))
+    for f in dataclasses.fields(e):
+        object.__setattr__(loc, f.name, repl[f.name] if f.name in repl else getattr(e, f.name))
     if loc.body_indices() != tuple(range(len(bodies))):
         raise ValueError(type(e).__name__)
     return loc

@@ -401,6 +401,7 @@ class Runner:
                 independent=r.independent,
                 q0=q,
                 hold=self.hold(plan),
+                linear_solver=r.linear_solver,
             )
         except ModelError as e:
             self._model_error(plan, e)
@@ -475,15 +476,16 @@ class Runner:
             dt = self.b.scalar(r.dt, "time", (*plan.path, "dt"))
         try:
             try:
+                ls = opts.pop("linear_solver", r.linear_solver)
                 if r.kind in ("kinematic", "inverse"):
                     if hold:
-                        q0 = an.assemble(model, q0, hold=hold).q
+                        q0 = an.assemble(model, q0, hold=hold, linear_solver=ls).q
                     if r.kind == "kinematic":
                         kw = {"max_iter": r.max_iter}
                         if r.tol is not None:
                             kw["tol"] = r.tol
-                        return an.kinematic(model, ts, q0=q0, **kw)
-                    return an.inverse(model, ts, q0=q0, **opts)
+                        return an.kinematic(model, ts, q0=q0, linear_solver=ls, **kw)
+                    return an.inverse(model, ts, q0=q0, linear_solver=ls, **opts)
                 common = dict(
                     method=r.method,
                     rtol=r.rtol,
@@ -492,6 +494,7 @@ class Runner:
                     q0=q0,
                     qd0=qd0,
                     hold=hold,
+                    linear_solver=ls,
                     **opts,
                 )
                 if progress is not None:

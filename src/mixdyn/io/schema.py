@@ -449,6 +449,7 @@ class AnimationSpec(Spec):
 class _RunSpec(Spec):
     name: Name
     time: TimeSpec
+    linear_solver: Literal["auto", "dense", "sparse"] = "auto"
     drivers: list[Name] | None = None
     prescribed: list[PrescribedSpec] = Field(default_factory=list)
     hold: list[Ref] | None = None

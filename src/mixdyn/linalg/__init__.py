@@ -1,4 +1,17 @@
-"""The linear-solver layer shared by every analysis."""
+"""The linear-solver layer shared by every analysis.
+
+Two paths, chosen per constraint set (``Constraints.linear_solver``, from the analyses'
+``linear_solver="auto" | "dense" | "sparse"`` argument):
+
+* dense (:mod:`._dense`): LU of dense matrices built from ``Phi_q``, truncated SVD where
+  equations are redundant or at singular positions;
+* sparse (:mod:`._sparse`): ``Phi_q`` as values on a static pattern, every solve through the
+  banded block Cholesky factorization of ``Phi_q W Phi_q^T`` (``W = M^-1``: equations of
+  motion; ``W = I``: minimum-norm kinematic steps, refined iteratively where accuracy matters).
+
+``"auto"`` (:func:`choose_solver`) takes the sparse path for large mechanisms of small
+bandwidth without redundant equations.
+"""
 
 from ._dense import (
     dependent_rows,

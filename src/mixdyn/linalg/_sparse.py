@@ -62,6 +62,9 @@ class SchurStructure:
 
     def __init__(self, m: int, n: int, rows: np.ndarray, cols: np.ndarray, min_block: int):
         self.m, self.n = m, n
+        if m == 0:  # nothing to factorize: solve and factor return at once
+            self.bandwidth, self.block, self.nblk = 0, 1, 0
+            return
         rows = np.asarray(rows, dtype=np.int64)
         cols = np.asarray(cols, dtype=np.int64)
         C = sp.coo_matrix((np.ones(rows.size), (rows, cols)), shape=(m, n)).tocsc()
@@ -106,6 +109,8 @@ class SchurStructure:
         self.size = (2 * nblk - 1) * B * B
         pad = np.arange(m, nblk * B)
         self.pad_slot = (pad // B * B + pad % B) * B + pad % B
+        real = np.arange(m)  # the diagonal of S (order irrelevant: a shift adds to all)
+        self.diag_slot = (real // B * B + real % B) * B + real % B
         # cyclic reduction: nblk padded to 2^L - 1 blocks; which pivots are real rows
         self.method = METHOD
         self.n_cr = 2 ** int(np.ceil(np.log2(nblk + 1))) - 1
@@ -114,11 +119,14 @@ class SchurStructure:
         self.cr_real = np.concatenate(_cr_order(real))
 
     # ------------------------------------------------------------------ numeric
-    def blocks(self, values, Minv):
-        """``(D (nblk, B, B), E (nblk - 1, B, B))`` of the reordered ``S`` from ``C``'s values."""
+    def blocks(self, values, Minv, shift=None):
+        """``(D (nblk, B, B), E (nblk - 1, B, B))`` of the reordered ``S`` from ``C``'s values
+        (plus ``shift`` on the diagonal: ``S + shift I``, a Levenberg–Marquardt damping)."""
         B, nblk = self.block, self.nblk
         contrib = values[self.k1] * values[self.k2] * Minv[self.col]
         flat = jax.ops.segment_sum(contrib, jnp.asarray(self.slot), num_segments=self.size)
+        if shift is not None:
+            flat = flat.at[self.diag_slot].add(shift)
         if self.pad_slot.size:
             flat = flat.at[self.pad_slot].set(1.0)
         D = flat[: nblk * B * B].reshape(nblk, B, B)
@@ -150,9 +158,38 @@ class SchurStructure:
             x = x[:nblk]
             d = pivots[self.cr_real] ** 2
         x = x.reshape(nblk * B, -1)[: self.m][self.inv]
-        ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(d.dtype).tiny)
-        ratio = jnp.where(jnp.isfinite(ratio), ratio, 0.0)
-        return (x[:, 0] if vec else x), ratio
+        return (x[:, 0] if vec else x), _ratio(d)
+
+    def factor(self, values, Minv, shift=None):
+        """Block Cholesky factors of ``S`` (or ``S + shift I``) for several solves with
+        :meth:`solve_factored`; returns ``(factor, pivot_ratio)``. Always the sequential
+        block Cholesky (whatever :data:`METHOD`)."""
+        if self.m == 0:
+            return (jnp.zeros((0, 1, 1)), jnp.zeros((0, 1, 1))), jnp.ones(())
+        D, E = self.blocks(values, Minv, shift)
+        L, W = _block_cholesky(D, E)
+        d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: self.m] ** 2
+        return (L, W), _ratio(d)
+
+    def solve_factored(self, factor, b):
+        """Solve ``S x = b`` (b (m,) or (m, k)) with the factors of :meth:`factor`."""
+        if self.m == 0:
+            return b
+        L, W = factor
+        vec = b.ndim == 1
+        bb = b[:, None] if vec else b
+        B, nblk = self.block, self.nblk
+        rhs = bb[self.perm]
+        rhs = jnp.concatenate([rhs, jnp.zeros((nblk * B - self.m, rhs.shape[1]), rhs.dtype)])
+        y = _block_forward(L, W, rhs.reshape(nblk, B, -1))
+        x = _block_backward(L, W, y).reshape(nblk * B, -1)[: self.m][self.inv]
+        return x[:, 0] if vec else x
+
+
+def _ratio(d):
+    """``min d / max d`` of the squared pivots, 0 where not finite (a failed factorization)."""
+    ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(d.dtype).tiny)
+    return jnp.where(jnp.isfinite(ratio), ratio, 0.0)
 
 
 def _cr_order(a):
@@ -220,6 +257,33 @@ def _block_cholesky_forward(D, E, rhs):
     init = (jnp.eye(B, dtype=D.dtype), jnp.zeros_like(rhs[0]))
     _, (L, W, y) = jax.lax.scan(step, init, (D, Epad, rhs), unroll=UNROLL)
     return L, W, y
+
+
+def _block_cholesky(D, E):
+    """The factors ``(L, W)`` of :func:`_block_cholesky_forward`, without a right-hand side."""
+    B = D.shape[1]
+    Epad = jnp.concatenate([jnp.zeros((1, B, B), D.dtype), E])
+
+    def step(Lp, xs):
+        Di, Ei = xs
+        Wi = jsl.solve_triangular(Lp, Ei.T, lower=True).T
+        Li = jnp.linalg.cholesky(Di - Wi @ Wi.T)
+        return Li, (Li, Wi)
+
+    _, (L, W) = jax.lax.scan(step, jnp.eye(B, dtype=D.dtype), (D, Epad), unroll=UNROLL)
+    return L, W
+
+
+def _block_forward(L, W, rhs):
+    """Forward sweep ``L y = rhs`` for the factors of :func:`_block_cholesky`."""
+
+    def step(yp, xs):
+        Li, Wi, ri = xs
+        yi = jsl.solve_triangular(Li, ri - Wi @ yp, lower=True)
+        return yi, yi
+
+    _, y = jax.lax.scan(step, jnp.zeros_like(rhs[0]), (L, W, rhs), unroll=UNROLL)
+    return y
 
 
 def _block_backward(L, W, y):

@@ -1,0 +1,387 @@
+"""One linear-solver layer for every analysis (issue 7): with ``linear_solver="sparse"`` the
+kinematic analysis (assembly, Newton, velocities, accelerations), inverse dynamics, forward
+runs (consistent start, reactions at the output times) and collocated mixed runs agree with
+``linear_solver="dense"`` to <= 1e-12 (relative to each quantity's scale) on every fixture and
+example the sparse path applies to; a dead point is still detected on the sparse path; the
+problems the sparse path cannot solve are refused with clear errors."""
+
+from __future__ import annotations
+
+import math
+import pathlib
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+import mixdyn.io as mio
+from fixtures import (
+    andrews_mechanism,
+    double_four_bar,
+    four_bar,
+    paper_mechanism,
+    parallelogram_with_extra_link,
+    pendulum,
+    pendulum_chain,
+    slider_crank,
+    spring_slider,
+)
+from mixdyn.equations import Constraints
+
+EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
+TOL = 1e-12
+
+
+def _coordinate(name, body, coord, value, rate):
+    return md.CoordinateDriver(name, body, coord, law=md.Ramp(value, rate))
+
+
+def _paper_driven():
+    drivers = [
+        _coordinate("m_crank", "crank", "phi", 0.0, 0.5),
+        _coordinate("m_coupler", "coupler", "phi", 0.0, -0.3),
+    ]
+    return paper_mechanism(drivers=drivers), ("crank.phi", "coupler.phi")
+
+
+def _chain_driven(n=6):
+    model = pendulum_chain(n)
+    drivers = [
+        _coordinate(f"d{k}", f"link{k}", "phi", 0.5 - math.pi / 2, 0.2 * (k + 1)) for k in range(n)
+    ]
+    return model.replace(drivers=drivers), ()
+
+
+def _double_four_bar_driven():
+    model, _ = double_four_bar(2)
+    return model.replace(drivers=[_coordinate("motor", "crank0", "phi", math.pi / 2, -1.0)]), ()
+
+
+def _andrews_driven():
+    model = andrews_mechanism()
+    beta = float(model.q0[2])
+    return model.replace(drivers=[_coordinate("drive", "crank", "phi", beta, 10.0)]), ()
+
+
+def _example(name):
+    model = mio.load(EXAMPLES / f"{name}.yaml")
+    spec = mio.read(EXAMPLES / f"{name}.yaml")
+    hold = tuple(spec.assembly.hold or ()) if spec.assembly is not None else ()
+    return model, hold
+
+
+#: Fully driven models (kinematic analysis, inverse dynamics): builder -> (model, hold).
+DRIVEN = {
+    "slider_crank": lambda: (slider_crank(), ()),
+    "four_bar": lambda: (four_bar(), ()),
+    "paper_mechanism": _paper_driven,
+    "pendulum": lambda: (
+        pendulum().replace(drivers=[md.CoordinateDriver("swing", "bob", "phi", law=0.2)]),
+        (),
+    ),
+    "spring_slider": lambda: (
+        spring_slider().replace(drivers=[_coordinate("push", "slider", "x", 0.6, 0.1)]),
+        (),
+    ),
+    "pendulum_chain": _chain_driven,
+    "double_four_bar": _double_four_bar_driven,
+    "andrews_mechanism": _andrews_driven,
+    "example_four_bar": lambda: _example("four_bar"),
+    "example_slider_crank": lambda: _example("slider_crank"),
+}
+
+
+def _loads():
+    from test_mixed import paper_loads
+
+    return paper_loads()
+
+
+#: Models under their forces (forward dynamics): builder -> (model, hold, qd0).
+FREE = {
+    "slider_crank": lambda: (slider_crank(drivers=()), (), None),
+    "paper_mechanism": lambda: (
+        paper_mechanism(forces=_loads()),
+        ("crank.phi", "coupler.phi"),
+        None,
+    ),
+    "pendulum": lambda: (pendulum(theta0=0.4), (), None),
+    "spring_slider": lambda: (spring_slider(), (), None),
+    "pendulum_chain": lambda: (pendulum_chain(6), (), None),
+    "double_four_bar": lambda: (*double_four_bar(2)[:1], (), double_four_bar(2)[1]),
+    "andrews_mechanism": lambda: (andrews_mechanism(), (), None),
+    "example_pendulum": lambda: (*_example("pendulum"), None),
+    "example_antonya": lambda: (*_example("antonya"), None),
+}
+
+
+def _agree(a, b, what, tol=TOL):
+    """``a`` and ``b`` (arrays of one kind of quantity) agree to ``tol`` relative to the
+    largest magnitude of ``b``."""
+    a, b = np.asarray(a), np.asarray(b)
+    scale = max(float(np.max(np.abs(b), initial=0.0)), 1e-300)
+    err = float(np.max(np.abs(a - b), initial=0.0)) / scale
+    assert err <= tol, f"{what}: relative difference {err:.2e}"
+
+
+def _agree_columns(s, d, kinds=("force", "torque")):
+    """Every extra column of the results, grouped by kind (the reactions' forces against the
+    largest force, and so on)."""
+    groups: dict = {}
+    for name, kind in d.kinds.items():
+        groups.setdefault(kind, []).append(name)
+    for kind in kinds:
+        names = groups.get(kind, [])
+        if names:
+            _agree(np.stack([s[n] for n in names]), np.stack([d[n] for n in names]), kind)
+
+
+# ------------------------------------------------------------------ the Jacobian
+@pytest.mark.parametrize("name", list(DRIVEN))
+def test_scattered_jacobian_is_the_ad_jacobian(name):
+    """``phi_q`` scattered from the per-element Jacobians equals ``jax.jacfwd`` of ``Phi``."""
+    model, _ = DRIVEN[name]()
+    c = Constraints.of(model)
+    q = jnp.asarray(np.asarray(model.q0)) + 1e-2
+    J = c.phi_q(q, 0.3)
+    ad = jax.jacfwd(c, argnums=0)(q, 0.3)
+    assert float(jnp.max(jnp.abs(J - ad))) <= 1e-15 * float(jnp.max(jnp.abs(ad)))
+
+
+def test_elements_with_laws_of_different_shapes_group_apart():
+    """Two coordinate drivers with polynomial laws of different degrees cannot share one
+    vectorized evaluation: the sparse form still works."""
+    model, _ = _chain_driven(3)
+    drivers = [
+        md.CoordinateDriver("d0", "link0", "phi", law=md.Polynomial([-1.0, 0.1, 0.2])),
+        _coordinate("d1", "link1", "phi", -1.0, 0.1),
+        md.CoordinateDriver("d2", "link2", "phi", law=-1.0),
+    ]
+    c = Constraints.of(model.replace(drivers=drivers)).with_linear_solver("sparse")
+    q = jnp.asarray(np.asarray(model.q0))
+    J = jax.jacfwd(c, argnums=0)(q, 0.5)
+    assert float(jnp.max(jnp.abs(c.phi_q(q, 0.5) - J))) <= 1e-15
+
+
+def test_rank_analysis_fast_path_agrees_with_the_qr(monkeypatch):
+    """The O(m) certificate of independent rows gives the report the rank-revealing QR gives
+    (and declines where a row is redundant)."""
+    from mixdyn.analysis import _structure
+
+    models = [DRIVEN[name]()[0] for name in DRIVEN]
+    models.append(parallelogram_with_extra_link())
+    models.append(slider_crank(drivers=[md.CoordinateDriver("lift", "slider", "y", law=0.0)]))
+    fast = [_structure.analyse(m) for m in models]
+    assert _structure._full_row_rank(np.eye(3)[:2])
+    assert not _structure._full_row_rank(np.ones((2, 3)))
+    monkeypatch.setattr(_structure, "_full_row_rank", lambda A: False)
+    for m, f in zip(models, fast, strict=True):
+        assert _structure.analyse(m) == f, m.name
+
+
+# ------------------------------------------------------------------ kinematics
+@pytest.mark.parametrize("name", list(DRIVEN))
+def test_kinematic_and_inverse_agree(name):
+    model, hold = DRIVEN[name]()
+    ts = np.linspace(0.0, 0.2, 4)
+    d = md.inverse(model, ts, hold=hold, linear_solver="dense")
+    s = md.inverse(model, ts, hold=hold, linear_solver="sparse")
+    assert d.stats["linear_solver"] == "dense" and s.stats["linear_solver"] == "sparse"
+    _agree(s.q, d.q, "positions")
+    _agree(s.qd, d.qd, "velocities")
+    _agree(s.qdd, d.qdd, "accelerations")
+    _agree_columns(s, d)  # driver efforts, reactions, multipliers
+
+
+def test_kinematic_sparse_under_auto():
+    model, _ = _chain_driven(24)  # 48 joint rows + 24 drivers >= 64 rows
+    ts = np.linspace(0.0, 0.1, 3)
+    a = md.kinematic(model, ts)
+    d = md.kinematic(model, ts, linear_solver="dense")
+    assert a.stats["linear_solver"] == "sparse"
+    _agree(a.q, d.q, "positions")
+    _agree(a.qdd, d.qdd, "accelerations")
+
+
+@pytest.mark.parametrize("name", ["paper_mechanism", "double_four_bar", "andrews_mechanism"])
+def test_assembly_agrees(name):
+    model, hold = DRIVEN[name]()
+    rough = np.asarray(model.q0) + 1e-2
+    d = md.assemble(model, rough, hold=hold, linear_solver="dense")
+    s = md.assemble(model, rough, hold=hold, linear_solver="sparse")
+    _agree(s.q, d.q, "assembled positions")
+
+
+def test_assembly_with_redundant_equations_falls_back():
+    """A redundant joint equation makes ``J J^T`` singular once the damping fades: the sparse
+    assembly takes the dense step there and closes the joints all the same."""
+    model = parallelogram_with_extra_link()
+    rough = np.asarray(model.q0) + 1e-3
+    s = md.assemble(model, rough, linear_solver="sparse")
+    d = md.assemble(model, rough, linear_solver="dense")
+    assert s.residual <= 1e-12
+    _agree(s.q, d.q, "assembled positions", 1e-9)
+    with pytest.raises(md.ModelError, match="redundant"):
+        md.kinematic(model, np.linspace(0.0, 0.1, 3), linear_solver="sparse")
+
+
+# ------------------------------------------------------------------ dead points
+R, L, TH0 = 0.1, 0.3, 0.5
+X0 = R * np.cos(TH0) + np.sqrt(L**2 - (R * np.sin(TH0)) ** 2)
+
+
+def test_dead_point_detected_on_the_sparse_path():
+    """As in test_errors_kinematic: the slider driven to its dead point at t = 1 (an output
+    time) and back; the sparse path reports the singularity there, naming the driver."""
+    k = (R + L - X0) / 1.0
+    law = md.Polynomial([R + L - k, 2 * k, -k])
+    drivers = [md.CoordinateDriver("push", "slider", "x", law=law)]
+    model = slider_crank(R, L, theta0=TH0)
+    ts = np.linspace(0.0, 2.0, 101)
+    with pytest.raises(md.SingularityError) as err:
+        md.kinematic(model, ts, drivers=drivers, linear_solver="sparse")
+    assert err.value.time == pytest.approx(1.0, abs=0.02)
+    assert "push" in err.value.elements
+    # output times that miss it: regular, and as on the dense path
+    ts = np.linspace(0.0, 2.0, 40)
+    s = md.kinematic(model, ts, drivers=drivers, linear_solver="sparse")
+    d = md.kinematic(model, ts, drivers=drivers, linear_solver="dense")
+    _agree(s.q, d.q, "positions", 1e-9)
+
+
+# ------------------------------------------------------------------ forward dynamics
+@pytest.mark.parametrize("name", list(FREE))
+def test_forward_agrees(name):
+    model, hold, qd0 = FREE[name]()
+    ts = np.linspace(0.0, 0.004, 3)
+    kw = dict(hold=hold, qd0=qd0, method="baumgarte", dt=1e-3)
+    d = md.forward(model, ts, linear_solver="dense", **kw)
+    s = md.forward(model, ts, linear_solver="sparse", **kw)
+    assert d.stats["linear_solver"] == "dense" and s.stats["linear_solver"] == "sparse"
+    _agree(s.q, d.q, "positions")
+    _agree(s.qd, d.qd, "velocities")
+    _agree(s.qdd, d.qdd, "accelerations")
+    _agree_columns(s, d, ("force", "torque", "power", "energy"))
+
+
+def test_forward_projection_chain_agrees():
+    model = pendulum_chain(8)
+    ts = np.linspace(0.0, 0.05, 3)
+    kw = dict(rtol=1e-10, atol=1e-12)
+    d = md.forward(model, ts, linear_solver="dense", **kw)
+    s = md.forward(model, ts, linear_solver="sparse", **kw)
+    _agree(s.q, d.q, "positions")
+    _agree_columns(s, d)
+
+
+# ------------------------------------------------------------------ mixed dynamics
+@pytest.fixture(scope="module")
+def paper_forward():
+    model = paper_mechanism(forces=_loads())
+    ts = np.linspace(0.0, 0.2, 6)
+    fw = md.forward(model, ts, hold=("crank.phi", "coupler.phi"), rtol=1e-12, atol=1e-12)
+    return model, ts, fw
+
+
+def test_collocated_mixed_round_trip_agrees(paper_forward):
+    """The paper's round trip (F1 unknown, the slider's x prescribed: a force along the
+    coordinate it prescribes, so the system is symmetric) on the sparse path."""
+    model, ts, fw = paper_forward
+    kw = dict(
+        prescribed=[md.prescribe(fw, "slider.x")],
+        unknown=["F1"],
+        q0=fw.q[0],
+        qd0=fw.qd[0],
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    d = md.mixed(model, ts, linear_solver="dense", **kw)
+    s = md.mixed(model, ts, linear_solver="sparse", **kw)
+    assert s.stats["collocated"] and s.stats["linear_solver"] == "sparse"
+    assert d.stats["linear_solver"] == "dense"
+    _agree(s.q, d.q, "positions")
+    _agree(s["F1"], d["F1"], "F1")
+    _agree_columns(s, d)
+    np.testing.assert_allclose(s["F1"], 10 * np.sin(np.pi * ts / 2), atol=1e-6)
+
+
+def _crank_torque_model():
+    return slider_crank(0.1, 0.3, 1.0, theta0=0.9).replace(
+        drivers=(), forces=[md.Torque("motor", "crank", law=0.0)]
+    )
+
+
+@pytest.mark.slow
+def test_collocated_torque_with_either_sign():
+    """A torque on the crank with the crank angle prescribed, ``B = Psi_q^T``, or the same
+    motion prescribed as the ground's angle relative to the crank, ``B = -Psi_q^T``: the same
+    torque either way, dense and sparse."""
+    model = _crank_torque_model()
+    ts = np.linspace(0.0, 0.1, 3)
+    f = [0.9, 1.0, 0.5]
+    motions = {
+        "coordinate": md.CoordinateDriver("angle", "crank", "phi", law=md.Polynomial(f)),
+        "relative": md.RelativeAngleDriver(
+            "angle", "crank", "ground", law=md.Polynomial([-a for a in f])
+        ),
+    }
+    runs = {}
+    for how, motion in motions.items():
+        for ls in ("dense", "sparse"):
+            runs[how, ls] = md.mixed(
+                model,
+                ts,
+                prescribed=[motion],
+                unknown=["motor"],
+                linear_solver=ls,
+                rtol=1e-12,
+                atol=1e-12,
+            )
+            assert runs[how, ls].stats["linear_solver"] == ls
+    ref = runs["coordinate", "dense"]
+    for key, res in runs.items():
+        _agree(res["motor"], ref["motor"], f"torque {key}")
+        _agree(res.q, ref.q, f"positions {key}")
+    _agree_columns(runs["relative", "sparse"], runs["relative", "dense"])
+
+
+def test_non_collocated_mixed_needs_the_dense_path():
+    """Slider prescribed, crank torque unknown: ``G != C^T``. 'sparse' asked explicitly is
+    refused; 'auto' solves it on the dense path."""
+    model = _crank_torque_model()
+    ts = np.linspace(0.0, 0.1, 3)
+    kw = dict(
+        prescribed=[md.CoordinateDriver("x", "slider", "x", law=md.Ramp(0.37, -0.1))],
+        unknown=["motor"],
+    )
+    with pytest.raises(md.ModelError, match="collocated"):
+        md.mixed(model, ts, linear_solver="sparse", **kw)
+    res = md.mixed(model, ts, linear_solver="auto", **kw)
+    assert res.stats["linear_solver"] == "dense" and not res.stats["collocated"]
+    with pytest.raises(md.ModelError, match="partition"):
+        md.mixed(model, ts, linear_solver="sparse", solver="partition", **kw)
+
+
+# ------------------------------------------------------------------ model files
+def test_model_file_run_takes_the_linear_solver():
+    text = (EXAMPLES / "four_bar.yaml").read_text()
+    text = text.replace(
+        "kind: kinematic\n", "kind: kinematic\n    linear_solver: sparse\n"
+    ).replace("time: {span: [0, 2*pi], step: 0.05}", "time: {span: [0, 0.2], n: 3}")
+    spec = mio.reads(text)
+    res = mio.execute(spec, ["kinematics"])["kinematics"]
+    assert res.stats["linear_solver"] == "sparse"
+    # the default normal form does not change: 'auto' is the default
+    assert "linear_solver" not in mio.dumps(mio.read(EXAMPLES / "four_bar.yaml"))
+
+
+@pytest.mark.parametrize("linear_solver", ["dense", "sparse", "auto"])
+def test_free_body_without_constraints(linear_solver):
+    """No constraint equation at all: nothing to solve on either path (it used to fail on an
+    empty reduction)."""
+    model = md.Model([md.Body("b", 1.0, 0.1)], gravity=(0.0, -9.81), units=md.SI)
+    ts = np.linspace(0.0, 0.1, 3)
+    res = md.forward(model, ts, linear_solver=linear_solver, method="baumgarte", dt=0.01)
+    np.testing.assert_allclose(res["b.y"], -9.81 * ts**2 / 2, atol=1e-12)
