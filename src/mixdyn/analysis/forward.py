@@ -38,7 +38,10 @@ def forward(
         t: (N,) increasing output times [time]; ``t[0]`` is the start.
         method: ``"projection"`` (default; adaptive RK + projection), ``"baumgarte"``
             (fixed-step RK4), ``"partitioning"`` (Wehage–Haug) or ``"generalized-alpha"``
-            (implicit, index 3).
+            (implicit, index 3; options ``rho_inf`` (default 0.9), ``newton``: ``"auto"``
+            (default: modified Newton on the acceleration-level KKT matrix, switching within
+            a step to the exact Newton matrix where it contracts poorly, e.g. a stiff spring
+            at a large step), ``"modified"`` or ``"full"``; ``tol``, ``max_newton``).
         rtol, atol: local error tolerances of the adaptive methods (on q and qd, model units).
         dt: step [time] of the fixed-step methods (or a fixed step for the adaptive ones).
         q0, qd0: (nq,) rough initial positions (default: the bodies' ``q0``) and velocities
@@ -51,11 +54,7 @@ def forward(
             velocities), the acceleration equations, the projections, generalized-alpha's
             Newton iterations and the reactions at the output times.
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
-            ``rho_inf``, ``max_steps``...). Generalized-alpha: ``rho_inf`` (default 0.9),
-            ``newton`` (``"auto"``, the default: modified Newton on the acceleration-level
-            KKT matrix, switching within a step to the exact Newton matrix where it contracts
-            poorly, e.g. a stiff spring at a large step; ``"modified"``; ``"full"``),
-            ``tol``, ``max_newton``, ``project_velocities``.
+            ``rho_inf``, ``max_steps``...).
 
     Returns:
         A :class:`Result` with the motion, the multipliers' physical meaning (joint reactions

@@ -12,14 +12,16 @@ Jacobian is ``[[M + beta' (K_c - Q_q) - gamma' Q_qd, G], [C, 0]]`` (``K_c`` the 
 of ``G mu`` with respect to ``q``, ``C = Phi_q``). Two iterations are available:
 
 * *modified* Newton drops the ``O(beta')`` stiffness and damping terms: the matrix
-  ``[[M, G], [C(q1), 0]]`` is the acceleration-level KKT matrix, solved by the Schur
-  complement ``C M^-1 G`` (dense, or sparse on the sparse path) without any Jacobian of the
-  residual. It contracts by a factor ``~ beta' |K| / M`` per iteration (``~1e-3`` for
-  pendulum chains at ``h = 1e-3``);
+  ``[[M, G], [C, 0]]`` is the acceleration-level KKT matrix, taken at the step's predicted
+  state and factorized once per step through its Schur complement ``C M^-1 G`` (dense LU, or
+  the banded block Cholesky of the sparse path); the residual's ``G mu`` comes from one
+  reverse pass through ``Phi``, so an iteration needs no Jacobian. It contracts by a factor
+  ``~ beta' |K| / M`` per iteration (``~1e-3`` for pendulum chains at ``h = 1e-3``);
 * *full* Newton builds the exact matrix by forward differentiation of the residual (dense,
   ``(nq + m)`` directions) and solves it by dense LU: quadratic convergence, for stiff forces
   (``h^2 K / M`` not small) where the modified iteration contracts slowly or diverges.
 
+Each step starts from ``(qdd, mu)`` extrapolated quadratically from the last three steps.
 ``newton="auto"`` (the default) starts each step with the modified iteration and switches,
 within the step, to full Newton from the better of the last two iterates as soon as an
 iteration contracts the error by less than :data:`SWITCH_RATE` (or diverges), or when, at the
@@ -57,8 +59,8 @@ def coefficients(rho_inf):
     return am, af, g, b
 
 
-#: Placeholder length of the steps before the first one [time]: with it the extrapolation of
-#: the first two steps is constant, then linear.
+#: Placeholder length of the steps before the first one [time]: with it the first step starts
+#: from the initial (qdd, mu) and the second extrapolates linearly.
 _NO_STEP = 1e100
 
 
