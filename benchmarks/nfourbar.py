@@ -168,18 +168,40 @@ def main(argv=None):
     ap.add_argument("--rtol", type=float, nargs="*", default=[1e-9])
     ap.add_argument("--exudyn-h", type=float, nargs="*", default=[1e-3])
     ap.add_argument("--linear-solver", default="auto")
+    ap.add_argument(
+        "--fixed",
+        nargs="*",
+        default=[],
+        help="fixed-step mixdyn runs as method:dt, e.g. generalized-alpha:1e-3 baumgarte:1e-3",
+    )
+    ap.add_argument("--max-steps", type=int, default=20_000)
     args = ap.parse_args(argv)
     rows = []
     for n in args.n:
-        for rtol in args.rtol:
+        for spec in args.fixed:
+            method, dt = spec.split(":")
+            opts = {"rho_inf": 0.95} if method == "generalized-alpha" else {}
             r = run_mixdyn(
-                n,
-                args.t_end,
-                rtol=rtol,
-                atol=rtol,
-                solver="dopri8",
-                linear_solver=args.linear_solver,
+                n, args.t_end, method, dt=float(dt), linear_solver=args.linear_solver, **opts
             )
+            r["method"] = f"{method} dt={float(dt):g}" + (" rho_inf=0.95" if opts else "")
+            rows.append((n, r))
+            print(f"N={n}: {r}", flush=True)
+        for rtol in args.rtol:
+            try:
+                r = run_mixdyn(
+                    n,
+                    args.t_end,
+                    rtol=rtol,
+                    atol=rtol,
+                    solver="dopri8",
+                    linear_solver=args.linear_solver,
+                    max_steps=args.max_steps,
+                )
+            except md.NumericalError as exc:  # a failure is a result to report
+                nan = float("nan")
+                r = {"code": "mixdyn", "run_s": nan, "tip_error": nan, "energy_error": nan}
+                r["failed"] = f"{type(exc).__name__}: {exc}"
             r["method"] = f"projection dopri8 rtol={rtol:g}"
             rows.append((n, r))
             print(f"N={n}: {r}", flush=True)
