@@ -234,18 +234,16 @@ def test_parallelogram_kinematics_through_vertical_links():
 # ---------------------------------------------------------------- compile once
 @pytest.fixture
 def trace_counter(monkeypatch):
-    """Counts evaluations of the constraint equations (``Constraints._local``, through which
-    ``Phi``, ``Phi_t`` and ``gamma`` of the built-in elements are evaluated): every analysis
-    evaluates them only inside ``jit``-compiled functions, so the count is the number of
-    traces."""
+    """Counts evaluations of ``Constraints.full``: every analysis evaluates it only inside
+    ``jit``-compiled functions, so the count is the number of traces."""
     calls = {"n": 0}
-    original = Constraints._local
+    original = Constraints.full
 
-    def counting(self, *args, **kwargs):
+    def counting(self, q, t):
         calls["n"] += 1
-        return original(self, *args, **kwargs)
+        return original(self, q, t)
 
-    monkeypatch.setattr(Constraints, "_local", counting)
+    monkeypatch.setattr(Constraints, "full", counting)
     return calls
 
 

@@ -200,10 +200,10 @@ class Problem(eqx.Module):
     # ------------------------------------------------------------------ work
     def powers(self, q, qd, t, mu):
         """Power of each multiplier's force (m,): ``-(G[:, r] mu_r) . qd``, with
-        ``G^T qd = [Phi_q qd; -B^T qd]`` (``Phi_q qd`` from the sparse values where the
-        elements allow it)."""
+        ``G^T qd = [Phi_q qd; -B^T qd]`` (``Phi_q qd`` from the sparse values on the sparse
+        path)."""
         c = self.c
-        if c._local_ok():
+        if c.linear_solver == "sparse":
             Cqd = c.matvec(c.jacobian_values(q, t), qd)
         else:
             Cqd = c.phi_q(q, t) @ qd

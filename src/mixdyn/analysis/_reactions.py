@@ -4,10 +4,10 @@ The constraint force on the bodies is ``-Phi_q^T lambda``. For a joint between b
 its rows give on body j a force ``F`` [force] at the body origin and a moment about it; the
 reported moment ``M`` is taken about the joint's point on body j. The force on body i is ``-F``.
 
-Only the entries of ``Phi_q`` in the joint's rows and body j's columns take part: where every
-element refers to its bodies through ``b``, ``bi``, ``bj`` (all the built-in ones) they are
-taken from the per-element Jacobian values (:meth:`~mixdyn.equations.Constraints.jacobian_values`)
-by one segment sum, without a dense ``Phi_q``; otherwise from the dense ``Phi_q``.
+Only the entries of ``Phi_q`` in the joint's rows and body j's columns take part: on the sparse
+path they are taken from the per-element Jacobian values
+(:meth:`~mixdyn.equations.Constraints.jacobian_values`) by one segment sum, without a dense
+``Phi_q``; on the dense path from the dense ``Phi_q``.
 """
 
 from __future__ import annotations
@@ -71,7 +71,7 @@ def joint_reactions(c: Constraints, q, t, lam) -> jax.Array:
     if nj == 0:
         return jnp.zeros((0, 3))
     bodies = _reaction_bodies(c)
-    if c._local_ok():
+    if c.linear_solver == "sparse":
         rows, _ = c.coo()
         take, slot, sign = _sparse_map(c, bodies)
         v = c.jacobian_values(q, t)

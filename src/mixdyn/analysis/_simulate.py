@@ -104,8 +104,8 @@ def _post_arrays(problem: Problem, ts, Q, QD):
 
     ``lax.map`` (one time after the other), not ``vmap``: under ``vmap`` the fallback of the
     acceleration solve at singular positions (a ``lax.cond``) would run at every time.
-    Everything is computed from the constraints' sparse form where the elements allow it: no
-    dense ``Phi_q`` on the sparse path.
+    On the sparse path everything comes from the constraints' sparse form: no dense
+    ``Phi_q``.
     """
     c = problem.c
 

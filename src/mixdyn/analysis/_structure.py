@@ -100,7 +100,8 @@ def analyse(
 ) -> tuple[DofReport, tuple[int, ...]]:
     """Mobility analysis; returns the report and the rows to keep in ``Constraints.of(model,
     drivers)`` (joint rows independent among themselves, then the drivers)."""
-    c = Constraints.of(model, drivers)
+    # the Jacobian by the per-element evaluation for a large mechanism (a small program)
+    c = Constraints.of(model, drivers).with_linear_solver("auto")
     q = model.q0 if q is None else jnp.asarray(q, dtype=jnp.float64)
     J = np.asarray(_jac(c, q, jnp.asarray(t, dtype=jnp.float64)))
     nk = c.n_joint_rows

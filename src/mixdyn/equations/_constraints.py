@@ -158,14 +158,15 @@ class Constraints(eqx.Module):
         return tuple(e.name for e in (*self.joints, *self.drivers))
 
     # ------------------------------------------------------------------ equations
-    # Wherever every element refers to its bodies through ``b``, ``bi``, ``bj`` (all the
-    # built-in ones), the equations and their derivatives are evaluated per element, vectorized
-    # over the elements of one kind (:meth:`_local`), on either linear-solver path: a small
-    # compiled program whatever the number of elements. Otherwise element by element, and the
-    # derivatives by automatic differentiation of the whole set.
+    # On the sparse path the equations and their derivatives are evaluated per element,
+    # vectorized over the elements of one kind (:meth:`_local`): a small compiled program
+    # whatever the number of elements. The dense path (the reference) evaluates the elements
+    # one after the other and differentiates the whole vector, as it always has: its numbers
+    # do not change with the sparse path (the double four-bar's passage through its singular
+    # positions depends on them to the last bit, see tests/test_validation.py).
     def full(self, q, t) -> jax.Array:
         """All rows ``Phi(q, t)`` (n_full,) before dropping redundant ones."""
-        if self._local_ok():
+        if self.linear_solver == "sparse":
             return self._local(_residual, q, t, rows=range(self.n_full))
         parts = [j.residual(q) for j in self.joints] + [d.residual(q, t) for d in self.drivers]
         if not parts:
@@ -174,7 +175,7 @@ class Constraints(eqx.Module):
 
     def __call__(self, q, t) -> jax.Array:
         """``Phi(q, t)`` (m,), the rows kept."""
-        if self._local_ok():
+        if self.linear_solver == "sparse":
             return self._local(_residual, q, t)
         Phi = self.full(q, t)
         if len(self.active) == self.n_full:
@@ -182,13 +183,10 @@ class Constraints(eqx.Module):
         return Phi[np.asarray(self.active, dtype=int)]
 
     def phi_q(self, q, t) -> jax.Array:
-        """Jacobian ``Phi_q`` (m, nq), dense.
-
-        Scattered from the per-element Jacobians of :meth:`jacobian_values` where the elements
-        allow it: the same numbers as ``jax.jacfwd`` of :meth:`__call__`, at O(nnz) work and a
-        small compiled program instead of one forward pass per coordinate.
-        """
-        if self._local_ok():
+        """Jacobian ``Phi_q`` (m, nq), dense: ``jax.jacfwd`` of :meth:`__call__`, or on the
+        sparse path scattered from the per-element Jacobians of :meth:`jacobian_values` (the
+        same numbers at O(nnz) work, with a small compiled program)."""
+        if self.linear_solver == "sparse":
             rows, cols = self.coo()
             v = self.jacobian_values(q, t)
             return jnp.zeros((self.m, self.nq), v.dtype).at[rows, cols].add(v)
@@ -197,14 +195,14 @@ class Constraints(eqx.Module):
     def phi_t(self, q, t) -> jax.Array:
         """Partial time derivative ``Phi_t`` (m,)."""
         t = jnp.asarray(t, dtype=jnp.float64)
-        if self._local_ok():
+        if self.linear_solver == "sparse":
             return self._local(_phi_t, q, t)
         return jax.jacfwd(self.__call__, argnums=1)(q, t)
 
     def gamma(self, q, qd, t) -> jax.Array:
         """Acceleration right-hand side ``gamma`` (m,)."""
         t = jnp.asarray(t, dtype=jnp.float64)
-        if self._local_ok():
+        if self.linear_solver == "sparse":
             return self._local(_gamma, q, t, qd)
 
         def path(s):
