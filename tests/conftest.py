@@ -4,8 +4,13 @@ The tests directory is put on ``sys.path`` so that test modules can ``from fixtu
 (see ``tests/fixtures.py``) whatever pytest's import mode.
 """
 
+import os
 import pathlib
 import sys
+
+# The CLI tests call the CLI in this process: keep them from turning on JAX's persistent
+# compilation cache for every later test (and from writing to the user's cache folder).
+os.environ.setdefault("MIXDYN_NO_CACHE", "1")
 
 import jax
 
