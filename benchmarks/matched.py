@@ -77,7 +77,14 @@ def main(argv=None):
         if have("exudyn"):
             for h in (1e-3, 5e-4):
                 r = chain_exudyn(n, T, h, sparse=True)
-                rows.append(dict(r, method=f"generalized-alpha h={h:g}", err=tip_error(r, ref)))
+                rows.append(
+                    dict(
+                        r,
+                        method=f"generalized-alpha h={h:g}",
+                        err=tip_error(r, ref),
+                        steps=round(T / h),
+                    )
+                )
                 print(f"  {rows[-1]['method']}: {r['run_s']:.3g} s, {rows[-1]['err']:.2e} m")
         target = rows[0]["err"] if rows else float("inf")
         for rtol in args.rtols:

@@ -32,11 +32,11 @@ class Assembly:
 
 def length_scale(model: Model) -> float:
     """A characteristic length of the model [length]: the largest point or body offset."""
-    vals = [1e-300]
+    vals = [1e-300]  # NumPy, not one small JAX operation per point (slow for large models)
     for b in model.bodies:
-        vals.append(float(jnp.max(jnp.abs(b.q0[:2]))))
-        vals += [float(jnp.max(jnp.abs(p))) for p in b.points.values()]
-    vals += [float(jnp.max(jnp.abs(p))) for p in model.ground.points.values()]
+        vals.append(float(np.max(np.abs(np.asarray(b.q0)[:2]))))
+        vals += [float(np.max(np.abs(np.asarray(p)))) for p in b.points.values()]
+    vals += [float(np.max(np.abs(np.asarray(p)))) for p in model.ground.points.values()]
     L = max(vals)
     return L if L > 1e-300 else 1.0
 

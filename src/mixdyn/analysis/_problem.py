@@ -228,23 +228,34 @@ class Problem(eqx.Module):
 
     # ------------------------------------------------------------------ projections
     def project_positions(self, q, t, tol, iters: int = 4):
-        """Mass-weighted least-norm projection of ``q`` onto ``Phi(q, t) = 0``."""
+        """Mass-weighted least-norm projection of ``q`` onto ``Phi(q, t) = 0``: at most
+        ``iters`` Newton steps, none once ``max |Phi| <= tol`` [length] (usually one after an
+        integration step, so the loop stops early rather than solving ``iters`` times)."""
 
         c, Minv = self.c, self.Minv
 
-        def body(_, q):
-            r = self.c(q, t)
-            if self.c.linear_solver == "sparse":
+        def residual(q):
+            r = c(q, t)
+            return r, jnp.max(jnp.abs(r), initial=0.0) > tol
+
+        def cond(state):
+            k, _, _, far = state
+            return (k < iters) & far
+
+        def body(state):
+            k, q, r, _ = state
+            if c.linear_solver == "sparse":
                 v = c.jacobian_values(q, t)
                 y, _ = c.schur_solve(v, Minv, r)
-                far = jnp.max(jnp.abs(r), initial=0.0) > tol
-                return jnp.where(far, q - Minv * c.rmatvec(v, y), q)
-            J = self.c.phi_q(q, t)
-            MJ = self.Minv[:, None] * J.T
-            y, _ = self.c.solve(J @ MJ, r)
-            return jnp.where(jnp.max(jnp.abs(r), initial=0.0) > tol, q - MJ @ y, q)
+                q = q - Minv * c.rmatvec(v, y)
+            else:
+                J = c.phi_q(q, t)
+                MJ = Minv[:, None] * J.T
+                y, _ = c.solve(J @ MJ, r)
+                q = q - MJ @ y
+            return (k + 1, q, *residual(q))
 
-        return jax.lax.fori_loop(0, iters, body, q)
+        return jax.lax.while_loop(cond, body, (0, q, *residual(q)))[1]
 
     def project_velocities(self, q, qd, t):
         """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``."""
