@@ -200,15 +200,16 @@ def test_parallelogram_reports_one_redundant_equation():
     assert (r2.n_coordinates, r2.rank, r2.dof, r2.redundant) == (9, 8, 1, ())
 
 
-def check_parallelogram(th_end):
+def check_parallelogram(th_end, linear_solver="auto"):
     """Drive the crank from 30 deg to ``th_end``; the coupler translates on a circle: centre
     ``(L/2 + a cos th, a sin th)``, ``phi = 0``; every link turns with the crank."""
     omega, th0 = 1.0, np.pi / 6
     model = parallelogram_with_extra_link(A_P, L_P, E_P, omega=omega, theta0=th0)
     t = np.linspace(0.0, th_end - th0, 41)
-    res = md.kinematic(model, t)
+    res = md.kinematic(model, t, linear_solver=linear_solver)
     th = th0 + omega * t
     assert len(res.stats["redundant_equations"]) == 1
+    assert linear_solver == "auto" or res.stats["linear_solver"] == linear_solver
     x, y = L_P / 2 + A_P * np.cos(th), A_P * np.sin(th)
     np.testing.assert_allclose(res["coupler.x"], x, atol=1e-12)
     np.testing.assert_allclose(res["coupler.y"], y, atol=1e-12)
@@ -229,6 +230,11 @@ def test_parallelogram_kinematics_match_closed_form():
 
 def test_parallelogram_kinematics_through_vertical_links():
     check_parallelogram(5 * np.pi / 6)  # 30 to 150 deg, through the vertical
+
+
+def test_parallelogram_kinematics_on_the_sparse_path():
+    """The redundant equation on the sparse path: the regularized Schur complement."""
+    check_parallelogram(5 * np.pi / 6, linear_solver="sparse")
 
 
 # ---------------------------------------------------------------- compile once

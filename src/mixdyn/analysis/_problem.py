@@ -142,7 +142,7 @@ class Problem(eqx.Module):
             # instant: there, as on the dense path, a truncated-SVD solve keeps it bounded.
             C = c.phi_q(q, t)
             S = C @ (Minv[:, None] * C.T)
-            return solve_ranked(S, rhs, None, rcond=SINGULAR_RCOND)[0]
+            return solve_ranked(S, rhs, c.rank, rcond=SINGULAR_RCOND)[0]
 
         mu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: mu)
         qdd = Minv * (Q - c.rmatvec(v, mu))

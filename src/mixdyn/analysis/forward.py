@@ -49,7 +49,7 @@ def forward(
         hold: coordinates (``"crank.phi"``) kept at their given values while assembling.
         progress: optional ``f(t)`` called at each output time (from inside the jitted loop).
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
-            of small bandwidth without redundant constraints, see :mod:`mixdyn.linalg`):
+            of small bandwidth, see :mod:`mixdyn.linalg`):
             the path of every linear solve of the run: the consistent start (assembly and
             velocities), the acceleration equations, the projections, generalized-alpha's
             Newton iterations and the reactions at the output times.

@@ -31,7 +31,7 @@ def inverse(
         q0: (nq,) rough starting configuration.
         hold: coordinates kept at their rough value while assembling.
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
-            of small bandwidth without redundant constraints, see :mod:`mixdyn.linalg`): the
+            of small bandwidth, see :mod:`mixdyn.linalg`): the
             path of the kinematic analysis and of the multipliers' solve.
         **kinematic_options: passed to :func:`~mixdyn.kinematic` (``tol``, ``max_iter``...).
 

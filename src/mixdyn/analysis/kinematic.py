@@ -131,7 +131,7 @@ def kinematic(
             through the banded Cholesky factorization of ``Phi_q Phi_q^T``, with one step of
             iterative refinement for velocities and accelerations; the pivot ratio compared
             with ``singular_tol`` is the square root of that factorization's) or ``"auto"``
-            (sparse for large mechanisms of small bandwidth without redundant equations, see
+            (sparse for large mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The assembly takes the same path.
 
     Returns:

@@ -377,7 +377,7 @@ def mixed(
         method, rtol, atol, dt, q0, qd0, hold, progress, **options: as in
             :func:`~mixdyn.forward`.
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (the default: sparse for large
-            mechanisms of small bandwidth without redundant equations, see
+            mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The sparse path (banded Cholesky of the Schur complement
             ``C M^-1 C^T``) needs a symmetric system: the ``"augmented"`` solver with
             *collocated* unknown forces, each acting along the gradient of one prescribed

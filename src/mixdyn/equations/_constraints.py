@@ -25,6 +25,10 @@ from ..model import Driver, Joint, Model
 
 #: The linear-solver paths (see :mod:`mixdyn.linalg`).
 LINEAR_SOLVERS = ("dense", "sparse", "auto")
+#: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
+#: the steps of iterated regularization (see :meth:`Constraints.schur_solver`).
+REGULARIZATION = 1e-8
+REFINE_REDUNDANT = 4
 
 # Static fields that only name things (resolved into indices and arrays at binding): cleared
 # so that elements of one kind share one vectorized evaluation.
@@ -80,19 +84,13 @@ class Constraints(eqx.Module):
 
         local = self._local_ok()
         if linear_solver == "auto":
-            if not local or self.rank is not None or self.m < AUTO_MIN_ROWS:
+            if not local or self.m < AUTO_MIN_ROWS:
                 return "dense"
             return choose_solver(self.m, self.schur_structure())
         if not local:
             raise ModelError(
                 "the sparse linear solver needs every joint and driver to refer to its bodies "
                 "through the fields b, bi, bj; use linear_solver='dense'"
-            )
-        if self.rank is not None:
-            raise ModelError(
-                "the sparse linear solver needs independent constraint equations, and this "
-                f"model has {self.m - self.rank} redundant one(s) (rank {self.rank} of "
-                f"{self.m}); use linear_solver='dense' (least-squares solve) or 'auto'"
             )
         return "sparse"
 
@@ -112,14 +110,8 @@ class Constraints(eqx.Module):
         it becomes a least-squares (truncated SVD) solve, robust wherever the redundancy moves
         from row to row (a parallelogram passing through its singular positions)."""
         return Constraints(
-            self.joints, self.drivers, self.nq, None, rank, linear_solver=self._downgrade(rank)
+            self.joints, self.drivers, self.nq, None, rank, linear_solver=self.linear_solver
         )
-
-    def _downgrade(self, rank) -> str:
-        """The solver kept by :meth:`with_rank`: redundant rows take the dense path."""
-        if self.linear_solver == "sparse" and rank is not None and rank != len(self.labels):
-            return "dense"
-        return self.linear_solver
 
     def with_linear_solver(self, linear_solver: str) -> Constraints:
         """The same set solved by ``linear_solver`` (``"dense"``, ``"sparse"``, ``"auto"``)."""
@@ -331,8 +323,49 @@ class Constraints(eqx.Module):
         return jax.ops.segment_sum(values * y[rows], jnp.asarray(cols), num_segments=self.nq)
 
     def schur_solve(self, values, Minv, b):
-        """Solve ``(Phi_q M^-1 Phi_q^T) x = b`` on the sparse path; ``(x, pivot_ratio)``."""
-        return self.schur_structure().solve(values, Minv, b)
+        """Solve ``(Phi_q M^-1 Phi_q^T) x = b`` on the sparse path; ``(x, pivot_ratio)``.
+
+        With redundant rows (``rank`` given) ``S`` is singular: :meth:`schur_solver`'s
+        regularized solve."""
+        if self.rank is None:
+            return self.schur_structure().solve(values, Minv, b)
+        solve, ratio = self.schur_solver(values, Minv)
+        return solve(b), ratio
+
+    def schur_solver(self, values, W, shift=None):
+        """``(solve, pivot_ratio)``: ``solve(b)`` solves ``(Phi_q W Phi_q^T + shift I) y = b``
+        on the sparse path, with one factorization for every right-hand side.
+
+        Without redundant rows: the banded block Cholesky factors. With redundant rows of
+        consistent equations (``rank < m``), ``S`` is singular and its minimum-norm solution
+        is sought by iterated Tikhonov regularization: ``S + eps I`` is factorized, with
+        ``eps = REGULARIZATION * max diag S``, and each of :data:`REFINE_REDUNDANT` steps
+        adds ``(S + eps I)^-1`` of the residual of the unregularized system. A component along
+        an eigenvalue ``s`` of ``S`` converges by the factor ``eps / (s + eps)`` per step,
+        one in the null space of ``S`` (the redundancy) is never excited beyond rounding
+        (``~ 1e-16 / REGULARIZATION`` relative): the motion (which depends on ``Phi_q^T y``
+        only) matches the dense truncated-SVD solve to rounding, the split of the multipliers
+        among redundant rows its minimum-norm split to ``~1e-8`` relative. The pivot ratio
+        leaves out the ``m - rank`` smallest pivots (:meth:`SchurStructure.factor`).
+        """
+        st = self.schur_structure()
+        if self.rank is None:
+            fac, ratio = st.factor(values, W, shift)
+            return (lambda b: st.solve_factored(fac, b)), ratio
+        rows, cols = self.coo()
+        diag = jax.ops.segment_sum(values**2 * W[cols], jnp.asarray(rows), num_segments=self.m)
+        eps = REGULARIZATION * jnp.max(diag, initial=0.0)
+        extra = 0.0 if shift is None else shift
+        fac, ratio = st.factor(values, W, eps + extra, rank=self.rank)
+
+        def solve(b):
+            y = st.solve_factored(fac, b)
+            for _ in range(REFINE_REDUNDANT):
+                r = b - self.matvec(values, W * self.rmatvec(values, y)) - extra * y
+                y = y + st.solve_factored(fac, r)
+            return y
+
+        return solve, ratio
 
     def min_norm_solver(self, values, weights=None, shift=None, refine: int = 0):
         """On the sparse path, a function ``b -> x`` giving the solution of ``Phi_q x = b`` of
@@ -354,12 +387,11 @@ class Constraints(eqx.Module):
             Cholesky factors, comparable to the LU pivot ratio of ``Phi_q`` on the dense path
             (0 when the factorization failed: ``Phi_q`` lost rank).
         """
-        st = self.schur_structure()
         W = jnp.ones(self.nq) if weights is None else weights
-        fac, ratio = st.factor(values, W, shift)
+        inner, ratio = self.schur_solver(values, W, shift)
 
         def once(b):
-            return W * self.rmatvec(values, st.solve_factored(fac, b))
+            return W * self.rmatvec(values, inner(b))
 
         def solve(b):
             x = once(b)

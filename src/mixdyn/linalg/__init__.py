@@ -10,7 +10,8 @@ Two paths, chosen per constraint set (``Constraints.linear_solver``, from the an
   motion; ``W = I``: minimum-norm kinematic steps, refined iteratively where accuracy matters).
 
 ``"auto"`` (:func:`choose_solver`) takes the sparse path for large mechanisms of small
-bandwidth without redundant equations.
+bandwidth. Redundant equations make the Schur complement singular: the sparse path solves it by
+iterated regularization (``Constraints.schur_solver``).
 """
 
 from ._dense import (

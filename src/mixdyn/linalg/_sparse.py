@@ -160,15 +160,21 @@ class SchurStructure:
         x = x.reshape(nblk * B, -1)[: self.m][self.inv]
         return (x[:, 0] if vec else x), _ratio(d)
 
-    def factor(self, values, Minv, shift=None):
+    def factor(self, values, Minv, shift=None, rank=None):
         """Block Cholesky factors of ``S`` (or ``S + shift I``) for several solves with
         :meth:`solve_factored`; returns ``(factor, pivot_ratio)``. Always the sequential
-        block Cholesky (whatever :data:`METHOD`)."""
+        block Cholesky (whatever :data:`METHOD`).
+
+        With ``rank`` (``S`` has ``m - rank`` redundant rows, factorized with a ``shift``) the
+        pivot ratio leaves out the ``m - rank`` smallest pivots, those of the redundancy:
+        ``d_(rank) / d_(1)`` of the squared pivots sorted in decreasing order."""
         if self.m == 0:
             return (jnp.zeros((0, 1, 1)), jnp.zeros((0, 1, 1))), jnp.ones(())
         D, E = self.blocks(values, Minv, shift)
         L, W = _block_cholesky(D, E)
         d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: self.m] ** 2
+        if rank is not None and rank < self.m:
+            return (L, W), _ranked_ratio(d, rank)
         return (L, W), _ratio(d)
 
     def solve_factored(self, factor, b):
@@ -190,6 +196,15 @@ def _ratio(d):
     """``min d / max d`` of the squared pivots, 0 where not finite (a failed factorization)."""
     ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(d.dtype).tiny)
     return jnp.where(jnp.isfinite(ratio), ratio, 0.0)
+
+
+def _ranked_ratio(d, rank: int):
+    """``d_(rank) / d_(1)``: the pivot ratio of the ``rank`` largest squared pivots ``d``."""
+    if rank <= 0:
+        return jnp.ones(())
+    ds = jnp.sort(d)[::-1]
+    ratio = ds[rank - 1] / jnp.maximum(ds[0], jnp.finfo(d.dtype).tiny)
+    return jnp.where(jnp.all(jnp.isfinite(d)), ratio, 0.0)
 
 
 def _cr_order(a):
@@ -313,11 +328,11 @@ def schur_structure(m: int, n: int, rows, cols, min_block: int = MIN_BLOCK) -> S
     return _structure_cached(int(m), int(n), rows.tobytes(), cols.tobytes(), int(min_block))
 
 
-def choose_solver(m: int, structure: SchurStructure | None, rank=None) -> str:
+def choose_solver(m: int, structure: SchurStructure | None) -> str:
     """``"dense"`` or ``"sparse"`` for ``linear_solver="auto"``: sparse for ``m >=``
     :data:`AUTO_MIN_ROWS` rows with a reordered bandwidth of at most :data:`MAX_AUTO_BLOCK`
-    and no redundant rows."""
-    if rank is not None or m < AUTO_MIN_ROWS or structure is None:
+    (redundant rows or not: see ``Constraints.schur_solve``)."""
+    if m < AUTO_MIN_ROWS or structure is None:
         return "dense"
     return "sparse" if structure.bandwidth <= MAX_AUTO_BLOCK else "dense"
 

@@ -129,6 +129,14 @@ def _schur_factor_sparse(c, v, Minv, dense_C):
     """``solve(b)`` with ``S = C M^-1 C^T`` from the sparse values ``v``: its banded block
     Cholesky factors computed once (:mod:`mixdyn.linalg._sparse`), two block triangular sweeps
     per solve; a dense truncated-SVD solve at a singular position (``dense_C()`` then)."""
+
+    def truncated_svd(b):
+        C = dense_C()
+        return solve_ranked(C @ (Minv[:, None] * C.T), b, c.rank, rcond=SINGULAR_RCOND)[0]
+
+    if c.rank is not None:  # redundant rows: the regularized solve of Constraints.schur_solver
+        solve, ratio = c.schur_solver(v, Minv)
+        return lambda b: jax.lax.cond(~(ratio >= SINGULAR_RATIO), truncated_svd, solve, b)
     st = c.schur_structure()
     B, nblk = st.block, st.nblk
     D, E = st.blocks(v, Minv)
@@ -146,10 +154,6 @@ def _schur_factor_sparse(c, v, Minv, dense_C):
 
         _, y = jax.lax.scan(step, jnp.zeros((B, 1), b.dtype), (L, W, rhs.reshape(nblk, B, 1)))
         return _block_backward(L, W, y).reshape(-1)[: st.m][st.inv]
-
-    def truncated_svd(b):
-        C = dense_C()
-        return solve_ranked(C @ (Minv[:, None] * C.T), b, None, rcond=SINGULAR_RCOND)[0]
 
     return lambda b: jax.lax.cond(singular, truncated_svd, factored, b)
 
