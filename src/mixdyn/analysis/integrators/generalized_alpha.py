@@ -22,6 +22,11 @@ of ``G mu`` with respect to ``q``, ``C = Phi_q``). Two iterations are available:
   (``h^2 K / M`` not small) where the modified iteration contracts slowly or diverges.
 
 Each step starts from ``(qdd, mu)`` extrapolated quadratically from the last three steps.
+The iteration has converged when the scaled force and position residuals are below 1; near a
+singular position, where the iteration matrix is ill-conditioned and the force residual
+stalls at the noise floor of its solve (the rounding of the positions amplified like
+1/distance), an iterate whose positions meet their tolerance and whose force residual is below
+:data:`STALL_TOL` tolerances is accepted once an exact-matrix iteration stops reducing it.
 ``newton="auto"`` (the default) starts each step with the modified iteration and switches,
 within the step, to full Newton from the better of the last two iterates as soon as an
 iteration contracts the error by less than :data:`SWITCH_RATE` (or diverges), or when, at the
@@ -48,6 +53,11 @@ NEWTON_CHOICES = ("auto", "modified", "full")
 #: ``newton="auto"``: an iteration of the modified Newton method that does not reduce the
 #: scaled error at least by this factor makes the step switch to full Newton.
 SWITCH_RATE = 0.5
+#: A Newton iteration that stalls (an iteration of the exact matrix reduces the scaled
+#: residual by less than ``STALL_RATE``) with the positions within tolerance and the force
+#: residual below ``STALL_TOL`` tolerances is converged to the noise floor of its solve.
+STALL_RATE = 0.5
+STALL_TOL = 1e4
 
 
 def coefficients(rho_inf):
@@ -263,11 +273,14 @@ def generalized_alpha(
             r1 = Mdiag * qdd1 + Gmu - problem.known_forces(q1, qd1, t1)
             return jnp.concatenate([r1, phi / beta_p])
 
-        def error(r):
+        def parts(r):
             # Force residual against ftol; position residual (r2 * beta_p) against ptol.
-            return jnp.maximum(
-                jnp.max(jnp.abs(r[:n])) / ftol, jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0) / ptol
-            )
+            return jnp.max(jnp.abs(r[:n])) / ftol, jnp.max(
+                jnp.abs(r[n:]) * beta_p, initial=0.0
+            ) / ptol
+
+        def error(r):
+            return jnp.maximum(*parts(r))
 
         x_last = jnp.concatenate([qdd, mu])
         x0 = _extrapolate(x_last, hist, h)
@@ -282,11 +295,11 @@ def generalized_alpha(
             return problem.c.solve(J, r, extra_rank=n)[0]
 
         def cond(s):
-            _, _, res, it, _ = s
-            return (res > 1.0) & (it < max_newton) & jnp.isfinite(res)
+            _, _, res, it, _, done = s
+            return ~done & (it < max_newton) & jnp.isfinite(res)
 
         def body(s):
-            x, r, res, it, full = s
+            x, r, res, it, full, _ = s
             if newton == "modified":
                 dx = modified_dx(x, r)
             elif newton == "full":
@@ -295,7 +308,21 @@ def generalized_alpha(
                 dx = jax.lax.cond(full, full_dx, modified_dx, x, r)
             x1 = x - dx
             r1 = residual(x1)
-            res1 = error(r1)
+            f1, p1 = parts(r1)
+            res1 = jnp.maximum(f1, p1)
+            # Converged; or stalled at the noise floor of the solve: near a singular position
+            # the iteration matrix is ill-conditioned, the rounding of the positions (1 ulp
+            # of Phi) is amplified like 1/distance in the update and the force residual stops
+            # decreasing. Such an iterate is accepted if the positions meet their tolerance
+            # and the force residual is below STALL_TOL x ftol (1e-6 of the force scale by
+            # default: an acceleration error far below the method's own), once the exact
+            # (or the chosen modified) Newton matrix no longer reduces it.
+            stalled = (
+                (p1 <= 1.0) & (f1 <= STALL_TOL) & ~(res1 <= STALL_RATE * res) & jnp.isfinite(res1)
+            )
+            if newton == "auto":
+                stalled = stalled & full
+            done = (res1 <= 1.0) | stalled
             if newton == "auto":
                 # A modified iteration that contracts poorly, or would at its rate need more
                 # than half the budget, hands the step to full Newton, from the better of the
@@ -309,11 +336,12 @@ def generalized_alpha(
                     lambda old, new: jnp.where(back, old, new), (x, r, res), (x1, r1, res1)
                 )
                 full = full | slow
-            return x1, r1, res1, it + 1, full
+            return x1, r1, res1, it + 1, full, done
 
         r0 = residual(x0)
-        init = (x0, r0, error(r0), 0, jnp.asarray(newton == "full"))
-        x, r, res, it, _ = jax.lax.while_loop(cond, body, init)
+        res0 = error(r0)
+        init = (x0, r0, res0, 0, jnp.asarray(newton == "full"), res0 <= 1.0)
+        x, r, res, it, _, done = jax.lax.while_loop(cond, body, init)
         q1, qd1, a1 = predict(x[:n])
         qdd1, mu1 = x[:n], x[n:]
         if project_velocities:
@@ -321,7 +349,7 @@ def generalized_alpha(
         rates0 = problem.work_rates(q, qd, t1 - h, qdd)
         rates1 = problem.work_rates(q1, qd1, t1, qdd1)
         w1 = w + 0.5 * h * (rates0 + rates1)
-        ok = res <= 1.0
+        ok = done
         # Phi(q1), from the last residual: the position violation before any projection.
         viol = jnp.max(jnp.abs(r[n:]) * beta_p, initial=0.0)
         new = (q1, qd1, a1, qdd1, mu1, w1, newt + it, (x_last, hist[0], h, hist[2]))
