@@ -172,19 +172,25 @@ def main(argv=None):
         "--fixed",
         nargs="*",
         default=[],
-        help="fixed-step mixdyn runs as method:dt, e.g. generalized-alpha:1e-3 baumgarte:1e-3",
+        help="fixed-step mixdyn runs as method:dt[:option=value...], e.g. "
+        "generalized-alpha:1e-3 generalized-alpha:6e-4:project_velocities=0 baumgarte:1e-3",
     )
     ap.add_argument("--max-steps", type=int, default=20_000)
     args = ap.parse_args(argv)
     rows = []
     for n in args.n:
         for spec in args.fixed:
-            method, dt = spec.split(":")
+            method, dt, *extra = spec.split(":")
             opts = {"rho_inf": 0.95} if method == "generalized-alpha" else {}
+            for kv in extra:  # numbers; 0/1 for flags
+                key, value = kv.split("=")
+                opts[key] = bool(int(value)) if key == "project_velocities" else float(value)
             r = run_mixdyn(
                 n, args.t_end, method, dt=float(dt), linear_solver=args.linear_solver, **opts
             )
-            r["method"] = f"{method} dt={float(dt):g}" + (" rho_inf=0.95" if opts else "")
+            r["method"] = f"{method} dt={float(dt):g}" + "".join(
+                f" {k}={v:g}" if isinstance(v, float) else f" {k}={v}" for k, v in opts.items()
+            )
             rows.append((n, r))
             print(f"N={n}: {r}", flush=True)
         for rtol in args.rtol:

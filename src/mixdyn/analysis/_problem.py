@@ -15,6 +15,8 @@ acceleration problem exist: ``"augmented"`` (Schur complement, any ``B``) and
 
 from __future__ import annotations
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -86,14 +88,10 @@ class Problem(eqx.Module):
     @property
     def sparse(self) -> bool:
         """Whether the sparse linear-solver path is taken: the constraints ask for it and the
-        system is symmetric (forward and inverse dynamics, mixed dynamics with the augmented
-        solver and collocated unknown forces; the partition solver and non-collocated mixed
-        problems stay dense)."""
-        return (
-            self.c.linear_solver == "sparse"
-            and self.solver == "augmented"
-            and (self.p == 0 or len(self.collocated) == self.p)
-        )
+        augmented solver is used (the partition solver stays dense). Mixed problems whose
+        unknown forces are not collocated are solved there by a rank-``p`` update of the
+        symmetric system (:meth:`_woodbury_accelerations`)."""
+        return self.c.linear_solver == "sparse" and self.solver == "augmented"
 
     # ------------------------------------------------------------------ forces
     def known_forces(self, q, qd, t):
@@ -134,6 +132,8 @@ class Problem(eqx.Module):
             gam = gam - 2 * alpha * (c.matvec(v, qd) + c.phi_t(q, t)) - beta**2 * c(q, t)
         Q = self.known_forces(q, qd, t)
         rhs = c.matvec(v, Minv * Q) - gam
+        if self.p and not self.collocated:
+            return self._woodbury_accelerations(q, qd, t, v, Q, rhs)
         # the symmetric system M qdd + C^T y = Q, C qdd = gam
         mu, ratio = c.schur_solve(v, Minv, rhs)
 
@@ -157,6 +157,43 @@ class Problem(eqx.Module):
             scale = jnp.sum(B * PsiT, axis=0) / jnp.sum(PsiT**2, axis=0)
             mu = jnp.concatenate([mu[:mk], -mu[rows] / scale])
         return qdd, mu, ratio
+
+    def _woodbury_accelerations(self, q, qd, t, v, Q, rhs):
+        """Mixed dynamics on the sparse path with unknown forces of any direction.
+
+        The Schur complement ``S = C M^-1 G`` differs from the symmetric ``S_sym = C M^-1 C^T``
+        in its last ``p`` columns only (``G = [Phi_q^T | -B]``, ``C^T = [Phi_q^T | Psi_q^T]``):
+        ``S = S_sym + U E^T`` with ``U = -C M^-1 (B + Psi_q^T)`` (m, p) and ``E`` the last
+        ``p`` columns of the identity. By the Sherman–Morrison–Woodbury formula
+        ``S^-1 b = y - Z K^-1 E^T y``, ``y = S_sym^-1 b``, ``Z = S_sym^-1 U``,
+        ``K = I + E^T Z`` (p, p): one banded Cholesky factorization, ``p + 1`` solves and a
+        ``p x p`` LU. ``K`` is singular exactly where ``S`` is (the mixed problem is not
+        solvable there); the pivot ratio is the smaller of the two factorizations'.
+        """
+        c, Minv, p = self.c, self.Minv, self.p
+        mk = c.m - p
+        B = force_directions(self.model, self.unknown, q, qd, t)  # (nq, p)
+        E = jnp.zeros((c.m, p)).at[mk + np.arange(p), np.arange(p)].set(1.0)
+        cols = functools.partial(jax.vmap, in_axes=1, out_axes=1)
+        PsiT = cols(lambda e: c.rmatvec(v, e))(E)  # (nq, p)
+        U = cols(lambda f: c.matvec(v, Minv * f))(-(B + PsiT))  # (m, p)
+        solve, ratio = c.schur_solver(v, Minv)
+        y = solve(rhs)
+        Z = cols(solve)(U)
+        K = jnp.eye(p) + Z[mk:]
+        w, ratio_k = lu_solve_checked(K, y[mk:])
+        mu = y - Z @ w
+
+        def truncated_svd():
+            # a singular position or an unsolvable instant: as on the dense path
+            C = c.phi_q(q, t)
+            S = C @ (Minv[:, None] * self.G(q, qd, t, C))
+            return solve_ranked(S, rhs, c.rank, rcond=SINGULAR_RCOND)[0]
+
+        ratio = jnp.minimum(ratio, ratio_k)
+        mu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: mu)
+        Gmu = c.rmatvec(v, jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])) - B @ mu[mk:]
+        return Minv * (Q - Gmu), mu, ratio
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""

@@ -289,17 +289,11 @@ def _setup(
     if solver == "augmented":
         collocated = _collocated(model, c, q, qd, t0, mk, unknown)
     path = c.with_linear_solver(linear_solver).linear_solver
-    if path == "sparse" and collocated is None:
+    if path == "sparse" and solver == "partition":
         if linear_solver == "sparse":
-            why = (
-                "the partition solver is dense"
-                if solver == "partition"
-                else "the unknown forces do not act along the gradients of the prescribed "
-                "motions (not collocated), so the system is not symmetric"
-            )
             raise ModelError(
-                f"the sparse linear solver cannot solve this mixed problem: {why}; use "
-                "linear_solver='dense' or 'auto'",
+                "the sparse linear solver cannot solve this mixed problem: the partition "
+                "solver is dense; use solver='augmented', or linear_solver='dense' or 'auto'",
                 ", ".join(unknown),
             )
         path = "dense"
@@ -379,13 +373,14 @@ def mixed(
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (the default: sparse for large
             mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The sparse path (banded Cholesky of the Schur complement
-            ``C M^-1 C^T``) needs a symmetric system: the ``"augmented"`` solver with
-            *collocated* unknown forces, each acting along the gradient of one prescribed
-            motion (``B = Psi_q^T`` up to a scale per force: a force along the coordinate or
-            distance it prescribes, a torque on the body whose angle it prescribes, as in the
-            paper's example). Non-collocated problems (``G != C^T``, a non-symmetric Schur
-            complement ``C M^-1 G``) and the ``"partition"`` solver stay on the dense path:
-            ``"auto"`` takes it silently, ``"sparse"`` raises a :class:`ModelError`. The
+            ``C M^-1 C^T``) takes the ``"augmented"`` solver: *collocated* unknown forces, each
+            acting along the gradient of one prescribed motion (``B = Psi_q^T`` up to a scale
+            per force: a force along the coordinate or distance it prescribes, a torque on the
+            body whose angle it prescribes, as in the paper's example), solve the symmetric
+            system directly; other unknown forces (``G != C^T``, a non-symmetric Schur
+            complement ``C M^-1 G``) by a rank-``p`` Sherman–Morrison–Woodbury update of the
+            symmetric one. The ``"partition"`` solver stays on the dense path: ``"auto"``
+            takes it silently, ``"sparse"`` raises a :class:`ModelError`. The
             consistent start (assembly, velocities) takes the path asked for in any case; the
             solvability checks of the start state are dense.
 
