@@ -26,7 +26,8 @@ The iteration has converged when the scaled force and position residuals are bel
 singular position, where the iteration matrix is ill-conditioned and the force residual
 stalls at the noise floor of its solve (the rounding of the positions amplified like
 1/distance), an iterate whose positions meet their tolerance and whose force residual is below
-:data:`STALL_TOL` tolerances is accepted once an exact-matrix iteration stops reducing it.
+:data:`STALL_TOL` tolerances is accepted once an exact-matrix iteration stops reducing it (only
+there: the pivot ratio of the iteration matrix's Schur complement below :data:`STALL_RATIO`).
 ``newton="auto"`` (the default) starts each step with the modified iteration and switches,
 within the step, to full Newton from the better of the last two iterates as soon as an
 iteration contracts the error by less than :data:`SWITCH_RATE` (or diverges), or when, at the
@@ -58,6 +59,10 @@ SWITCH_RATE = 0.5
 #: residual below ``STALL_TOL`` tolerances is converged to the noise floor of its solve.
 STALL_RATE = 0.5
 STALL_TOL = 1e4
+#: ... and only near a singular position: the pivot ratio of the iteration matrix's Schur
+#: complement below this (elsewhere, e.g. a stiff spring at a huge step, a stalled iteration
+#: is a failure).
+STALL_RATIO = 1e-6
 
 
 def coefficients(rho_inf):
@@ -115,30 +120,36 @@ def _svd_inverse(S, keep):
 
 
 def _schur_factor_dense(S, rank):
-    """``solve(b)`` with the Schur complement ``S``, factorized once, solved as
-    :func:`~mixdyn.linalg.solve_kkt` solves it: truncated SVD when ``rank`` is given (redundant
-    rows), else LU with a truncated-SVD fallback at a singular position."""
+    """``(solve, ratio)``: ``solve(b)`` with the Schur complement ``S``, factorized once,
+    solved as :func:`~mixdyn.linalg.solve_kkt` solves it: truncated SVD when ``rank`` is given
+    (redundant rows), else LU with a truncated-SVD fallback at a singular position; ``ratio``
+    the pivot ratio (of the ``rank`` largest singular values with redundant rows)."""
     m = S.shape[0]
     if rank is not None:
         U, sinv, Vt = _svd_inverse(S, lambda s: (jnp.arange(m) < rank) & (s > 0))
-        return lambda b: Vt.T @ (sinv * (U.T @ b))
+        ratio = sinv[0] / jnp.maximum(jnp.max(sinv), jnp.finfo(S.dtype).tiny)
+        return (lambda b: Vt.T @ (sinv * (U.T @ b))), ratio
     lu, piv = jsl.lu_factor(S)
     d = jnp.abs(jnp.diag(lu))
     singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))
+    ratio = jnp.where(singular, 0.0, jnp.min(d) / jnp.max(d))
     U, sinv, Vt = jax.lax.cond(
         singular,
         lambda: _svd_inverse(S, lambda s: s > SINGULAR_RCOND * s[0]),
         lambda: (jnp.zeros_like(S), jnp.zeros(m, S.dtype), jnp.zeros_like(S)),
     )
-    return lambda b: jax.lax.cond(
-        singular, lambda: Vt.T @ (sinv * (U.T @ b)), lambda: jsl.lu_solve((lu, piv), b)
-    )
+    return (
+        lambda b: jax.lax.cond(
+            singular, lambda: Vt.T @ (sinv * (U.T @ b)), lambda: jsl.lu_solve((lu, piv), b)
+        )
+    ), ratio
 
 
 def _schur_factor_sparse(c, v, Minv, dense_C):
-    """``solve(b)`` with ``S = C M^-1 C^T`` from the sparse values ``v``: its banded block
-    Cholesky factors computed once (:mod:`mixdyn.linalg._sparse`), two block triangular sweeps
-    per solve; a dense truncated-SVD solve at a singular position (``dense_C()`` then)."""
+    """``(solve, ratio)``: ``solve(b)`` with ``S = C M^-1 C^T`` from the sparse values ``v``:
+    its banded block Cholesky factors computed once (:mod:`mixdyn.linalg._sparse`), two block
+    triangular sweeps per solve; a dense truncated-SVD solve at a singular position
+    (``dense_C()`` then); ``ratio`` the pivot ratio."""
 
     def truncated_svd(b):
         C = dense_C()
@@ -146,13 +157,14 @@ def _schur_factor_sparse(c, v, Minv, dense_C):
 
     if c.rank is not None:  # redundant rows: the regularized solve of Constraints.schur_solver
         solve, ratio = c.schur_solver(v, Minv)
-        return lambda b: jax.lax.cond(~(ratio >= SINGULAR_RATIO), truncated_svd, solve, b)
+        return (lambda b: jax.lax.cond(~(ratio >= SINGULAR_RATIO), truncated_svd, solve, b)), ratio
     st = c.schur_structure()
     B, nblk = st.block, st.nblk
     D, E = st.blocks(v, Minv)
     L, W, _ = _block_cholesky_forward(D, E, jnp.zeros((nblk, B, 1), D.dtype))
     d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: st.m] ** 2
     singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))  # NaN: a failed factorization
+    ratio = jnp.where(singular, 0.0, jnp.min(d) / jnp.max(d))
 
     def factored(b):
         rhs = jnp.concatenate([b[st.perm], jnp.zeros(nblk * B - st.m, b.dtype)])
@@ -165,40 +177,41 @@ def _schur_factor_sparse(c, v, Minv, dense_C):
         _, y = jax.lax.scan(step, jnp.zeros((B, 1), b.dtype), (L, W, rhs.reshape(nblk, B, 1)))
         return _block_backward(L, W, y).reshape(-1)[: st.m][st.inv]
 
-    return lambda b: jax.lax.cond(singular, truncated_svd, factored, b)
+    return (lambda b: jax.lax.cond(singular, truncated_svd, factored, b)), ratio
 
 
 def _iteration_matrix(problem: Problem, sparse: bool):
-    """``factorize(q, qd, t) -> kkt``: the modified Newton matrix ``[[M, G], [C, 0]]`` at one
-    state, factorized (through its Schur complement ``C M^-1 G``); ``kkt(r1, r2)`` returns
-    ``(dqdd, dmu)`` solving ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
+    """``factorize(q, qd, t) -> (kkt, ratio)``: the modified Newton matrix ``[[M, G], [C, 0]]``
+    at one state, factorized (through its Schur complement ``C M^-1 G``, whose pivot ratio is
+    ``ratio``); ``kkt(r1, r2)`` returns ``(dqdd, dmu)`` solving
+    ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
     c, Minv = problem.c, problem.Minv
     if c.m == 0:
-        return lambda q, qd, t: lambda r1, r2: (Minv * r1, r2)
+        return lambda q, qd, t: ((lambda r1, r2: (Minv * r1, r2)), jnp.ones(()))
     if sparse:
 
         def factorize(q, qd, t):
             v = c.jacobian_values(q, t)
-            solve = _schur_factor_sparse(c, v, Minv, lambda: c.phi_q(q, t))
+            solve, ratio = _schur_factor_sparse(c, v, Minv, lambda: c.phi_q(q, t))
 
             def kkt(r1, r2):
                 dmu = solve(c.matvec(v, Minv * r1) - r2)
                 return Minv * (r1 - c.rmatvec(v, dmu)), dmu
 
-            return kkt
+            return kkt, ratio
 
         return factorize
 
     def factorize(q, qd, t):
         C = c.phi_q(q, t)
         MinvG = Minv[:, None] * problem.G(q, qd, t, C)
-        solve = _schur_factor_dense(C @ MinvG, c.rank)
+        solve, ratio = _schur_factor_dense(C @ MinvG, c.rank)
 
         def kkt(r1, r2):
             dmu = solve(C @ (Minv * r1) - r2)
             return Minv * r1 - MinvG @ dmu, dmu
 
-        return kkt
+        return kkt, ratio
 
     return factorize
 
@@ -285,7 +298,10 @@ def generalized_alpha(
         x_last = jnp.concatenate([qdd, mu])
         x0 = _extrapolate(x_last, hist, h)
         # The modified Newton matrix, at the predicted state, factorized once per step.
-        kkt = None if newton == "full" else factorize(*predict(x0[:n])[:2], t1)
+        if newton == "full":
+            kkt, kratio = None, jnp.ones(())
+        else:
+            kkt, kratio = factorize(*predict(x0[:n])[:2], t1)
 
         def modified_dx(x, r):
             return jnp.concatenate(kkt(r[:n], r[n:]))
@@ -316,9 +332,14 @@ def generalized_alpha(
             # decreasing. Such an iterate is accepted if the positions meet their tolerance
             # and the force residual is below STALL_TOL x ftol (1e-6 of the force scale by
             # default: an acceleration error far below the method's own), once the exact
-            # (or the chosen modified) Newton matrix no longer reduces it.
+            # (or the chosen modified) Newton matrix no longer reduces it, and only where the
+            # iteration matrix is near singular (STALL_RATIO).
             stalled = (
-                (p1 <= 1.0) & (f1 <= STALL_TOL) & ~(res1 <= STALL_RATE * res) & jnp.isfinite(res1)
+                (kratio < STALL_RATIO)
+                & (p1 <= 1.0)
+                & (f1 <= STALL_TOL)
+                & ~(res1 <= STALL_RATE * res)
+                & jnp.isfinite(res1)
             )
             if newton == "auto":
                 stalled = stalled & full

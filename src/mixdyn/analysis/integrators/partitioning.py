@@ -6,6 +6,11 @@ positions and velocities are integrated (adaptive explicit RK from diffrax); at 
 dependent positions are solved from ``Phi(q, t) = 0`` by Newton and the dependent velocities
 from ``Phi_q qd = -Phi_t``, so the constraints hold to Newton tolerance throughout. The
 partition is chosen again when ``Phi_qD`` becomes ill-conditioned compared with a fresh choice.
+
+On the sparse path the dependent solves are minimum-norm solves with weights 1 on ``D`` and 0
+on ``I`` through the banded Cholesky factorization of ``Phi_q W Phi_q^T`` (one pattern whatever
+the partition), and the partition is chosen again only when that factorization's pivot ratio
+collapses (:data:`RECHOOSE_RATIO`), by the dense pivoted LU of the first choice.
 """
 
 from __future__ import annotations
@@ -19,9 +24,45 @@ from ...linalg import lu_solve_checked
 from .._problem import Problem, pivot_columns
 from ._common import SOLVERS, Trajectory, adaptive_loop
 
+#: Sparse path: the partition is chosen again (dense pivoted LU) only when the square root of
+#: the pivot ratio of ``Phi_qD Phi_qD^T``'s Cholesky factors falls below this.
+RECHOOSE_RATIO = 1e-4
+
+
+def _dependent_solver(problem: Problem, q, t, D):
+    """Sparse path: ``(solve, ratio)`` with ``solve(b)`` the ``dq`` (nq,), zero outside ``D``,
+    with ``Phi_qD dq_D = b``: the minimum-norm solution with weights 1 on ``D`` and 0 on the
+    independent coordinates, ``W Phi_q^T (Phi_q W Phi_q^T)^-1 b`` (exact for a regular square
+    ``Phi_qD``), banded Cholesky with one step of iterative refinement."""
+    c = problem.c
+    w = jnp.zeros(q.shape[0], q.dtype).at[D].set(1.0)
+    return c.min_norm_solver(c.jacobian_values(q, t), w, refine=1)
+
+
+def _complete_sparse(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
+    c = problem.c
+    q = q_ref.at[I].set(v)
+
+    def cond(s):
+        k, _, r = s
+        return (k < iters) & (jnp.max(jnp.abs(r), initial=0.0) > tol)
+
+    def body(s):
+        k, q, r = s
+        q = q - _dependent_solver(problem, q, t, D)[0](r)
+        return k + 1, q, c(q, t)
+
+    _, q, _ = jax.lax.while_loop(cond, body, (0, q, c(q, t)))
+    qd_i = jnp.zeros_like(q).at[I].set(vd)
+    solve, _ = _dependent_solver(problem, q, t, D)
+    rhs = -c.phi_t(q, t) - c.matvec(c.jacobian_values(q, t), qd_i)
+    return q, qd_i + solve(rhs)
+
 
 def _complete(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
     """Full ``(q, qd)`` from independent ``(v, vd)``, dependent parts by Newton from ``q_ref``."""
+    if problem.sparse:
+        return _complete_sparse(problem, q_ref, D, I, v, vd, t, tol, iters)
     q = q_ref.at[I].set(v)
 
     def body(_, q):
@@ -87,8 +128,17 @@ def partitioning(
         # Control the error of every coordinate: an error dv of the independent ones moves
         # the dependent ones by -Phi_qD^-1 Phi_qI dv, which may be much larger.
         q_ref, qd_ref, D, I = args
-        J = problem.c.phi_q(q_ref, t0)
-        E, _ = lu_solve_checked(J[:, D], J[:, I] @ jnp.stack([yerr[0], yerr[1]], axis=1))
+        if problem.sparse:
+            c = problem.c
+            vals = c.jacobian_values(q_ref, t0)
+            solve, _ = _dependent_solver(problem, q_ref, t0, D)
+            E = jnp.stack(
+                [solve(c.matvec(vals, jnp.zeros_like(q_ref).at[I].set(e)))[D] for e in yerr[:2]],
+                axis=1,
+            )
+        else:
+            J = problem.c.phi_q(q_ref, t0)
+            E, _ = lu_solve_checked(J[:, D], J[:, I] @ jnp.stack([yerr[0], yerr[1]], axis=1))
         full_err = (jnp.concatenate([yerr[0], -E[:, 0]]), jnp.concatenate([yerr[1], -E[:, 1]]))
         full0 = (jnp.concatenate([y[0], q_ref[D]]), jnp.concatenate([y[1], qd_ref[D]]))
         return y1, full_err, full0, full0
@@ -98,11 +148,19 @@ def partitioning(
         q_ref, _, D, I = args
         q, qd = _complete(problem, q_ref, D, I, v, vd, t1, tol)
         viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
-        # Choose again when the current dependent block is much worse than a fresh choice.
-        D_new, I_new = _choose(problem, q, t1)
-        switch = _conditioning(problem, q, t1, D) < 0.5 * _conditioning(problem, q, t1, D_new)
-        D = jnp.where(switch, D_new, D)
-        I = jnp.where(switch, I_new, I)
+        if problem.sparse:
+            # Choose again (dense pivoted LU, in a branch taken only then) when the current
+            # dependent block's factorization becomes ill-conditioned.
+            _, ratio = _dependent_solver(problem, q, t1, D)
+            D, I = jax.lax.cond(
+                ~(ratio >= RECHOOSE_RATIO), lambda: _choose(problem, q, t1), lambda: (D, I)
+            )
+        else:
+            # Choose again when the current dependent block is much worse than a fresh choice.
+            D_new, I_new = _choose(problem, q, t1)
+            switch = _conditioning(problem, q, t1, D) < 0.5 * _conditioning(problem, q, t1, D_new)
+            D = jnp.where(switch, D_new, D)
+            I = jnp.where(switch, I_new, I)
         return (q[I], qd[I], w), (q, qd, D, I), viol
 
     span = ts[-1] - ts[0]
