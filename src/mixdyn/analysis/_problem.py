@@ -159,16 +159,26 @@ class Problem(eqx.Module):
         return qdd, mu, ratio
 
     def _woodbury_accelerations(self, q, qd, t, v, Q, rhs):
-        """Mixed dynamics on the sparse path with unknown forces of any direction.
+        """Mixed dynamics on the sparse path with unknown forces of any direction
+        (:meth:`woodbury_solver`)."""
+        solve, ratio, g_times = self.woodbury_solver(q, qd, t, v)
+        mu = solve(rhs)
+        return self.Minv * (Q - g_times(mu)), mu, ratio
 
-        The Schur complement ``S = C M^-1 G`` differs from the symmetric ``S_sym = C M^-1 C^T``
-        in its last ``p`` columns only (``G = [Phi_q^T | -B]``, ``C^T = [Phi_q^T | Psi_q^T]``):
-        ``S = S_sym + U E^T`` with ``U = -C M^-1 (B + Psi_q^T)`` (m, p) and ``E`` the last
-        ``p`` columns of the identity. By the Sherman–Morrison–Woodbury formula
-        ``S^-1 b = y - Z K^-1 E^T y``, ``y = S_sym^-1 b``, ``Z = S_sym^-1 U``,
-        ``K = I + E^T Z`` (p, p): one banded Cholesky factorization, ``p + 1`` solves and a
-        ``p x p`` LU. ``K`` is singular exactly where ``S`` is (the mixed problem is not
-        solvable there); the pivot ratio is the smaller of the two factorizations'.
+    def woodbury_solver(self, q, qd, t, v):
+        """Sparse path, mixed problem: ``(solve, ratio, g_times)`` with ``solve(b)`` solving
+        ``S mu = b`` for the Schur complement ``S = C M^-1 G`` (m, m) and ``g_times(mu)`` the
+        generalized force ``G mu`` (nq,), from the Jacobian values ``v`` at ``(q, t)``.
+
+        ``S`` differs from the symmetric ``S_sym = C M^-1 C^T`` in its last ``p`` columns only
+        (``G = [Phi_q^T | -B]``, ``C^T = [Phi_q^T | Psi_q^T]``): ``S = S_sym + U E^T`` with
+        ``U = -C M^-1 (B + Psi_q^T)`` (m, p) and ``E`` the last ``p`` columns of the identity.
+        By the Sherman–Morrison–Woodbury formula ``S^-1 b = y - Z K^-1 E^T y``,
+        ``y = S_sym^-1 b``, ``Z = S_sym^-1 U``, ``K = I + E^T Z`` (p, p): one banded Cholesky
+        factorization, ``p`` solves once and one per right-hand side, and a ``p x p`` LU.
+        ``K`` is singular exactly where ``S`` is (the mixed problem is not solvable there);
+        the pivot ratio is the smaller of the two factorizations'. Below
+        :data:`SINGULAR_RATIO` the solve is a dense truncated SVD, as on the dense path.
         """
         c, Minv, p = self.c, self.Minv, self.p
         mk = c.m - p
@@ -177,23 +187,32 @@ class Problem(eqx.Module):
         cols = functools.partial(jax.vmap, in_axes=1, out_axes=1)
         PsiT = cols(lambda e: c.rmatvec(v, e))(E)  # (nq, p)
         U = cols(lambda f: c.matvec(v, Minv * f))(-(B + PsiT))  # (m, p)
-        solve, ratio = c.schur_solver(v, Minv)
-        y = solve(rhs)
-        Z = cols(solve)(U)
+        solve_sym, ratio = c.schur_solver(v, Minv)
+        Z = cols(solve_sym)(U)
         K = jnp.eye(p) + Z[mk:]
-        w, ratio_k = lu_solve_checked(K, y[mk:])
-        mu = y - Z @ w
+        lu, piv = jsl.lu_factor(K)
+        d = jnp.abs(jnp.diag(lu))
+        ratio = jnp.minimum(ratio, jnp.min(d) / jnp.maximum(jnp.max(d), 1e-300))
+        ratio = jnp.where(jnp.isfinite(ratio), ratio, 0.0)
 
-        def truncated_svd():
+        def woodbury(b):
+            y = solve_sym(b)
+            return y - Z @ jsl.lu_solve((lu, piv), y[mk:])
+
+        def truncated_svd(b):
             # a singular position or an unsolvable instant: as on the dense path
             C = c.phi_q(q, t)
             S = C @ (Minv[:, None] * self.G(q, qd, t, C))
-            return solve_ranked(S, rhs, c.rank, rcond=SINGULAR_RCOND)[0]
+            return solve_ranked(S, b, c.rank, rcond=SINGULAR_RCOND)[0]
 
-        ratio = jnp.minimum(ratio, ratio_k)
-        mu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: mu)
-        Gmu = c.rmatvec(v, jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])) - B @ mu[mk:]
-        return Minv * (Q - Gmu), mu, ratio
+        def solve(b):
+            return jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, woodbury, b)
+
+        def g_times(mu):
+            lam = jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])
+            return c.rmatvec(v, lam) - B @ mu[mk:]
+
+        return solve, ratio, g_times
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""

@@ -192,6 +192,14 @@ def _iteration_matrix(problem: Problem, sparse: bool):
 
         def factorize(q, qd, t):
             v = c.jacobian_values(q, t)
+            if problem.p:  # mixed: S = C M^-1 G by a rank-p update of the symmetric system
+                solve, ratio, g_times = problem.woodbury_solver(q, qd, t, v)
+
+                def kkt_mixed(r1, r2):
+                    dmu = solve(c.matvec(v, Minv * r1) - r2)
+                    return Minv * (r1 - g_times(dmu)), dmu
+
+                return kkt_mixed, ratio
             solve, ratio = _schur_factor_sparse(c, v, Minv, lambda: c.phi_q(q, t))
 
             def kkt(r1, r2):
@@ -256,8 +264,8 @@ def generalized_alpha(
     am, af, gm, bt = coefficients(rho_inf)
     Mdiag = problem.model.mass_diagonal
     n = q0.shape[0]
-    # The sparse path for forward problems (G = C^T); mixed problems take the dense one.
-    sparse = problem.sparse and problem.p == 0
+    # The sparse path (mixed problems through the Woodbury update of the symmetric system).
+    sparse = problem.sparse
     constraint_terms = _constraint_terms(problem)
     factorize = _iteration_matrix(problem, sparse)
     qdd0, mu0, _ = problem.accelerations(q0, qd0, ts[0])
