@@ -3,7 +3,7 @@
 The fixed-step tables of ``benchmarks/run.py`` compare cost per step. What a user pays for is
 an answer of a given accuracy: here every run is scored by the error of the chain's free tip at
 ``T`` against a reference, and mixdyn's adaptive projection (Tsit5 with mass-weighted
-projection, its sparse linear-solver path from 64 constraint rows) is run at the loosest
+projection, its sparse linear-solver path from 32 constraint rows) is run at the loosest
 tolerance whose error is no larger than Exudyn's.
 
 * Reference: mixdyn, projection with Dopri8 at rtol = atol = 1e-11; checked against a second

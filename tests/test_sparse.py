@@ -218,6 +218,9 @@ def test_regularized_schur_solve_is_the_minimum_norm_solution():
 def test_auto_choice_and_bad_name():
     assert Constraints.of(slider_crank()).with_linear_solver("auto").linear_solver == "dense"
     assert Constraints.of(chain(64)).with_linear_solver("auto").linear_solver == "sparse"
+    # the measured threshold: 32 rows (a 16-link chain) sparse, 30 dense
+    assert Constraints.of(chain(16)).with_linear_solver("auto").linear_solver == "sparse"
+    assert Constraints.of(chain(15)).with_linear_solver("auto").linear_solver == "dense"
     with pytest.raises(md.errors.ModelError, match="linear_solver"):
         Constraints.of(slider_crank()).with_linear_solver("klu")
 
