@@ -2,9 +2,9 @@
 mixdyn against Exudyn, crank-0 tip error at the end against the exact 1-DOF reduction.
 
 Run: ``python benchmarks/nfourbar.py [N ...] [--t-end 10] [--exudyn-h 1e-3 5e-4]
-[--rtol 1e-9]``. Prints a Markdown table for ``benchmarks/RESULTS.md``. Peers come from the
-``bench`` extra; nothing is installed here. ``benchmarks/run.py`` reuses the builders below
-for its N = 2 table.
+[--rtol 1e-9] [--solver dopri8]``. Prints a Markdown table for ``benchmarks/RESULTS.md``.
+Peers come from the ``bench`` extra; nothing is installed here. ``benchmarks/run.py`` reuses
+the builders below for its N = 2 table.
 """
 
 from __future__ import annotations
@@ -166,6 +166,7 @@ def main(argv=None):
     ap.add_argument("n", nargs="*", type=int, default=[2, 4, 8, 16])
     ap.add_argument("--t-end", type=float, default=10.0)
     ap.add_argument("--rtol", type=float, nargs="*", default=[1e-9])
+    ap.add_argument("--solver", default="dopri8", help="RK method of the adaptive runs")
     ap.add_argument("--exudyn-h", type=float, nargs="*", default=[1e-3])
     ap.add_argument("--linear-solver", default="auto")
     ap.add_argument(
@@ -200,7 +201,7 @@ def main(argv=None):
                     args.t_end,
                     rtol=rtol,
                     atol=rtol,
-                    solver="dopri8",
+                    solver=args.solver,
                     linear_solver=args.linear_solver,
                     max_steps=args.max_steps,
                 )
@@ -208,7 +209,7 @@ def main(argv=None):
                 nan = float("nan")
                 r = {"code": "mixdyn", "run_s": nan, "tip_error": nan, "energy_error": nan}
                 r["failed"] = f"{type(exc).__name__}: {exc}"
-            r["method"] = f"projection dopri8 rtol={rtol:g}"
+            r["method"] = f"projection {args.solver} rtol={rtol:g}"
             rows.append((n, r))
             print(f"N={n}: {r}", flush=True)
         for h in args.exudyn_h:

@@ -43,8 +43,9 @@ def forward(
             a step to the exact Newton matrix where it contracts poorly, e.g. a stiff spring
             at a large step), ``"modified"`` or ``"full"``; ``tol``, ``max_newton``). For a
             mechanism that passes through singular positions again and again (the IFToMM
-            N-four-bar) prefer ``"generalized-alpha"``: the adaptive projection's error control
-            loses its grip there (``benchmarks/RESULTS.md``, section 2b).
+            N-four-bar) keep the projection's default ``solver="tsit5"`` (or use
+            ``"generalized-alpha"``): ``"dopri8"`` loses its grip there
+            (``benchmarks/RESULTS.md``, section 2b).
         rtol, atol: local error tolerances of the adaptive methods (on q and qd, model units).
         dt: step [time] of the fixed-step methods (or a fixed step for the adaptive ones).
         q0, qd0: (nq,) rough initial positions (default: the bodies' ``q0``) and velocities
