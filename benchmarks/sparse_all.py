@@ -1,5 +1,5 @@
 """Dense vs sparse linear-solver path beyond the acceleration solve (issue 7), on a pendulum
-chain of ``n`` links (default 256, the chain of ``tests/test_sparse.py``):
+chain of ``n`` links (default 256, ``tests/fixtures.py::horizontal_chain``):
 
 * post-processing of a dynamic run (``_post``: accelerations, reactions, efforts, powers,
   energies) at 101 output times, first call (with compilation) and second call;
@@ -19,36 +19,20 @@ import os
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_enable_concurrency_optimized_scheduler=false")
 
 import argparse
+import sys
 import time
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
+
 import mixdyn as md
+from fixtures import horizontal_chain as chain
 from mixdyn.analysis._problem import Problem
 from mixdyn.analysis._simulate import _post, consistent_state
 from mixdyn.equations import Constraints
-
-
-def chain(n: int, length: float = 0.1) -> md.Model:
-    """The chain of ``tests/test_sparse.py``: ``n`` links, pinned to the ground, horizontal."""
-    h = length / 2
-    bodies = [
-        md.Body(
-            f"b{i}",
-            mass=1.0 + 0.1 * i,
-            inertia=length**2 / 12,
-            q0=(h + i * length, 0.0, 0.0),
-            points={"A": (-h, 0.0), "B": (h, 0.0)},
-        )
-        for i in range(n)
-    ]
-    joints = [md.Revolute("J0", "ground", "b0.A")]
-    joints += [md.Revolute(f"J{i}", f"b{i - 1}.B", f"b{i}.A") for i in range(1, n)]
-    return md.Model(
-        bodies=bodies, joints=joints, gravity=(0.0, -9.81), units=md.UnitSystem("m", "kg", "s")
-    )
 
 
 def timed(f, *a, **k):

@@ -17,6 +17,7 @@ import os
 os.environ.setdefault("XLA_FLAGS", "--xla_cpu_enable_concurrency_optimized_scheduler=false")
 
 import argparse
+import sys
 import time
 
 import equinox as eqx
@@ -26,29 +27,11 @@ import numpy as np
 
 jax.config.update("jax_enable_x64", True)
 
-import mixdyn as md  # noqa: E402
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
+
+from fixtures import horizontal_chain  # noqa: E402
 from mixdyn.analysis._problem import Problem  # noqa: E402
 from mixdyn.equations import Constraints  # noqa: E402
-
-
-def chain(n: int, length: float = 0.1) -> md.Model:
-    """A planar pendulum chain of ``n`` uniform links, pinned to the ground, horizontal."""
-    h = length / 2
-    bodies = [
-        md.Body(
-            f"b{i}",
-            mass=1.0,
-            inertia=length**2 / 12,
-            q0=(h + i * length, 0.0, 0.0),
-            points={"A": (-h, 0.0), "B": (h, 0.0)},
-        )
-        for i in range(n)
-    ]
-    joints = [md.Revolute("J0", "ground", "b0.A")]
-    joints += [md.Revolute(f"J{i}", f"b{i - 1}.B", f"b{i}.A") for i in range(1, n)]
-    return md.Model(
-        bodies=bodies, joints=joints, gravity=(0.0, -9.81), units=md.UnitSystem("m", "kg", "s")
-    )
 
 
 def klujax_problem(problem: Problem):
@@ -168,7 +151,7 @@ def main():
     )
     print(hdr)
     for n in args.sizes:
-        model = chain(n)
+        model = horizontal_chain(n, mass_step=0.0)  # uniform links
         c = Constraints.of(model)
         pd = Problem(model, c)
         ps = Problem(model, c.with_linear_solver("sparse"))

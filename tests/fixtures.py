@@ -23,6 +23,8 @@ Dynamics (masses and inertias as published, or as stated in each builder):
 * :func:`pendulum` — a compound pendulum on a revolute joint to the ground.
 * :func:`spring_slider` — a mass on a slider with a spring–damper to the ground.
 * :func:`pendulum_chain` — ``n`` links hanging from the ground (benchmarks).
+* :func:`horizontal_chain` — ``n`` short links pinned in a horizontal line (the sparse path's
+  tests and scaling benchmarks).
 * :func:`double_four_bar` — the IFToMM double four-bar (parallelograms, singular positions).
 * :func:`andrews_mechanism` — Andrews' squeezing mechanism (seven bodies, spring, torque),
   with :func:`andrews_angles` / :func:`andrews_body_angles` converting to and from the
@@ -48,6 +50,7 @@ __all__ = [
     "double_four_bar",
     "four_bar",
     "four_bar_pose",
+    "horizontal_chain",
     "paper_mechanism",
     "parallelogram_with_extra_link",
     "pendulum",
@@ -591,4 +594,27 @@ def andrews_mechanism(angles=ANDREWS_Q0) -> md.Model:
         gravity=(0.0, 0.0),
         units=md.SI,
         name="andrews",
+    )
+
+
+def horizontal_chain(n: int, length: float = 0.1, mass_step: float = 0.1) -> md.Model:
+    """``n`` links of length ``length`` [m] pinned end to end from the ground origin, lying
+    along +x (bodies ``b{i}``, points ``A``/``B``, joints ``J{i}``), SI units, gravity -y; link
+    ``i`` has mass ``1 + mass_step i`` [kg] (graded, so that the mass matrix is not a multiple
+    of the identity) and inertia ``length**2 / 12`` [kg m^2]."""
+    h = length / 2
+    bodies = [
+        md.Body(
+            f"b{i}",
+            mass=1.0 + mass_step * i,
+            inertia=length**2 / 12,
+            q0=(h + i * length, 0.0, 0.0),
+            points={"A": (-h, 0.0), "B": (h, 0.0)},
+        )
+        for i in range(n)
+    ]
+    joints = [md.Revolute("J0", "ground", "b0.A")]
+    joints += [md.Revolute(f"J{i}", f"b{i - 1}.B", f"b{i}.A") for i in range(1, n)]
+    return md.Model(
+        bodies=bodies, joints=joints, gravity=(0.0, -9.81), units=md.UnitSystem("m", "kg", "s")
     )

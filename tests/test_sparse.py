@@ -13,29 +13,10 @@ import pytest
 
 import mixdyn as md
 from fixtures import four_bar, paper_mechanism, parallelogram_with_extra_link, slider_crank
+from fixtures import horizontal_chain as chain
 from mixdyn.analysis._problem import Problem
 from mixdyn.equations import Constraints
 from mixdyn.linalg import schur_structure
-
-
-def chain(n: int, length: float = 0.1) -> md.Model:
-    h = length / 2
-    bodies = [
-        md.Body(
-            f"b{i}",
-            mass=1.0 + 0.1 * i,
-            inertia=length**2 / 12,
-            q0=(h + i * length, 0.0, 0.0),
-            points={"A": (-h, 0.0), "B": (h, 0.0)},
-        )
-        for i in range(n)
-    ]
-    joints = [md.Revolute("J0", "ground", "b0.A")]
-    joints += [md.Revolute(f"J{i}", f"b{i - 1}.B", f"b{i}.A") for i in range(1, n)]
-    return md.Model(
-        bodies=bodies, joints=joints, gravity=(0.0, -9.81), units=md.UnitSystem("m", "kg", "s")
-    )
-
 
 MODELS = {
     "slider_crank": slider_crank,

@@ -136,27 +136,56 @@ class Problem(eqx.Module):
             return self._woodbury_accelerations(q, qd, t, v, Q, rhs)
         # the symmetric system M qdd + C^T y = Q, C qdd = gam
         mu, ratio = c.schur_solve(v, Minv, rhs)
-
-        def truncated_svd():
-            # At a singular position (a bifurcation) the Cholesky factor loses rank for an
-            # instant: there, as on the dense path, a truncated-SVD solve keeps it bounded.
-            C = c.phi_q(q, t)
-            S = C @ (Minv[:, None] * C.T)
-            return solve_ranked(S, rhs, c.rank, rcond=SINGULAR_RCOND)[0]
-
-        mu = jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, lambda: mu)
+        mu = jax.lax.cond(
+            ratio < SINGULAR_RATIO, lambda: self._dense_schur_solve(q, qd, t, rhs), lambda: mu
+        )
         qdd = Minv * (Q - c.rmatvec(v, mu))
         if self.p:
             # Collocated unknown forces: -B[:, a] u_a = Psi_q[b]^T y_b with B[:, a] = s_a
             # Psi_q[b]^T, so u_a = -y_b / s_a.
-            p, mk = self.p, c.m - self.p
+            mk = c.m - self.p
             rows = mk + np.asarray(self.collocated, dtype=int)
             B = force_directions(self.model, self.unknown, q, qd, t)
-            E = jnp.zeros((c.m, p)).at[rows, np.arange(p)].set(1.0)
-            PsiT = jax.vmap(lambda e: c.rmatvec(v, e), in_axes=1, out_axes=1)(E)  # (nq, p)
+            PsiT = self._row_gradients(v, rows)
             scale = jnp.sum(B * PsiT, axis=0) / jnp.sum(PsiT**2, axis=0)
             mu = jnp.concatenate([mu[:mk], -mu[rows] / scale])
         return qdd, mu, ratio
+
+    def _row_gradients(self, v, rows):
+        """``Phi_q[rows]^T`` (nq, len(rows)) from the sparse values ``v``."""
+        E = jnp.zeros((self.c.m, len(rows))).at[rows, np.arange(len(rows))].set(1.0)
+        return jax.vmap(lambda e: self.c.rmatvec(v, e), in_axes=1, out_axes=1)(E)
+
+    def _dense_schur_solve(self, q, qd, t, b, symmetric=True):
+        """The sparse path's fallback at a singular position (the factorization loses rank
+        for an instant), as on the dense path: a truncated-SVD solve of the Schur complement
+        formed densely, ``C M^-1 C^T`` (or ``C M^-1 G`` with ``symmetric=False``)."""
+        c = self.c
+        C = c.phi_q(q, t)
+        G = C.T if symmetric else self.G(q, qd, t, C)
+        return solve_ranked(C @ (self.Minv[:, None] * G), b, c.rank, rcond=SINGULAR_RCOND)[0]
+
+    def schur_solver(self, q, qd, t, v):
+        """Sparse path: ``(solve, ratio, g_times)`` with ``solve(b)`` solving ``S mu = b`` for
+        the Schur complement ``S = C M^-1 G`` (m, m), factorized once, and ``g_times(mu)`` the
+        generalized force ``G mu`` (nq,), from the Jacobian values ``v`` at ``(q, t)``:
+        ``G = C^T`` through the banded Cholesky factors (:meth:`Constraints.schur_solver`),
+        mixed problems through :meth:`woodbury_solver`; below :data:`SINGULAR_RATIO` a dense
+        truncated-SVD solve."""
+        if self.p:
+            return self.woodbury_solver(q, qd, t, v)
+        c = self.c
+        solve_sym, ratio = c.schur_solver(v, self.Minv)
+
+        def solve(b):
+            return jax.lax.cond(
+                ratio < SINGULAR_RATIO,
+                lambda b: self._dense_schur_solve(q, qd, t, b),
+                solve_sym,
+                b,
+            )
+
+        return solve, ratio, lambda mu: c.rmatvec(v, mu)
 
     def _woodbury_accelerations(self, q, qd, t, v, Q, rhs):
         """Mixed dynamics on the sparse path with unknown forces of any direction
@@ -183,9 +212,8 @@ class Problem(eqx.Module):
         c, Minv, p = self.c, self.Minv, self.p
         mk = c.m - p
         B = force_directions(self.model, self.unknown, q, qd, t)  # (nq, p)
-        E = jnp.zeros((c.m, p)).at[mk + np.arange(p), np.arange(p)].set(1.0)
         cols = functools.partial(jax.vmap, in_axes=1, out_axes=1)
-        PsiT = cols(lambda e: c.rmatvec(v, e))(E)  # (nq, p)
+        PsiT = self._row_gradients(v, mk + np.arange(p))  # (nq, p)
         U = cols(lambda f: c.matvec(v, Minv * f))(-(B + PsiT))  # (m, p)
         solve_sym, ratio = c.schur_solver(v, Minv)
         Z = cols(solve_sym)(U)
@@ -199,14 +227,13 @@ class Problem(eqx.Module):
             y = solve_sym(b)
             return y - Z @ jsl.lu_solve((lu, piv), y[mk:])
 
-        def truncated_svd(b):
-            # a singular position or an unsolvable instant: as on the dense path
-            C = c.phi_q(q, t)
-            S = C @ (Minv[:, None] * self.G(q, qd, t, C))
-            return solve_ranked(S, b, c.rank, rcond=SINGULAR_RCOND)[0]
-
-        def solve(b):
-            return jax.lax.cond(ratio < SINGULAR_RATIO, truncated_svd, woodbury, b)
+        def solve(b):  # dense below SINGULAR_RATIO: a singular position or unsolvable instant
+            return jax.lax.cond(
+                ratio < SINGULAR_RATIO,
+                lambda b: self._dense_schur_solve(q, qd, t, b, symmetric=False),
+                woodbury,
+                b,
+            )
 
         def g_times(mu):
             lam = jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])

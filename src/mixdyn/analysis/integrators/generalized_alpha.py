@@ -43,9 +43,7 @@ import jax.scipy.linalg as jsl
 
 from ...equations import force_directions
 from ...errors import ModelError
-from ...linalg import solve_ranked
 from ...linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
-from ...linalg._sparse import _block_backward, _block_cholesky_forward
 from .._problem import Problem
 from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory
 
@@ -145,41 +143,6 @@ def _schur_factor_dense(S, rank):
     ), ratio
 
 
-def _schur_factor_sparse(c, v, Minv, dense_C):
-    """``(solve, ratio)``: ``solve(b)`` with ``S = C M^-1 C^T`` from the sparse values ``v``:
-    its banded block Cholesky factors computed once (:mod:`mixdyn.linalg._sparse`), two block
-    triangular sweeps per solve; a dense truncated-SVD solve at a singular position
-    (``dense_C()`` then); ``ratio`` the pivot ratio."""
-
-    def truncated_svd(b):
-        C = dense_C()
-        return solve_ranked(C @ (Minv[:, None] * C.T), b, c.rank, rcond=SINGULAR_RCOND)[0]
-
-    if c.rank is not None:  # redundant rows: the regularized solve of Constraints.schur_solver
-        solve, ratio = c.schur_solver(v, Minv)
-        return (lambda b: jax.lax.cond(~(ratio >= SINGULAR_RATIO), truncated_svd, solve, b)), ratio
-    st = c.schur_structure()
-    B, nblk = st.block, st.nblk
-    D, E = st.blocks(v, Minv)
-    L, W, _ = _block_cholesky_forward(D, E, jnp.zeros((nblk, B, 1), D.dtype))
-    d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: st.m] ** 2
-    singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))  # NaN: a failed factorization
-    ratio = jnp.where(singular, 0.0, jnp.min(d) / jnp.max(d))
-
-    def factored(b):
-        rhs = jnp.concatenate([b[st.perm], jnp.zeros(nblk * B - st.m, b.dtype)])
-
-        def step(yp, xs):
-            Li, Wi, ri = xs
-            yi = jsl.solve_triangular(Li, ri - Wi @ yp, lower=True)
-            return yi, yi
-
-        _, y = jax.lax.scan(step, jnp.zeros((B, 1), b.dtype), (L, W, rhs.reshape(nblk, B, 1)))
-        return _block_backward(L, W, y).reshape(-1)[: st.m][st.inv]
-
-    return (lambda b: jax.lax.cond(singular, truncated_svd, factored, b)), ratio
-
-
 def _iteration_matrix(problem: Problem, sparse: bool):
     """``factorize(q, qd, t) -> (kkt, ratio)``: the modified Newton matrix ``[[M, G], [C, 0]]``
     at one state, factorized (through its Schur complement ``C M^-1 G``, whose pivot ratio is
@@ -191,20 +154,14 @@ def _iteration_matrix(problem: Problem, sparse: bool):
     if sparse:
 
         def factorize(q, qd, t):
+            # the banded Cholesky factors of C M^-1 C^T (mixed problems: their Woodbury
+            # update), a dense truncated SVD at a singular position: Problem.schur_solver
             v = c.jacobian_values(q, t)
-            if problem.p:  # mixed: S = C M^-1 G by a rank-p update of the symmetric system
-                solve, ratio, g_times = problem.woodbury_solver(q, qd, t, v)
-
-                def kkt_mixed(r1, r2):
-                    dmu = solve(c.matvec(v, Minv * r1) - r2)
-                    return Minv * (r1 - g_times(dmu)), dmu
-
-                return kkt_mixed, ratio
-            solve, ratio = _schur_factor_sparse(c, v, Minv, lambda: c.phi_q(q, t))
+            solve, ratio, g_times = problem.schur_solver(q, qd, t, v)
 
             def kkt(r1, r2):
                 dmu = solve(c.matvec(v, Minv * r1) - r2)
-                return Minv * (r1 - c.rmatvec(v, dmu)), dmu
+                return Minv * (r1 - g_times(dmu)), dmu
 
             return kkt, ratio
 

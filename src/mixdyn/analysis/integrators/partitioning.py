@@ -29,17 +29,20 @@ from ._common import SOLVERS, Trajectory, adaptive_loop
 RECHOOSE_RATIO = 1e-4
 
 
-def _dependent_solver(problem: Problem, q, t, D):
+def _dependent_solver(problem: Problem, q, t, D, values=None):
     """Sparse path: ``(solve, ratio)`` with ``solve(b)`` the ``dq`` (nq,), zero outside ``D``,
     with ``Phi_qD dq_D = b``: the minimum-norm solution with weights 1 on ``D`` and 0 on the
     independent coordinates, ``W Phi_q^T (Phi_q W Phi_q^T)^-1 b`` (exact for a regular square
-    ``Phi_qD``), banded Cholesky with one step of iterative refinement."""
+    ``Phi_qD``), banded Cholesky with one step of iterative refinement; ``values``: the
+    Jacobian values at ``(q, t)`` if already evaluated."""
     c = problem.c
     w = jnp.zeros(q.shape[0], q.dtype).at[D].set(1.0)
-    return c.min_norm_solver(c.jacobian_values(q, t), w, refine=1)
+    return c.min_norm_solver(c.jacobian_values(q, t) if values is None else values, w, refine=1)
 
 
 def _complete_sparse(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
+    """:func:`_complete` on the sparse path; also returns the pivot ratio of the final
+    factorization (for the choice of a new partition)."""
     c = problem.c
     q = q_ref.at[I].set(v)
 
@@ -54,15 +57,15 @@ def _complete_sparse(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
 
     _, q, _ = jax.lax.while_loop(cond, body, (0, q, c(q, t)))
     qd_i = jnp.zeros_like(q).at[I].set(vd)
-    solve, _ = _dependent_solver(problem, q, t, D)
-    rhs = -c.phi_t(q, t) - c.matvec(c.jacobian_values(q, t), qd_i)
-    return q, qd_i + solve(rhs)
+    vals = c.jacobian_values(q, t)
+    solve, ratio = _dependent_solver(problem, q, t, D, vals)
+    return q, qd_i + solve(-c.phi_t(q, t) - c.matvec(vals, qd_i)), ratio
 
 
 def _complete(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
     """Full ``(q, qd)`` from independent ``(v, vd)``, dependent parts by Newton from ``q_ref``."""
     if problem.sparse:
-        return _complete_sparse(problem, q_ref, D, I, v, vd, t, tol, iters)
+        return _complete_sparse(problem, q_ref, D, I, v, vd, t, tol, iters)[:2]
     q = q_ref.at[I].set(v)
 
     def body(_, q):
@@ -131,7 +134,7 @@ def partitioning(
         if problem.sparse:
             c = problem.c
             vals = c.jacobian_values(q_ref, t0)
-            solve, _ = _dependent_solver(problem, q_ref, t0, D)
+            solve, _ = _dependent_solver(problem, q_ref, t0, D, vals)
             E = jnp.stack(
                 [solve(c.matvec(vals, jnp.zeros_like(q_ref).at[I].set(e)))[D] for e in yerr[:2]],
                 axis=1,
@@ -146,12 +149,14 @@ def partitioning(
     def accept(t1, y1, args):
         v, vd, w = y1
         q_ref, _, D, I = args
-        q, qd = _complete(problem, q_ref, D, I, v, vd, t1, tol)
+        if problem.sparse:
+            q, qd, ratio = _complete_sparse(problem, q_ref, D, I, v, vd, t1, tol)
+        else:
+            q, qd = _complete(problem, q_ref, D, I, v, vd, t1, tol)
         viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
         if problem.sparse:
             # Choose again (dense pivoted LU, in a branch taken only then) when the current
             # dependent block's factorization becomes ill-conditioned.
-            _, ratio = _dependent_solver(problem, q, t1, D)
             D, I = jax.lax.cond(
                 ~(ratio >= RECHOOSE_RATIO), lambda: _choose(problem, q, t1), lambda: (D, I)
             )
