@@ -38,22 +38,33 @@ FileArg = Annotated[pathlib.Path, typer.Argument(help="The model file (YAML).", 
 
 
 # --------------------------------------------------------------------------- plumbing
+#: Characters never sent to the terminal as they are: C0 and C1 controls (escape sequences),
+#: DEL, and the bidirectional overrides that reorder what is shown.
+_CONTROL = re.compile("[\x00-\x08\x0b-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def clean(text) -> str:
+    """``text`` with every control character (except newlines and tabs) shown as an escape
+    (``\\x1b``), so that names and paths from a file cannot drive the terminal."""
+    return _CONTROL.sub(lambda m: ascii(m.group())[1:-1], str(text))
+
+
 def _say(text: str = "") -> None:
     from rich.console import Console
 
-    Console(soft_wrap=True, highlight=False).print(text)
+    Console(soft_wrap=True, highlight=False).print(clean(text))
 
 
 def _esc(text) -> str:
-    """User text (names, paths) made safe inside rich markup."""
+    """User text (names, paths) made safe inside rich markup and on the terminal."""
     from rich.markup import escape
 
-    return escape(str(text))
+    return escape(clean(text))
 
 
 def _fail(code: int, line: str) -> None:
     """Print one line on stderr and exit with ``code``."""
-    sys.stderr.write(" ".join(str(line).split()) + "\n")
+    sys.stderr.write(" ".join(clean(line).split()) + "\n")
     sys.stderr.flush()
     raise typer.Exit(code)
 
@@ -90,6 +101,11 @@ def _guard(file: pathlib.Path | str | None):
         _fail(EXIT_INPUT, f"{where}: {loc}: {first['msg']}")
     except KeyboardInterrupt:
         _fail(130, f"{where}: interrupted")
+    except OSError as e:  # a file that cannot be read or written: the path is the fault
+        name = e.filename if e.filename is not None else where
+        _fail(EXIT_INPUT, f"{name}: {e.strerror or e}; check the path and its permissions")
+    except RecursionError:
+        _fail(EXIT_INPUT, f"{where}: the input is nested too deeply; simplify it")
     except Exception as e:
         if os.environ.get("MIXDYN_DEBUG"):
             raise
@@ -146,6 +162,61 @@ def configure_cache() -> str | None:
     except Exception:  # a cache is an optimisation, never a failure
         return None
     return folder
+
+
+# --------------------------------------------------------------------------- output paths
+def _refuse(path, problem: str, option: str, hint: str) -> None:
+    from .io import FileError
+
+    raise FileError(problem, option, file=str(path), hint=hint)
+
+
+def _existing_ancestor(path: pathlib.Path, option: str) -> pathlib.Path:
+    """The nearest folder above ``path`` that exists (refusing a file on the way)."""
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if parent.exists() and not parent.is_dir():
+        _refuse(parent, "is a file, not a folder", option, "give a path inside a folder")
+    return parent
+
+
+def check_output(path: pathlib.Path, option: str, *, folder: bool = False) -> None:
+    """Refuse, before anything is computed, an output that cannot be written: a folder where a
+    file is wanted or the reverse, a parent that is a file, no permission to write.
+
+    Args:
+        path: the file (or with ``folder``, the folder) to be written.
+        option: the command-line option that named it, for the message.
+        folder: whether ``path`` is a folder (created if missing).
+    """
+    path = pathlib.Path(path)
+    if path.exists() or path.is_symlink():
+        if folder and not path.is_dir():
+            _refuse(path, "exists and is not a folder", option, "give a folder for the results")
+        if not folder and path.is_dir():
+            _refuse(path, "is a folder", option, "give a file name")
+        if not os.access(path, os.W_OK | (os.X_OK if folder else 0)):
+            _refuse(path, "is not writable", option, "check its permissions or write elsewhere")
+        return
+    parent = _existing_ancestor(path, option)
+    if not os.access(parent, os.W_OK | os.X_OK):
+        _refuse(path, f"cannot be created: {parent} is not writable", option, "write elsewhere")
+
+
+def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
+    """The output folder and every file the runs will write, checked before running."""
+    check_output(out, "--out", folder=True)
+    for plan in plans:
+        folder = out / plan.name
+        check_output(folder, "--out", folder=True)
+        names = ["results.csv", "meta.json"]
+        if figures:
+            names += [p.file for p in plan.spec.plots]
+            if plan.spec.animation is not None:
+                names.append(plan.spec.animation.file)
+        for name in names:
+            check_output(folder / name, "--out")
 
 
 # --------------------------------------------------------------------------- check
@@ -263,6 +334,7 @@ def run(
                 "the file has no runs", "runs", file=str(file), hint="add a runs: section"
             )
         plans = runner.order(runs or None)
+        _check_run_outputs(out, plans, figures)
         for plan in plans:  # fail fast on ill-posed runs, before any long computation
             if plan.spec.kind != "kinematic":
                 runner.check_masses(plan)
@@ -292,6 +364,8 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
 
     written = []
     console = Console(stderr=True)
+    if mode == "steps" and not console.is_terminal:
+        mode = "log"  # no bar off a terminal: a plain line every few seconds instead
     columns = (
         SpinnerColumn(),
         TextColumn("{task.description}"),
@@ -299,7 +373,8 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
         TaskProgressColumn(),
         TimeElapsedColumn(),
     )
-    with Progress(*columns, console=console, disable=mode == "off", transient=False) as bar:
+    disable = mode in ("off", "log")
+    with Progress(*columns, console=console, disable=disable, transient=False) as bar:
         tasks = {}
         for plan in plans:
             span = float(plan.times[-1] - plan.times[0]) or 1.0
@@ -310,8 +385,10 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
             )
 
         def hook(plan):
-            if mode != "steps" or plan.spec.kind in ("kinematic", "inverse"):
+            if mode not in ("steps", "log") or plan.spec.kind in ("kinematic", "inverse"):
                 return None
+            if mode == "log":
+                return _progress_log(plan)
             task, t0 = tasks[plan.name], float(plan.times[0])
 
             def at(t):
@@ -360,6 +437,34 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
             on_done=done,
         )
     return written
+
+
+#: Seconds between two progress lines when stderr is not a terminal.
+PROGRESS_LOG_EVERY = 5.0
+
+
+def _progress_log(plan, every: float = PROGRESS_LOG_EVERY):
+    """A progress callback ``f(t)`` writing a plain line on stderr at most every ``every``
+    seconds: the run, the simulated time, the fraction done and the time elapsed."""
+    t0, t1 = float(plan.times[0]), float(plan.times[-1])
+    start = time.monotonic()
+    last = [start]
+
+    def at(t):
+        now = time.monotonic()
+        if now - last[0] < every:
+            return
+        last[0] = now
+        done = (float(t) - t0) / ((t1 - t0) or 1.0)
+        sys.stderr.write(
+            clean(
+                f"{plan.name}: t = {float(t):.6g} of {t1:.6g} ({100 * done:.0f}%), "
+                f"{now - start:.0f} s\n"
+            )
+        )
+        sys.stderr.flush()
+
+    return at
 
 
 def _figures(runner, plan, result, folder) -> list[pathlib.Path]:
@@ -465,6 +570,7 @@ def plot(
                 file=str(results),
                 hint=f"use {', '.join(PLOT_SUFFIXES)}",
             )
+        check_output(output, "--output")
         plot_columns(table, columns, output, units=meta.get("units"), title=title)
         _say(f"wrote {_esc(output)}")
 
@@ -498,6 +604,8 @@ def animate(
     """Animate the mechanism moving in a run: a GIF (MP4 only if ffmpeg exists) and a
     self-contained HTML page."""
     with _guard(file):
+        import shutil
+
         import numpy as np
 
         from .io import FileError, Runner, read, read_result
@@ -516,6 +624,13 @@ def animate(
         for o in output:
             if o.suffix == "":
                 targets += [o.with_suffix(".gif"), o.with_suffix(".html")]
+            elif o.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+                raise FileError(
+                    "writing MP4 needs ffmpeg, which is not installed",
+                    "--output",
+                    file=str(file),
+                    hint="write a .gif or .html instead",
+                )
             elif o.suffix.lower() in (".gif", ".mp4", ".html"):
                 targets.append(o)
             else:
@@ -525,6 +640,8 @@ def animate(
                     file=str(file),
                     hint="use .gif, .mp4 or .html",
                 )
+        for target in targets:
+            check_output(target, "--output")
         model = runner.model
         if results is not None:
             try:
@@ -549,16 +666,6 @@ def animate(
             res = runner.execute([run_name])[run_name]
             t, q = res.t, res.q
         for target in targets:
-            if target.suffix.lower() == ".mp4":
-                import shutil
-
-                if shutil.which("ffmpeg") is None:
-                    raise FileError(
-                        "writing MP4 needs ffmpeg, which is not installed",
-                        "--output",
-                        file=str(file),
-                        hint="write a .gif or .html instead",
-                    )
             write_animation(
                 None,
                 target,
@@ -580,16 +687,17 @@ def schema(
     ] = None,
 ):
     """Print (or write) the JSON Schema of model files, for editors and validators."""
-    import json
+    with _guard(output):
+        import json
 
-    from .io import json_schema
+        from .io import json_schema
 
-    text = json.dumps(json_schema(), indent=2)
-    if output is None:
-        typer.echo(text)
-    else:
-        output.write_text(text + "\n", encoding="utf-8")
-        _say(f"wrote {_esc(output)}")
+        text = json.dumps(json_schema(), indent=2)
+        if output is None:
+            typer.echo(text)
+        else:
+            _write_text(output, text + "\n")
+            _say(f"wrote {_esc(output)}")
 
 
 @app.command()
@@ -604,14 +712,23 @@ def dump(
     with _guard(file):
         from .io import build, dumps, read
 
+        if output is not None:
+            check_output(output, "--output")
         spec = read(file)
         build(spec)
         text = dumps(spec)
         if output is None:
             typer.echo(text, nl=False)
         else:
-            output.write_text(text, encoding="utf-8")
+            _write_text(output, text)
             _say(f"wrote {_esc(output)}")
+
+
+def _write_text(path: pathlib.Path, text: str) -> None:
+    """Write ``text`` to ``path`` (its folder created), after :func:`check_output`."""
+    check_output(path, "--output")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
 
 
 def main() -> None:

@@ -23,6 +23,7 @@ import ast
 import dataclasses
 import functools
 import math
+from collections.abc import Mapping
 
 import equinox as eqx
 import jax
@@ -205,7 +206,8 @@ def parse(
         ) from None
     except (RecursionError, MemoryError, ValueError):
         raise ExpressionError(source, "cannot be parsed (too deeply nested)", None, "") from None
-    c = _Compiler(source, shift, frozenset(parameters), time, bodies)
+    values = dict(parameters) if isinstance(parameters, Mapping) else None
+    c = _Compiler(source, shift, frozenset(parameters), time, bodies, values)
     try:
         tree = c.compile(node.body, 0)
     except RecursionError:
@@ -214,8 +216,10 @@ def parse(
 
 
 class _Compiler:
-    def __init__(self, source, shift, parameters, time, bodies):
+    def __init__(self, source, shift, parameters, time, bodies, values=None):
         self.source = source
+        self.values = values
+        self._known: dict[tuple, float | None] = {}
         self.shift = shift
         self.parameters = parameters
         self.time = time
@@ -231,6 +235,47 @@ class _Compiler:
         )
 
     def compile(self, node, depth):
+        tree = self._compile(node, depth)
+        if tree[0] in ("b", "u", "k", "f"):
+            self._check_constant(node, tree)
+        return tree
+
+    def constant(self, tree) -> float | None:
+        """The value of a subtree that depends on neither ``t`` nor a state (else None)."""
+        if tree in self._known:
+            return self._known[tree]
+        tag = tree[0]
+        if tag in ("t", "s") or (tag == "p" and self.values is None):
+            value = None
+        elif tag == "c":
+            value = tree[1]
+        elif tag == "p":
+            value = float(self.values[self.used[tree[1]]])
+        else:
+            args = tree[2:] if tag in ("u", "b", "k") else tree[2]
+            known = [self.constant(a) for a in args]
+            value = None if any(v is None for v in known) else _numeric(tree, self.values_of())
+        self._known[tree] = value
+        return value
+
+    def values_of(self) -> list[float]:
+        return [float(self.values[n]) for n in self.used] if self.values is not None else []
+
+    def _check_constant(self, node, tree):
+        """Refuse a division by a constant zero and a constant part that is not finite."""
+        if tree[0] == "b" and tree[1] in ("/", "%") and self.constant(tree[3]) == 0.0:
+            what = "division" if tree[1] == "/" else "remainder"
+            self.fail(node, f"{what} by zero", "the divisor is always 0")
+        value = self.constant(tree)
+        if value is not None and not math.isfinite(value):
+            part = _segment(self.source, node)
+            self.fail(
+                node,
+                f"{part!r} is not a finite number ({value!r})",
+                "check the arguments (a logarithm or root of a negative number, an overflow)",
+            )
+
+    def _compile(self, node, depth):
         if depth > MAX_DEPTH:
             self.fail(node, f"nested more than {MAX_DEPTH} levels deep", "simplify it")
         d = depth + 1
@@ -351,6 +396,21 @@ class _Compiler:
         return ("f", f.id, tuple(self.compile(a, d) for a in node.args))
 
 
+def _numeric(tree, values) -> float:
+    """Evaluate a constant tree with NumPy; any arithmetic fault gives NaN."""
+    try:
+        with np.errstate(all="ignore"):
+            return float(np.asarray(evaluate(tree, 0.0, values, xp=np), dtype=float))
+    except (ArithmeticError, ValueError, TypeError, RecursionError, MemoryError):
+        return math.nan
+
+
+def _segment(source: str, node) -> str:
+    """The text of ``node`` in ``source`` (shortened), for messages."""
+    text = ast.get_source_segment(source.strip(), node) or source
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
 _OPS_HINT = "use + - * / % ** and comparisons"
 _FUNCS_HINT = "allowed functions: " + ", ".join(FUNCTIONS)
 
@@ -380,7 +440,7 @@ def evaluate(tree: tuple, t, values, q=None, qd=None, xp=jnp):
         if op == "*":
             return a * b
         if op == "/":
-            return a / b
+            return xp.true_divide(a, b)
         if op == "%":
             return xp.mod(a, b)
         return xp.power(a, b)
@@ -411,11 +471,9 @@ def constant_value(source: str, parameters: dict[str, float] | None = None) -> f
     """
     parameters = dict(parameters or {})
     p = parse(source, parameters, time=False)
-    with np.errstate(all="ignore"):
-        x = evaluate(p.tree, 0.0, [parameters[n] for n in p.parameters], xp=np)
-    x = float(np.asarray(x, dtype=float))
+    x = _numeric(p.tree, [parameters[n] for n in p.parameters])
     if not math.isfinite(x):
-        raise ExpressionError(source, "the value is not a finite number")
+        raise ExpressionError(source, f"the value is not a finite number ({x!r})")
     return x
 
 

@@ -21,6 +21,7 @@ import itertools
 import math
 import os
 import re
+import stat
 from typing import NoReturn
 
 import numpy as np
@@ -31,7 +32,7 @@ from ..errors import ModelError
 from ..units import UnitSystem
 from . import schema as s
 from ._errors import FileError
-from ._yaml import YamlError, line_of, read_yaml
+from ._yaml import MAX_BYTES, YamlError, line_of, read_yaml
 from .expressions import CONSTANTS, FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
 from .expressions import parse as parse_expression
 from .quantities import (
@@ -71,17 +72,7 @@ def read(path) -> s.ModelFile:
         FileError: unreadable file, bad YAML, or a description of the wrong form.
     """
     file = os.fspath(path)
-    try:
-        with open(file, "rb") as f:
-            raw = f.read(_MAX_READ + 1)
-    except FileNotFoundError:
-        raise FileError("no such file", file=file, hint="check the path") from None
-    except IsADirectoryError:
-        raise FileError(
-            "is a folder, not a model file", file=file, hint="give a .yaml file"
-        ) from None
-    except OSError as e:
-        raise FileError(f"cannot read the file ({e.strerror})", file=file) from None
+    raw = _read_bytes(file)
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as e:
@@ -91,7 +82,48 @@ def read(path) -> s.ModelFile:
     return reads(text, file)
 
 
-_MAX_READ = 2_000_000
+def _read_bytes(file: str) -> bytes:
+    """The bytes of a regular file of at most :data:`MAX_BYTES` bytes.
+
+    The file is opened without blocking and checked before it is read, so that a FIFO, a
+    device or a folder is refused at once instead of hanging or filling memory.
+    """
+    try:
+        fd = os.open(file, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0))
+    except FileNotFoundError:
+        raise FileError("no such file", file=file, hint="check the path") from None
+    except IsADirectoryError:
+        raise _not_regular(file, "a folder") from None
+    except OSError as e:
+        raise FileError(f"cannot read the file ({e.strerror})", file=file) from None
+    try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise _not_regular(file, "a folder")
+        if not stat.S_ISREG(st.st_mode):
+            raise _not_regular(file, "a pipe, socket or device")
+        if st.st_size > MAX_BYTES:
+            raise FileError(
+                f"the file has {st.st_size:,} bytes, more than the limit of "
+                f"{MAX_BYTES // 1_000_000} MB",
+                file=file,
+                hint="a model file holds a description, not data",
+            )
+        if hasattr(os, "set_blocking"):
+            os.set_blocking(fd, True)
+        with os.fdopen(fd, "rb") as f:
+            fd = -1
+            return f.read(MAX_BYTES + 1)
+    except OSError as e:
+        raise FileError(f"cannot read the file ({e.strerror})", file=file) from None
+    finally:
+        if fd >= 0:
+            os.close(fd)
+
+
+def _not_regular(file: str, what: str) -> FileError:
+    hint = "give a .yaml file" if what == "a folder" else "give a model file saved on disk"
+    return FileError(f"is {what}, not a model file", file=file, hint=hint)
 
 
 def reads(text: str, file: str = "<string>") -> s.ModelFile:

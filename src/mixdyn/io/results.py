@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis import Result
+from ..errors import NumericalError
 
 RESULTS_CSV = "results.csv"
 RESULTS_PARQUET = "results.parquet"
@@ -67,8 +68,9 @@ def write_result(
     from .. import __version__
 
     folder = pathlib.Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
     df = result.table().reset_index()
+    _refuse_non_finite(df)
+    folder.mkdir(parents=True, exist_ok=True)
     written = []
     csv = folder / RESULTS_CSV
     df.to_csv(csv, index=False, float_format="%.17g")
@@ -102,6 +104,22 @@ def write_result(
     os.replace(tmp, path)
     written.append(path)
     return written
+
+
+def _refuse_non_finite(df) -> None:
+    """Raise a :class:`~mixdyn.NumericalError` (naming the column and time) rather than write
+    a NaN or an infinity."""
+    values = df.select_dtypes("number")
+    finite = np.isfinite(values.to_numpy(dtype=float))
+    if finite.all():
+        return
+    row, col = np.argwhere(~finite)[0]
+    t = float(df["t"].iloc[row]) if "t" in df.columns else None
+    raise NumericalError(
+        f"column {values.columns[col]!r} is not finite ({values.iat[row, col]!r}); nothing "
+        "was written",
+        t,
+    )
 
 
 def read_result(path):

@@ -25,6 +25,7 @@ from .. import model as m
 from ..errors import ModelError, NumericalError
 from ..model._element import Resolver
 from . import schema as s
+from . import settings
 from ._errors import FileError
 from .expressions import ExpressionError
 from .expressions import parse as parse_expression
@@ -75,6 +76,7 @@ class Runner:
         self.model = model if model is not None else self.b.model()
         self.plans = {r.name: self._plan(i, r) for i, r in enumerate(spec.runs)}
         self._check_cycles()
+        settings.check_replays(self)
 
     # ----------------------------------------------------------------- checking
     def fail(self, path, problem, hint=""):
@@ -172,7 +174,16 @@ class Runner:
             dt = b.scalar(r.dt, "time", (*path, "dt"))
             if not dt > 0:
                 self.fail((*path, "dt"), "dt must be positive", "")
-        return Plan(r, index, ts, tuple(dict.fromkeys(depends)))
+        plan = Plan(r, index, ts, tuple(dict.fromkeys(depends)))
+        self._check_settings(plan)
+        return plan
+
+    def _check_settings(self, plan: Plan) -> None:
+        """The run's options, step, outputs and laws (see :mod:`mixdyn.io.settings`)."""
+        settings.check_options(self, plan.spec, plan.path)
+        settings.check_step(self, plan)
+        settings.check_outputs(self, plan)
+        settings.check_laws(self, plan)
 
     def _prescribed_ref(self, ref: str, path):
         parts = ref.split(".")

@@ -70,6 +70,39 @@ def _relative_file(v: str) -> str:
     return v
 
 
+#: File types of figures and animations (those of :mod:`mixdyn.viz`).
+PLOT_SUFFIXES = (".png", ".svg", ".pdf")
+ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
+
+
+def _suffixed(suffixes: tuple[str, ...], what: str):
+    def check(v: str) -> str:
+        if not v.lower().endswith(suffixes) or v.rsplit("/", 1)[-1].startswith("."):
+            raise ValueError(f"cannot write {_article(what)} to {v!r}: use {', '.join(suffixes)}")
+        return v
+
+    return check
+
+
+def _article(what: str) -> str:
+    return ("an " if what[0] in "aeiou" else "a ") + what
+
+
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u202a-\u202e\u2066-\u2069]")
+
+
+def _text(v: str) -> str:
+    """One line of plain text: no control characters (no terminal escapes)."""
+    if _CONTROL.search(v):
+        raise ValueError("contains a control character; write plain text on one line")
+    return v
+
+
+def _paragraph(v: str) -> str:
+    """Plain text that may span lines: no control characters other than newlines and tabs."""
+    return _text(v.replace("\n", " ").replace("\t", " ").replace("\r", " "))
+
+
 Name = Annotated[str, AfterValidator(_name)]
 """A name: letters, digits, ``_`` and ``-``, starting with a letter or ``_``."""
 
@@ -83,6 +116,10 @@ Vec2 = tuple[Scalar, Scalar]
 """Two scalars ``[x, y]``."""
 
 RelativeFile = Annotated[str, AfterValidator(_relative_file)]
+PlotFile = Annotated[RelativeFile, AfterValidator(_suffixed(PLOT_SUFFIXES, "plot"))]
+AnimationFile = Annotated[RelativeFile, AfterValidator(_suffixed(ANIMATION_SUFFIXES, "animation"))]
+Text = Annotated[str, AfterValidator(_text)]
+"""One line of plain text (a title, a label, the model's name)."""
 
 
 class Spec(BaseModel):
@@ -422,24 +459,24 @@ class ReferenceSpec(Spec):
     """A reference curve drawn beside the plotted columns: an expression of ``t``."""
 
     expr: str
-    label: str | None = None
+    label: Text | None = None
     unit: str | None = None
 
 
 class PlotSpec(Spec):
     """A figure of some columns against time, written to the run's output folder."""
 
-    file: RelativeFile
+    file: PlotFile
     columns: list[str] = Field(min_length=1)
-    title: str | None = None
-    ylabel: str | None = None
+    title: Text | None = None
+    ylabel: Text | None = None
     reference: ReferenceSpec | None = None
 
 
 class AnimationSpec(Spec):
     """An animation of the run, written to the run's output folder."""
 
-    file: RelativeFile = "animation.gif"
+    file: AnimationFile = "animation.gif"
     html: bool = True
     fps: int = Field(default=20, ge=1, le=120)
     frames: int = Field(default=80, ge=2, le=2000)
@@ -463,7 +500,7 @@ class KinematicRunSpec(_RunSpec):
     """Motion prescribed for every degree of freedom (``mixdyn.kinematic``)."""
 
     kind: Literal["kinematic"]
-    tol: float | None = Field(default=None, gt=0)
+    tol: float | None = Field(default=None, gt=0, allow_inf_nan=False)
     max_iter: int = Field(default=25, ge=1, le=1000)
 
 
@@ -476,8 +513,8 @@ class ForwardRunSpec(_RunSpec):
 
     kind: Literal["forward"]
     method: Method = "projection"
-    rtol: float = Field(default=1e-8, gt=0)
-    atol: float = Field(default=1e-10, gt=0)
+    rtol: float = Field(default=1e-8, gt=0, allow_inf_nan=False)
+    atol: float = Field(default=1e-10, gt=0, allow_inf_nan=False)
     dt: Scalar | None = None
     options: dict[str, Option] = Field(default_factory=dict)
 
@@ -497,8 +534,8 @@ class MixedRunSpec(_RunSpec):
     solver: Literal["augmented", "partition"] = "augmented"
     independent: list[Ref] | None = None
     method: Method = "projection"
-    rtol: float = Field(default=1e-8, gt=0)
-    atol: float = Field(default=1e-10, gt=0)
+    rtol: float = Field(default=1e-8, gt=0, allow_inf_nan=False)
+    atol: float = Field(default=1e-10, gt=0, allow_inf_nan=False)
     dt: Scalar | None = None
     options: dict[str, Option] = Field(default_factory=dict)
 
@@ -513,8 +550,8 @@ class ModelFile(Spec):
     """A model file: a mechanism in one unit system, and named runs of analyses on it."""
 
     mixdyn: Literal[1] = FORMAT_VERSION
-    name: str = "mechanism"
-    description: str | None = None
+    name: Text = "mechanism"
+    description: Annotated[str, AfterValidator(_paragraph)] | None = None
     units: UnitsSpec = UnitsSpec()
     gravity: Vec2 = (0.0, 0.0)
     parameters: dict[str, Scalar] = Field(default_factory=dict)

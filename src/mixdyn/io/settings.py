@@ -1,0 +1,302 @@
+"""Checks of a run's settings made when the run is planned, before anything is computed.
+
+``mixdyn check`` and ``mixdyn run`` plan every run first, so each fault below is an input
+error (exit 2) naming the file, line and setting, never a failure after minutes of computing:
+
+* ``options``: only the names the run's analysis takes (close matches suggested), none that
+  repeats a setting of the run itself (``rtol``, ``dt``, ``linear_solver``...), every value of
+  the right type, finite and in range (``rho_inf`` in [0, 1], ``max_steps`` >= 1...);
+* the step: a fixed-step method needs ``dt``, and ``span / dt`` may not exceed ``max_steps``;
+* the outputs: figure and animation files of a known type, each written once;
+* the laws: every expression law finite at the run's output times.
+"""
+
+from __future__ import annotations
+
+import difflib
+import inspect
+import math
+import shutil
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import schema as s
+from .expressions import ExpressionLaw, evaluate
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .runs import Plan, Runner
+
+#: Methods whose step is fixed: ``dt`` is required.
+FIXED_STEP = ("baumgarte", "generalized-alpha")
+#: Options of an inverse run (passed to :func:`mixdyn.kinematic`) and their defaults.
+INVERSE_OPTIONS = {"tol": None, "max_iter": 25, "singular_tol": 1e-7, "assemble_first": True}
+#: Names an option may not take: they are settings of the run itself.
+RUN_SETTINGS = ("rtol", "atol", "dt", "method", "linear_solver", "hold", "q0", "qd0", "drivers")
+#: Arguments of an integrator that are not options.
+_NOT_OPTIONS = ("problem", "ts", "q0", "qd0", "progress", "_")
+#: Choices of the options that take a name.
+CHOICES = {
+    "solver": ("tsit5", "dopri5", "dopri8"),
+    "newton": ("auto", "modified", "full"),
+}
+#: Options that are switches.
+SWITCHES = ("project_velocities", "assemble_first")
+
+
+def _positive(v: float) -> bool:
+    return math.isfinite(v) and v > 0
+
+
+def _whole(v: float) -> bool:
+    return math.isfinite(v) and v >= 1 and float(v).is_integer()
+
+
+#: Range of each numeric option: ``(test, what the value must be)``.
+RANGES = {
+    "tol": (_positive, "a finite number > 0"),
+    "singular_tol": (lambda v: 0 < v < 1, "a number in (0, 1)"),
+    "alpha": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
+    "beta": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
+    "rho_inf": (lambda v: 0 <= v <= 1, "a number in [0, 1] (1: no numerical damping)"),
+    "max_steps": (_whole, "a whole number >= 1"),
+    "max_newton": (lambda v: _whole(v) and v <= 1000, "a whole number from 1 to 1000"),
+    "max_iter": (lambda v: _whole(v) and v <= 1000, "a whole number from 1 to 1000"),
+}
+
+
+def integrator(method: str):
+    """The integrator function of ``method``."""
+    from ..analysis.integrators import INTEGRATORS
+
+    return INTEGRATORS[method]
+
+
+def known_options(run) -> dict[str, object]:
+    """The options a run may give, with their defaults (``inspect.Parameter.empty`` if none).
+
+    Args:
+        run: the run's description.
+    """
+    if isinstance(run, s.InverseRunSpec):
+        return dict(INVERSE_OPTIONS)
+    params = inspect.signature(integrator(run.method)).parameters
+    return {
+        n: p.default
+        for n, p in params.items()
+        if n not in _NOT_OPTIONS
+        and n not in RUN_SETTINGS
+        and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+        and not (n == "solver" and isinstance(run, s.MixedRunSpec))
+    }
+
+
+def check_options(runner: Runner, run, path) -> dict:
+    """A run's ``options``, checked: names, types, ranges.
+
+    Args:
+        runner: reports the faults (``runner.fail``).
+        run: the run's description.
+        path: the run's path in the file.
+
+    Returns:
+        The options to pass to the analysis.
+    """
+    opts = dict(getattr(run, "options", {}) or {})
+    if not opts:
+        return opts
+    known = known_options(run)
+    for name, value in opts.items():
+        p = (*path, "options", name)
+        if name not in known:
+            runner.fail(p, *_unknown(run, name, known))
+        _check_value(runner, name, value, p)
+    return opts
+
+
+def _unknown(run, name: str, known) -> tuple[str, str]:
+    """The problem and hint for an option ``name`` that the run does not take."""
+    what = "an inverse run" if isinstance(run, s.InverseRunSpec) else f"the {run.method} method"
+    if name in RUN_SETTINGS:
+        return (
+            f"{name!r} is a setting of the run, not an option of {what}",
+            f"write '{name}:' in the run itself and remove it from options",
+        )
+    if name == "solver" and isinstance(run, s.MixedRunSpec):
+        return (
+            "a mixed run's integrator keeps its default Runge-Kutta solver ('solver:' of the "
+            "run names the mixed solver, augmented or partition)",
+            "remove it from options",
+        )
+    close = suggestions(name, known)
+    allowed = ", ".join(known) or "(none)"
+    hint = (f"did you mean {' or '.join(map(repr, close))}? " if close else "") + (
+        f"the options of {what} are: {allowed}"
+    )
+    return f"unknown option {name!r} of {what}", hint
+
+
+def suggestions(name: str, known) -> list[str]:
+    """Names in ``known`` close to ``name``: similar spellings (difflib) and abbreviations
+    (``tol`` for ``tolerance``)."""
+    lower = name.lower()
+    close = difflib.get_close_matches(lower, list(known), n=3, cutoff=0.5)
+    close += [k for k in known if len(k) >= 3 and lower.startswith(k) and k not in close]
+    return close[:3]
+
+
+def _check_value(runner: Runner, name: str, value, path) -> None:
+    """Refuse an option value of the wrong type or out of range."""
+    if name in CHOICES:
+        if value not in CHOICES[name]:
+            runner.fail(path, f"{name} is {value!r}", f"use one of: {', '.join(CHOICES[name])}")
+        return
+    if name in SWITCHES:
+        if not isinstance(value, bool):
+            runner.fail(path, f"{name} is {value!r}", "write true or false")
+        return
+    test, what = RANGES.get(name, (math.isfinite, "a finite number"))
+    ok = isinstance(value, int | float) and not isinstance(value, bool)
+    if not (ok and test(float(value))):
+        runner.fail(path, f"{name} is {value!r}", f"give {what}")
+
+
+def check_step(runner: Runner, plan: Plan) -> None:
+    """A fixed step where needed, and no more steps than ``max_steps``."""
+    r = plan.spec
+    if isinstance(r, s.KinematicRunSpec | s.InverseRunSpec):
+        return
+    path = plan.path
+    if r.dt is None:
+        if r.method in FIXED_STEP:
+            span = float(plan.times[-1] - plan.times[0])
+            runner.fail(
+                (*path, "method"),
+                f"the {r.method} method has a fixed step but the run gives no dt",
+                f"add 'dt:' to the run, e.g. dt: {span / 2000:.3g}",
+            )
+        return
+    dt = runner.b.scalar(r.dt, "time", (*path, "dt"))
+    limit = r.options.get("max_steps", known_options(r).get("max_steps"))
+    if not isinstance(limit, int | float) or isinstance(limit, bool):
+        return
+    steps = step_count(plan.times, dt)
+    if steps > limit:
+        span = float(plan.times[-1] - plan.times[0])
+        fair = min(int(limit), 20_000)
+        runner.fail(
+            (*path, "dt"),
+            f"dt = {dt:g} needs {steps:.3g} steps over the span {span:g}, more than "
+            f"max_steps = {int(limit):,}",
+            f"use a larger step (dt: {span / fair:.3g} gives {fair:,} steps) or raise "
+            "options.max_steps",
+        )
+
+
+def step_count(times: np.ndarray, dt: float) -> float:
+    """The steps of a fixed-step run: each output interval split into steps <= ``dt``."""
+    with np.errstate(all="ignore"):
+        per = np.ceil(np.diff(np.asarray(times, dtype=float)) / dt * (1 - 1e-12))
+    return float(np.sum(np.maximum(per, 1.0)))
+
+
+def check_outputs(runner: Runner, plan: Plan) -> None:
+    """Figure and animation files: a writable type each, no file written twice."""
+    r = plan.spec
+    seen: dict[str, tuple] = {}
+
+    def claim(name: str, path) -> None:
+        key = name.lower()
+        if key in seen or key in ("results.csv", "results.parquet", "meta.json"):
+            runner.fail(path, f"the run writes {name!r} twice", "give each output its own file")
+        seen[key] = path
+
+    for k, plot in enumerate(r.plots):
+        claim(plot.file, (*plan.path, "plots", k, "file"))
+    a = r.animation
+    if a is None:
+        return
+    p = (*plan.path, "animation", "file")
+    claim(a.file, p)
+    if a.file.lower().endswith(".mp4") and shutil.which("ffmpeg") is None:
+        runner.fail(p, "writing MP4 needs ffmpeg, which is not installed", "write a .gif")
+    if a.html and not a.file.lower().endswith(".html"):
+        stem = a.file.rsplit(".", 1)[0]
+        claim(f"{stem}.html", (*plan.path, "animation", "html"))
+
+
+def check_laws(runner: Runner, plan: Plan) -> None:
+    """Every expression law of the run's drivers, prescribed motions and known forces finite
+    at its output times."""
+    r = plan.spec
+    used = None if r.drivers is None else set(r.drivers)
+    unknown = set(getattr(r, "unknown", ()))
+    laws = [
+        (("drivers", i, "law"), d.law)
+        for i, d in enumerate(runner.model.drivers)
+        if used is None or d.name in used
+    ]
+    for i, f in enumerate(runner.model.forces):
+        key = "actuator" if hasattr(f, "actuator") else "law"
+        if f.name not in unknown:
+            laws.append((("forces", i, key), getattr(f, key, None)))
+    for k, p in enumerate(r.prescribed):
+        if p.law is not None:
+            path = (*plan.path, "prescribed", k)
+            laws.append(((*path, "law"), runner._prescribed_driver(p, path).law))
+    for path, law in laws:
+        if isinstance(law, ExpressionLaw):
+            _finite_law(runner, law, plan.times, path)
+
+
+def check_replays(runner: Runner) -> None:
+    """A motion replayed ``from_run`` covers the replaying run's time span."""
+    for plan in runner.plans.values():
+        for k, p in enumerate(plan.spec.prescribed):
+            if p.from_run is None or p.from_run not in runner.plans:
+                continue
+            src = runner.plans[p.from_run].times
+            t0, t1 = float(src[0]), float(src[-1])
+            tol = 1e-12 * max(abs(t0), abs(t1), 1.0)
+            if plan.times[0] < t0 - tol or plan.times[-1] > t1 + tol:
+                runner.fail(
+                    (*plan.path, "prescribed", k, "from_run"),
+                    f"run {p.from_run!r} covers t = {t0:g}..{t1:g}, but run {plan.name!r} "
+                    f"needs its motion over {plan.times[0]:g}..{plan.times[-1]:g}",
+                    f"run {p.from_run!r} over at least this run's time span, or shorten it",
+                )
+
+
+def _finite_law(runner: Runner, law: ExpressionLaw, times, path) -> None:
+    values = [float(v) for v in np.asarray(law.values)]
+    try:
+        with np.errstate(all="ignore"):
+            y = np.asarray(evaluate(law.tree, times, values, xp=np), dtype=float)
+    except (ArithmeticError, ValueError, TypeError):
+        return
+    y = np.broadcast_to(y, np.shape(times))
+    bad = ~np.isfinite(y)
+    if bad.any():
+        k = int(np.argmax(bad))
+        runner.fail(
+            path,
+            f"the law {law.source!r} is not finite at t = {float(times[k]):g} ({y[k]!r})",
+            "change the law or the run's time span",
+        )
+
+
+__all__ = [
+    "CHOICES",
+    "FIXED_STEP",
+    "INVERSE_OPTIONS",
+    "RANGES",
+    "RUN_SETTINGS",
+    "check_laws",
+    "check_options",
+    "check_outputs",
+    "check_replays",
+    "check_step",
+    "known_options",
+    "step_count",
+    "suggestions",
+]
