@@ -69,6 +69,14 @@ def prescribe(result: Result, coordinate: str, name: str | None = None) -> Drive
     raise ModelError("use 'body.x', 'body.y', 'body.phi' or 'body.point.x'", coordinate)
 
 
+def bind_prescribed(model: Model, prescribed) -> tuple[Driver, ...]:
+    """The prescribed motions bound to the bodies of ``model``: the constraints that
+    :func:`mixed` and :func:`check_mixed` add to the joints (checks made before a run use
+    this too, so that they constrain the same coordinates as the run)."""
+    r = Resolver(model.ground, model.bodies)
+    return tuple(d.bind(r) for d in prescribed)
+
+
 def _null_space(A):
     return sl.null_space(A) if A.size else np.eye(A.shape[1])
 
@@ -220,8 +228,7 @@ def _setup(
         )
     require_masses(model)
     unknown = tuple(unknown)
-    r = Resolver(model.ground, model.bodies)
-    prescribed = tuple(d.bind(r) for d in prescribed)
+    prescribed = bind_prescribed(model, prescribed)
     if len(unknown) != len(prescribed):
         raise SolvabilityError(
             f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); a "

@@ -22,8 +22,8 @@ import numpy as np
 
 from .. import analysis as an
 from .. import model as m
-from ..errors import ModelError, NumericalError
-from ..model._element import Resolver
+from ..analysis.mixed import bind_prescribed
+from ..errors import AssemblyError, ModelError, NumericalError
 from . import schema as s
 from . import settings
 from ._errors import FileError
@@ -229,6 +229,15 @@ class Runner:
             )
         for k, ref in enumerate(r.independent or ()):
             self.b.coordinate(ref, (*path, "independent", k))
+        prescribed = {p.coordinate: k for k, p in enumerate(r.prescribed)}
+        for k, ref in enumerate(r.hold or ()):
+            if ref in prescribed:
+                self.fail(
+                    (*path, "hold", k),
+                    f"{ref} is held, but the run prescribes it (prescribed[{prescribed[ref]}]): "
+                    "a held coordinate cannot follow a prescribed motion",
+                    "remove it from the run's hold",
+                )
 
     def _check_column(self, col: str, r, path):
         parts = col.split(".")
@@ -321,8 +330,36 @@ class Runner:
         return qd
 
     def hold(self, plan: Plan) -> tuple[str, ...]:
-        h = plan.spec.hold if plan.spec.hold is not None else self.spec.assembly.hold
-        return tuple(h)
+        """The coordinates a run holds at its start: kept at their starting value while the
+        joints are closed (and, in a dynamic run, at their starting speed).
+
+        The run's own ``hold``, else the file's ``assembly.hold``. A mixed run does not inherit
+        a hold on a coordinate it prescribes: the prescribed motion fixes that coordinate's
+        start position and speed, so it wins and that hold is dropped for the run (a run's own
+        ``hold`` naming a coordinate it prescribes is refused when the run is planned).
+
+        Args:
+            plan: the run.
+
+        Returns:
+            The held coordinates, e.g. ``("crank.phi",)``.
+        """
+        if plan.spec.hold is not None:
+            return tuple(plan.spec.hold)
+        prescribed = self._prescribed_coordinates(plan)
+        return tuple(h for h in self.spec.assembly.hold if h not in prescribed)
+
+    def _prescribed_coordinates(self, plan: Plan) -> set[str]:
+        """The body coordinates (``body.x``, ``.y``, ``.phi``) a mixed run prescribes."""
+        if not isinstance(plan.spec, s.MixedRunSpec):
+            return set()
+        return {p.coordinate for p in plan.spec.prescribed if p.coordinate.count(".") == 1}
+
+    def _hold_source(self, plan: Plan) -> tuple[tuple, str]:
+        """Where a run's hold comes from: its path in the file and how to name it."""
+        if plan.spec.hold is not None:
+            return (*plan.path, "hold"), "the run's hold"
+        return ("assembly", "hold"), "assembly.hold"
 
     def run_model(self, plan: Plan, drivers=()) -> m.Model:
         """The model of a run: the model's drivers it selects, plus extra drivers."""
@@ -338,22 +375,44 @@ class Runner:
         return self.model.replace(drivers=all_drivers)
 
     def mobility(self, plan: Plan):
-        """Degrees of freedom of a run's model with its drivers (and prescribed motions), at
-        the assembled start; raises a :class:`FileError` if a kinematic or inverse run is not
-        fully driven, or a dynamic run over-driven."""
+        """Degrees of freedom of a run's model with its drivers and prescribed motions, at the
+        assembled start.
+
+        The prescribed motions are bound to their bodies as :func:`mixdyn.mixed` binds them,
+        so the check counts the coordinates the run will drive. A mixed run is then checked
+        as :meth:`check_solvable` does (its start with the held coordinates, the pairing of
+        forces and motions), so that ``mixdyn run`` refuses it before any long computation.
+
+        Args:
+            plan: the run.
+
+        Returns:
+            The :class:`~mixdyn.DofReport` of the run's model and drivers.
+
+        Raises:
+            FileError: a kinematic or inverse run is not fully driven, a dynamic run is
+                over-driven, or a mixed run fails a check of :meth:`check_solvable`.
+        """
         r = plan.spec
-        dummy = [
-            self._dummy_driver(k, p)
-            if p.from_run is not None
-            else self._prescribed_driver(p, (*plan.path, "prescribed", k))
-            for k, p in enumerate(r.prescribed)
-        ]
-        model = self.run_model(plan, () if isinstance(r, s.MixedRunSpec) else dummy)
-        drivers = (*model.drivers, *dummy) if isinstance(r, s.MixedRunSpec) else model.drivers
+        mixed = isinstance(r, s.MixedRunSpec)
+        if mixed:
+            model = self.run_model(plan, ())
+        else:
+            model = self.run_model(
+                plan,
+                [
+                    self._dummy_driver(k, p)
+                    if p.from_run is not None
+                    else self._prescribed_driver(p, (*plan.path, "prescribed", k))
+                    for k, p in enumerate(r.prescribed)
+                ],
+            )
         try:
             q = an.assemble(model, self.q_start(plan, model), hold=self.hold(plan)).q
+            prescribed = self._prescribed_motions(plan, model, q) if mixed else ()
         except ModelError as e:
             self._model_error(plan, e)
+        drivers = (*model.drivers, *prescribed)
         report = an.degrees_of_freedom(model, q, float(plan.times[0]), drivers=drivers)
         n = report.n_drivers
         if r.kind in ("kinematic", "inverse"):
@@ -382,40 +441,108 @@ class Runner:
                     if report.redundant_drivers
                     else ""
                 ),
-                "prescribe fewer motions",
+                "prescribe fewer motions, or motions of coordinates the joints leave free",
             )
+        if mixed:
+            self.check_solvable(plan)
         return report
 
     def check_solvable(self, plan: Plan) -> None:
         """For a mixed run, every solvability check of :func:`mixdyn.check_mixed` at the
-        assembled start, without integrating (a prescribed motion taken from another run is
-        held at its starting value for the check)."""
+        assembled start, without integrating.
+
+        The prescribed motions are those of the run, built and bound as the run builds them
+        (:meth:`_prescribed_motions`); a motion taken from another run is held at its value at
+        the assembled start for the check. A start the held coordinates make impossible (a
+        hold that fights a prescribed motion) is reported at the hold, naming where it comes
+        from (the run's ``hold`` or ``assembly.hold``). Checked once per run.
+
+        Args:
+            plan: the run (other kinds pass).
+
+        Raises:
+            FileError: the run cannot be solved, with the reason.
+        """
         r = plan.spec
         if not isinstance(r, s.MixedRunSpec):
             return
+        done = self.__dict__.setdefault("_solvable_runs", set())
+        if plan.name in done:
+            return
         model = self.run_model(plan, ())
+        hold = self.hold(plan)
         try:
-            q = np.asarray(an.assemble(model, self.q_start(plan, model), hold=self.hold(plan)).q)
-            drivers = []
-            for k, p in enumerate(r.prescribed):
-                if p.from_run is None:
-                    drivers.append(self._prescribed_driver(p, (*plan.path, "prescribed", k)))
-                    continue
-                d = self._dummy_driver(k, p).bind(Resolver(model.ground, model.bodies))
-                drivers.append(dataclasses.replace(d, law=m.Constant(float(d.measure(q)))))
+            q = np.asarray(an.assemble(model, self.q_start(plan, model), hold=hold).q)
+            prescribed = self._prescribed_motions(plan, model, q)
+        except ModelError as e:
+            self._model_error(plan, e)
+        # A stand-in for another run's motion has no speed: the run's start speeds are
+        # checked only where every prescribed motion is a law.
+        laws_only = all(p.from_run is None for p in r.prescribed)
+
+        def check(hold):
             an.check_mixed(
                 model,
-                drivers,
+                prescribed,
                 tuple(r.unknown),
                 t0=float(plan.times[0]),
                 solver=r.solver,
                 independent=r.independent,
                 q0=q,
-                hold=self.hold(plan),
+                qd0=self.qd_start(plan, model) if laws_only else None,
+                hold=hold,
                 linear_solver=r.linear_solver,
             )
-        except ModelError as e:
+
+        try:
+            check(hold)
+        except (ModelError, AssemblyError) as e:
+            if hold and self._passes(check, ()):
+                path, source = self._hold_source(plan)
+                cause = str(e)
+                element = getattr(e, "element", None)
+                if element and cause.startswith(f"{element}: "):
+                    cause = cause[len(element) + 2 :]
+                self.fail(
+                    path,
+                    f"run {plan.name!r}: the held coordinate(s) {', '.join(hold)} (from "
+                    f"{source}) conflict with its prescribed motion(s) "
+                    f"{', '.join(d.name for d in prescribed)} at t = {plan.times[0]:g}: {cause}",
+                    "remove them from the run's hold"
+                    if r.hold is not None
+                    else "give the run its own hold: (hold: [] holds nothing)",
+                )
+            if isinstance(e, AssemblyError):
+                raise
             self._model_error(plan, e)
+        done.add(plan.name)
+
+    @staticmethod
+    def _passes(check: Callable, hold) -> bool:
+        """Whether ``check(hold)`` raises no :class:`ModelError` or :class:`NumericalError`."""
+        try:
+            check(hold)
+        except (ModelError, NumericalError):
+            return False
+        return True
+
+    def _prescribed_motions(self, plan: Plan, model: m.Model, q) -> tuple[m.Driver, ...]:
+        """A mixed run's prescribed motions as the checks see them, bound to the bodies of
+        ``model`` exactly as :func:`mixdyn.mixed` binds them: a ``law`` as written, a motion
+        ``from_run`` by a stand-in held at its value in ``q`` (that run has not run yet)."""
+        r = plan.spec
+        drivers = [
+            self._dummy_driver(k, p)
+            if p.from_run is not None
+            else self._prescribed_driver(p, (*plan.path, "prescribed", k))
+            for k, p in enumerate(r.prescribed)
+        ]
+        bound = bind_prescribed(model, drivers)
+        q = np.asarray(q, dtype=float)
+        return tuple(
+            d if p.from_run is None else dataclasses.replace(d, law=m.Constant(float(d.measure(q))))
+            for d, p in zip(bound, r.prescribed, strict=True)
+        )
 
     def check_masses(self, plan: Plan) -> None:
         """A dynamic run needs every body's mass and inertia > 0."""
@@ -432,6 +559,7 @@ class Runner:
                     )
 
     def _dummy_driver(self, k, p: s.PrescribedSpec) -> m.Driver:
+        """An unbound stand-in (law 0) for the motion ``p`` replays from another run."""
         parts = p.coordinate.split(".")
         name = p.name or f"prescribed {p.coordinate}"
         if len(parts) == 3:
