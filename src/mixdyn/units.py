@@ -46,6 +46,10 @@ class UnitSystem:
     mass: str = "kg"
     time: str = "s"
 
+    def __post_init__(self):
+        for kind in ("length", "mass", "time"):
+            _check_unit(getattr(self, kind), kind)
+
     def unit(self, kind: str) -> str:
         """The unit of a kind of quantity (a key of :data:`DIMENSIONS`) in this system.
 
@@ -80,6 +84,32 @@ class UnitSystem:
     def describe(self) -> str:
         """One line naming the system, e.g. ``"length mm, mass kg, time s, angle rad"``."""
         return f"length {self.length}, mass {self.mass}, time {self.time}, angle rad"
+
+
+#: Common spellings accepted without asking pint (fast, and no import at start-up).
+_KNOWN = {
+    "length": {"m", "mm", "cm", "dm", "km", "um", "µm", "nm", "in", "inch", "ft", "foot"},
+    "mass": {"kg", "g", "mg", "t", "tonne", "lb", "pound"},
+    "time": {"s", "ms", "us", "µs", "min", "h", "hour", "second", "minute"},
+}
+
+
+def _check_unit(text, kind: str) -> None:
+    """Refuse a unit that pint does not know or that is not of ``kind`` (``"length"``...)."""
+    from .errors import ModelError
+
+    if not isinstance(text, str) or not text.strip():
+        raise ModelError(f"the {kind} unit must be a unit name such as 'm', got {text!r}")
+    if text in _KNOWN[kind]:
+        return
+    from .io.quantities import QuantityError, exponents
+
+    try:
+        exps = exponents(text)
+    except QuantityError as e:
+        raise ModelError(f"{kind} unit {text!r}: {e.problem}", "units") from None
+    if exps != DIMENSIONS[kind]:
+        raise ModelError(f"{text!r} is not a unit of {kind}", "units")
 
 
 SI = UnitSystem("m", "kg", "s")

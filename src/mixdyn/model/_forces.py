@@ -21,6 +21,7 @@ from ..errors import ModelError
 from ._element import Element, Resolver, moving, static_direction
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._laws import Law, as_law
+from ._validate import finite
 
 _UNBOUND = -2
 
@@ -122,6 +123,10 @@ class PointForce(ForceElement):
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
     has_magnitude = True
 
+    def __check_init__(self):
+        if not isinstance(self.along, str):
+            finite(self.along, "along", self.name)
+
     def bind(self, r: Resolver):
         if self.frame not in ("ground", "body"):
             raise ModelError(f"frame must be 'ground' or 'body', got {self.frame!r}", self.name)
@@ -196,6 +201,10 @@ class SpringDamper(ForceElement):
     sj: jax.Array | None = eqx.field(default=None, kw_only=True)
     has_magnitude = True
 
+    def __check_init__(self):
+        finite((self.stiffness, self.damping), "stiffness and damping", self.name)
+        finite(self.free_length, "free_length", self.name, at_least=0.0)
+
     def bind(self, r: Resolver):
         bi, si = r.point(self.point_i, self.name)
         bj, sj = r.point(self.point_j, self.name)
@@ -259,6 +268,13 @@ class RotarySpringDamper(ForceElement):
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     has_magnitude = True
+
+    def __check_init__(self):
+        finite(
+            (self.stiffness, self.damping, self.free_angle),
+            "stiffness, damping and free_angle",
+            self.name,
+        )
 
     def bind(self, r: Resolver):
         bi, bj = r.body(self.body_i, self.name), r.body(self.body_j, self.name)

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 
 from ._element import Element, Resolver, moving, static_direction
 from ._geometry import angle, cross, point, vector
+from ._validate import finite
 
 _UNBOUND = -2
 
@@ -103,6 +104,9 @@ class Weld(_TwoPoint):
     n_equations: ClassVar[int] = 3
     equation_labels: ClassVar[tuple[str, ...]] = ("x", "y", "angle")
 
+    def __check_init__(self):
+        finite(self.angle, "angle", self.name)
+
     def residual(self, q):
         rel = angle(q, self.bj) - angle(q, self.bi) - self.angle
         return jnp.concatenate([self._d(q), rel[None]])
@@ -129,6 +133,11 @@ class Translational(_TwoPoint):
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
     n_equations: ClassVar[int] = 2
     equation_labels: ClassVar[tuple[str, ...]] = ("normal", "angle")
+
+    def __check_init__(self):
+        finite(self.angle, "angle", self.name)
+        if not isinstance(self.axis, str):
+            finite(self.axis, "axis", self.name)
 
     def bind(self, r: Resolver):
         kw = self._bind_points(r)
@@ -170,6 +179,9 @@ class Distance(_TwoPoint):
     length: jax.Array = eqx.field(default=1.0, converter=_f64)
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("length",)
+
+    def __check_init__(self):
+        finite(self.length, "length", self.name, above=0.0)
 
     def residual(self, q):
         return (jnp.linalg.norm(self._d(q)) - self.length)[None]

@@ -16,6 +16,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ._validate import finite
 
 
 def _f64(x) -> jax.Array:
@@ -46,6 +47,7 @@ class Constant(Law):
     value: jax.Array
 
     def __init__(self, value):
+        finite(value, "the value of a Constant law")
         self.value = _f64(value)
 
     def __call__(self, t):
@@ -58,6 +60,7 @@ class Polynomial(Law):
     coeffs: jax.Array
 
     def __init__(self, coeffs):
+        finite(coeffs, "the coefficients of a Polynomial law")
         self.coeffs = _f64(np.atleast_1d(coeffs))
 
     def __call__(self, t):
@@ -78,6 +81,9 @@ class Harmonic(Law):
     offset: jax.Array
 
     def __init__(self, amplitude, omega, phase=0.0, offset=0.0):
+        finite(
+            (amplitude, omega, phase, offset), "amplitude, omega, phase and offset of a Harmonic"
+        )
         self.amplitude = _f64(amplitude)
         self.omega = _f64(omega)
         self.phase = _f64(phase)
@@ -101,6 +107,8 @@ class PiecewisePolynomial(Law):
     coeffs: jax.Array
 
     def __init__(self, breaks, coeffs):
+        finite(breaks, "the breaks of a PiecewisePolynomial")
+        finite(coeffs, "the coefficients of a PiecewisePolynomial")
         self.breaks = _f64(breaks)
         self.coeffs = _f64(coeffs)
 

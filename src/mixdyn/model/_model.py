@@ -92,9 +92,12 @@ class Model(eqx.Module):
         self.drivers = tuple(d.bind(r) for d in drivers)
         self.forces = tuple(f.bind(r) for f in forces)
         self.ground = ground
-        g = np.asarray(gravity, dtype=float)
-        if g.shape != (2,):
-            raise ModelError("gravity must be two numbers (gx, gy)", name)
+        try:
+            g = np.asarray(gravity, dtype=float)
+        except (TypeError, ValueError):
+            g = np.full(1, np.nan)
+        if g.shape != (2,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"gravity must be two finite numbers (gx, gy), got {gravity!r}", name)
         self.gravity = jnp.asarray(g)
         if not isinstance(units, UnitSystem):
             raise ModelError("units must be a mixdyn.UnitSystem", name)
