@@ -3,7 +3,10 @@
 Commands: ``check``, ``run``, ``plot``, ``animate``, ``schema``, ``dump``; ``--help`` on each.
 
 Exit codes: 0 success; 2 bad input (one line on stderr: ``FILE:LINE: element: problem; what to
-do``); 1 a numerical failure (singularity, divergence) with its time and cause.
+do``); 1 a numerical failure (singularity, divergence) with its time and cause. Every input
+error that can be found without computing is found by ``mixdyn check`` and by ``mixdyn run``
+before it computes anything (run settings, options, output paths). A model file is a regular
+file of UTF-8 text of at most 20 MB (:data:`mixdyn.io._yaml.MAX_BYTES`).
 
 Compiled code is kept between invocations in JAX's persistent compilation cache, in
 ``$MIXDYN_CACHE_DIR`` or ``$XDG_CACHE_HOME/mixdyn/jax`` (``~/.cache/mixdyn/jax``); set
@@ -74,7 +77,7 @@ def _guard(file: pathlib.Path | str | None):
     """Turn mixdyn's errors into one line and an exit code."""
     from pydantic import ValidationError
 
-    from .errors import MixdynError, ModelError, NumericalError
+    from .errors import AssemblyError, MixdynError, ModelError, NumericalError
     from .io import FileError
 
     where = str(file) if file is not None else "mixdyn"
@@ -84,6 +87,12 @@ def _guard(file: pathlib.Path | str | None):
         raise
     except FileError as e:
         _fail(EXIT_INPUT, e.one_line())
+    except AssemblyError as e:  # no start closes the joints: the description is at fault
+        _fail(
+            EXIT_INPUT,
+            f"{getattr(e, 'file', where)}: the start cannot be assembled: {e}; check the "
+            "geometry, q0, initial and hold",
+        )
     except NumericalError as e:
         run = getattr(e, "run", None)
         what = f"run {run!r}: " if run else ""
@@ -223,8 +232,9 @@ def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
 @app.command()
 def check(file: FileArg):
     """Check a model file: form, names, units, expressions, degrees of freedom, and that
-    every run is well posed. Prints the degrees of freedom, redundant equations, the
-    driver/DOF balance of each run and warnings; changes nothing."""
+    every run is well posed (options, steps, outputs, laws). Prints the degrees of freedom,
+    redundant equations, the driver/DOF balance of each run and warnings; changes nothing.
+    A model file is UTF-8 text of at most 20 MB."""
     with _guard(file):
         from . import analysis as an
         from .io import Runner, read

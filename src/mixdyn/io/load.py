@@ -41,8 +41,10 @@ from .quantities import (
     convert,
     dimension,
     factor,
+    has_unit_tail,
     looks_like_quantity,
 )
+from .settings import suggestions
 
 _SECTIONS = {
     "bodies": "body",
@@ -190,8 +192,10 @@ def _pydantic_error(e: ValidationError, data, lines, file) -> FileError:
     elif typ == "extra_forbidden":
         parent = _allowed_fields(data, path[:-1])
         msg = f"unknown field {field!r}"
-        hint = "remove it or fix its spelling" + (
-            f"; allowed fields: {', '.join(parent)}" if parent else ""
+        close = suggestions(str(field), parent)
+        hint = (f"did you mean {' or '.join(map(repr, close))}? " if close else "") + (
+            "remove it or fix its spelling"
+            + (f"; allowed fields: {', '.join(parent)}" if parent else "")
         )
     elif typ == "union_tag_invalid":
         ctx = err.get("ctx", {})
@@ -428,7 +432,7 @@ class Builder:
             except DimensionError as e:
                 self.fail(path, f"{spec!r}: {e.problem}", e.hint)
             except QuantityError as e:
-                if looks_like_quantity(spec):
+                if looks_like_quantity(spec) or has_unit_tail(spec):
                     self.fail(path, f"{spec!r}: {e.problem}", e.hint)
             except ExpressionError:
                 pass

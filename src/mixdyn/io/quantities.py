@@ -221,6 +221,16 @@ def looks_like_quantity(text: str) -> bool:
     return bool(m and m.group(2) and _UNIT.match(m.group(2)))
 
 
+def has_unit_tail(text: str) -> bool:
+    """Whether ``text`` reads as numeric arithmetic followed by a unit (``"1/0 N"``,
+    ``"2*L mm"``)."""
+    words = text.split()
+    return any(
+        _UNIT.match(" ".join(words[k:])) and re.search(r"[0-9]", " ".join(words[:k]))
+        for k in range(1, len(words))
+    )
+
+
 def _split(text: str, constants, kind, units) -> tuple[float, str | None]:
     """Split ``"EXPR UNIT"`` into the expression's value and the unit text."""
     from .expressions import ExpressionError, constant_value
