@@ -239,11 +239,12 @@ def check(file: FileArg):
         from . import analysis as an
         from .io import Runner, read
         from .io import schema as s
+        from .io.runs import start_q
 
         spec = read(file)
         runner = Runner(spec)
         model = runner.model
-        asm = an.assemble(model, hold=spec.assembly.hold)
+        asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
         report = an.degrees_of_freedom(model, asm.q)
         _say(f"[bold]{_esc(file)}[/bold]: {_esc(model.summary())}")
         _say(f"assembled start: residual {asm.residual:.2e} in {asm.iterations} iteration(s)")

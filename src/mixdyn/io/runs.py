@@ -310,7 +310,7 @@ class Runner:
     # ----------------------------------------------------------------- checks needing numbers
     def q_start(self, plan: Plan, model: m.Model):
         """Rough starting coordinates of a run: the bodies' q0 with the run's ``initial``."""
-        q = np.array(model.q0, dtype=float)
+        q = start_q(model)
         for ref, value in plan.spec.initial.items():
             _, coord = ref.split(".")
             q[model.coordinate_index(ref)] = self.b.scalar(
@@ -692,6 +692,12 @@ class Runner:
             if on_done is not None:
                 on_done(plan, res, _time.perf_counter() - t0)
         return results
+
+
+def start_q(model: m.Model) -> np.ndarray:
+    """The bodies' rough start ``q0`` stacked with NumPy (``Model.q0`` compiles a JAX
+    concatenation of every body, whose compile time grows quadratically with their number)."""
+    return np.concatenate([np.asarray(b.q0, dtype=float) for b in model.bodies])
 
 
 def _position_kind(coord: str) -> str:
