@@ -233,33 +233,17 @@ class Constraints(eqx.Module):
         """Static layout: per element its first full row, row count and coordinate columns."""
         return self._static().layout
 
-    def _groups(self):
-        """Elements grouped by kind (same tree structure once localized): a list of
-        ``(indices of the elements, localized elements)``."""
-        elems = self._elements()
-        return [(idx, [_localize(elems[i]) for i in idx]) for idx in self._static().groups]
+    def _stacked(self) -> tuple:
+        """The elements of each kind (:attr:`_Static.groups`) localized and stacked: one
+        PyTree per group whose leaves have a leading axis over the group's elements."""
+        return _stack_groups(self._static(), self.joints, self.drivers)
 
     def _local(self, fn, q, t, qd=None, rows=None):
         """``fn(element, q_local, t, qd_local)`` (rows, ...) over every element, vectorized per
         kind, stacked in row order; the rows ``rows`` of the full set (default: those kept)."""
-        layout = self._layout()
-        outs, order = [], []
-        for idx, elems in self._groups():
-            stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *elems)
-            cols = np.stack([layout[i][2] for i in idx])
-            ql = q[cols]
-            qdl = ql if qd is None else qd[cols]
-            y = jax.vmap(fn, in_axes=(0, 0, None, 0))(stacked, ql, t, qdl)
-            outs.append(y.reshape(-1, *y.shape[2:]))
-            for i in idx:
-                order.extend(range(layout[i][0], layout[i][0] + layout[i][1]))
-        if not outs:
-            return jnp.zeros((0,))
-        allv = jnp.concatenate(outs)
-        pos = np.empty(len(order), dtype=np.int64)
-        pos[np.asarray(order, dtype=np.int64)] = np.arange(len(order))
-        rows = self.active if rows is None else rows
-        return allv[pos[np.asarray(rows, dtype=np.int64)]]
+        return _local_eval(
+            self._static(), self._stacked(), fn, q, t, qd, self.active if rows is None else rows
+        )
 
     def coo(self) -> tuple[np.ndarray, np.ndarray]:
         """Static pattern ``(rows, cols)`` of :meth:`jacobian_values` (rows of the kept set)."""
@@ -269,41 +253,26 @@ class Constraints(eqx.Module):
         return cache[self.active]
 
     def _coo(self):
-        layout = self._layout()
-        where = {r: k for k, r in enumerate(self.active)}
-        rows, cols = [], []
-        for idx, _ in self._groups():
-            for i in idx:
-                r0, n, c = layout[i]
-                for r in range(r0, r0 + n):
-                    rows.append(np.full(c.size, where.get(r, -1)))
-                    cols.append(c)
-        rows = np.concatenate(rows) if rows else np.zeros(0, np.int64)
-        cols = np.concatenate(cols) if cols else np.zeros(0, np.int64)
+        st = self._static()
+        where = np.full(self.n_full, -1, dtype=np.int64)
+        where[np.asarray(self.active, dtype=np.int64)] = np.arange(self.m)
+        rows, cols = where[st.nz_rows], st.nz_cols
         keep = rows >= 0
         return rows[keep], cols[keep]
 
     def jacobian_values(self, q, t) -> jax.Array:
         """Values (nnz,) of ``Phi_q`` on the pattern :meth:`coo`: each element's Jacobian
         with respect to its own bodies' coordinates only (O(m) work)."""
-        layout = self._layout()
-        outs, keep, start = [], [], 0
-        active = set(self.active)
-        for idx, elems in self._groups():
-            stacked = jax.tree.map(lambda *xs: jnp.stack(xs), *elems)
-            cols = np.stack([layout[i][2] for i in idx])
-            J = jax.vmap(_jac, in_axes=(0, 0, None))(stacked, q[cols], t)
-            outs.append(J.reshape(-1))
-            for i in idx:
-                r0, n, c = layout[i]
-                for r in range(r0, r0 + n):
-                    if r in active:
-                        keep.extend(range(start, start + c.size))
-                    start += c.size
-        if not outs:
-            return jnp.zeros((0,))
-        v = jnp.concatenate(outs)
-        return v if len(keep) == v.shape[0] else v[np.asarray(keep, dtype=np.int64)]
+        return _jacobian_eval(self._static(), self._stacked(), q, t, self.active)
+
+    def packed(self) -> Packed:
+        """This set with its elements stacked per kind (see :class:`Packed`): a few array
+        leaves whatever the number of elements, for compiled programs that do not grow with
+        it. Needs the per-element form (every element refers to its bodies through ``b``,
+        ``bi``, ``bj``)."""
+        if not self._local_ok():
+            raise ModelError("packed constraints need every element in the per-element form")
+        return Packed(self._stacked(), _Key(self))
 
     def schur_structure(self):
         """Symbolic analysis of ``Phi_q M^-1 Phi_q^T`` (cached per pattern)."""
@@ -415,15 +384,27 @@ class Constraints(eqx.Module):
 
 
 class _Static:
-    """What is static about a set of joints and drivers, computed once per set (not per
-    analysis, constraint-set copy or call: at 256 bodies this took 0.3 s each time).
+    """What is static about a set of joints and drivers, computed once per structure (not per
+    analysis, constraint-set copy, trace or call: at 2,000 bodies rebuilding it took seconds).
+
+    Shared by every set of the same structure (the same elements, bodies and leaf shapes, any
+    numbers): see :func:`_static_of`.
 
     Attributes:
         layout: per element its first full row, row count and coordinate columns (nq,).
         groups: the elements' indices grouped by kind (same tree structure and leaf shapes
             once localized, one vectorized evaluation per group); None when an element
             cannot be localized (no sparse path).
+        loc_defs: per group, the tree structure of its localized elements.
+        direct: per group, whether a localized element has exactly its element's leaves (then
+            the group is stacked from the elements' leaves, without localizing them).
+        cols: per group, (k, nc) the coordinate columns of its k elements.
+        pos: (n_full,) where each full row lies in the group-ordered output of
+            :func:`_local_eval`.
+        nz_rows, nz_cols: (nnz,) the full rows and columns of the per-element Jacobian
+            values, in the order :func:`_jacobian_eval` computes them.
         coo: the sparsity patterns already built, per tuple of kept rows.
+        keep: per tuple of kept rows, the indices of their values among all values.
     """
 
     def __init__(self, elements):
@@ -433,25 +414,72 @@ class _Static:
             cols = [3 * b + k for b in e.body_indices() for k in range(3)]
             self.layout.append((row, n, np.asarray(cols, dtype=np.int64)))
             row += n
+        self.n_full = row
         groups: dict = {}
+        defs: dict = {}
+        direct: dict = {}
         try:
             for i, e in enumerate(elements):
                 loc = _localize(e)
+                loc_leaves, loc_def = jax.tree_util.tree_flatten(loc)
                 # the leaves' shapes too: two polynomial laws of different degrees do not stack
-                shapes = tuple(np.shape(x) for x in jax.tree.leaves(loc))
-                key = (jax.tree_util.tree_structure(loc), shapes, len(e.body_indices()))
+                shapes = tuple(np.shape(x) for x in loc_leaves)
+                key = (loc_def, shapes, len(e.body_indices()))
                 groups.setdefault(key, []).append(i)
+                defs.setdefault(key, loc_def)
+                own = jax.tree_util.tree_leaves(e)
+                same = len(own) == len(loc_leaves) and all(
+                    a is b for a, b in zip(own, loc_leaves, strict=True)
+                )
+                direct[key] = direct.get(key, True) and same
             self.groups = list(groups.values())
+            self.loc_defs = list(defs.values())
+            self.direct = list(direct.values())
         except ValueError:
             self.groups = None
         self.coo: dict = {}
+        self.keep: dict = {}
+        if self.groups is None:
+            return
+        self.cols = [np.stack([self.layout[i][2] for i in idx]) for idx in self.groups]
+        order, nz_rows, nz_cols = [], [], []
+        for idx in self.groups:
+            for i in idx:
+                r0, n, c = self.layout[i]
+                order.append(np.arange(r0, r0 + n))
+                nz_rows.append(np.repeat(np.arange(r0, r0 + n), c.size))
+                nz_cols.append(np.tile(c, n))
+        order = np.concatenate(order) if order else np.zeros(0, np.int64)
+        self.pos = np.empty(order.size, dtype=np.int64)
+        self.pos[order] = np.arange(order.size)
+        self.nz_rows = np.concatenate(nz_rows) if nz_rows else np.zeros(0, np.int64)
+        self.nz_cols = np.concatenate(nz_cols) if nz_cols else np.zeros(0, np.int64)
+
+    def kept_values(self, active: tuple) -> np.ndarray | None:
+        """Indices of the values of the rows ``active`` among all values (None: all kept)."""
+        if active not in self.keep:
+            if len(active) == self.n_full:
+                self.keep[active] = None
+            else:
+                mask = np.zeros(self.n_full, dtype=bool)
+                mask[np.asarray(active, dtype=np.int64)] = True
+                self.keep[active] = np.flatnonzero(mask[self.nz_rows])
+        return self.keep[active]
 
 
 #: Identity cache of :class:`_Static`: ``(id(joints), id(drivers)) -> (joints, drivers,
-#: info)``. The tuples are held, so their ids stay theirs while cached; a set being traced
-#: (tracer leaves: a fresh tuple on every trace) is not stored.
+#: info, stacked)``. The tuples are held, so their ids stay theirs while cached; a set being
+#: traced (tracer leaves: a fresh tuple on every trace) is not stored, but finds its
+#: :class:`_Static` in :data:`_STRUCT_CACHE` by its structure.
 _STATIC_CACHE: dict = {}
 _STATIC_CACHE_SIZE = 32
+#: Structural cache of :class:`_Static`: ``(tree structure, leaf shapes) -> info``.
+_STRUCT_CACHE: dict = {}
+_STRUCT_CACHE_SIZE = 16
+
+
+def _is_traced(leaves) -> bool:
+    return any(isinstance(x, jax.core.Tracer) for x in leaves)
 
 
 def _static_of(joints: tuple, drivers: tuple) -> _Static:
@@ -459,13 +487,128 @@ def _static_of(joints: tuple, drivers: tuple) -> _Static:
     hit = _STATIC_CACHE.get(key)
     if hit is not None and hit[0] is joints and hit[1] is drivers:
         return hit[2]
-    info = _Static((*joints, *drivers))
-    leaves = jax.tree.leaves((joints, drivers))
-    if not any(isinstance(x, jax.core.Tracer) for x in leaves):
+    leaves, treedef = jax.tree_util.tree_flatten((joints, drivers))
+    skey = (treedef, tuple(np.shape(x) for x in leaves))
+    info = _STRUCT_CACHE.get(skey)
+    if info is None:
+        info = _Static((*joints, *drivers))
+        if len(_STRUCT_CACHE) >= _STRUCT_CACHE_SIZE:
+            _STRUCT_CACHE.pop(next(iter(_STRUCT_CACHE)))
+        _STRUCT_CACHE[skey] = info
+    if not _is_traced(leaves):
         if len(_STATIC_CACHE) >= _STATIC_CACHE_SIZE:
             _STATIC_CACHE.pop(next(iter(_STATIC_CACHE)))
-        _STATIC_CACHE[key] = (joints, drivers, info)
+        _STATIC_CACHE[key] = [joints, drivers, info, None]
     return info
+
+
+def _stack_groups(st: _Static, joints: tuple, drivers: tuple) -> tuple:
+    """Per group of ``st``, its elements localized and stacked (leading axis: the element).
+
+    Concrete elements are stacked with NumPy (once per set: cached with its
+    :class:`_Static`), traced ones with ``jnp.stack``."""
+    hit = _STATIC_CACHE.get((id(joints), id(drivers)))
+    cached = hit is not None and hit[0] is joints and hit[1] is drivers
+    if cached and hit[3] is not None:
+        return hit[3]
+    elems = (*joints, *drivers)
+    out = []
+    for idx, loc_def, direct in zip(st.groups, st.loc_defs, st.direct, strict=True):
+        if direct:
+            per = [jax.tree_util.tree_leaves(elems[i]) for i in idx]
+        else:
+            per = [jax.tree_util.tree_leaves(_localize(elems[i])) for i in idx]
+        leaves = []
+        for k in range(loc_def.num_leaves):
+            xs = [p[k] for p in per]
+            if _is_traced(xs):
+                leaves.append(jnp.stack(xs))
+            else:
+                leaves.append(jnp.asarray(np.stack([np.asarray(x) for x in xs])))
+        out.append(jax.tree_util.tree_unflatten(loc_def, leaves))
+    out = tuple(out)
+    if cached:
+        hit[3] = out
+    return out
+
+
+def _local_eval(st: _Static, stacked: tuple, fn, q, t, qd, rows) -> jax.Array:
+    """``fn(element, q_local, t, qd_local)`` (rows, ...) over the stacked groups, vectorized
+    per group, the full rows ``rows`` in their order."""
+    outs = []
+    for group, cols in zip(stacked, st.cols, strict=True):
+        ql = q[cols]
+        qdl = ql if qd is None else qd[cols]
+        y = jax.vmap(fn, in_axes=(0, 0, None, 0))(group, ql, t, qdl)
+        outs.append(y.reshape(-1, *y.shape[2:]))
+    if not outs:
+        return jnp.zeros((0,))
+    allv = jnp.concatenate(outs)
+    return allv[st.pos[np.asarray(rows, dtype=np.int64)]]
+
+
+def _jacobian_eval(st: _Static, stacked: tuple, q, t, active: tuple) -> jax.Array:
+    """The per-element Jacobian values (nnz,) of the rows ``active``, in :meth:`coo` order."""
+    outs = []
+    for group, cols in zip(stacked, st.cols, strict=True):
+        J = jax.vmap(_jac, in_axes=(0, 0, None))(group, q[cols], t)
+        outs.append(J.reshape(-1))
+    if not outs:
+        return jnp.zeros((0,))
+    v = jnp.concatenate(outs)
+    keep = st.kept_values(tuple(active))
+    return v if keep is None else v[keep]
+
+
+class _Key:
+    """Static part of a :class:`Packed` set: equal (one compiled program) for every set of the
+    same structure, kept rows, rank and solver path, whatever its numbers."""
+
+    def __init__(self, c: Constraints):
+        self.c = c
+        self.static = c._static()
+        self.id = (id(self.static), c.active, c.rank, c.nq, c.linear_solver)
+
+    def __hash__(self):
+        return hash(self.id)
+
+    def __eq__(self, other):
+        return isinstance(other, _Key) and self.static is other.static and self.id == other.id
+
+
+class Packed(eqx.Module):
+    """A constraint set with its elements stacked per kind (:meth:`Constraints.packed`).
+
+    Its leaves are a few stacked arrays, whatever the number of joints and drivers, so a
+    compiled function of it has a program (and a compile time) independent of that number;
+    the numbers are those of the per-element (sparse) path of :class:`Constraints`.
+
+    Attributes:
+        groups: per kind of element, the localized elements stacked (leading axis: element).
+        key: the static part; ``key.c`` is the set, for its static methods (:meth:`coo`,
+            solvers): those do not read the elements' numbers.
+    """
+
+    groups: tuple
+    key: _Key = eqx.field(static=True)
+
+    @property
+    def c(self) -> Constraints:
+        """The constraint set (use only its static structure inside a compiled function)."""
+        return self.key.c
+
+    def full(self, q, t) -> jax.Array:
+        """All rows ``Phi(q, t)`` (n_full,) before dropping redundant ones."""
+        rows = range(self.c.n_full)
+        return _local_eval(self.key.static, self.groups, _residual, q, t, None, rows)
+
+    def __call__(self, q, t) -> jax.Array:
+        """``Phi(q, t)`` (m,), the rows kept."""
+        return _local_eval(self.key.static, self.groups, _residual, q, t, None, self.c.active)
+
+    def jacobian_values(self, q, t) -> jax.Array:
+        """Values (nnz,) of ``Phi_q`` on the pattern ``c.coo()``."""
+        return _jacobian_eval(self.key.static, self.groups, q, t, self.c.active)
 
 
 def _localize(e):
