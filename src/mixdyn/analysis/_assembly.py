@@ -9,6 +9,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints
+from ..equations._constraints import Packed
 from ..errors import AssemblyError, ModelError
 from ..linalg import min_norm_step
 from ..model import CoordinateDriver, Model, Polynomial
@@ -39,6 +40,11 @@ def length_scale(model: Model) -> float:
     vals += [float(np.max(np.abs(np.asarray(p)))) for p in model.ground.points.values()]
     L = max(vals)
     return L if L > 1e-300 else 1.0
+
+
+def start_q(model: Model) -> np.ndarray:
+    """The bodies' rough start ``q0`` (nq,) stacked with NumPy [length, length, rad]."""
+    return np.concatenate([np.asarray(b.q0, dtype=float) for b in model.bodies])
 
 
 def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
@@ -75,6 +81,36 @@ def _residual(c: Constraints, q, t):
     return c.full(q, t)
 
 
+@eqx.filter_jit
+def _gn_step_packed(p: Packed, q, t, damping):
+    """:func:`_gn_step` on the sparse path for a packed set: a program whose size does not
+    depend on the number of joints (one vectorized evaluation per kind)."""
+    solve, ratio = p.c.min_norm_solver(p.jacobian_values(q, t), shift=damping)
+    return q - solve(p(q, t)), ratio
+
+
+@eqx.filter_jit
+def _residual_packed(p: Packed, q, t):
+    return p.full(q, t)
+
+
+class _Steps:
+    """The residual and Gauss–Newton step of a constraint set: on the sparse path through
+    its packed form (compiled once per structure), else the set itself."""
+
+    def __init__(self, c: Constraints):
+        self.c = c
+        self.p = c.packed() if c.linear_solver == "sparse" else None
+
+    def residual(self, q, t):
+        return _residual(self.c, q, t) if self.p is None else _residual_packed(self.p, q, t)
+
+    def step(self, q, t, damping):
+        if self.p is None:
+            return _gn_step(self.c, q, t, damping)
+        return _gn_step_packed(self.p, q, t, damping)
+
+
 def assemble(
     model: Model,
     q=None,
@@ -106,7 +142,7 @@ def assemble(
     Raises:
         AssemblyError: naming the joint equations that could not be closed.
     """
-    q = model.q0 if q is None else jnp.asarray(q, dtype=jnp.float64)
+    q = jnp.asarray(start_q(model) if q is None else q, dtype=jnp.float64)
     if q.shape != (model.nq,):
         raise ModelError(f"q must have shape ({model.nq},), got {tuple(q.shape)}", model.name)
     hold = tuple(hold)
@@ -120,18 +156,19 @@ def assemble(
     tol = 1e-12 * L if tol is None else tol
     t = jnp.asarray(t, dtype=jnp.float64)
     damping = jnp.asarray(0.0)
-    r = _residual(c, q, t)
+    steps = _Steps(c)
+    r = steps.residual(q, t)
     err = float(jnp.max(jnp.abs(r))) if r.size else 0.0
     it = 0
     while err > tol and it < max_iter:
         # Levenberg–Marquardt damping from the residual size keeps the step bounded far away.
         damping = jnp.asarray(min(err / L, 1.0) * 1e-3)
-        q_new, ratio = _gn_step(c, q, t, damping)
+        q_new, ratio = steps.step(q, t, damping)
         if c.linear_solver == "sparse" and not (
             float(ratio) >= SPARSE_STEP_MIN_RATIO and bool(jnp.all(jnp.isfinite(q_new)))
         ):
             q_new, _ = _gn_step(c.with_linear_solver("dense"), q, t, damping)
-        r_new = _residual(c, q_new, t)
+        r_new = steps.residual(q_new, t)
         err_new = float(jnp.max(jnp.abs(r_new)))
         if not np.isfinite(err_new):
             break
@@ -141,7 +178,7 @@ def assemble(
         while err_new > err and alpha > 1e-3:
             alpha *= 0.5
             q_new = q + alpha * step
-            r_new = _residual(c, q_new, t)
+            r_new = steps.residual(q_new, t)
             err_new = float(jnp.max(jnp.abs(r_new)))
         q, r, err = q_new, r_new, err_new
         it += 1

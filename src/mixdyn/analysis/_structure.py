@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -12,9 +13,11 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
 from ..equations import Constraints
-from ..errors import DegreesOfFreedomError, RedundantConstraintError
+from ..equations._constraints import Packed
+from ..errors import DegreesOfFreedomError, ModelError, RedundantConstraintError
 from ..linalg import independent_rows
 from ..model import Model
+from ._assembly import start_q
 
 
 @dataclasses.dataclass(frozen=True)
@@ -64,30 +67,71 @@ def _jac(c: Constraints, q, t):
     return c.phi_q(q, t)
 
 
+@eqx.filter_jit
+def _values(p: Packed, q, t):
+    return p.jacobian_values(q, t)
+
+
 #: :func:`_full_row_rank` certifies full row rank above this ratio (the rank decision's own
 #: tolerance is ``rtol = 1e-9``; the margin covers the unpivoted factorization).
 FULL_RANK_RATIO = 1e-6
+#: A model whose joints' Jacobian has at most this many entries (rows x coordinates, about
+#: 300 bodies) is analysed densely: rank-revealing QR of the whole Jacobian (the reference).
+#: Larger ones by :func:`independent_rows_sparse`, in time and memory linear in the size.
+DENSE_MAX_ENTRIES = 600_000
+#: The sparse analysis hands the rows around a redundancy to the dense QR; it refuses (an
+#: input error) when they would form a dense block of more than this many entries
+#: (rows x columns, 8 bytes each: 400 MB).
+LOCAL_MAX_ENTRIES = 50_000_000
+#: Sparse analysis: diagonal shift of the Gram matrix ``A_n A_n^T`` (rows at unit norm) in the
+#: inverse iteration, pivots below :data:`SUSPECT_PIVOT` counted as possible dependencies,
+#: Ritz values below :data:`NULL_RITZ` (a singular value below 1e-4, far above the QR's
+#: ``rtol``) taken as dependencies, rows with a component above :data:`SUPPORT_TOL` (relative)
+#: in one as taking part, and :data:`LAYERS` layers of neighbouring rows added around them.
+GRAM_SHIFT = 1e-10
+SUSPECT_PIVOT = 1e-6
+NULL_RITZ = 1e-8
+SUPPORT_TOL = 1e-6
+LAYERS = 2
 
 
-def _full_row_rank(A) -> bool:
-    """Whether the rows of ``A`` (m, n) are clearly independent, in O(m) work for a sparse,
-    banded ``A``: the pivots of the Cholesky factorization of ``A_n A_n^T`` (rows scaled to
-    unit norm, bandwidth-reducing order, sparse LU without pivoting), their ratio
-    ``sqrt(min / max)`` above :data:`FULL_RANK_RATIO`. False means "not certain": the caller
-    then takes the rank-revealing QR."""
-    m = A.shape[0]
-    if m == 0:
-        return True
-    norms = np.linalg.norm(A, axis=1)
-    if np.any(norms == 0):
-        return False
-    C = sp.csr_matrix(A / norms[:, None])
-    S = (C @ C.T).tocsr()
+def _unit_rows(A: sp.csr_matrix) -> sp.csr_matrix:
+    """``A`` (m, n) with its rows scaled to unit norm (zero rows left zero)."""
+    norms = np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
+    return sp.diags(1.0 / np.where(norms == 0, 1.0, norms)) @ A
+
+
+def _gram_lu(An: sp.csr_matrix, shift: float):
+    """``(lu, perm)``: sparse LU without pivoting (a Cholesky in effect) of ``An An^T + shift
+    I`` (m, m) in reverse Cuthill–McKee order ``perm``; ``lu`` None if exactly singular."""
+    m = An.shape[0]
+    S = (An @ An.T).tocsr()
+    if shift:
+        S = S + shift * sp.eye(m, format="csr")
     perm = reverse_cuthill_mckee(S, symmetric_mode=True)
     S = S[perm][:, perm].tocsc()
     try:
         lu = splu(S, permc_spec="NATURAL", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
     except RuntimeError:  # exactly singular
+        return None, perm
+    return lu, perm
+
+
+def _full_row_rank(A) -> bool:
+    """Whether the rows of ``A`` (m, n), dense or sparse, are clearly independent, in O(m)
+    work for a sparse, banded ``A``: the pivots of the Cholesky factorization of ``A_n A_n^T``
+    (rows scaled to unit norm, bandwidth-reducing order, sparse LU without pivoting), their
+    ratio ``sqrt(min / max)`` above :data:`FULL_RANK_RATIO`. False means "not certain": the
+    caller then takes the rank-revealing QR."""
+    A = sp.csr_matrix(A)
+    m = A.shape[0]
+    if m == 0:
+        return True
+    An = _unit_rows(A)
+    if np.any(np.diff(An.indptr) == 0) or np.any(An.multiply(An).sum(axis=1) == 0):
+        return False
+    lu, _ = _gram_lu(An, 0.0)
+    if lu is None:
         return False
     d = lu.U.diagonal()
     if not (np.all(np.isfinite(d)) and np.all(d > 0)):
@@ -95,50 +139,217 @@ def _full_row_rank(A) -> bool:
     return bool(np.sqrt(d.min() / d.max()) > FULL_RANK_RATIO)
 
 
+def _neighbours(P: sp.csr_matrix, rows: np.ndarray, layers: int) -> np.ndarray:
+    """``rows`` and the rows sharing a column with them, ``layers`` times over (pattern
+    ``P`` (m, n)); sorted."""
+    sel = np.zeros(P.shape[0], dtype=bool)
+    sel[rows] = True
+    PT = P.T.tocsr()
+    for _ in range(layers):
+        cols = (PT @ sel.astype(float)) > 0
+        sel |= (P @ cols.astype(float)) > 0
+    return np.flatnonzero(sel)
+
+
+def dependent_neighbourhood(A) -> np.ndarray | None:
+    """Where the rows of the sparse ``A`` (m, n) may depend on one another, in time and memory
+    linear in ``m`` for a banded ``A`` (a mechanism of bounded bandwidth).
+
+    The (near) dependencies are the null space of ``A_n^T`` (rows at unit norm): found by
+    inverse subspace iteration with the Cholesky factors of ``A_n A_n^T + GRAM_SHIFT I``, its
+    block as wide as the factors' small pivots are many (plus 4), widened until it holds more
+    than the dependencies. The rows with a component in one of them, and :data:`LAYERS`
+    layers of rows around, are returned.
+
+    Every combination of rows that vanishes involves these rows only, so a maximal
+    independent subset of them, with every other row, is a maximal independent set of rows.
+
+    Args:
+        A: (m, n) sparse matrix.
+
+    Returns:
+        The sorted row indices of the neighbourhood, or None when the rows are certainly
+        independent (:func:`_full_row_rank`).
+    """
+    A = sp.csr_matrix(A)
+    m = A.shape[0]
+    if _full_row_rank(A):
+        return None
+    An = _unit_rows(A)
+    lu, perm = _gram_lu(An, GRAM_SHIFT)
+    d = lu.U.diagonal()
+    inv = np.empty(m, dtype=np.int64)
+    inv[perm] = np.arange(m)
+    S = (An @ An.T).tocsr()[perm][:, perm]
+    k = int(np.sum(~(d > SUSPECT_PIVOT)))
+    rng = np.random.default_rng(0)
+    while True:
+        b = min(max(k, 1) + 4, m)
+        X = rng.standard_normal((m, b))
+        for _ in range(4):
+            X = lu.solve(X)
+            X, _ = np.linalg.qr(X)
+        mu, V = np.linalg.eigh(X.T @ (S @ X))
+        null = mu < NULL_RITZ
+        if not null.all() or b == m:
+            break
+        k = 2 * b
+    if not null.any():
+        return None
+    Y = (X @ V[:, null])[inv]  # back to the original row order
+    big = np.abs(Y) > SUPPORT_TOL * np.max(np.abs(Y), axis=0)
+    rows = np.flatnonzero(big.any(axis=1))
+    P = A.copy()
+    P.data = np.ones_like(P.data)
+    return _neighbours(P, rows, LAYERS)
+
+
+def _dense_block(A: sp.csr_matrix, rows: np.ndarray) -> np.ndarray:
+    """``A[rows]`` (k, c) dense, on the columns where it has entries; refused (an input error)
+    beyond :data:`LOCAL_MAX_ENTRIES` entries."""
+    sub = A[rows]
+    cols = np.unique(sub.indices)
+    if rows.size * max(cols.size, 1) > LOCAL_MAX_ENTRIES:
+        raise ModelError(
+            f"the redundant joint equations or drivers involve {rows.size} equations over "
+            f"{cols.size} coordinates, more than the mobility analysis handles "
+            f"({LOCAL_MAX_ENTRIES:,} entries); remove the redundant joints"
+        )
+    return sub[:, cols].toarray()
+
+
+def independent_rows_sparse(A, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`mixdyn.linalg.independent_rows` for a sparse ``A`` (m, n), in time and memory
+    linear in ``m`` for a mechanism of bounded bandwidth: the rank-revealing QR runs on the
+    rows of :func:`dependent_neighbourhood` only, every other row being independent.
+
+    Returns:
+        ``(independent, redundant, rank)`` as :func:`~mixdyn.linalg.independent_rows`.
+    """
+    A = sp.csr_matrix(A)
+    m = A.shape[0]
+    local = dependent_neighbourhood(A)
+    if local is None:
+        return np.arange(m), np.zeros(0, int), m
+    _, red, _ = independent_rows(_dense_block(A, local), rtol)
+    redundant = np.sort(local[red])
+    keep = np.setdiff1d(np.arange(m), redundant)
+    return keep, redundant, int(keep.size)
+
+
+def _driver_rows(J, n_keep: int, rtol: float) -> list[int]:
+    """Which of the rows ``J[n_keep:]`` (drivers, in order) to keep after the independent
+    rows ``J[:n_keep]``: all if together they raise the rank by their number (one
+    factorization), else one by one, a driver that does not raise the rank being redundant.
+
+    Returns:
+        The positions (``>= n_keep``) of the drivers kept.
+    """
+    keep = list(range(n_keep))
+    drivers = list(range(n_keep, J.shape[0]))
+    rank = independent_rows(J[keep], rtol)[2] if keep else 0
+    if drivers and independent_rows(J[[*keep, *drivers]], rtol)[2] == rank + len(drivers):
+        return drivers
+    out = []
+    for k in drivers:
+        _, _, r = independent_rows(J[[*keep, k]], rtol)
+        if r > rank:
+            keep.append(k)
+            out.append(k)
+            rank = r
+    return out
+
+
+def _sparse_jacobian(c: Constraints, q, t) -> sp.csr_matrix:
+    """``Phi_q`` (n_full, nq) of every row of ``c`` as a SciPy sparse matrix, from the
+    per-element Jacobians (one compiled program per structure; no dense matrix)."""
+    c = c.with_active(range(c.n_full))
+    v = np.asarray(_values(c.packed(), q, t))
+    rows, cols = c.coo()
+    return sp.csr_matrix((v, (rows, cols)), shape=(c.n_full, c.nq))
+
+
 def analyse(
-    model: Model, q=None, t: float = 0.0, drivers=None, rtol: float = 1e-9
+    model: Model,
+    q=None,
+    t: float = 0.0,
+    drivers=None,
+    rtol: float = 1e-9,
+    method: str = "auto",
 ) -> tuple[DofReport, tuple[int, ...]]:
     """Mobility analysis; returns the report and the rows to keep in ``Constraints.of(model,
-    drivers)`` (joint rows independent among themselves, then the drivers)."""
+    drivers)`` (joint rows independent among themselves, then the drivers).
+
+    Args:
+        model: the mechanism.
+        q: (nq,) configuration (default: the bodies' ``q0``).
+        t: time [time] at which drivers are evaluated.
+        drivers: drivers (default: the model's).
+        rtol: relative tolerance of the rank decision (see
+            :func:`~mixdyn.linalg.independent_rows`).
+        method: ``"dense"`` (QR of the dense Jacobian), ``"sparse"`` (sparse Jacobian, QR
+            of the rows around a redundancy only: :func:`independent_rows_sparse`) or
+            ``"auto"`` (dense up to :data:`DENSE_MAX_ENTRIES` Jacobian entries).
+    """
+    c = Constraints.of(model, drivers)
+    q = jnp.asarray(start_q(model) if q is None else q, dtype=jnp.float64)
+    t = jnp.asarray(t, dtype=jnp.float64)
+    if method not in ("dense", "sparse", "auto"):
+        raise ModelError(f"method must be 'dense', 'sparse' or 'auto', got {method!r}")
+    if method == "auto":
+        small = c.n_full * model.nq <= DENSE_MAX_ENTRIES or not c._local_ok()
+        method = "dense" if small else "sparse"
+    if method == "sparse":
+        return _analyse_sparse(model, c, _sparse_jacobian(c, q, t), rtol)
     # the Jacobian by the per-element evaluation for a large mechanism (a small program)
-    c = Constraints.of(model, drivers).with_linear_solver("auto")
-    q = model.q0 if q is None else jnp.asarray(q, dtype=jnp.float64)
-    J = np.asarray(_jac(c, q, jnp.asarray(t, dtype=jnp.float64)))
+    J = np.asarray(_jac(c.with_linear_solver("auto"), q, t))
     nk = c.n_joint_rows
     if _full_row_rank(J):  # the usual case, in O(m): every row independent
         keep = tuple(range(c.n_full))
         report = DofReport(model.nq, nk, nk, model.nq - nk, (), c.n_full - nk, ())
         return report, keep
     keep_k, red_k, rank_k = independent_rows(J[:nk], rtol)
-    redundant_drivers = []
-    keep = list(keep_k)
     drivers_rows = list(range(nk, c.n_full))
-    # Drivers that together raise the rank by their number are all independent (one
-    # factorization); otherwise add them one by one: a driver that does not raise the rank is
-    # redundant.
-    if drivers_rows and independent_rows(J[[*keep, *drivers_rows]], rtol)[2] == rank_k + len(
-        drivers_rows
-    ):
-        keep += drivers_rows
-        drivers_rows = []
-    rank = rank_k
-    for k in drivers_rows:
-        _, _, r = independent_rows(J[[*keep, k]], rtol)
-        if r > rank:
-            keep.append(k)
-            rank = r
-        else:
-            redundant_drivers.append(c.labels[k])
+    kept = _driver_rows(J[[*keep_k, *drivers_rows]], len(keep_k), rtol)
+    kept_drivers = [drivers_rows[k - len(keep_k)] for k in kept]
+    return _report(model, c, red_k, rank_k, [*keep_k, *kept_drivers])
+
+
+def _report(model, c: Constraints, red_k, rank_k: int, keep) -> tuple[DofReport, tuple]:
+    nk = c.n_joint_rows
+    kept = set(int(i) for i in keep)
     report = DofReport(
         n_coordinates=model.nq,
         n_equations=nk,
-        rank=rank_k,
-        dof=model.nq - rank_k,
+        rank=int(rank_k),
+        dof=model.nq - int(rank_k),
         redundant=tuple(c.labels[i] for i in red_k),
         n_drivers=c.n_full - nk,
-        redundant_drivers=tuple(redundant_drivers),
+        redundant_drivers=tuple(c.labels[k] for k in range(nk, c.n_full) if k not in kept),
     )
     return report, tuple(int(i) for i in keep)
+
+
+def _analyse_sparse(model, c: Constraints, J: sp.csr_matrix, rtol: float):
+    """:func:`analyse` on the sparse Jacobian ``J`` (n_full, nq)."""
+    nk = c.n_joint_rows
+    keep_k, red_k, rank_k = independent_rows_sparse(J[:nk], rtol)
+    drivers_rows = np.arange(nk, c.n_full)
+    if drivers_rows.size == 0:
+        return _report(model, c, red_k, rank_k, keep_k)
+    B = J[np.concatenate([keep_k, drivers_rows])]
+    local = dependent_neighbourhood(B)
+    if local is None:
+        return _report(model, c, red_k, rank_k, [*keep_k, *drivers_rows])
+    nkeep = keep_k.size
+    block = _dense_block(B, local)
+    n_local_keep = int(np.sum(local < nkeep))  # local is sorted: joint rows first
+    kept_local = _driver_rows(block, n_local_keep, rtol)
+    dropped = set(int(local[k]) - nkeep for k in range(n_local_keep, local.size)) - set(
+        int(local[k]) - nkeep for k in kept_local
+    )
+    kept_drivers = [int(drivers_rows[i]) for i in range(drivers_rows.size) if i not in dropped]
+    return _report(model, c, red_k, rank_k, [*keep_k, *kept_drivers])
 
 
 def degrees_of_freedom(model: Model, q=None, t: float = 0.0, drivers=None) -> DofReport:

@@ -18,6 +18,11 @@ from ._joints import Joint
 COORDINATES = ("x", "y", "phi")
 
 
+def _traced(leaves) -> bool:
+    """Whether any of ``leaves`` is being traced (inside ``jit``, ``grad``, ``vmap``)."""
+    return any(isinstance(x, jax.core.Tracer) for x in leaves)
+
+
 def _unique(items, what):
     seen = set()
     for it in items:
@@ -149,13 +154,26 @@ class Model(eqx.Module):
 
     @property
     def q0(self) -> jax.Array:
-        """The bodies' rough initial coordinates, stacked, (3 nb,)."""
-        return jnp.concatenate([b.q0 for b in self.bodies])
+        """The bodies' rough initial coordinates, stacked, (3 nb,) [length, length, rad].
+
+        Stacked with NumPy (a JAX concatenation of every body compiles in a time growing
+        quadratically with their number), with JAX only inside a trace."""
+        parts = [b.q0 for b in self.bodies]
+        if _traced(parts):
+            return jnp.concatenate(parts)
+        return jnp.asarray(np.concatenate([np.asarray(x) for x in parts]))
 
     @property
     def mass_diagonal(self) -> jax.Array:
-        """Diagonal of ``M = diag(m_i, m_i, J_i)``, (3 nb,) [mass, mass, mass*length**2]."""
-        return jnp.concatenate([jnp.stack([b.mass, b.mass, b.inertia]) for b in self.bodies])
+        """Diagonal of ``M = diag(m_i, m_i, J_i)``, (3 nb,) [mass, mass, mass*length**2]
+        (NumPy-built outside a trace, as :attr:`q0`)."""
+        m = [b.mass for b in self.bodies]
+        inertia = [b.inertia for b in self.bodies]
+        if _traced(m) or _traced(inertia):
+            return jnp.concatenate([jnp.stack([b.mass, b.mass, b.inertia]) for b in self.bodies])
+        m = np.asarray([np.asarray(x) for x in m])
+        inertia = np.asarray([np.asarray(x) for x in inertia])
+        return jnp.asarray(np.stack([m, m, inertia], axis=1).reshape(-1))
 
     @property
     def n_joint_equations(self) -> int:
