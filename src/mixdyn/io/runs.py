@@ -407,13 +407,34 @@ class Runner:
                     for k, p in enumerate(r.prescribed)
                 ],
             )
+        # Assembly and analysis are cached by what they depend on (the drivers, the held
+        # coordinates, the start, the time): runs that share them are analysed once.
+        import jax
+
+        def _drivers_key(drivers) -> tuple:  # the drivers' kinds, structure and numbers
+            out = []
+            for d in drivers:
+                leaves, treedef = jax.tree_util.tree_flatten(d)
+                out.append((treedef, tuple(np.asarray(x).tobytes() for x in leaves)))
+            return tuple(out)
+
+        cache = self.__dict__.setdefault("_mobility_cache", {})
+        hold = self.hold(plan)
         try:
-            q = an.assemble(model, self.q_start(plan, model), hold=self.hold(plan)).q
+            q_rough = np.asarray(self.q_start(plan, model), dtype=float)
+            key = ("assemble", _drivers_key(model.drivers), hold, q_rough.tobytes())
+            if key not in cache:
+                cache[key] = np.asarray(an.assemble(model, q_rough, hold=hold).q)
+            q = cache[key]
             prescribed = self._prescribed_motions(plan, model, q) if mixed else ()
         except ModelError as e:
             self._model_error(plan, e)
         drivers = (*model.drivers, *prescribed)
-        report = an.degrees_of_freedom(model, q, float(plan.times[0]), drivers=drivers)
+        t0 = float(plan.times[0])
+        key = ("dof", _drivers_key(drivers), q.tobytes(), t0)
+        if key not in cache:
+            cache[key] = an.degrees_of_freedom(model, q, t0, drivers=drivers)
+        report = cache[key]
         n = report.n_drivers
         if r.kind in ("kinematic", "inverse"):
             if report.redundant_drivers:
