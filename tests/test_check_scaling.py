@@ -56,14 +56,22 @@ def _chain_with_parallelogram(n: int):
     tip = chain.bodies[-1]
     bodies = [*chain.bodies]
     pts = dict(tip.points)
-    pts.update({"O1": (0.5, 0.0), "O2": (0.5, 0.5), "O3": (0.5, 0.2)})
+    pts.update({"O1": (0.0, 0.0), "O2": (0.5, 0.0), "O3": (0.2, 0.0)})
     bodies[-1] = md.Body(tip.name, 1.0, 0.1, q0=tuple(np.asarray(tip.q0)), points=pts)
     joints = [*chain.joints]
     for j in base.joints:
         pi = j.point_i.replace("ground.", f"{tip.name}.")
         joints.append(md.Revolute(j.name, pi, j.point_j))
+    # the parallelogram's bodies placed in the tip's frame (a start close to closing)
+    x, y, phi = np.asarray(tip.q0, dtype=float)
+    c, s = np.cos(phi), np.sin(phi)
+    moved = []
+    for b in base.bodies:
+        bx, by, bphi = np.asarray(b.q0, dtype=float)
+        q0 = (x + c * bx - s * by, y + s * bx + c * by, phi + bphi)
+        moved.append(md.Body(b.name, 1.0, 0.01, q0=q0, points=dict(b.points)))
     return md.Model(
-        [*bodies, *base.bodies],
+        [*bodies, *moved],
         joints,
         ground=chain.ground,
         name="chain+parallelogram",

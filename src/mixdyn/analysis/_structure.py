@@ -75,10 +75,11 @@ def _values(p: Packed, q, t):
 #: :func:`_full_row_rank` certifies full row rank above this ratio (the rank decision's own
 #: tolerance is ``rtol = 1e-9``; the margin covers the unpivoted factorization).
 FULL_RANK_RATIO = 1e-6
-#: A model whose joints' Jacobian has at most this many entries (rows x coordinates, about
-#: 300 bodies) is analysed densely: rank-revealing QR of the whole Jacobian (the reference).
-#: Larger ones by :func:`independent_rows_sparse`, in time and memory linear in the size.
-DENSE_MAX_ENTRIES = 600_000
+#: A model whose Jacobian has at most this many entries (rows x coordinates, about 130
+#: bodies on revolute joints) is analysed densely: rank-revealing QR of the whole Jacobian
+#: (the reference). Larger ones by :func:`independent_rows_sparse`, in time and memory linear
+#: in the size.
+DENSE_MAX_ENTRIES = 100_000
 #: The sparse analysis hands the rows around a redundancy to the dense QR; it refuses (an
 #: input error) when they would form a dense block of more than this many entries
 #: (rows x columns, 8 bytes each: 400 MB).
@@ -237,17 +238,26 @@ def independent_rows_sparse(A, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarr
     return keep, redundant, int(keep.size)
 
 
-def _driver_rows(J, n_keep: int, rtol: float) -> list[int]:
+def _driver_rows(J, n_keep: int, rtol: float, rank: int | None = None) -> list[int]:
     """Which of the rows ``J[n_keep:]`` (drivers, in order) to keep after the independent
     rows ``J[:n_keep]``: all if together they raise the rank by their number (one
     factorization), else one by one, a driver that does not raise the rank being redundant.
+
+    Args:
+        J: (k, n) dense rows: ``n_keep`` independent rows, then the drivers' rows.
+        n_keep: number of independent rows first.
+        rtol: tolerance of the rank decision.
+        rank: the rank of ``J[:n_keep]`` if known (else computed).
 
     Returns:
         The positions (``>= n_keep``) of the drivers kept.
     """
     keep = list(range(n_keep))
     drivers = list(range(n_keep, J.shape[0]))
-    rank = independent_rows(J[keep], rtol)[2] if keep else 0
+    if not drivers:
+        return []
+    if rank is None:
+        rank = independent_rows(J[keep], rtol)[2] if keep else 0
     if drivers and independent_rows(J[[*keep, *drivers]], rtol)[2] == rank + len(drivers):
         return drivers
     out = []
@@ -263,7 +273,8 @@ def _driver_rows(J, n_keep: int, rtol: float) -> list[int]:
 def _sparse_jacobian(c: Constraints, q, t) -> sp.csr_matrix:
     """``Phi_q`` (n_full, nq) of every row of ``c`` as a SciPy sparse matrix, from the
     per-element Jacobians (one compiled program per structure; no dense matrix)."""
-    c = c.with_active(range(c.n_full))
+    if c.m != c.n_full:
+        c = c.with_active(range(c.n_full))
     v = np.asarray(_values(c.packed(), q, t))
     rows, cols = c.coo()
     return sp.csr_matrix((v, (rows, cols)), shape=(c.n_full, c.nq))
@@ -301,8 +312,12 @@ def analyse(
         method = "dense" if small else "sparse"
     if method == "sparse":
         return _analyse_sparse(model, c, _sparse_jacobian(c, q, t), rtol)
-    # the Jacobian by the per-element evaluation for a large mechanism (a small program)
-    J = np.asarray(_jac(c.with_linear_solver("auto"), q, t))
+    # the per-element Jacobians (a small program, compiled once per structure) when every
+    # element has that form, else ``jax.jacfwd`` of the whole set
+    if c._local_ok():
+        J = _sparse_jacobian(c, q, t).toarray()
+    else:
+        J = np.asarray(_jac(c.with_linear_solver("auto"), q, t))
     nk = c.n_joint_rows
     if _full_row_rank(J):  # the usual case, in O(m): every row independent
         keep = tuple(range(c.n_full))
@@ -310,7 +325,7 @@ def analyse(
         return report, keep
     keep_k, red_k, rank_k = independent_rows(J[:nk], rtol)
     drivers_rows = list(range(nk, c.n_full))
-    kept = _driver_rows(J[[*keep_k, *drivers_rows]], len(keep_k), rtol)
+    kept = _driver_rows(J[[*keep_k, *drivers_rows]], len(keep_k), rtol, rank_k)
     kept_drivers = [drivers_rows[k - len(keep_k)] for k in kept]
     return _report(model, c, red_k, rank_k, [*keep_k, *kept_drivers])
 

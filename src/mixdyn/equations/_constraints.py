@@ -410,8 +410,9 @@ class _Static:
     def __init__(self, elements):
         self.layout, row = [], 0
         for e in elements:
-            n = e.n_equations if isinstance(e, Joint) else 1
-            cols = [3 * b + k for b in e.body_indices() for k in range(3)]
+            n = type(e).n_equations if isinstance(e, Joint) else 1
+            # through the class: an equinox module wraps every method it hands out (slow)
+            cols = [3 * b + k for b in type(e).body_indices(e) for k in range(3)]
             self.layout.append((row, n, np.asarray(cols, dtype=np.int64)))
             row += n
         self.n_full = row
@@ -424,7 +425,7 @@ class _Static:
                 loc_leaves, loc_def = jax.tree_util.tree_flatten(loc)
                 # the leaves' shapes too: two polynomial laws of different degrees do not stack
                 shapes = tuple(np.shape(x) for x in loc_leaves)
-                key = (loc_def, shapes, len(e.body_indices()))
+                key = (loc_def, shapes, len(self.layout[i][2]) // 3)
                 groups.setdefault(key, []).append(i)
                 defs.setdefault(key, loc_def)
                 own = jax.tree_util.tree_leaves(e)
@@ -614,7 +615,7 @@ class Packed(eqx.Module):
 def _localize(e):
     """A copy of element ``e`` reading its bodies from a local vector ``[q_b0, q_b1, ...]``
     (its ``body_indices()`` in order), with its naming fields cleared."""
-    bodies = e.body_indices()
+    bodies = type(e).body_indices(e)  # through the class: equinox wraps bound methods (slow)
     where = {b: k for k, b in enumerate(bodies)}
     names = {f.name for f in dataclasses.fields(e)}
     if not names & set(_BODY_FIELDS) and bodies:
@@ -627,7 +628,7 @@ def _localize(e):
     loc = object.__new__(type(e))
     for f in dataclasses.fields(e):
         object.__setattr__(loc, f.name, repl[f.name] if f.name in repl else getattr(e, f.name))
-    if loc.body_indices() != tuple(range(len(bodies))):
+    if type(loc).body_indices(loc) != tuple(range(len(bodies))):
         raise ValueError(type(e).__name__)
     return loc
 
