@@ -258,3 +258,29 @@ def test_check_of_a_2000_body_chain_is_sparse_and_compiles_a_bounded_number_of_p
     assert 1 <= traces["local"] <= 6
     assert 1 <= traces["jacobian"] <= 6
     assert traces["elements"] <= 20
+
+
+def test_large_assembly_retries_a_failed_sparse_step_damped_not_dense(monkeypatch):
+    """A sparse step refused (as redundant equations make ``J J^T`` singular) is taken again
+    on the sparse path with a damping floor for a large model, not on the dense path."""
+    from mixdyn.analysis import _assembly
+
+    model = _chain_with_parallelogram(40)
+    q = np.asarray(model.q0, dtype=float).copy()
+    q[-12:] += 0.05 * np.random.default_rng(0).standard_normal(12)
+    monkeypatch.setattr(_assembly, "SPARSE_STEP_MIN_RATIO", 2.0)  # every step refused
+    monkeypatch.setattr(_assembly, "DENSE_FALLBACK_MAX_ENTRIES", 0)
+
+    def no_dense(*args, **kwargs):
+        raise AssertionError("dense step")
+
+    monkeypatch.setattr(_assembly, "_gn_step", no_dense)
+    asm = md.assemble(model, q, linear_solver="sparse")
+    assert asm.residual <= 1e-12 * _assembly.length_scale(model)
+    assert md.degrees_of_freedom(model, asm.q).rank == model.n_joint_equations - 1
+
+
+def test_size_limit_is_an_input_error():
+    _structure.require_checkable(_structure.MAX_BODIES)
+    with pytest.raises(md.ModelError, match=f"at most {_structure.MAX_BODIES:,} bodies"):
+        _structure.require_checkable(_structure.MAX_BODIES + 1, "big.yaml")

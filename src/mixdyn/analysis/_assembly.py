@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -82,11 +83,24 @@ def _residual(c: Constraints, q, t):
 
 
 @eqx.filter_jit
-def _gn_step_packed(p: Packed, q, t, damping):
+def _gn_step_packed(p: Packed, q, t, damping, floor=0.0):
     """:func:`_gn_step` on the sparse path for a packed set: a program whose size does not
-    depend on the number of joints (one vectorized evaluation per kind)."""
-    solve, ratio = p.c.min_norm_solver(p.jacobian_values(q, t), shift=damping)
+    depend on the number of joints (one vectorized evaluation per kind). The damping is at
+    least ``floor`` times the largest diagonal entry of ``J J^T``."""
+    v = p.jacobian_values(q, t)
+    rows, _ = p.c.coo()
+    diag = jax.ops.segment_sum(v**2, jnp.asarray(rows), num_segments=p.c.m)
+    damping = jnp.maximum(damping, floor * jnp.max(diag, initial=0.0))
+    solve, ratio = p.c.min_norm_solver(v, shift=damping)
     return q - solve(p(q, t)), ratio
+
+
+#: Above this many Jacobian entries (rows x coordinates) a failed sparse step is not taken
+#: again on the dense path (a dense ``J`` and ``J J^T``: memory and time growing as the
+#: square and the cube of the size) but on the sparse path with the damping at least
+#: :data:`SPARSE_DAMPING_FLOOR` times the largest diagonal entry of ``J J^T``.
+DENSE_FALLBACK_MAX_ENTRIES = 4_000_000
+SPARSE_DAMPING_FLOOR = 1e-10
 
 
 @eqx.filter_jit
@@ -105,10 +119,10 @@ class _Steps:
     def residual(self, q, t):
         return _residual(self.c, q, t) if self.p is None else _residual_packed(self.p, q, t)
 
-    def step(self, q, t, damping):
+    def step(self, q, t, damping, floor=0.0):
         if self.p is None:
             return _gn_step(self.c, q, t, damping)
-        return _gn_step_packed(self.p, q, t, damping)
+        return _gn_step_packed(self.p, q, t, damping, floor)
 
 
 def assemble(
@@ -167,7 +181,10 @@ def assemble(
         if c.linear_solver == "sparse" and not (
             float(ratio) >= SPARSE_STEP_MIN_RATIO and bool(jnp.all(jnp.isfinite(q_new)))
         ):
-            q_new, _ = _gn_step(c.with_linear_solver("dense"), q, t, damping)
+            if c.m * c.nq <= DENSE_FALLBACK_MAX_ENTRIES:
+                q_new, _ = _gn_step(c.with_linear_solver("dense"), q, t, damping)
+            else:
+                q_new, _ = steps.step(q, t, damping, SPARSE_DAMPING_FLOOR)
         r_new = steps.residual(q_new, t)
         err_new = float(jnp.max(jnp.abs(r_new)))
         if not np.isfinite(err_new):

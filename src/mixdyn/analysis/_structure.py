@@ -96,6 +96,30 @@ SUPPORT_TOL = 1e-6
 LAYERS = 2
 
 
+#: The largest model the mobility analysis (and ``mixdyn check``) accepts [bodies]: its time
+#: and memory grow linearly, about 1.7 s and 60 MB per 1,000 bodies (``mixdyn check`` of a
+#: pendulum chain, ``benchmarks/check_scaling.py``), so about 90 s and 3.5 GB at the limit.
+MAX_BODIES = 50_000
+
+
+def require_checkable(n_bodies: int, where: str = "the model") -> None:
+    """Refuse (an input error) a model too large to be checked in bounded time and memory.
+
+    Args:
+        n_bodies: number of moving bodies.
+        where: what to name in the message (a file name).
+
+    Raises:
+        ModelError: more than :data:`MAX_BODIES` bodies.
+    """
+    if n_bodies > MAX_BODIES:
+        raise ModelError(
+            f"{where} has {n_bodies:,} bodies; a model is checked and analysed with at most "
+            f"{MAX_BODIES:,} bodies (about 1.7 s and 60 MB per 1,000 bodies); split the "
+            "mechanism into smaller models"
+        )
+
+
 def _unit_rows(A: sp.csr_matrix) -> sp.csr_matrix:
     """``A`` (m, n) with its rows scaled to unit norm (zero rows left zero)."""
     norms = np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
