@@ -97,8 +97,9 @@ LAYERS = 2
 
 
 #: The largest model the mobility analysis (and ``mixdyn check``) accepts [bodies]: its time
-#: and memory grow linearly, about 1.7 s and 60 MB per 1,000 bodies (``mixdyn check`` of a
-#: pendulum chain, ``benchmarks/check_scaling.py``), so about 90 s and 3.5 GB at the limit.
+#: and memory grow linearly, about 2 s and 50 MB per 1,000 bodies (``mixdyn check`` of a
+#: pendulum chain, ``benchmarks/check_scaling.py``: 17 s and 0.6 GB at 10,000 bodies, 97 s
+#: and 2.4 GB at 50,000), most of it reading the file and building the model.
 MAX_BODIES = 50_000
 
 
@@ -115,7 +116,7 @@ def require_checkable(n_bodies: int, where: str = "the model") -> None:
     if n_bodies > MAX_BODIES:
         raise ModelError(
             f"{where} has {n_bodies:,} bodies; a model is checked and analysed with at most "
-            f"{MAX_BODIES:,} bodies (about 1.7 s and 60 MB per 1,000 bodies); split the "
+            f"{MAX_BODIES:,} bodies (about 2 s and 50 MB per 1,000 bodies); split the "
             "mechanism into smaller models"
         )
 
