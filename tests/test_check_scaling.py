@@ -284,3 +284,18 @@ def test_size_limit_is_an_input_error():
     _structure.require_checkable(_structure.MAX_BODIES)
     with pytest.raises(md.ModelError, match=f"at most {_structure.MAX_BODIES:,} bodies"):
         _structure.require_checkable(_structure.MAX_BODIES + 1, "big.yaml")
+
+
+def test_cli_refuses_a_model_over_the_size_limit_before_building_it(monkeypatch):
+    """``mixdyn check`` and ``mixdyn run`` refuse a model over the stated limit with one line
+    and exit 2, before building it (the limit lowered to 1 body for the test)."""
+    from mixdyn.cli import app
+
+    monkeypatch.setattr(_structure, "MAX_BODIES", 1)
+    example = pathlib.Path(__file__).parent.parent / "examples" / "four_bar.yaml"
+    for args in (["check", str(example)], ["run", str(example), "--out", "unused"]):
+        res = CliRunner().invoke(app, args)
+        assert res.exit_code == 2, res.output
+        assert "at most 1 bodies" in res.stderr
+        assert len(res.stderr.strip().splitlines()) == 1
+        assert not pathlib.Path("unused").exists()

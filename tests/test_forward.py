@@ -89,9 +89,7 @@ def falling_four_bar():
     """The fixtures' crank–rocker without its motor, under gravity, its crank started at
     3 rad/s (a closed loop, one degree of freedom, no damping: conservative)."""
     model = four_bar(theta0=0.3).replace(drivers=(), gravity=(0.0, -G))
-    qd0 = np.zeros(model.nq)
-    qd0[model.coordinate_index("crank.phi")] = 3.0
-    return model, qd0
+    return model, {"crank.phi": 3.0}
 
 
 def test_four_bar_conserves_energy():
@@ -142,7 +140,14 @@ def test_convergence_order(order_reference, method, solver, order, steps):
     errors = []
     for h in steps:
         res = md.forward(
-            model, ts, method=method, dt=jnp.asarray(h), qd0=qd0, hold=("crank.phi",), **opts
+            model,
+            ts,
+            method=method,
+            dt=jnp.asarray(h),
+            qd0=qd0,
+            hold=("crank.phi",),
+            energy_tol=None,  # the coarse steps of a convergence study: errors expected
+            **opts,
         )
         errors.append(np.max(np.abs(res.q - ref.q)))
     slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
@@ -204,7 +209,9 @@ def test_generalized_alpha_stiff_spring_falls_back_to_full_newton(k):
     model = spring_slider(m, k, c, L0, L0 + A)
     ts = np.linspace(0.0, 0.05, 51)
     ref = generalized_alpha_oscillator(m, k, c, L0, L0 + A, h, 50, 0.9)
-    kw = dict(method="generalized-alpha", dt=h, rho_inf=0.9)
+    # the method's recurrence, not the physics: at two steps per period the numerical damping
+    # dissipates the spring's energy (the energy-balance check would rightly refuse it)
+    kw = dict(method="generalized-alpha", dt=h, rho_inf=0.9, energy_tol=None)
     with pytest.raises(md.ConvergenceError, match="Newton"):
         md.forward(model, ts, newton="modified", **kw)
     for newton in ("auto", "full"):

@@ -228,13 +228,21 @@ def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
             check_output(folder / name, "--out")
 
 
+def _require_size(spec, file) -> None:
+    """Refuse, before building anything, a model too large to check in bounded time."""
+    from .analysis._structure import require_checkable
+
+    require_checkable(len(spec.bodies), str(file))
+
+
 # --------------------------------------------------------------------------- check
 @app.command()
 def check(file: FileArg):
     """Check a model file: form, names, units, expressions, degrees of freedom, and that
     every run is well posed (options, steps, outputs, laws). Prints the degrees of freedom,
     redundant equations, the driver/DOF balance of each run and warnings; changes nothing.
-    A model file is UTF-8 text of at most 20 MB."""
+    A model file is UTF-8 text of at most 20 MB with at most 50,000 bodies (checked at
+    about 2 s and 50 MB per 1,000 bodies)."""
     with _guard(file):
         from . import analysis as an
         from .io import Runner, read
@@ -242,6 +250,7 @@ def check(file: FileArg):
         from .io.runs import start_q
 
         spec = read(file)
+        _require_size(spec, file)
         runner = Runner(spec)
         model = runner.model
         asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
@@ -337,6 +346,7 @@ def run(
         from .io import Runner, read
 
         spec = read(file)
+        _require_size(spec, file)
         runner = Runner(spec)
         if not spec.runs:
             from .io import FileError
@@ -623,6 +633,7 @@ def animate(
         from .viz import animate as write_animation
 
         spec = read(file)
+        _require_size(spec, file)
         runner = Runner(spec)
         plan = runner.order([run_name])[-1]
         a = plan.spec.animation
@@ -726,6 +737,7 @@ def dump(
         if output is not None:
             check_output(output, "--output")
         spec = read(file)
+        _require_size(spec, file)
         build(spec)
         text = dumps(spec)
         if output is None:

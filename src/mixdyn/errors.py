@@ -67,3 +67,13 @@ class SingularityError(NumericalError):
 
 class StepSizeError(NumericalError):
     """An adaptive integrator's step size collapsed below its minimum."""
+
+
+class EnergyBalanceError(NumericalError):
+    """A dynamic run broke its energy balance ``T + V - E0 - W_applied - W_constraints = 0``
+    beyond its tolerance: the motion jumped to another branch at a singular position, or the
+    steps were too large for the accuracy the result claims."""
+
+
+class NonFiniteError(NumericalError):
+    """A result column holds a NaN or an infinity (a singular force law, an overflow)."""

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..equations import Constraints, applied_forces, force_directions, potential_energy
 from ..linalg import lu_solve_checked, min_pivot, solve_kkt, solve_ranked
-from ..linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
+from ..linalg._dense import SINGULAR_DAMPING, SINGULAR_RATIO
 from ..model import Model
 
 
@@ -137,7 +137,9 @@ class Problem(eqx.Module):
         # the symmetric system M qdd + C^T y = Q, C qdd = gam
         mu, ratio = c.schur_solve(v, Minv, rhs)
         mu = jax.lax.cond(
-            ratio < SINGULAR_RATIO, lambda: self._dense_schur_solve(q, qd, t, rhs), lambda: mu
+            ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
+            lambda: self._dense_schur_solve(q, qd, t, rhs),
+            lambda: mu,
         )
         qdd = Minv * (Q - c.rmatvec(v, mu))
         if self.p:
@@ -163,7 +165,7 @@ class Problem(eqx.Module):
         c = self.c
         C = c.phi_q(q, t)
         G = C.T if symmetric else self.G(q, qd, t, C)
-        return solve_ranked(C @ (self.Minv[:, None] * G), b, c.rank, rcond=SINGULAR_RCOND)[0]
+        return solve_ranked(C @ (self.Minv[:, None] * G), b, c.rank, damping=SINGULAR_DAMPING)[0]
 
     def schur_solver(self, q, qd, t, v):
         """Sparse path: ``(solve, ratio, g_times)`` with ``solve(b)`` solving ``S mu = b`` for
@@ -179,7 +181,7 @@ class Problem(eqx.Module):
 
         def solve(b):
             return jax.lax.cond(
-                ratio < SINGULAR_RATIO,
+                ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
                 lambda b: self._dense_schur_solve(q, qd, t, b),
                 solve_sym,
                 b,
@@ -229,7 +231,7 @@ class Problem(eqx.Module):
 
         def solve(b):  # dense below SINGULAR_RATIO: a singular position or unsolvable instant
             return jax.lax.cond(
-                ratio < SINGULAR_RATIO,
+                ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
                 lambda b: self._dense_schur_solve(q, qd, t, b, symmetric=False),
                 woodbury,
                 b,
@@ -313,7 +315,11 @@ class Problem(eqx.Module):
     def project_positions(self, q, t, tol, iters: int = 4):
         """Mass-weighted least-norm projection of ``q`` onto ``Phi(q, t) = 0``: at most
         ``iters`` Newton steps, none once ``max |Phi| <= tol`` [length] (usually one after an
-        integration step, so the loop stops early rather than solving ``iters`` times)."""
+        integration step, so the loop stops early rather than solving ``iters`` times).
+
+        Returns:
+            ``(q (nq,), residual)``: the projected positions and ``max |Phi|`` there.
+        """
 
         c, Minv = self.c, self.Minv
 
@@ -334,11 +340,11 @@ class Problem(eqx.Module):
             else:
                 J = c.phi_q(q, t)
                 MJ = Minv[:, None] * J.T
-                y, _ = c.solve(J @ MJ, r)
-                q = q - MJ @ y
+                q = q - MJ @ self._projection_solve(J @ MJ, r)
             return (k + 1, q, *residual(q))
 
-        return jax.lax.while_loop(cond, body, (0, q, *residual(q)))[1]
+        _, q, r, _ = jax.lax.while_loop(cond, body, (0, q, *residual(q)))
+        return q, jnp.max(jnp.abs(r), initial=0.0)
 
     def project_velocities(self, q, qd, t):
         """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``."""
@@ -350,5 +356,18 @@ class Problem(eqx.Module):
         J = self.c.phi_q(q, t)
         r = J @ qd + self.c.phi_t(q, t)
         MJ = self.Minv[:, None] * J.T
-        y, _ = self.c.solve(J @ MJ, r)
-        return qd - MJ @ y
+        return qd - MJ @ self._projection_solve(J @ MJ, r)
+
+    def _projection_solve(self, S, r):
+        """``S^-1 r`` for a projection's ``S = Phi_q M^-1 Phi_q^T`` (dense path): near a
+        singular position the damped SVD solve, as for the accelerations, so that the
+        residual's part along the direction losing rank (rounding, drift) is not amplified
+        like ``1/s`` into a jump of the positions or velocities."""
+        y, ratio = self.c.solve(S, r)
+        if self.c.rank is not None or S.shape[0] == 0:
+            return y
+        return jax.lax.cond(
+            ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
+            lambda: solve_ranked(S, r, None, damping=SINGULAR_DAMPING)[0],
+            lambda: y,
+        )

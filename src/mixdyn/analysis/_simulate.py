@@ -3,16 +3,26 @@ failures turned into named errors, and results in physical terms."""
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Mapping
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints, kinetic_energy, potential_energy
-from ..errors import ModelError, NumericalError, SingularityError, StepSizeError
+from ..errors import (
+    EnergyBalanceError,
+    ModelError,
+    NumericalError,
+    SingularityError,
+    StepSizeError,
+)
 from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import assemble, hold_drivers, length_scale
+from ._options import check_options
 from ._problem import Problem
 from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
 from ._structure import _jac
@@ -21,7 +31,9 @@ from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE
 from .kinematic import output_times
 from .result import Result
 
-FIXED_STEP = ("baumgarte", "generalized-alpha")
+#: Default relative tolerance of a dynamic run's energy balance (see
+#: :func:`check_energy_balance`).
+ENERGY_TOL = 1e-4
 
 
 def require_masses(model: Model) -> None:
@@ -61,22 +73,61 @@ def _velocity_fix_sparse(c: Constraints, q, qd, t, weights):
     return qd, jnp.max(jnp.abs(c.matvec(v, qd) + phi_t), initial=0.0), ratio
 
 
+def _velocity_conditions(model: Model, qd0) -> tuple[jax.Array, list[int], bool]:
+    """``(qd (nq,), indices of the given velocities, whether qd0 was a full vector)``."""
+    if qd0 is None:
+        return jnp.zeros(model.nq), [], False
+    if isinstance(qd0, Mapping):
+        qd = np.zeros(model.nq)
+        idx = []
+        for ref, value in qd0.items():
+            i = model.coordinate_index(ref)
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                v = float("nan")
+            if not np.isfinite(v):
+                raise ModelError(
+                    f"the initial velocity must be a finite number, got {value!r}", ref
+                )
+            qd[i] = v
+            idx.append(i)
+        return jnp.asarray(qd), idx, False
+    qd = np.asarray(qd0, dtype=float)
+    if qd.shape != (model.nq,):
+        raise ModelError(
+            f"qd0 must have shape ({model.nq},) or be a mapping {{coordinate: velocity}}, "
+            f"got shape {qd.shape}",
+            model.name,
+        )
+    if not np.all(np.isfinite(qd)):
+        k = int(np.argmax(~np.isfinite(qd)))
+        raise ModelError("the initial velocity must be a finite number", model.coordinate_names[k])
+    return jnp.asarray(qd), [], True
+
+
 def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None, hold=()):
     """Positions on ``Phi(q, t0) = 0`` and velocities on ``Phi_q qd = -Phi_t``.
 
     Positions: assembled from ``q0`` (default the bodies' ``q0``) keeping the ``hold``
-    coordinates; velocities: the least change of ``qd0`` (default 0) that satisfies the velocity
-    constraints, keeping the held coordinates' velocities. Both on ``c``'s linear-solver path
-    (the sparse one falls back to the dense least-squares solve where ``Phi_q`` is rank
-    deficient: redundant equations, too many held coordinates).
+    coordinates. Velocities: given velocities are kept, never changed silently:
+
+    - ``qd0=None``: the least (mass-unweighted) velocities satisfying the velocity
+      constraints (zero for a mechanism without drivers), the held coordinates at rest;
+    - ``qd0={"crank.phi": 1.0, ...}``: *velocity conditions*: these velocities are kept
+      exactly and the others follow (the least velocities that satisfy the constraints with
+      them); too many or inconsistent conditions are a :class:`ModelError` naming them;
+    - ``qd0`` a full (nq,) vector: it must satisfy the velocity constraints (to 1e-8 of its
+      size; rounding is corrected), else a :class:`ModelError`.
+
+    Both on ``c``'s linear-solver path (the sparse one falls back to the dense least-squares
+    solve where ``Phi_q`` is rank deficient: redundant equations, too many held coordinates).
     """
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     asm = assemble(model, q, hold=hold, t=t0, drivers=c.drivers, linear_solver=c.linear_solver)
     q = jnp.asarray(asm.q)
-    qd = jnp.zeros(model.nq) if qd0 is None else jnp.asarray(qd0, dtype=jnp.float64)
-    if qd.shape != (model.nq,):
-        raise ModelError(f"qd0 must have shape ({model.nq},)", model.name)
-    hold_idx = [model.coordinate_index(h) for h in hold]
+    qd, given, full = _velocity_conditions(model, qd0)
+    hold_idx = sorted({model.coordinate_index(h) for h in hold} | set(given))
     qd_in, ok = qd, False
     if c.linear_solver == "sparse":
         W = np.ones(model.nq)
@@ -87,11 +138,31 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
         qd, err = _velocity_fix(
             c.with_linear_solver("dense"), q, qd_in, jnp.asarray(t0), jnp.asarray(hold_idx, int)
         )
+    if hold_idx:  # the conditions hold to rounding: keep the given numbers bit for bit
+        qd = qd.at[jnp.asarray(hold_idx)].set(qd_in[jnp.asarray(hold_idx)])
     scale = length_scale(model)
+    size = max(1.0, float(jnp.max(jnp.abs(qd_in), initial=0.0)))
     if not float(err) < 1e-8 * max(scale, 1.0) * max(1.0, float(jnp.max(jnp.abs(qd)))):
+        names = [model.coordinate_names[i] for i in given]
+        what = []
+        if names:
+            what.append(f"the given velocities of {', '.join(names)}")
+        if hold:
+            what.append(f"the held coordinates {', '.join(hold)} (at rest)")
         raise ModelError(
-            "the initial velocities cannot satisfy the velocity constraints with "
-            f"the held coordinates {', '.join(hold)}; hold fewer velocities",
+            f"{' and '.join(what) or 'the drivers'} cannot all hold with the joints' velocity "
+            f"constraints (violated by {float(err):.3g}): they are too many or inconsistent; "
+            "give only independent velocities (at most one per degree of freedom)",
+            ", ".join(names) or model.name,
+        )
+    change = float(jnp.max(jnp.abs(qd - qd_in), initial=0.0))
+    if full and change > 1e-8 * size:
+        k = int(jnp.argmax(jnp.abs(qd - qd_in)))
+        raise ModelError(
+            f"the initial velocities qd0 violate the velocity constraints (making them "
+            f"consistent would change {model.coordinate_names[k]} by {change:.3g}); give a "
+            "consistent vector, or only the velocities you mean as a mapping "
+            "{coordinate: velocity} (the others follow)",
             model.name,
         )
     return q, qd
@@ -200,6 +271,109 @@ def _raise_failure(problem: Problem, traj, ts, method):
     raise cls(msg, t, names if singular else ())
 
 
+def check_energy_tol(energy_tol) -> None:
+    """``energy_tol`` is None or a finite number > 0."""
+    if energy_tol is None:
+        return
+    try:
+        ok = not isinstance(energy_tol, bool) and 0 < float(energy_tol) < np.inf
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise ModelError(
+            f"energy_tol must be a finite number > 0 (e.g. 1e-4) or None, got {energy_tol!r}",
+            "energy_tol",
+        )
+
+
+def integrator_options(method: str, options: dict, ts) -> dict:
+    """The checked options of a run of integrator ``method`` (before any computing): unknown
+    names, values out of range and absurd step counts are input errors
+    (:func:`~._options.check_options`)."""
+    if method not in INTEGRATORS:
+        close = difflib.get_close_matches(str(method), INTEGRATORS, n=2, cutoff=0.5)
+        hint = f"did you mean {' or '.join(close)}? " if close else ""
+        raise ModelError(
+            f"unknown integrator {method!r}; {hint}choose one of {', '.join(INTEGRATORS)}",
+            "method",
+        )
+    return check_options(method, INTEGRATORS[method], options, np.asarray(ts))
+
+
+def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_tol) -> float:
+    """The energy balance of a dynamic run, ``T + V - E0 - W_nc - W_c`` [energy], relative to
+    its energy scale; raise past ``energy_tol``.
+
+    Every dynamic run obeys ``T(t) + V(t) = T(0) + V(0) + W_nc(t) + W_c(t)``: the work of the
+    non-conservative applied forces and of the constraint forces (drivers, prescribed
+    motions, unknown forces, Baumgarte terms) is integrated along with the motion. Projection
+    and integration errors keep the balance at the level of the tolerances; a jump to
+    another branch at a singular position (a parallelogram that folds, a crank that locks)
+    changes the velocities at one instant and breaks the balance by a finite amount, which is
+    how it is detected. The scale is the largest of the energies' ranges and the works
+    (and the model's mass times its length scale squared over the span squared, so that a
+    run at rest is not held to rounding).
+
+    Args:
+        problem: the equations of motion.
+        ts: (N,) output times [time].
+        Q: (N, nq) positions at ``ts`` (to name the elements at the failure).
+        extra: result columns (``energy.*``, ``work.*``).
+        ratio: (N,) pivot ratios at ``ts`` (to tell a singular position).
+        method: integrator name (for the message).
+        energy_tol: relative tolerance, or None to skip the check.
+
+    Returns:
+        The largest relative balance error.
+
+    Raises:
+        EnergyBalanceError: at the first output time past the tolerance.
+    """
+    T, V = extra["energy.kinetic"], extra["energy.potential"]
+    Wn, Wc = extra["work.nonconservative"], extra["work.constraints"]
+    bal = (T + V) - (T[0] + V[0]) - Wn - Wc
+    span = float(ts[-1] - ts[0])
+    mass = float(np.sum(problem.model.mass_diagonal[::3]))
+    rest = mass * (length_scale(problem.model) / span) ** 2
+    scale = max(np.ptp(T), np.ptp(V), np.max(np.abs(Wn)), np.max(np.abs(Wc)), rest, 1e-300)
+    rel = np.abs(bal) / scale
+    if not np.all(np.isfinite(rel)):
+        return float("nan")  # the result's own check names the non-finite column
+    worst = float(np.max(rel))
+    if energy_tol is None or worst <= energy_tol:
+        return worst
+    k = int(np.argmax(~(rel <= energy_tol)))
+    k0 = max(k - 1, 0)
+    near = k0 + int(np.argmin(ratio[k0 : k + 1]))
+    singular = float(np.min(ratio[: k + 1])) < 1e-3
+    names = []
+    if singular:
+        J = np.asarray(_jac(problem.c, jnp.asarray(Q[near]), jnp.asarray(ts[near])))
+        for i in dependent_rows(J, 1e-3) if J.size else []:
+            e = problem.c.element_names[problem.c.owners[problem.c.active[i]]]
+            if e not in names:
+                names.append(e)
+    cause = (
+        "the motion most likely left its branch at a singular position (the constraint "
+        f"Jacobian's pivot ratio fell to {float(np.min(ratio[: k + 1])):.1e} before this time)"
+        if singular
+        else "the steps are too large for the accuracy asked, or the motion left its branch"
+    )
+    if method == "generalized-alpha":
+        cause += (
+            " (generalized-alpha also damps unresolved high frequencies by design, rho_inf "
+            "< 1: if that loss is intended, set energy_tol=None)"
+        )
+    raise EnergyBalanceError(
+        f"{method} run broke its energy balance by {abs(bal[k]):.3g} [energy], "
+        f"{rel[k]:.1e} of its energy scale {scale:.3g} (tolerance {energy_tol:g}): {cause}; "
+        "use a smaller step or tighter tolerances, another method (projection with "
+        "solver='tsit5' passes singular positions best), or energy_tol=None to accept it",
+        float(ts[k]),
+        names,
+    )
+
+
 def simulate(
     kind: str,
     problem: Problem,
@@ -210,22 +384,17 @@ def simulate(
     options: dict,
     n_drivers: int,
     progress=None,
+    energy_tol: float | None = ENERGY_TOL,
 ) -> Result:
-    """Integrate ``problem`` from the consistent state ``(q0, qd0)`` and build the result."""
-    if method not in INTEGRATORS:
-        raise ModelError(
-            f"unknown integrator {method!r}; choose one of {', '.join(INTEGRATORS)}", "method"
-        )
+    """Integrate ``problem`` from the consistent state ``(q0, qd0)`` and build the result.
+
+    ``options`` are the integrator's, checked by :func:`integrator_options`. A run whose
+    energy balance breaks by more than ``energy_tol`` of its energy scale fails
+    (:func:`check_energy_balance`).
+    """
     opts = dict(options)
-    if method in FIXED_STEP:
-        if opts.get("dt") is None:
-            raise ModelError(
-                f"the {method} integrator has a fixed step: give dt [time], e.g. "
-                f"dt={(ts[-1] - ts[0]) / 2000:.3g}",
-                "dt",
-            )
-        opts.pop("rtol", None)
-        opts.pop("atol", None)
+    if "first_step" in opts:  # an array, so that another first step is not another program
+        opts["first_step"] = jnp.asarray(opts["first_step"], dtype=jnp.float64)
     integrator = INTEGRATORS[method]
     traj = integrator(problem, jnp.asarray(ts), q0, qd0, progress=progress, **opts)
     if int(traj.status) != 0:
@@ -243,15 +412,17 @@ def simulate(
         raise SingularityError(
             "accelerations are not finite: singular equations of motion", float(ts[k])
         )
+    balance = check_energy_balance(problem, ts, Q, extra, ratio, method, energy_tol)
     stats = {
         "method": method,
-        "options": {k: v for k, v in opts.items() if k != "progress"},
+        "options": {k: v for k, v in options.items() if k != "progress"},
         "steps": int(traj.steps),
         "rejected_steps": int(traj.rejected),
         "newton_iterations": int(traj.newton),
         "max_violation_before_projection": float(traj.max_violation),
         "max_violation": float(np.max(extra["constraint.violation"])),
         "min_pivot_ratio": float(np.min(ratio)),
+        "energy_balance_error": balance,
         "constraint_rows": problem.c.active_labels,
         "unknown_forces": problem.unknown,
         "linear_solver": "sparse" if problem.sparse else "dense",

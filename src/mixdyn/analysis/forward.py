@@ -11,7 +11,15 @@ import numpy as np
 from ..equations import Constraints
 from ..model import Model
 from ._problem import Problem
-from ._simulate import consistent_state, output_times, require_masses, simulate
+from ._simulate import (
+    ENERGY_TOL,
+    check_energy_tol,
+    consistent_state,
+    integrator_options,
+    output_times,
+    require_masses,
+    simulate,
+)
 from ._structure import analyse
 from .result import Result
 
@@ -29,6 +37,7 @@ def forward(
     hold=(),
     progress=None,
     linear_solver: str = "auto",
+    energy_tol: float | None = ENERGY_TOL,
     **options,
 ) -> Result:
     """Simulate the mechanism under its forces from a consistent initial state.
@@ -57,6 +66,10 @@ def forward(
             the path of every linear solve of the run: the consistent start (assembly and
             velocities), the acceleration equations, the projections, generalized-alpha's
             Newton iterations and the reactions at the output times.
+        energy_tol: relative tolerance of the run's energy balance (default 1e-4 of its
+            energy scale; None: not checked): a run that breaks it, e.g. by jumping to
+            another branch at a singular position, raises
+            :class:`~mixdyn.errors.EnergyBalanceError` rather than returning a wrong motion.
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
             ``rho_inf``, ``max_steps``...).
 
@@ -67,6 +80,8 @@ def forward(
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
     """
     ts = output_times(t)
+    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts)
+    check_energy_tol(energy_tol)
     require_masses(model)
     c_full = Constraints.of(model).with_linear_solver(linear_solver)
     q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
@@ -75,7 +90,8 @@ def forward(
     # constraints in the least-squares sense (robust where the redundancy moves).
     c = c_full.with_active(keep) if method == "partitioning" else c_full.with_rank(len(keep))
     problem = Problem(model, c.with_linear_solver(linear_solver))
-    opts = dict(options, rtol=rtol, atol=atol, dt=dt)
-    res = simulate("forward", problem, ts, q, qd, method, opts, len(model.drivers), progress)
+    res = simulate(
+        "forward", problem, ts, q, qd, method, opts, len(model.drivers), progress, energy_tol
+    )
     res.stats["redundant_equations"] = report.redundant
     return res

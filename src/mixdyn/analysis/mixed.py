@@ -30,7 +30,15 @@ from ..errors import ModelError, SolvabilityError
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
 from ._problem import Problem
-from ._simulate import consistent_state, output_times, require_masses, simulate
+from ._simulate import (
+    ENERGY_TOL,
+    check_energy_tol,
+    consistent_state,
+    integrator_options,
+    output_times,
+    require_masses,
+    simulate,
+)
 from ._structure import _jac, analyse
 from .result import Result
 
@@ -361,6 +369,7 @@ def mixed(
     hold=(),
     progress=None,
     linear_solver: str = "auto",
+    energy_tol: float | None = ENERGY_TOL,
     **options,
 ) -> Result:
     """Mixed dynamics: find the unknown forces that produce the prescribed motions while the
@@ -375,7 +384,7 @@ def mixed(
         solver: ``"augmented"`` (general) or ``"partition"`` (the paper's method).
         independent: for ``"partition"``, the independent coordinates ``i`` (e.g.
             ``["coupler.phi"]``); default: chosen by pivoted LU.
-        method, rtol, atol, dt, q0, qd0, hold, progress, **options: as in
+        method, rtol, atol, dt, q0, qd0, hold, progress, energy_tol, **options: as in
             :func:`~mixdyn.forward`.
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (the default: sparse for large
             mechanisms of small bandwidth, see
@@ -402,6 +411,8 @@ def mixed(
             (see above), or a bad option.
     """
     ts = output_times(t)
+    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts)
+    check_energy_tol(energy_tol)
     problem, q, qd, prescribed = _setup(
         model,
         float(ts[0]),
@@ -415,8 +426,9 @@ def mixed(
         hold,
         linear_solver,
     )
-    opts = dict(options, rtol=rtol, atol=atol, dt=dt)
-    res = simulate("mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress)
+    res = simulate(
+        "mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress, energy_tol
+    )
     res.stats.update(
         solver=solver,
         independent=tuple(independent or ()),

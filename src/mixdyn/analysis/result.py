@@ -27,6 +27,31 @@ _BODY_COLUMNS = (
 )
 
 
+def require_finite(result: Result) -> None:
+    """No non-finite number leaves mixdyn: the first NaN or infinity of any column (earliest
+    time, then column order) is a :class:`~mixdyn.errors.NonFiniteError` naming the column,
+    the time and the element the column belongs to."""
+    from ..errors import NonFiniteError
+
+    cols = result.columns()
+    bad_rows = [np.flatnonzero(~np.isfinite(np.asarray(v, dtype=float))) for v in cols.values()]
+    firsts = [(rows[0], k) for k, rows in enumerate(bad_rows) if rows.size]
+    if not firsts:
+        return
+    row, k = min(firsts)
+    name = list(cols)[k]
+    n_bad = sum(1 for rows in bad_rows if rows.size)
+    t = float(result.t[row]) if np.isfinite(result.t[row]) else None
+    raise NonFiniteError(
+        f"the {result.kind} analysis produced a non-finite value in column {name!r} "
+        f"({n_bad} column(s) affected): a force or law that is not finite here (sqrt or log "
+        "of a negative number, an overflow), a singular configuration or a diverging motion; "
+        "check the element's law and values",
+        t,
+        (name.split(".")[0],),
+    )
+
+
 @dataclasses.dataclass(frozen=True)
 class Result:
     """Time histories of one analysis.
@@ -50,6 +75,9 @@ class Result:
     extra: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     kinds: dict[str, str] = dataclasses.field(default_factory=dict)
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
+
+    def __post_init__(self):
+        require_finite(self)
 
     # ----------------------------------------------------------------- columns
     def columns(self) -> dict[str, np.ndarray]:

@@ -226,9 +226,23 @@ def has_unit_tail(text: str) -> bool:
     ``"2*L mm"``)."""
     words = text.split()
     return any(
-        _UNIT.match(" ".join(words[k:])) and re.search(r"[0-9]", " ".join(words[:k]))
+        _UNIT.match(" ".join(words[k:]))
+        and re.search(r"[0-9]", " ".join(words[:k]))
+        and _parses(" ".join(words[:k]))
         for k in range(1, len(words))
     )
+
+
+def _parses(text: str) -> bool:
+    """Whether ``text`` is a complete expression (``"pi/2 +"`` is not: in ``"pi/2 + omega*t"``
+    the words after it are the rest of a formula, not a unit)."""
+    import ast
+
+    try:
+        ast.parse(text, mode="eval")
+    except (SyntaxError, ValueError, RecursionError, MemoryError):
+        return False
+    return True
 
 
 def _split(text: str, constants, kind, units) -> tuple[float, str | None]:

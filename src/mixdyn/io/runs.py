@@ -319,14 +319,15 @@ class Runner:
         return q
 
     def qd_start(self, plan: Plan, model: m.Model):
+        """The run's ``velocities``: velocity conditions ``{coordinate: value}`` (model units)
+        that the analysis keeps exactly, the other velocities following; None if none."""
         if not plan.spec.velocities:
             return None
-        qd = np.zeros(model.nq)
+        qd = {}
         for ref, value in plan.spec.velocities.items():
             _, coord = ref.split(".")
-            qd[model.coordinate_index(ref)] = self.b.scalar(
-                value, _velocity_kind(coord), (*plan.path, "velocities", ref)
-            )
+            model.coordinate_index(ref)
+            qd[ref] = self.b.scalar(value, _velocity_kind(coord), (*plan.path, "velocities", ref))
         return qd
 
     def hold(self, plan: Plan) -> tuple[str, ...]:

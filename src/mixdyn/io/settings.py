@@ -13,56 +13,26 @@ error (exit 2) naming the file, line and setting, never a failure after minutes 
 
 from __future__ import annotations
 
-import difflib
-import inspect
-import math
 import shutil
 from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..analysis._options import CHOICES, FIXED_STEP, step_count, suggestions, value_problem
+from ..analysis._options import known_options as integrator_options
+from ..analysis._simulate import ENERGY_TOL
 from . import schema as s
 from .expressions import ExpressionLaw, evaluate
 
 if TYPE_CHECKING:  # pragma: no cover
     from .runs import Plan, Runner
 
-#: Methods whose step is fixed: ``dt`` is required.
-FIXED_STEP = ("baumgarte", "generalized-alpha")
 #: Options of an inverse run (passed to :func:`mixdyn.kinematic`) and their defaults.
 INVERSE_OPTIONS = {"tol": None, "max_iter": 25, "singular_tol": 1e-7, "assemble_first": True}
+#: Options of a dynamic run that are the analysis' own, not the integrator's.
+DYNAMIC_OPTIONS = {"energy_tol": ENERGY_TOL}
 #: Names an option may not take: they are settings of the run itself.
 RUN_SETTINGS = ("rtol", "atol", "dt", "method", "linear_solver", "hold", "q0", "qd0", "drivers")
-#: Arguments of an integrator that are not options.
-_NOT_OPTIONS = ("problem", "ts", "q0", "qd0", "progress", "_")
-#: Choices of the options that take a name.
-CHOICES = {
-    "solver": ("tsit5", "dopri5", "dopri8"),
-    "newton": ("auto", "modified", "full"),
-}
-#: Options that are switches.
-SWITCHES = ("project_velocities", "assemble_first")
-
-
-def _positive(v: float) -> bool:
-    return math.isfinite(v) and v > 0
-
-
-def _whole(v: float) -> bool:
-    return math.isfinite(v) and v >= 1 and float(v).is_integer()
-
-
-#: Range of each numeric option: ``(test, what the value must be)``.
-RANGES = {
-    "tol": (_positive, "a finite number > 0"),
-    "singular_tol": (lambda v: 0 < v < 1, "a number in (0, 1)"),
-    "alpha": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
-    "beta": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
-    "rho_inf": (lambda v: 0 <= v <= 1, "a number in [0, 1] (1: no numerical damping)"),
-    "max_steps": (_whole, "a whole number >= 1"),
-    "max_newton": (lambda v: _whole(v) and v <= 1000, "a whole number from 1 to 1000"),
-    "max_iter": (lambda v: _whole(v) and v <= 1000, "a whole number from 1 to 1000"),
-}
 
 
 def integrator(method: str):
@@ -80,15 +50,12 @@ def known_options(run) -> dict[str, object]:
     """
     if isinstance(run, s.InverseRunSpec):
         return dict(INVERSE_OPTIONS)
-    params = inspect.signature(integrator(run.method)).parameters
-    return {
-        n: p.default
-        for n, p in params.items()
-        if n not in _NOT_OPTIONS
-        and n not in RUN_SETTINGS
-        and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
-        and not (n == "solver" and isinstance(run, s.MixedRunSpec))
+    known = {
+        n: d
+        for n, d in integrator_options(integrator(run.method)).items()
+        if n not in RUN_SETTINGS and not (n == "solver" and isinstance(run, s.MixedRunSpec))
     }
+    return {**known, **DYNAMIC_OPTIONS}
 
 
 def check_options(runner: Runner, run, path) -> dict:
@@ -136,29 +103,16 @@ def _unknown(run, name: str, known) -> tuple[str, str]:
     return f"unknown option {name!r} of {what}", hint
 
 
-def suggestions(name: str, known) -> list[str]:
-    """Names in ``known`` close to ``name``: similar spellings (difflib) and abbreviations
-    (``tol`` for ``tolerance``)."""
-    lower = name.lower()
-    close = difflib.get_close_matches(lower, list(known), n=3, cutoff=0.5)
-    close += [k for k in known if len(k) >= 3 and lower.startswith(k) and k not in close]
-    return close[:3]
-
-
 def _check_value(runner: Runner, name: str, value, path) -> None:
     """Refuse an option value of the wrong type or out of range."""
-    if name in CHOICES:
-        if value not in CHOICES[name]:
-            runner.fail(path, f"{name} is {value!r}", f"use one of: {', '.join(CHOICES[name])}")
-        return
-    if name in SWITCHES:
-        if not isinstance(value, bool):
-            runner.fail(path, f"{name} is {value!r}", "write true or false")
-        return
-    test, what = RANGES.get(name, (math.isfinite, "a finite number"))
-    ok = isinstance(value, int | float) and not isinstance(value, bool)
-    if not (ok and test(float(value))):
-        runner.fail(path, f"{name} is {value!r}", f"give {what}")
+    problem = value_problem(name, value)
+    if problem:
+        hint = (
+            f"use one of: {', '.join(CHOICES[name])}"
+            if name in CHOICES
+            else problem.replace("must be", "give", 1)
+        )
+        runner.fail(path, f"{name} is {value!r}", hint)
 
 
 def check_step(runner: Runner, plan: Plan) -> None:
@@ -191,13 +145,6 @@ def check_step(runner: Runner, plan: Plan) -> None:
             f"use a larger step (dt: {span / fair:.3g} gives {fair:,} steps) or raise "
             "options.max_steps",
         )
-
-
-def step_count(times: np.ndarray, dt: float) -> float:
-    """The steps of a fixed-step run: each output interval split into steps <= ``dt``."""
-    with np.errstate(all="ignore"):
-        per = np.ceil(np.diff(np.asarray(times, dtype=float)) / dt * (1 - 1e-12))
-    return float(np.sum(np.maximum(per, 1.0)))
 
 
 def check_outputs(runner: Runner, plan: Plan) -> None:
@@ -286,10 +233,8 @@ def _finite_law(runner: Runner, law: ExpressionLaw, times, path) -> None:
 
 
 __all__ = [
-    "CHOICES",
-    "FIXED_STEP",
+    "DYNAMIC_OPTIONS",
     "INVERSE_OPTIONS",
-    "RANGES",
     "RUN_SETTINGS",
     "check_laws",
     "check_options",
@@ -297,6 +242,4 @@ __all__ = [
     "check_replays",
     "check_step",
     "known_options",
-    "step_count",
-    "suggestions",
 ]

@@ -30,27 +30,36 @@ def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
     return jsl.lu_solve((lu, piv), b), ratio
 
 
-#: Pivot ratio under which :func:`solve_kkt` switches to a truncated-SVD solve.
+#: Pivot ratio under which :func:`solve_kkt` switches to a damped SVD solve.
 SINGULAR_RATIO = 1e-10
-#: Relative singular-value cutoff of that solve.
+#: Relative singular-value cutoff of the truncated-SVD solves (generalized-alpha's).
 SINGULAR_RCOND = 1e-12
+#: Relative Tikhonov damping ``kappa`` of the SVD solve near a singular position: singular
+#: values ``s`` of the Schur complement are inverted as ``s / (s^2 + (kappa s_max)^2)``.
+SINGULAR_DAMPING = 1e-9
 
 
-def solve_ranked(A: jax.Array, b: jax.Array, rank: int | None = None, rcond: float = 0.0):
+def solve_ranked(
+    A: jax.Array, b: jax.Array, rank: int | None = None, rcond: float = 0.0, damping: float = 0.0
+):
     """Solve ``A x = b`` (least squares, minimum norm) knowing ``rank(A)``; ``(x, ratio)``.
 
     With ``rank=None`` and a square ``A`` this is :func:`lu_solve_checked`. Otherwise a truncated
     SVD keeps the ``rank`` largest singular values: redundant but consistent equations (a
     parallelogram's extra link) are solved exactly, and the multipliers of redundant constraints
     come out as the minimum-norm set; singular values below ``rcond * s_max`` are dropped too.
-    ``ratio = s[rank-1] / s[0]`` tells a loss of rank.
+    ``ratio = s[rank-1] / s[0]`` tells a loss of rank. With ``damping = kappa > 0`` the kept
+    singular values are inverted as ``s / (s^2 + (kappa s[0])^2)`` (Tikhonov filter factors):
+    exact for ``s >> kappa s[0]``, smoothly to zero below, so that the solution stays a
+    smooth, bounded function of ``A`` and ``b`` through a loss of rank.
     """
-    if rank is None and A.shape[0] == A.shape[1] and rcond == 0.0:
+    if rank is None and A.shape[0] == A.shape[1] and rcond == 0.0 and damping == 0.0:
         return lu_solve_checked(A, b)
     U, s, Vt = jnp.linalg.svd(A, full_matrices=False)
     r = min(A.shape) if rank is None else rank
     keep = (jnp.arange(s.shape[0]) < r) & (s > rcond * s[0])
-    inv = jnp.where(keep, 1.0 / jnp.where(keep, s, 1.0), 0.0)
+    mu2 = (damping * s[0]) ** 2 if s.shape[0] else 0.0
+    inv = jnp.where(keep, s / jnp.where(keep, s * s + mu2, 1.0), 0.0)
     Ub = U.T @ b
     x = Vt.T @ (inv[:, None] * Ub if b.ndim == 2 else inv * Ub)
     ratio = s[r - 1] / jnp.maximum(s[0], jnp.finfo(A.dtype).tiny) if r > 0 else jnp.ones(())
@@ -90,11 +99,13 @@ def solve_kkt(Minv, C, G, Q, rhs, rank=None) -> tuple[jax.Array, jax.Array, jax.
     b = C @ (Minv * Q) - rhs
     mu, ratio = solve_ranked(S, b, rank)
     if rank is None and S.shape[0] > 0:
-        # At a singular position (a bifurcation, a dead point) S loses rank for an instant:
-        # there the truncated-SVD least-squares solve keeps the accelerations bounded.
+        # At a singular position (a bifurcation, a dead point) S loses rank for an instant.
+        # Off the constraint manifold (an RK stage, rounding) the part of b along the lost
+        # direction is not zero there, and 1/s would make it a force like a pole; the damped
+        # SVD solve keeps the accelerations bounded and smooth in the state.
         mu = jax.lax.cond(
-            ratio < SINGULAR_RATIO,
-            lambda: solve_ranked(S, b, None, rcond=SINGULAR_RCOND)[0],
+            ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
+            lambda: solve_ranked(S, b, None, damping=SINGULAR_DAMPING)[0],
             lambda: mu,
         )
     qdd = Minv * Q - MinvG @ mu

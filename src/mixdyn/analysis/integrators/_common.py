@@ -89,8 +89,9 @@ def adaptive_loop(
     Args:
         step: ``(t0, t1, y, args) -> (y1, y_err, y_controlled, y1_controlled)``: one step and
             the parts of ``y``/``y1`` under error control.
-        accept: ``(t1, y1, args) -> (y1, args, violation)``: called on each accepted step
-            (projection, re-partitioning).
+        accept: ``(t1, y1, args) -> (y1, args, violation[, closed])``: called on each step
+            whose error is within tolerance (projection, re-partitioning); ``closed`` False
+            (the constraints could not be closed) rejects the step after all.
         ts: (N,) output times; ``ts[0]`` is the start.
         y0, args0: initial state (pytree) and loop-carried data.
         order: order of the method (the error estimate is of order ``order - 1``).
@@ -134,8 +135,11 @@ def adaptive_loop(
             err = jnp.where(finite, 0.0, jnp.inf)
         else:
             err = jnp.where(finite, rms_error(yc0, yc1, yerr, rtol, atol), jnp.inf)
-        ok = err <= 1.0
-        y1p, args1, v = accept(t1, y1, args)
+        accepted = accept(t1, y1, args)
+        y1p, args1, v = accepted[:3]
+        # an accept may also say whether it closed the constraints (else: a rejected step)
+        closed = accepted[3] if len(accepted) > 3 else jnp.asarray(True)
+        ok = (err <= 1.0) & closed
         y = jax.tree.map(lambda a, b: jnp.where(ok, a, b), y1p, y)
         args = jax.tree.map(lambda a, b: jnp.where(ok, a, b), args1, args)
         store = ok & hit
@@ -151,7 +155,8 @@ def adaptive_loop(
         else:
             factor = jnp.clip(0.9 * jnp.where(err > 0, err, 1e-10) ** (-1.0 / order), 0.2, 10.0)
             h_used = t1 - t
-            h_new = h_used * jnp.where(ok, factor, jnp.minimum(factor, 0.9))
+            shrink = jnp.where(closed, jnp.minimum(factor, 0.9), 0.25)
+            h_new = h_used * jnp.where(ok, factor, shrink)
             # A step shortened to land on an output does not shrink the next one.
             h_new = jnp.where(ok & hit & (h_used < h), jnp.maximum(h_new, h), h_new)
         status = jnp.where(n + 1 >= max_steps, MAX_STEPS, status)

@@ -24,7 +24,6 @@ def baumgarte(
     beta=10.0,
     max_steps=10_000_000,
     progress=None,
-    **_,
 ) -> Trajectory:
     """Integrate with fixed-step RK4 and Baumgarte stabilization.
 

@@ -196,7 +196,6 @@ def generalized_alpha(
     project_velocities=True,
     max_steps=10_000_000,
     progress=None,
-    **_,
 ) -> Trajectory:
     """Integrate with the index-3 generalized-alpha method at fixed step ``dt``.
 

@@ -104,6 +104,7 @@ def partitioning(
     dt=None,
     solver="tsit5",
     max_steps=1_000_000,
+    first_step=None,
     progress=None,
 ) -> Trajectory:
     """Integrate the independent coordinates; solve the dependent ones by Newton.
@@ -116,10 +117,17 @@ def partitioning(
     t0 = ts[0]
     D0, I0 = _choose(problem, q0, t0)
 
+    def predicted(args, t):
+        # Newton starts from the last accepted state moved on by its velocity: near a
+        # bifurcation (a parallelogram's flat position) the old positions alone are as near
+        # the other branch as the one the motion is on.
+        q_ref, qd_ref, _, _, t_ref = args
+        return q_ref + qd_ref * (t - t_ref)
+
     def f(t, y, args):
         v, vd, _ = y
-        q_ref, _, D, I = args
-        q, qd = _complete(problem, q_ref, D, I, v, vd, t, tol)
+        _, _, D, I, _ = args
+        q, qd = _complete(problem, predicted(args, t), D, I, v, vd, t, tol)
         qdd, _, _ = problem.accelerations(q, qd, t)
         return (vd, qdd[I], problem.work_rates(q, qd, t, qdd))
 
@@ -130,7 +138,7 @@ def partitioning(
         y1, yerr, _, _, _ = rk.step(term, t0, t1, y, args, state, made_jump=False)
         # Control the error of every coordinate: an error dv of the independent ones moves
         # the dependent ones by -Phi_qD^-1 Phi_qI dv, which may be much larger.
-        q_ref, qd_ref, D, I = args
+        q_ref, qd_ref, D, I, _ = args
         if problem.sparse:
             c = problem.c
             vals = c.jacobian_values(q_ref, t0)
@@ -148,7 +156,8 @@ def partitioning(
 
     def accept(t1, y1, args):
         v, vd, w = y1
-        q_ref, _, D, I = args
+        _, _, D, I, _ = args
+        q_ref = predicted(args, t1)
         if problem.sparse:
             q, qd, ratio = _complete_sparse(problem, q_ref, D, I, v, vd, t1, tol)
         else:
@@ -166,10 +175,12 @@ def partitioning(
             switch = _conditioning(problem, q, t1, D) < 0.5 * _conditioning(problem, q, t1, D_new)
             D = jnp.where(switch, D_new, D)
             I = jnp.where(switch, I_new, I)
-        return (q[I], qd[I], w), (q, qd, D, I), viol
+        return (q[I], qd[I], w), (q, qd, D, I, t1), viol
 
     span = ts[-1] - ts[0]
     h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
+    if first_step is not None:
+        h0 = jnp.asarray(first_step, dtype=ts.dtype)
     # Outputs carry the full state through args; integrate (v, vd, w) and rebuild q at outputs.
     y0 = (q0[I0], qd0[I0], jnp.zeros(2))
     full0 = (q0, qd0)
@@ -182,7 +193,7 @@ def partitioning(
     def accept_full(t1, yfull, args):
         y, _ = yfull
         y1, args1, viol = accept(t1, y, args)
-        q, qd, _, _ = args1
+        q, qd, _, _, _ = args1
         return (y1, (q, qd)), args1, viol
 
     outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
@@ -190,7 +201,7 @@ def partitioning(
         accept_full,
         ts,
         (y0, full0),
-        (q0, qd0, D0, I0),
+        (q0, qd0, D0, I0, jnp.asarray(t0, dtype=ts.dtype)),
         rtol=rtol,
         atol=atol,
         order=order,

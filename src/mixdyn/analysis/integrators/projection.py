@@ -33,6 +33,7 @@ def projection(
     dt=None,
     solver="tsit5",
     max_steps=1_000_000,
+    first_step=None,
     progress=None,
 ) -> Trajectory:
     """Integrate with an adaptive explicit RK method and project after every step.
@@ -45,6 +46,8 @@ def projection(
         dt: a fixed step [time] instead of error control (for convergence studies).
         solver: ``"tsit5"`` (order 5), ``"dopri5"`` or ``"dopri8"`` (order 8).
         max_steps: step limit.
+        first_step: the first step's size [time] (default: 1e-4 of the span or the first
+            output interval, whichever is shorter); the controller adapts it from there.
         progress: optional callback ``f(t)`` at each output time.
     """
     cls, order = SOLVERS[solver]
@@ -57,15 +60,21 @@ def projection(
         y1, yerr, _, _, _ = rk.step(term, t0, t1, y, None, state, made_jump=False)
         return y1, yerr[:2], y[:2], y1[:2]
 
+    # A projection that cannot close the constraints (past a dead point, at a lock-up) is a
+    # rejected step; a step size that collapses on it is then a named failure.
+    tol_closed = 1e-6 * jnp.maximum(jnp.max(jnp.abs(q0)), 1.0)
+
     def accept(t1, y1, args):
         q, qd, w = y1
         viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
-        q = problem.project_positions(q, t1, tol_pos)
+        q, residual = problem.project_positions(q, t1, tol_pos)
         qd = problem.project_velocities(q, qd, t1)
-        return (q, qd, w), args, viol
+        return (q, qd, w), args, viol, residual <= tol_closed
 
     span = ts[-1] - ts[0]
     h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
+    if first_step is not None:
+        h0 = jnp.asarray(first_step, dtype=ts.dtype)
     outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
         step,
         accept,
