@@ -183,6 +183,58 @@ def parse(
     Raises:
         ExpressionError: with the column of the first fault.
     """
+    key = _cache_key(source, parameters, time) if bodies is None else None
+    if key is None:
+        return _parse(source, parameters, time=time, bodies=bodies)
+    result = _parse_cached(key)
+    if isinstance(result, Parsed):
+        return result
+    raise ExpressionError(*result) from None
+
+
+#: Distinct (expression, parameter values, time allowed) parses remembered, refusals included.
+CACHE_SIZE = 4096
+
+
+def _cache_key(source, parameters, time) -> tuple | None:
+    """A key that holds everything a parse without body states depends on (the parameters'
+    names, and their values: a constant part that is not finite is refused), or None when
+    the arguments are not plain (then the parse is not cached)."""
+    if type(source) is not str or type(time) is not bool:
+        return None
+    if isinstance(parameters, Mapping):
+        items = []
+        for k, v in parameters.items():
+            if type(k) is not str or type(v) is not float:
+                return None
+            items.append((k, v, math.copysign(1.0, v)))  # -0.0 and 0.0 kept apart
+        return (source, time, True, tuple(items))
+    if isinstance(parameters, tuple | list | set | frozenset) and all(
+        type(k) is str for k in parameters
+    ):
+        return (source, time, False, frozenset(parameters))
+    return None
+
+
+@functools.lru_cache(maxsize=CACHE_SIZE)
+def _parse_cached(key) -> Parsed | tuple:
+    """The parse of a :func:`_cache_key` key, or the arguments of its ExpressionError."""
+    source, time, mapping, params = key
+    parameters = {k: v for k, v, _ in params} if mapping else params
+    try:
+        return _parse(source, parameters, time=time)
+    except ExpressionError as e:
+        return (e.source, e.problem, e.column, e.hint)
+
+
+def _parse(
+    source: str,
+    parameters=(),
+    *,
+    time: bool = True,
+    bodies: dict[str, int] | None = None,
+) -> Parsed:
+    """:func:`parse`, not cached."""
     if not isinstance(source, str):
         raise ExpressionError(str(source), "an expression must be a string")
     if len(source) > MAX_LENGTH:
@@ -547,8 +599,19 @@ class ExpressionFunction:
         parameters = dict(parameters or {})
         bodies = tuple(bodies)
         p = parse(source, parameters, time=True, bodies={b: i for i, b in enumerate(bodies)})
-        vals = tuple(float(parameters[n]) for n in p.parameters)
-        return cls(source, p.tree, p.parameters, vals, unit, float(scale), bodies)
+        return cls._of_parsed(p, bodies, parameters, unit, scale)
+
+    @classmethod
+    def _of_parsed(
+        cls, parsed: Parsed, bodies, parameters=None, unit=None, scale=1.0
+    ) -> ExpressionFunction:
+        """:meth:`of` from the parse of its source with ``bodies={b: i for i, b in
+        enumerate(bodies)}`` (a caller that has parsed it already parses it once)."""
+        parameters = parameters or {}
+        vals = tuple(float(parameters[n]) for n in parsed.parameters)
+        return cls(
+            parsed.source, parsed.tree, parsed.parameters, vals, unit, float(scale), tuple(bodies)
+        )
 
     def __call__(self, q, qd, t):
         t = jnp.asarray(t, dtype=jnp.float64)

@@ -29,6 +29,7 @@ from pydantic import ValidationError
 
 from .. import model as m
 from ..errors import ModelError
+from ..model._body import GROUND_NAME
 from ..units import UnitSystem
 from . import schema as s
 from ._errors import FileError
@@ -298,6 +299,7 @@ class Builder:
         self.parameters = self._parameters()
         self.body_names = [b.name for b in spec.bodies]
         self.body_index = {n: i for i, n in enumerate(self.body_names)}
+        self._body_tuple = tuple(self.body_names)
 
     # ----------------------------------------------------------------- errors
     def fail(self, path, problem: str, hint: str = "") -> NoReturn:
@@ -377,7 +379,7 @@ class Builder:
 
     # ----------------------------------------------------------------- references
     def body(self, name: str, path, *, ground: bool = True) -> str:
-        if name == m.Ground().name:
+        if name == GROUND_NAME:
             if not ground:
                 self.fail(path, "the ground cannot be used here", "name a moving body")
             return name
@@ -512,6 +514,14 @@ class Builder:
     def expression(self, text, unit, kind, path, state: bool):
         scale = 1.0 if unit is None else self.factor(unit, kind, (*path[:-1], "unit"))
         try:
+            # A law of t (no body state) parses the same without the bodies: that parse is
+            # cached and is the one ExpressionLaw repeats.
+            parse_expression(text, self.parameters)
+        except ExpressionError:
+            pass
+        else:
+            return ExpressionLaw(text, self.parameters, unit, scale)
+        try:
             p = parse_expression(text, self.parameters, bodies=self.body_index)
         except ExpressionError as e:
             self.fail(path, e.message, e.hint or "a law is an expression of t, e.g. '2*t'")
@@ -523,7 +533,7 @@ class Builder:
                     "a prescribed motion may depend on t only; body states may be used in "
                     "force magnitudes",
                 )
-            fn = ExpressionFunction.of(text, self.body_names, self.parameters, unit, scale)
+            fn = ExpressionFunction._of_parsed(p, self._body_tuple, self.parameters, unit, scale)
             return m.StateFunction(fn)
         return ExpressionLaw(text, self.parameters, unit, scale)
 

@@ -83,7 +83,27 @@ def registry():
     return ureg
 
 
+#: Distinct unit strings (and (unit, kind, unit system) conversions) remembered: parsing a
+#: unit with pint takes about 0.1 ms, and a model file repeats a few units many times.
+CACHE_SIZE = 4096
+
+
+def _cached(fn, *args):
+    """``fn(*args)`` through its cache, or directly when an argument cannot be hashed."""
+    try:
+        hash(args)
+    except TypeError:
+        return fn.__wrapped__(*args)
+    return fn(*args)
+
+
 def _unit(text: str):
+    """The pint unit of ``text`` (cached: pint units are immutable; errors are not cached)."""
+    return _cached(_parse_unit, text)
+
+
+@functools.lru_cache(maxsize=CACHE_SIZE)
+def _parse_unit(text: str):
     text = text.replace("\u00b2", "**2").replace("\u00b3", "**3").replace("^", "**")
     if len(text) > MAX_LENGTH or not _UNIT.match(text):
         raise QuantityError(
@@ -107,6 +127,11 @@ def exponents(unit_text: str) -> tuple[int, int, int]:
     Raises:
         QuantityError: the unit is not mechanical (a temperature, a current...).
     """
+    return _cached(_exponents, unit_text)
+
+
+@functools.lru_cache(maxsize=CACHE_SIZE)
+def _exponents(unit_text: str) -> tuple[int, int, int]:
     dim = dict(registry().Quantity(1.0, _unit(unit_text)).dimensionality)
     other = [k for k in dim if k not in _DIM_KEYS]
     if other:
@@ -147,6 +172,11 @@ def factor(unit_text: str, kind: Kind | None, units: UnitSystem) -> float:
     Raises:
         QuantityError: unknown unit, or a dimension other than that of ``kind``.
     """
+    return _cached(_factor, unit_text, kind, units)
+
+
+@functools.lru_cache(maxsize=CACHE_SIZE)
+def _factor(unit_text: str, kind: Kind | None, units: UnitSystem) -> float:
     exps = exponents(unit_text)
     if kind is not None and exps != dimension(kind):
         name = kind_name(kind)
