@@ -4,8 +4,12 @@ Writes a model file per size (a chain of ``N`` links of 1 m joined by revolute j
 first pinned to the ground, each link at a slight angle, with a forward run and a kinematic
 run driving every joint angle in the small case), then runs ``mixdyn check FILE`` under
 ``/usr/bin/time -v`` and prints a table of wall time [s] and peak resident memory [MB].
+With ``--phases`` it also times, in a separate process, reading the file
+(:func:`mixdyn.io.read`: YAML and the schema) and building the model (:func:`mixdyn.io.build`:
+names, units, expressions), the part of ``check`` before any analysis.
 
-Run: ``python benchmarks/check_scaling.py [--sizes 1000 2000 5000 10000] [--keep DIR]``.
+Run: ``python benchmarks/check_scaling.py [--sizes 1000 2000 5000 10000] [--keep DIR]
+[--phases]``.
 """
 
 from __future__ import annotations
@@ -80,6 +84,27 @@ def measure(path: pathlib.Path, mixdyn: str) -> tuple[float, float, int]:
     return secs, rss, out.returncode
 
 
+_PHASES = """\
+import sys, time
+import mixdyn.io as mio
+t0 = time.perf_counter()
+spec = mio.read(sys.argv[1])
+t1 = time.perf_counter()
+mio.build(spec)
+t2 = time.perf_counter()
+print(t1 - t0, t2 - t1)
+"""
+
+
+def phases(path: pathlib.Path, python: str = sys.executable) -> tuple[float, float]:
+    """``(read [s], build [s])`` of ``path`` in a fresh process (imports not counted)."""
+    out = subprocess.run(
+        [python, "-c", _PHASES, str(path)], capture_output=True, text=True, check=True
+    )
+    read, build = out.stdout.split()[-2:]
+    return float(read), float(build)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[1000, 2000, 5000, 10000])
@@ -89,16 +114,23 @@ def main() -> None:
         default=os.path.join(os.path.dirname(sys.executable), "mixdyn"),
         help="the mixdyn command",
     )
+    ap.add_argument(
+        "--phases", action="store_true", help="also time reading and building the model"
+    )
     args = ap.parse_args()
     folder = args.keep or pathlib.Path(tempfile.mkdtemp(prefix="check_scaling_"))
     folder.mkdir(parents=True, exist_ok=True)
-    print(f"{'bodies':>8} {'file MB':>8} {'wall s':>8} {'peak MB':>9} {'exit':>5}")
+    extra = f" {'read s':>7} {'build s':>7}" if args.phases else ""
+    print(f"{'bodies':>8} {'file MB':>8}{extra} {'wall s':>8} {'peak MB':>9} {'exit':>5}")
     for n in args.sizes:
         path = folder / f"chain{n}.yaml"
         path.write_text(chain_yaml(n))
+        if args.phases:
+            read, build = phases(path)
+            extra = f" {read:>7.2f} {build:>7.2f}"
         secs, rss, rc = measure(path, args.mixdyn)
         size = path.stat().st_size / 1e6
-        print(f"{n:>8} {size:>8.2f} {secs:>8.1f} {rss:>9.0f} {rc:>5}", flush=True)
+        print(f"{n:>8} {size:>8.2f}{extra} {secs:>8.1f} {rss:>9.0f} {rc:>5}", flush=True)
 
 
 if __name__ == "__main__":
