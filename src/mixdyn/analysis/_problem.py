@@ -160,7 +160,7 @@ class Problem(eqx.Module):
 
     def _dense_schur_solve(self, q, qd, t, b, symmetric=True):
         """The sparse path's fallback at a singular position (the factorization loses rank
-        for an instant), as on the dense path: a truncated-SVD solve of the Schur complement
+        for an instant), as on the dense path: a damped SVD solve of the Schur complement
         formed densely, ``C M^-1 C^T`` (or ``C M^-1 G`` with ``symmetric=False``)."""
         c = self.c
         C = c.phi_q(q, t)
@@ -173,7 +173,7 @@ class Problem(eqx.Module):
         generalized force ``G mu`` (nq,), from the Jacobian values ``v`` at ``(q, t)``:
         ``G = C^T`` through the banded Cholesky factors (:meth:`Constraints.schur_solver`),
         mixed problems through :meth:`woodbury_solver`; below :data:`SINGULAR_RATIO` a dense
-        truncated-SVD solve."""
+        damped SVD solve."""
         if self.p:
             return self.woodbury_solver(q, qd, t, v)
         c = self.c
@@ -209,7 +209,7 @@ class Problem(eqx.Module):
         factorization, ``p`` solves once and one per right-hand side, and a ``p x p`` LU.
         ``K`` is singular exactly where ``S`` is (the mixed problem is not solvable there);
         the pivot ratio is the smaller of the two factorizations'. Below
-        :data:`SINGULAR_RATIO` the solve is a dense truncated SVD, as on the dense path.
+        :data:`SINGULAR_RATIO` the solve is a dense damped SVD, as on the dense path.
         """
         c, Minv, p = self.c, self.Minv, self.p
         mk = c.m - p

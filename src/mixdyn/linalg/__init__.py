@@ -4,7 +4,7 @@ Two paths, chosen per constraint set (``Constraints.linear_solver``, from the an
 ``linear_solver="auto" | "dense" | "sparse"`` argument):
 
 * dense (:mod:`._dense`): LU of dense matrices built from ``Phi_q``, truncated SVD where
-  equations are redundant or at singular positions;
+  equations are redundant, a damped (Tikhonov-filtered) SVD at singular positions;
 * sparse (:mod:`._sparse`): ``Phi_q`` as values on a static pattern, every solve through the
   banded block Cholesky factorization of ``Phi_q W Phi_q^T`` (``W = M^-1``: equations of
   motion; ``W = I``: minimum-norm kinematic steps, refined iteratively where accuracy matters).
