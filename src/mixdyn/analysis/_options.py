@@ -47,7 +47,7 @@ RANGES = {
     "dt": (_positive, "a finite step > 0 [time]"),
     "first_step": (_positive, "a finite step > 0 [time]"),
     "tol": (_positive, "a finite number > 0"),
-    "energy_tol": (_positive, "a finite number > 0 (e.g. 1e-4), or null/None for no check"),
+    "energy_tol": (_positive, "auto, a finite number > 0 (e.g. 1e-4), or null/None (no check)"),
     "singular_tol": (lambda v: 0 < v < 1, "a number in (0, 1)"),
     "alpha": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
     "beta": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
@@ -84,6 +84,8 @@ def suggestions(name: str, known) -> list[str]:
 def value_problem(name: str, value) -> str | None:
     """What is wrong with the value of option ``name`` (``"must be ..."``), or None."""
     if value is None and name in NULLABLE:
+        return None
+    if name == "energy_tol" and value == "auto":
         return None
     if name in CHOICES:
         ok = value in CHOICES[name]

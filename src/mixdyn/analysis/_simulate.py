@@ -22,18 +22,21 @@ from ..errors import (
 from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import assemble, hold_drivers, length_scale
-from ._options import check_options
+from ._options import FIXED_STEP, check_options
 from ._problem import Problem
 from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
 from ._structure import _jac
 from .integrators import INTEGRATORS, STATUS_MESSAGES
-from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE
+from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE, UNCLOSED
 from .kinematic import output_times
 from .result import Result
 
-#: Default relative tolerance of a dynamic run's energy balance (see
-#: :func:`check_energy_balance`).
-ENERGY_TOL = 1e-4
+#: Default tolerance of a dynamic run's energy balance (see :func:`energy_tolerance`).
+ENERGY_TOL = "auto"
+#: The energy balance of a run at relative tolerance ``rtol`` must hold to this many rtol...
+ENERGY_PER_RTOL = 1e3
+#: ...within these bounds; the upper one is also the fixed-step methods' tolerance.
+ENERGY_TOL_RANGE = (1e-9, 1e-4)
 
 
 def require_masses(model: Model) -> None:
@@ -257,12 +260,14 @@ def _raise_failure(problem: Problem, traj, ts, method):
             names.append(e)
     s = np.linalg.svd(J, compute_uv=False) if J.size else np.ones(1)
     r = problem.c.rank or min(J.shape) if J.size else 1
-    singular = bool(s[r - 1] < 1e-6 * s[0])
+    # a step size that collapses where the Jacobian is poorly conditioned is a singular position
+    limit = 1e-4 if status == STEP_COLLAPSE else 1e-6
+    near_singular = bool(s[r - 1] < limit * s[0])
+    singular = near_singular or status == UNCLOSED
     msg = f"{method} integrator failed: {STATUS_MESSAGES[status]}"
     if singular:
-        raise SingularityError(
-            msg + "; the constraint Jacobian is (nearly) singular here", t, names
-        )
+        where = "; the constraint Jacobian is (nearly) singular here" if near_singular else ""
+        raise SingularityError(msg + where, t, names)
     cls = StepSizeError if status == STEP_COLLAPSE else NumericalError
     if status == NEWTON_FAILED:
         from ..errors import ConvergenceError
@@ -271,9 +276,23 @@ def _raise_failure(problem: Problem, traj, ts, method):
     raise cls(msg, t, names if singular else ())
 
 
+def energy_tolerance(energy_tol, method: str, options: dict) -> float | None:
+    """The relative tolerance of a run's energy balance: ``energy_tol`` itself, or for
+    ``"auto"`` 1000 times the relative tolerance of an adaptive run (between 1e-9 and 1e-4: a
+    run that drifts far beyond what its tolerance promises does not meet its tolerance) and
+    1e-4 for a fixed-step run."""
+    if energy_tol != "auto":
+        return energy_tol
+    lo, hi = ENERGY_TOL_RANGE
+    if method in FIXED_STEP or options.get("dt") is not None:
+        return hi
+    rtol = float(options.get("rtol", 1e-8))
+    return min(hi, max(lo, ENERGY_PER_RTOL * rtol))
+
+
 def check_energy_tol(energy_tol) -> None:
-    """``energy_tol`` is None or a finite number > 0."""
-    if energy_tol is None:
+    """``energy_tol`` is ``"auto"``, None or a finite number > 0."""
+    if energy_tol is None or (isinstance(energy_tol, str) and energy_tol == "auto"):
         return
     try:
         ok = not isinstance(energy_tol, bool) and 0 < float(energy_tol) < np.inf
@@ -281,7 +300,8 @@ def check_energy_tol(energy_tol) -> None:
         ok = False
     if not ok:
         raise ModelError(
-            f"energy_tol must be a finite number > 0 (e.g. 1e-4) or None, got {energy_tol!r}",
+            "energy_tol must be 'auto', a finite number > 0 (e.g. 1e-4) or None, got "
+            f"{energy_tol!r}",
             "energy_tol",
         )
 
@@ -384,7 +404,7 @@ def simulate(
     options: dict,
     n_drivers: int,
     progress=None,
-    energy_tol: float | None = ENERGY_TOL,
+    energy_tol: float | str | None = ENERGY_TOL,
 ) -> Result:
     """Integrate ``problem`` from the consistent state ``(q0, qd0)`` and build the result.
 
@@ -412,7 +432,8 @@ def simulate(
         raise SingularityError(
             "accelerations are not finite: singular equations of motion", float(ts[k])
         )
-    balance = check_energy_balance(problem, ts, Q, extra, ratio, method, energy_tol)
+    tol = energy_tolerance(energy_tol, method, opts)
+    balance = check_energy_balance(problem, ts, Q, extra, ratio, method, tol)
     stats = {
         "method": method,
         "options": {k: v for k, v in options.items() if k != "progress"},

@@ -37,7 +37,7 @@ def forward(
     hold=(),
     progress=None,
     linear_solver: str = "auto",
-    energy_tol: float | None = ENERGY_TOL,
+    energy_tol: float | str | None = ENERGY_TOL,
     **options,
 ) -> Result:
     """Simulate the mechanism under its forces from a consistent initial state.
@@ -66,10 +66,12 @@ def forward(
             the path of every linear solve of the run: the consistent start (assembly and
             velocities), the acceleration equations, the projections, generalized-alpha's
             Newton iterations and the reactions at the output times.
-        energy_tol: relative tolerance of the run's energy balance (default 1e-4 of its
-            energy scale; None: not checked): a run that breaks it, e.g. by jumping to
-            another branch at a singular position, raises
-            :class:`~mixdyn.errors.EnergyBalanceError` rather than returning a wrong motion.
+        energy_tol: relative tolerance of the run's energy balance ``T + V - E0 - W``,
+            against its energy scale: ``"auto"`` (default: 1000 x ``rtol`` for the adaptive
+            methods, within [1e-9, 1e-4]; 1e-4 for the fixed-step ones), a number, or None
+            (not checked). A run that breaks it, e.g. by jumping to another branch at a
+            singular position, raises :class:`~mixdyn.errors.EnergyBalanceError` rather
+            than returning a wrong motion.
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
             ``rho_inf``, ``max_steps``...).
 

@@ -369,7 +369,7 @@ def mixed(
     hold=(),
     progress=None,
     linear_solver: str = "auto",
-    energy_tol: float | None = ENERGY_TOL,
+    energy_tol: float | str | None = ENERGY_TOL,
     **options,
 ) -> Result:
     """Mixed dynamics: find the unknown forces that produce the prescribed motions while the

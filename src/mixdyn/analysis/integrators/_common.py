@@ -9,7 +9,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
-OK, MAX_STEPS, STEP_COLLAPSE, NEWTON_FAILED, NOT_FINITE = 0, 1, 2, 3, 4
+OK, MAX_STEPS, STEP_COLLAPSE, NEWTON_FAILED, NOT_FINITE, UNCLOSED = 0, 1, 2, 3, 4, 5
 
 #: What each status code means, and what to do about it.
 STATUS_MESSAGES = {
@@ -21,6 +21,8 @@ STATUS_MESSAGES = {
     "step or check for a singular configuration",
     NOT_FINITE: "the solution became non-finite (NaN/inf): a singular configuration or a "
     "diverging force",
+    UNCLOSED: "the constraints cannot be closed beyond this time, however short the step: "
+    "the motion reached a dead point or a lock-up (a driver pushing past a limit position)",
 }
 
 
@@ -164,7 +166,8 @@ def adaptive_loop(
             status = jnp.where(finite, status, NOT_FINITE)
         else:
             too_small = h_new < 1e-13 * jnp.maximum(jnp.abs(t_new), 1.0)
-            status = jnp.where(too_small, jnp.where(finite, STEP_COLLAPSE, NOT_FINITE), status)
+            cause = jnp.where(finite, jnp.where(closed, STEP_COLLAPSE, UNCLOSED), NOT_FINITE)
+            status = jnp.where(too_small, cause, status)
         nrej = nrej + (~ok).astype(int)
         return (t_new, y, args, h_new, k, outs, n + 1, nrej, viol, status)
 
