@@ -165,6 +165,8 @@ HOSTILE_YAML = [
     ("python-name", sub("name: slider-crank", "name: !!python/name:os.system ''"), "tag"),
     ("binary-tag", sub("name: slider-crank", "name: !!binary aGVsbG8="), "tag"),
     ("set-tag", sub("name: slider-crank", "name: !!set {a, b}"), "tag"),
+    ("empty-float-tag", sub("mass: 1\n", 'mass: !!float ""\n'), "bad value"),
+    ("empty-int-tag", sub("mass: 1\n", 'mass: !!int ""\n'), "bad value"),
     ("local-tag", sub("name: slider-crank", "name: !evil x"), "tag"),
     ("timestamp", sub("name: slider-crank", "name: 2001-12-14"), "tag"),
     ("deep-lists", deep(200), "nested"),

@@ -356,7 +356,7 @@ def _scalar(loader, node):
         )
     try:
         return loader.yaml_constructors[node.tag](loader, node)
-    except (yaml.YAMLError, ValueError, OverflowError) as e:
+    except (yaml.YAMLError, ValueError, OverflowError, IndexError) as e:
         raise YamlError(f"bad value: {e}", _line(node), "quote the value") from None
 
 
