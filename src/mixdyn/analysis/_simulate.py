@@ -22,7 +22,7 @@ from ..errors import (
 from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import assemble, hold_drivers, length_scale
-from ._options import FIXED_STEP, check_options
+from ._options import FIXED_STEP, check_options, value_problem
 from ._problem import Problem
 from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
 from ._structure import _jac
@@ -290,26 +290,13 @@ def energy_tolerance(energy_tol, method: str, options: dict) -> float | None:
     return min(hi, max(lo, ENERGY_PER_RTOL * rtol))
 
 
-def check_energy_tol(energy_tol) -> None:
-    """``energy_tol`` is ``"auto"``, None or a finite number > 0."""
-    if energy_tol is None or (isinstance(energy_tol, str) and energy_tol == "auto"):
-        return
-    try:
-        ok = not isinstance(energy_tol, bool) and 0 < float(energy_tol) < np.inf
-    except (TypeError, ValueError):
-        ok = False
-    if not ok:
-        raise ModelError(
-            "energy_tol must be 'auto', a finite number > 0 (e.g. 1e-4) or None, got "
-            f"{energy_tol!r}",
-            "energy_tol",
-        )
-
-
-def integrator_options(method: str, options: dict, ts) -> dict:
+def integrator_options(method: str, options: dict, ts, energy_tol=ENERGY_TOL) -> dict:
     """The checked options of a run of integrator ``method`` (before any computing): unknown
-    names, values out of range and absurd step counts are input errors
-    (:func:`~._options.check_options`)."""
+    names, values out of range, absurd step counts and a bad ``energy_tol`` are input errors
+    (:func:`~._options.check_options`, :func:`~._options.value_problem`)."""
+    problem = value_problem("energy_tol", energy_tol)
+    if problem:
+        raise ModelError(f"energy_tol {problem}, got {energy_tol!r}", "energy_tol")
     if method not in INTEGRATORS:
         close = difflib.get_close_matches(str(method), INTEGRATORS, n=2, cutoff=0.5)
         hint = f"did you mean {' or '.join(close)}? " if close else ""

@@ -13,7 +13,6 @@ from ..model import Model
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
-    check_energy_tol,
     consistent_state,
     integrator_options,
     output_times,
@@ -82,8 +81,7 @@ def forward(
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
     """
     ts = output_times(t)
-    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts)
-    check_energy_tol(energy_tol)
+    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts, energy_tol)
     require_masses(model)
     c_full = Constraints.of(model).with_linear_solver(linear_solver)
     q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)

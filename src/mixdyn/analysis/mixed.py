@@ -32,7 +32,6 @@ from ..model._element import Resolver
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
-    check_energy_tol,
     consistent_state,
     integrator_options,
     output_times,
@@ -411,8 +410,7 @@ def mixed(
             (see above), or a bad option.
     """
     ts = output_times(t)
-    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts)
-    check_energy_tol(energy_tol)
+    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts, energy_tol)
     problem, q, qd, prescribed = _setup(
         model,
         float(ts[0]),
