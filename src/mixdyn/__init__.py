@@ -2,11 +2,23 @@
 
 All numerics run in JAX with float64 (enabled on import). Every quantity is expressed in the
 model's :class:`~mixdyn.UnitSystem`; angles are in radians.
+
+Compiled programs (traced and compiled) are kept between processes in a cache folder
+(``$MIXDYN_CACHE_DIR``, else ``~/.cache/mixdyn/jax``), so a second process does not trace or
+compile them again: ``MIXDYN_NO_CACHE=1`` (read on import) or :func:`set_cache` turns that
+off (see :mod:`mixdyn._compile`).
 """
 
 import jax as _jax
 
 _jax.config.update("jax_enable_x64", True)
+
+from ._compile import set_cache  # noqa: E402
+
+set_cache.__module__ = __name__
+from ._compile import configure_from_env as _configure_cache  # noqa: E402
+
+_configure_cache()
 
 from . import errors  # noqa: E402
 from .analysis import (  # noqa: E402
@@ -79,6 +91,7 @@ __all__ = [
     "inverse",
     "mixed",
     "prescribe",
+    "set_cache",
     "kinematic",
     *_model_all,
 ]

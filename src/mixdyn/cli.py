@@ -150,27 +150,15 @@ def _root(
 
 
 def configure_cache() -> str | None:
-    """Turn on JAX's persistent compilation cache (see the module's documentation).
+    """Turn on mixdyn's persistent caches (see the module's documentation) unless
+    ``MIXDYN_NO_CACHE`` is set (:func:`mixdyn.set_cache`).
 
     Returns:
         The cache folder, or None when turned off.
     """
-    if os.environ.get("MIXDYN_NO_CACHE", "").strip() not in ("", "0"):
-        return None
-    folder = os.environ.get("MIXDYN_CACHE_DIR")
-    if not folder:
-        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
-        folder = os.path.join(base, "mixdyn", "jax")
-    try:
-        os.makedirs(folder, exist_ok=True)
-        import jax
+    from ._compile import configure_from_env
 
-        jax.config.update("jax_compilation_cache_dir", folder)
-        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-        jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-    except Exception:  # a cache is an optimisation, never a failure
-        return None
-    return folder
+    return configure_from_env()
 
 
 # --------------------------------------------------------------------------- output paths

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import dataclasses
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._compile import cached_jit
 from ..equations import Constraints
 from ..equations._constraints import Packed
 from ..errors import AssemblyError, ModelError
@@ -59,7 +59,7 @@ def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
     return out
 
 
-@eqx.filter_jit
+@cached_jit
 def _gn_step(c: Constraints, q, t, damping):
     """One damped Gauss–Newton step ``dq = -J^T (J J^T + damping I)^-1 Phi``; returns the new
     ``q`` and the pivot ratio of the solve (1 on the dense path, which does not report it)."""
@@ -77,12 +77,12 @@ def _gn_step(c: Constraints, q, t, damping):
 SPARSE_STEP_MIN_RATIO = 1e-8
 
 
-@eqx.filter_jit
+@cached_jit
 def _residual(c: Constraints, q, t):
     return c.full(q, t)
 
 
-@eqx.filter_jit
+@cached_jit
 def _gn_step_packed(p: Packed, q, t, damping, floor=0.0):
     """:func:`_gn_step` on the sparse path for a packed set: a program whose size does not
     depend on the number of joints (one vectorized evaluation per kind). The damping is at
@@ -103,7 +103,7 @@ DENSE_FALLBACK_MAX_ENTRIES = 4_000_000
 SPARSE_DAMPING_FLOOR = 1e-10
 
 
-@eqx.filter_jit
+@cached_jit
 def _residual_packed(p: Packed, q, t):
     return p.full(q, t)
 

@@ -4,13 +4,14 @@ failures turned into named errors, and results in physical terms."""
 from __future__ import annotations
 
 import difflib
+import functools
 from collections.abc import Mapping
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._compile import cached_jit
 from ..equations import Constraints, kinetic_energy, potential_energy
 from ..errors import (
     EnergyBalanceError,
@@ -27,7 +28,13 @@ from ._problem import Problem
 from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
 from ._structure import _jac
 from .integrators import INTEGRATORS, STATUS_MESSAGES
-from .integrators._common import NEWTON_FAILED, STEP_COLLAPSE, UNCLOSED
+from .integrators._common import (
+    NEWTON_FAILED,
+    STEP_COLLAPSE,
+    UNCLOSED,
+    progress_hook,
+    solo_progress,
+)
 from .kinematic import output_times
 from .result import Result
 
@@ -51,7 +58,7 @@ def require_masses(model: Model) -> None:
             )
 
 
-@eqx.filter_jit
+@cached_jit
 def _velocity_fix(c: Constraints, q, qd, t, hold_idx):
     J = c.phi_q(q, t)
     rhs = -c.phi_t(q, t)
@@ -64,7 +71,7 @@ def _velocity_fix(c: Constraints, q, qd, t, hold_idx):
     return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)), initial=0.0)
 
 
-@eqx.filter_jit
+@cached_jit
 def _velocity_fix_sparse(c: Constraints, q, qd, t, weights):
     """:func:`_velocity_fix` on the sparse path: the least change ``dqd = -W J^T (J W J^T)^-1
     (J qd + Phi_t)``, ``W`` zero on the held coordinates (so the same least-squares solution),
@@ -171,7 +178,7 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
     return q, qd
 
 
-@eqx.filter_jit
+@cached_jit
 def _post_arrays(problem: Problem, ts, Q, QD):
     """Per output time: accelerations, multipliers, pivot ratio, joint reactions (n_joints, 3),
     multipliers' powers, energies ``[T, V, T + V]`` and the constraint violation.
@@ -381,6 +388,18 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
     )
 
 
+#: Integrators whose tolerances may be arrays (used only in traced arithmetic).
+_ARRAY_TOLERANCES = ("projection", "partitioning")
+#: Integrators that call their progress callback with ``jax.debug.callback`` themselves.
+_PLAIN_PROGRESS = ("generalized-alpha",)
+
+
+@functools.cache
+def _integrator(method: str):
+    """The integrator ``method``, its traced programs kept in the persistent cache."""
+    return cached_jit(INTEGRATORS[method])
+
+
 def simulate(
     kind: str,
     problem: Problem,
@@ -400,10 +419,16 @@ def simulate(
     (:func:`check_energy_balance`).
     """
     opts = dict(options)
-    if "first_step" in opts:  # an array, so that another first step is not another program
-        opts["first_step"] = jnp.asarray(opts["first_step"], dtype=jnp.float64)
-    integrator = INTEGRATORS[method]
-    traj = integrator(problem, jnp.asarray(ts), q0, qd0, progress=progress, **opts)
+    # Arrays, so that another tolerance or first step is not another program.
+    for name in ("first_step", *(("rtol", "atol") if method in _ARRAY_TOLERANCES else ())):
+        if opts.get(name) is not None:
+            opts[name] = np.asarray(opts[name], dtype=np.float64)
+    integrator = _integrator(method)
+    # A progress callback is passed as a key into a registry (one program for every
+    # callback), or for generalized-alpha, which calls it directly, as one fixed function.
+    hook = solo_progress if method in _PLAIN_PROGRESS else progress_hook
+    with hook(progress) as cb:
+        traj = integrator(problem, np.asarray(ts, dtype=np.float64), q0, qd0, progress=cb, **opts)
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)
     Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
@@ -419,7 +444,7 @@ def simulate(
         raise SingularityError(
             "accelerations are not finite: singular equations of motion", float(ts[k])
         )
-    tol = energy_tolerance(energy_tol, method, opts)
+    tol = energy_tolerance(energy_tol, method, options)
     balance = check_energy_balance(problem, ts, Q, extra, ratio, method, tol)
     stats = {
         "method": method,

@@ -4,14 +4,13 @@ from __future__ import annotations
 
 import dataclasses
 
-import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
+from .._compile import cached_jit
 from ..equations import Constraints
 from ..equations._constraints import Packed
 from ..errors import DegreesOfFreedomError, ModelError, RedundantConstraintError
@@ -62,12 +61,12 @@ class DofReport:
         return "\n".join(lines)
 
 
-@jax.jit
+@cached_jit
 def _jac(c: Constraints, q, t):
     return c.phi_q(q, t)
 
 
-@eqx.filter_jit
+@cached_jit
 def _values(p: Packed, q, t):
     return p.jacobian_values(q, t)
 

@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import contextlib
+import itertools
+import threading
 from collections.abc import Callable
 
 import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 OK, MAX_STEPS, STEP_COLLAPSE, NEWTON_FAILED, NOT_FINITE, UNCLOSED = 0, 1, 2, 3, 4, 5
 
@@ -50,6 +54,91 @@ class Trajectory(eqx.Module):
     status: jax.Array
     t_fail: jax.Array
     q_last: jax.Array
+
+
+# --------------------------------------------------------------------------- progress
+#: Progress callbacks by key: the compiled loop calls one fixed host function,
+#: :func:`_dispatch`, with the key as an array, so a new callback is a new number, not a new
+#: program (a callable argument of a jitted function is static: each new one would be traced
+#: and compiled again).
+_PROGRESS: dict[int, Callable] = {}
+_PROGRESS_KEYS = itertools.count()
+
+
+class Progress(eqx.Module):
+    """A progress callback as data: ``key`` (an int64 array, a leaf of the program's
+    arguments) names a function ``f(t)`` registered by :func:`progress_hook`.
+
+    Inside the compiled loop, :func:`report_progress` calls it at each output time.
+    """
+
+    key: jax.Array
+
+
+def _dispatch(key, t) -> None:
+    fn = _PROGRESS.get(int(key))
+    if fn is not None:
+        fn(t)
+
+
+@contextlib.contextmanager
+def progress_hook(fn: Callable | None):
+    """Register ``fn(t)`` for the duration of a run; yields the :class:`Progress` to pass
+    to the integrator (None for None)."""
+    if fn is None or isinstance(fn, Progress):
+        yield fn
+        return
+    key = next(_PROGRESS_KEYS)
+    _PROGRESS[key] = fn
+    try:
+        yield Progress(np.asarray(key, dtype=np.int64))
+    finally:
+        _PROGRESS.pop(key, None)
+
+
+def report_progress(progress, t, when=None) -> None:
+    """Inside a traced loop: call the progress callback with ``t`` (where ``when`` is true).
+
+    ``progress`` is None (nothing), a :class:`Progress` (one program for every callback) or a
+    plain function (a static argument: one program per function)."""
+    if progress is None:
+        return
+    if isinstance(progress, Progress):
+        emit = lambda: jax.debug.callback(_dispatch, progress.key, t)  # noqa: E731
+    else:
+        emit = lambda: jax.debug.callback(progress, t)  # noqa: E731
+    if when is None:
+        emit()
+    else:
+        jax.lax.cond(when, emit, lambda: None)
+
+
+#: A host function of fixed identity for integrators that call ``jax.debug.callback(progress,
+#: t)`` themselves (generalized-alpha): it calls the function :func:`solo_progress` set.
+_SOLO: list = [None]
+_SOLO_LOCK = threading.Lock()
+
+
+def _solo(t) -> None:
+    fn = _SOLO[0]
+    if fn is not None:
+        fn(t)
+
+
+@contextlib.contextmanager
+def solo_progress(fn: Callable | None):
+    """For an integrator that takes a plain callable: yields :func:`_solo` (the same
+    function every run, so no new program) dispatching to ``fn``; runs with a progress
+    callback through it take turns (a lock), since the dispatch has no key."""
+    if fn is None:
+        yield None
+        return
+    with _SOLO_LOCK:
+        _SOLO[0] = fn
+        try:
+            yield _solo
+        finally:
+            _SOLO[0] = None
 
 
 def rms_error(y0, y1, yerr, rtol, atol):
@@ -100,7 +189,8 @@ def adaptive_loop(
         dt: fixed step (None for adaptive control).
         h0: initial step guess.
         max_steps: step limit.
-        progress: optional ``f(t)`` called (via ``jax.debug.callback``) at each output.
+        progress: optional :class:`Progress` (or ``f(t)``) called at each output time
+            (:func:`report_progress`).
 
     Returns:
         ``(outputs (pytree stacked over N), args, steps, rejected, max_violation, status, t,
@@ -147,8 +237,7 @@ def adaptive_loop(
         store = ok & hit
         kk = jnp.minimum(k, N - 1)
         outs = jax.tree.map(lambda o, a: o.at[kk].set(jnp.where(store, a, o[kk])), outs, y)
-        if progress is not None:
-            jax.lax.cond(store, lambda: jax.debug.callback(progress, t1), lambda: None)
+        report_progress(progress, t1, store)
         t_new = jnp.where(ok, t1, t)
         k = k + store.astype(int)
         viol = jnp.where(ok, jnp.maximum(viol, v), viol)

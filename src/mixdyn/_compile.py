@@ -1,0 +1,372 @@
+"""Compiled programs kept between processes: the persistent caches of mixdyn.
+
+Two layers, both in one folder (``$MIXDYN_CACHE_DIR``, else ``$XDG_CACHE_HOME/mixdyn/jax``,
+else ``~/.cache/mixdyn/jax``), on by default in the Python API and the CLI alike:
+
+- JAX's persistent compilation cache (XLA executables, keyed by the lowered program);
+- the *traced* programs of mixdyn's jitted functions, exported with :mod:`jax.export` per
+  model structure (:func:`cached_jit`). JAX's cache starts from a lowered program, so every
+  process would otherwise trace each function again (seconds for an integrator); an exported
+  program is read back and lowered without running any Python of the function.
+
+A program is keyed by the function (module and qualified name), everything about its
+arguments that is not an array (the PyTree structure with every static field of the
+equinox modules: the mechanism's structure, element names, expression trees...), the
+shapes, dtypes and weak types of the array leaves (the model's numbers: changing them
+reuses the program), and the versions of Python, jax, jaxlib, equinox, diffrax, lineax,
+optimistix and of mixdyn's own source (a digest of its files), the backend and the
+x64 flag. Arguments that cannot be keyed safely across processes (a function or class
+defined outside mixdyn and the libraries above, e.g. in a user's script, or anything that
+cannot be pickled) are not exported: those calls are traced as before (``equinox.filter_jit``),
+as are programs that JAX cannot export (host callbacks such as a progress callback).
+
+Switches: ``MIXDYN_NO_CACHE=1`` (read when mixdyn is imported) or :func:`set_cache`. The cache
+folder is trusted code, as JAX's own cache is: do not share it with users you do not trust.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import hashlib
+import importlib.metadata
+import io
+import os
+import pathlib
+import pickle
+import sys
+import tempfile
+import threading
+import types
+from collections.abc import Callable
+
+import equinox as eqx
+import jax
+from jax import export as _export
+
+#: The environment variable that turns every persistent cache off (``1``).
+NO_CACHE_ENV = "MIXDYN_NO_CACHE"
+#: The environment variable naming the cache folder.
+CACHE_DIR_ENV = "MIXDYN_CACHE_DIR"
+#: The sub-folder of the cache folder holding the exported (traced) programs.
+EXPORTED = "exported"
+
+_state = {"folder": None}
+_lock = threading.Lock()
+
+#: Modules whose functions and classes may appear (by name) in a key: their code is covered
+#: by the versions in the key. Anything else (a user's ``__main__``) is not keyed.
+_TRUSTED_MODULES = (
+    "mixdyn",
+    "jax",
+    "jaxlib",
+    "equinox",
+    "diffrax",
+    "lineax",
+    "optimistix",
+    "numpy",
+    "math",
+    "operator",
+    "builtins",
+    "functools",
+    "collections",
+    "typing",
+)
+_DISTRIBUTIONS = ("jax", "jaxlib", "equinox", "diffrax", "lineax", "optimistix", "numpy")
+
+
+def default_folder() -> str:
+    """The cache folder from the environment (``$MIXDYN_CACHE_DIR``, ``$XDG_CACHE_HOME``)."""
+    folder = os.environ.get(CACHE_DIR_ENV)
+    if not folder:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+        folder = os.path.join(base, "mixdyn", "jax")
+    return folder
+
+
+def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
+    """Turn mixdyn's persistent caches on or off for this process.
+
+    Args:
+        enabled: True (the default folder, see the module's documentation), a folder, or
+            False (nothing is read from or written to disk; programs are traced and compiled
+            in each process).
+
+    Returns:
+        The cache folder in use, or None when off (or when the folder cannot be created: a
+        cache is an optimisation, never a failure).
+    """
+    import jax._src.compilation_cache as cc
+
+    with _lock:
+        folder = None
+        if enabled is not False and enabled is not None:
+            folder = default_folder() if enabled is True else os.fspath(enabled)
+            try:
+                os.makedirs(os.path.join(folder, EXPORTED), exist_ok=True)
+            except OSError:
+                folder = None
+        if folder == _state["folder"]:
+            return folder
+        _state["folder"] = folder
+        try:
+            if folder is None:
+                jax.config.update("jax_enable_compilation_cache", False)
+            else:
+                jax.config.update("jax_enable_compilation_cache", True)
+                jax.config.update("jax_compilation_cache_dir", folder)
+                jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+                jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+            cc.reset_cache()  # JAX opens its cache once: make it see the new setting
+        except Exception:  # pragma: no cover - a cache is never a failure
+            pass
+        return folder
+
+
+def cache_folder() -> str | None:
+    """The cache folder in use, or None when the persistent caches are off."""
+    return _state["folder"]
+
+
+def configure_from_env() -> str | None:
+    """The default at import: on, unless ``MIXDYN_NO_CACHE`` is set to something else than
+    ``0`` or empty."""
+    if os.environ.get(NO_CACHE_ENV, "").strip() not in ("", "0"):
+        return set_cache(False)
+    return set_cache(True)
+
+
+# --------------------------------------------------------------------------- keys
+class _UncacheableError(Exception):
+    """An argument that cannot be keyed safely across processes."""
+
+
+class _Aval:
+    """An array leaf in a key: its shape, dtype and weak type only."""
+
+    __slots__ = ("dtype", "shape", "weak")
+
+    def __init__(self, x):
+        self.shape = tuple(x.shape)
+        self.dtype = str(x.dtype)
+        self.weak = bool(getattr(x, "weak_type", False))
+
+    def __reduce__(self):
+        return (_Aval._of, (self.shape, self.dtype, self.weak))
+
+    @staticmethod
+    def _of(shape, dtype, weak):  # pragma: no cover - keys are never unpickled
+        raise TypeError
+
+
+class _Leaf:
+    """A placeholder for an output array leaf (its index in the flat outputs)."""
+
+    __slots__ = ("i",)
+
+    def __init__(self, i: int):
+        self.i = i
+
+    def __reduce__(self):
+        return (_Leaf, (self.i,))
+
+
+def _trusted(module: str | None) -> bool:
+    root = (module or "").split(".")[0]
+    return root in _TRUSTED_MODULES
+
+
+class _KeyPickler(pickle.Pickler):
+    """Pickles a key; refuses functions and classes whose code the key's versions do not
+    cover (a name in ``__main__`` may mean other code in another process)."""
+
+    def reducer_override(self, obj):
+        if isinstance(obj, type | types.FunctionType | types.BuiltinFunctionType):
+            if not _trusted(getattr(obj, "__module__", None)) or "<locals>" in getattr(
+                obj, "__qualname__", "<locals>"
+            ):
+                raise _UncacheableError(repr(obj))
+        elif isinstance(obj, jax.Array):
+            raise _UncacheableError("an array among the static parts")
+        return NotImplemented
+
+
+def _key_bytes(obj) -> bytes:
+    buf = io.BytesIO()
+    try:
+        _KeyPickler(buf, protocol=5).dump(obj)
+    except _UncacheableError:
+        raise
+    except Exception as e:  # not picklable: not keyable
+        raise _UncacheableError(str(e)) from None
+    return buf.getvalue()
+
+
+@functools.cache
+def _environment() -> bytes:
+    """What besides the arguments decides a traced program: versions, mixdyn's source,
+    the backend and the JAX settings that change tracing."""
+    parts = [sys.version, jax.default_backend(), str(jax.config.jax_enable_x64)]
+    for name in _DISTRIBUTIONS:
+        try:
+            parts.append(f"{name}={importlib.metadata.version(name)}")
+        except importlib.metadata.PackageNotFoundError:
+            parts.append(f"{name}=?")
+    for flag in (
+        "jax_default_matmul_precision",
+        "jax_numpy_rank_promotion",
+        "jax_numpy_dtype_promotion",
+    ):
+        parts.append(f"{flag}={getattr(jax.config, flag, None)}")
+    h = hashlib.sha256("\n".join(parts).encode())
+    root = pathlib.Path(__file__).parent
+    for path in sorted(root.rglob("*.py")):
+        h.update(str(path.relative_to(root)).encode())
+        h.update(path.read_bytes())
+    return h.digest()
+
+
+# --------------------------------------------------------------------------- the wrapper
+class _Program:
+    """A loaded program: the jitted call of the exported function and the outputs' shape."""
+
+    __slots__ = ("call", "leaves", "treedef")
+
+    def __init__(self, exported: _export.Exported, skeleton):
+        self.call = jax.jit(exported.call)
+        self.leaves, self.treedef = jax.tree_util.tree_flatten(skeleton)
+
+    def __call__(self, dynamic):
+        flat = self.call(*dynamic)
+        out = [flat[x.i] if isinstance(x, _Leaf) else x for x in self.leaves]
+        return jax.tree_util.tree_unflatten(self.treedef, out)
+
+
+#: Counters of this process (for tests and profiling): programs traced by export, read
+#: from disk, and calls that fell back to tracing.
+stats = {"exported": 0, "loaded": 0, "fallback": 0}
+
+
+class _CachedJit:
+    def __init__(self, fn: Callable):
+        self.fn = fn
+        self.jit = eqx.filter_jit(fn)
+        self.name = f"{fn.__module__}.{fn.__qualname__}"
+        self.programs: dict = {}
+        functools.update_wrapper(self, fn, updated=())
+
+    def __get__(self, obj, objtype=None):  # pragma: no cover - used on plain functions
+        return self if obj is None else types.MethodType(self, obj)
+
+    def __call__(self, *args, **kwargs):
+        folder = _state["folder"]
+        if folder is None:
+            return self.jit(*args, **kwargs)
+        leaves, treedef = jax.tree_util.tree_flatten((args, kwargs))
+        if any(isinstance(x, jax.core.Tracer) for x in leaves):
+            return self.jit(*args, **kwargs)  # inside another trace: nothing to cache
+        dynamic = [x for x in leaves if eqx.is_array(x)]
+        static = tuple(None if eqx.is_array(x) else x for x in leaves)
+        avals = tuple(
+            (x.shape, str(x.dtype), bool(getattr(x, "weak_type", False))) for x in dynamic
+        )
+        try:
+            mkey = (treedef, static, avals)
+            program = self.programs.get(mkey)
+        except TypeError:  # an unhashable static part: as filter_jit would refuse it
+            return self.jit(*args, **kwargs)
+        if program is None:
+            program = self._load(folder, args, kwargs, leaves, treedef)
+            self.programs[mkey] = program
+        if program is False:
+            stats["fallback"] += 1
+            return self.jit(*args, **kwargs)
+        return program(dynamic)
+
+    def _load(self, folder, args, kwargs, leaves, treedef):
+        """The program for these arguments: from disk, else exported (and written), else
+        False (traced by filter_jit at each new structure, as without a cache)."""
+        try:
+            skeleton = treedef.unflatten([_Aval(x) if eqx.is_array(x) else x for x in leaves])
+            key = hashlib.sha256(
+                _environment() + self.name.encode() + _key_bytes(skeleton)
+            ).hexdigest()
+        except _UncacheableError:
+            return False
+        path = pathlib.Path(folder, EXPORTED, f"{self.fn.__qualname__}-{key}.bin")
+        try:
+            with open(path, "rb") as f:
+                blob = pickle.load(f)
+            if blob is None:
+                return False  # not exportable (recorded by an earlier process)
+            program = _Program(_export.deserialize(bytearray(blob[0])), blob[1])
+            stats["loaded"] += 1
+            return program
+        except FileNotFoundError:
+            pass
+        except Exception:  # a damaged entry: export it again
+            pass
+        blob = self._export(args, kwargs, leaves, treedef)
+        _write(path, blob)
+        if blob is None:
+            return False
+        stats["exported"] += 1
+        return _Program(_export.deserialize(bytearray(blob[0])), blob[1])
+
+    def _export(self, args, kwargs, leaves, treedef):
+        """``(serialized program, output skeleton)``, or None where JAX cannot export it."""
+        is_dyn = [eqx.is_array(x) for x in leaves]
+        specs = [
+            jax.ShapeDtypeStruct(x.shape, x.dtype, weak_type=bool(getattr(x, "weak_type", False)))
+            for x, d in zip(leaves, is_dyn, strict=True)
+            if d
+        ]
+        out_static = {}
+
+        def flat(*dynamic):
+            it = iter(dynamic)
+            full = [next(it) if d else x for x, d in zip(leaves, is_dyn, strict=True)]
+            a, k = jax.tree_util.tree_unflatten(treedef, full)
+            out = self.fn(*a, **k)
+            out_leaves, out_tree = jax.tree_util.tree_flatten(out)
+            arrays = [x for x in out_leaves if eqx.is_array(x)]
+            n = iter(range(len(arrays)))
+            out_static["skeleton"] = jax.tree_util.tree_unflatten(
+                out_tree, [_Leaf(next(n)) if eqx.is_array(x) else x for x in out_leaves]
+            )
+            return arrays
+
+        try:
+            exported = _export.export(jax.jit(flat))(*specs)
+            blob = (bytes(exported.serialize()), out_static["skeleton"])
+            pickle.dumps(blob)
+        except Exception:
+            return None
+        return blob
+
+
+def _write(path: pathlib.Path, blob) -> None:
+    """Write an entry atomically (a concurrent reader sees all of it or nothing)."""
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+        with os.fdopen(fd, "wb") as f:
+            pickle.dump(blob, f, protocol=5)
+        os.replace(tmp, path)
+    except OSError:  # a read-only or full folder: the program is still used in memory
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
+def cached_jit(fn: Callable) -> Callable:
+    """``equinox.filter_jit`` whose traced programs persist in the cache folder.
+
+    Arrays are the arguments of the program; everything else is part of its key. Inside
+    another trace, with the cache off, or for arguments that cannot be keyed or exported, it
+    is ``equinox.filter_jit(fn)``.
+    """
+    return _CachedJit(fn)
+
+
+__all__ = ["cache_folder", "cached_jit", "configure_from_env", "set_cache", "stats"]
