@@ -176,11 +176,36 @@ def _trusted(module: str | None) -> bool:
     return root in _TRUSTED_MODULES
 
 
+#: Classes whose instances are keyed by a function of them (:func:`register_key`).
+_KEYS: dict[type, Callable] = {}
+
+
+def register_key(cls: type, key: Callable) -> None:
+    """Key the instances of ``cls`` (in a static part of the arguments) by ``key(obj)``: data
+    that decides the traced program, the same in every process (arrays in it count by shape
+    and dtype only). For classes that compare by identity or that hold numbers they do not
+    use when traced."""
+    _KEYS[cls] = key
+
+
+def skeleton(tree):
+    """``tree`` with its array leaves replaced by their shape, dtype and weak type."""
+    leaves, treedef = jax.tree_util.tree_flatten(tree)
+    return treedef.unflatten([_Aval(x) if eqx.is_array(x) else x for x in leaves])
+
+
+def _keyed(name, data):  # pragma: no cover - keys are never unpickled
+    raise TypeError
+
+
 class _KeyPickler(pickle.Pickler):
     """Pickles a key; refuses functions and classes whose code the key's versions do not
     cover (a name in ``__main__`` may mean other code in another process)."""
 
     def reducer_override(self, obj):
+        key = _KEYS.get(type(obj))
+        if key is not None:
+            return (_keyed, (type(obj).__qualname__, key(obj)))
         if isinstance(obj, type | types.FunctionType | types.BuiltinFunctionType):
             if not _trusted(getattr(obj, "__module__", None)) or "<locals>" in getattr(
                 obj, "__qualname__", "<locals>"
@@ -287,9 +312,9 @@ class _CachedJit:
         """The program for these arguments: from disk, else exported (and written), else
         False (traced by filter_jit at each new structure, as without a cache)."""
         try:
-            skeleton = treedef.unflatten([_Aval(x) if eqx.is_array(x) else x for x in leaves])
+            shape = treedef.unflatten([_Aval(x) if eqx.is_array(x) else x for x in leaves])
             key = hashlib.sha256(
-                _environment() + self.name.encode() + _key_bytes(skeleton)
+                _environment() + self.name.encode() + _key_bytes(shape)
             ).hexdigest()
         except _UncacheableError:
             return False
@@ -369,4 +394,12 @@ def cached_jit(fn: Callable) -> Callable:
     return _CachedJit(fn)
 
 
-__all__ = ["cache_folder", "cached_jit", "configure_from_env", "set_cache", "stats"]
+__all__ = [
+    "cache_folder",
+    "cached_jit",
+    "configure_from_env",
+    "register_key",
+    "set_cache",
+    "skeleton",
+    "stats",
+]

@@ -8,13 +8,22 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compile import cached_jit
+from .._compile import cached_jit, register_key, skeleton
 from ..equations import Constraints
+from ..equations import _constraints as _cons
 from ..equations._constraints import Packed
 from ..errors import AssemblyError, ModelError
 from ..linalg import min_norm_step
 from ..model import CoordinateDriver, Model, Polynomial
 from ..model._element import Resolver
+
+# The static part of a packed constraint set compares by the identity of its layout (cached
+# per structure) and holds the set with its numbers: across processes it is keyed by the
+# set's structure (its numbers by shape only), which decides the layout.
+register_key(
+    _cons._Key,
+    lambda k: (skeleton(k.c), k.c.active, k.c.rank, k.c.nq, k.c.linear_solver),
+)
 
 
 @dataclasses.dataclass(frozen=True)
