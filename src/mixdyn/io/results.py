@@ -9,6 +9,7 @@ column, the run's settings (solver, tolerances), the solver's counters and the m
 from __future__ import annotations
 
 import datetime
+import io
 import json
 import math
 import os
@@ -68,16 +69,18 @@ def write_result(
     from .. import __version__
 
     folder = pathlib.Path(folder)
-    df = result.table().reset_index()
-    _refuse_non_finite(df)
+    cols = result.columns()
+    names = list(cols)
+    table = np.column_stack([np.asarray(cols[n]) for n in names]) if names else np.zeros((0, 0))
+    _refuse_non_finite(table, names)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     csv = folder / RESULTS_CSV
-    df.to_csv(csv, index=False, float_format="%.17g")
+    _write_csv(csv, names, table)
     written.append(csv)
     if parquet:
         pq = folder / RESULTS_PARQUET
-        df.to_parquet(pq, index=False)
+        result.table().reset_index().to_parquet(pq, index=False)
         written.append(pq)
     units = result.units()
     meta = {
@@ -91,9 +94,9 @@ def write_result(
             "time": result.model.units.time,
             "angle": "rad",
         },
-        "rows": len(df),
-        "columns": list(df.columns),
-        "units": {c: units.get(c, "") for c in df.columns},
+        "rows": len(table),
+        "columns": names,
+        "units": {c: units.get(c, "") for c in names},
         "settings": jsonable(settings or {}),
         "stats": jsonable(result.stats),
     }
@@ -106,18 +109,30 @@ def write_result(
     return written
 
 
-def _refuse_non_finite(df) -> None:
+def _write_csv(path: pathlib.Path, names: list[str], table: np.ndarray) -> None:
+    """The table as CSV, as ``pandas.DataFrame.to_csv(index=False, float_format="%.17g")``
+    writes it (names quoted where needed; every number at full precision), without pandas."""
+    import csv
+
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerow(names)
+    if table.size:
+        np.savetxt(buf, table, fmt="%.17g", delimiter=",")
+    tmp = path.with_suffix(".csv.tmp")
+    tmp.write_text(buf.getvalue(), encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def _refuse_non_finite(table: np.ndarray, names: list[str]) -> None:
     """Raise a :class:`~mixdyn.NumericalError` (naming the column and time) rather than write
     a NaN or an infinity."""
-    values = df.select_dtypes("number")
-    finite = np.isfinite(values.to_numpy(dtype=float))
+    finite = np.isfinite(table)
     if finite.all():
         return
     row, col = np.argwhere(~finite)[0]
-    t = float(df["t"].iloc[row]) if "t" in df.columns else None
+    t = float(table[row, names.index("t")]) if "t" in names else None
     raise NumericalError(
-        f"column {values.columns[col]!r} is not finite ({values.iat[row, col]!r}); nothing "
-        "was written",
+        f"column {names[col]!r} is not finite ({table[row, col]!r}); nothing was written",
         t,
     )
 
