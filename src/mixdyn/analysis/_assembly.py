@@ -60,6 +60,7 @@ def start_q(model: Model) -> np.ndarray:
 def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
     """Coordinate drivers that keep the coordinates named in ``hold`` at their value in ``q``."""
     out = []
+    q = np.asarray(q)
     for ref in hold:
         idx = model.coordinate_index(ref)
         body, coord = ref.split(".")
@@ -165,7 +166,8 @@ def assemble(
     Raises:
         AssemblyError: naming the joint equations that could not be closed.
     """
-    q = jnp.asarray(start_q(model) if q is None else q, dtype=jnp.float64)
+    # NumPy between the compiled programs (a JAX operation outside them is a program too).
+    q = np.asarray(start_q(model) if q is None else q, dtype=np.float64)
     if q.shape != (model.nq,):
         raise ModelError(f"q must have shape ({model.nq},), got {tuple(q.shape)}", model.name)
     hold = tuple(hold)
@@ -177,25 +179,26 @@ def assemble(
     )
     L = length_scale(model)
     tol = 1e-12 * L if tol is None else tol
-    t = jnp.asarray(t, dtype=jnp.float64)
-    damping = jnp.asarray(0.0)
+    t = np.asarray(t, dtype=np.float64)
     steps = _Steps(c)
-    r = steps.residual(q, t)
-    err = float(jnp.max(jnp.abs(r))) if r.size else 0.0
+    r = np.asarray(steps.residual(q, t))
+    err = float(np.max(np.abs(r))) if r.size else 0.0
     it = 0
     while err > tol and it < max_iter:
         # Levenberg–Marquardt damping from the residual size keeps the step bounded far away.
-        damping = jnp.asarray(min(err / L, 1.0) * 1e-3)
+        damping = np.asarray(min(err / L, 1.0) * 1e-3)
         q_new, ratio = steps.step(q, t, damping)
+        q_new = np.asarray(q_new)
         if c.linear_solver == "sparse" and not (
-            float(ratio) >= SPARSE_STEP_MIN_RATIO and bool(jnp.all(jnp.isfinite(q_new)))
+            float(ratio) >= SPARSE_STEP_MIN_RATIO and bool(np.all(np.isfinite(q_new)))
         ):
             if c.m * c.nq <= DENSE_FALLBACK_MAX_ENTRIES:
                 q_new, _ = _gn_step(c.with_linear_solver("dense"), q, t, damping)
             else:
                 q_new, _ = steps.step(q, t, damping, SPARSE_DAMPING_FLOOR)
-        r_new = steps.residual(q_new, t)
-        err_new = float(jnp.max(jnp.abs(r_new)))
+            q_new = np.asarray(q_new)
+        r_new = np.asarray(steps.residual(q_new, t))
+        err_new = float(np.max(np.abs(r_new)))
         if not np.isfinite(err_new):
             break
         # Backtracking line search on the residual norm.
@@ -204,8 +207,8 @@ def assemble(
         while err_new > err and alpha > 1e-3:
             alpha *= 0.5
             q_new = q + alpha * step
-            r_new = steps.residual(q_new, t)
-            err_new = float(jnp.max(jnp.abs(r_new)))
+            r_new = np.asarray(steps.residual(q_new, t))
+            err_new = float(np.max(np.abs(r_new)))
         q, r, err = q_new, r_new, err_new
         it += 1
     if not err <= tol:

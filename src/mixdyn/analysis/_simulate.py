@@ -83,10 +83,10 @@ def _velocity_fix_sparse(c: Constraints, q, qd, t, weights):
     return qd, jnp.max(jnp.abs(c.matvec(v, qd) + phi_t), initial=0.0), ratio
 
 
-def _velocity_conditions(model: Model, qd0) -> tuple[jax.Array, list[int], bool]:
+def _velocity_conditions(model: Model, qd0) -> tuple[np.ndarray, list[int], bool]:
     """``(qd (nq,), indices of the given velocities, whether qd0 was a full vector)``."""
     if qd0 is None:
-        return jnp.zeros(model.nq), [], False
+        return np.zeros(model.nq), [], False
     if isinstance(qd0, Mapping):
         qd = np.zeros(model.nq)
         idx = []
@@ -102,7 +102,7 @@ def _velocity_conditions(model: Model, qd0) -> tuple[jax.Array, list[int], bool]
                 )
             qd[i] = v
             idx.append(i)
-        return jnp.asarray(qd), idx, False
+        return qd, idx, False
     qd = np.asarray(qd0, dtype=float)
     if qd.shape != (model.nq,):
         raise ModelError(
@@ -113,7 +113,7 @@ def _velocity_conditions(model: Model, qd0) -> tuple[jax.Array, list[int], bool]
     if not np.all(np.isfinite(qd)):
         k = int(np.argmax(~np.isfinite(qd)))
         raise ModelError("the initial velocity must be a finite number", model.coordinate_names[k])
-    return jnp.asarray(qd), [], True
+    return qd, [], True
 
 
 def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None, hold=()):
@@ -133,26 +133,30 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
     Both on ``c``'s linear-solver path (the sparse one falls back to the dense least-squares
     solve where ``Phi_q`` is rank deficient: redundant equations, too many held coordinates).
     """
-    q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
+    # NumPy between the compiled programs: each JAX operation outside them would be a
+    # program of its own to look up (and, in a new process, to load).
+    q = np.asarray(model.q0 if q0 is None else q0, dtype=np.float64)
     asm = assemble(model, q, hold=hold, t=t0, drivers=c.drivers, linear_solver=c.linear_solver)
-    q = jnp.asarray(asm.q)
+    q = np.asarray(asm.q, dtype=np.float64)
     qd, given, full = _velocity_conditions(model, qd0)
     hold_idx = sorted({model.coordinate_index(h) for h in hold} | set(given))
     qd_in, ok = qd, False
+    t0_ = np.asarray(t0, dtype=np.float64)
     if c.linear_solver == "sparse":
         W = np.ones(model.nq)
         W[hold_idx] = 0.0
-        qd, err, ratio = _velocity_fix_sparse(c, q, qd_in, jnp.asarray(t0), jnp.asarray(W))
-        ok = float(ratio) >= 1e-8 and bool(jnp.all(jnp.isfinite(qd)))
+        qd, err, ratio = _velocity_fix_sparse(c, q, qd_in, t0_, W)
+        ok = float(ratio) >= 1e-8 and bool(np.all(np.isfinite(np.asarray(qd))))
     if not ok:
         qd, err = _velocity_fix(
-            c.with_linear_solver("dense"), q, qd_in, jnp.asarray(t0), jnp.asarray(hold_idx, int)
+            c.with_linear_solver("dense"), q, qd_in, t0_, np.asarray(hold_idx, dtype=np.int64)
         )
+    qd = np.array(qd)  # a copy: writable
     if hold_idx:  # the conditions hold to rounding: keep the given numbers bit for bit
-        qd = qd.at[jnp.asarray(hold_idx)].set(qd_in[jnp.asarray(hold_idx)])
+        qd[hold_idx] = qd_in[hold_idx]
     scale = length_scale(model)
-    size = max(1.0, float(jnp.max(jnp.abs(qd_in), initial=0.0)))
-    if not float(err) < 1e-8 * max(scale, 1.0) * max(1.0, float(jnp.max(jnp.abs(qd)))):
+    size = max(1.0, float(np.max(np.abs(qd_in), initial=0.0)))
+    if not float(err) < 1e-8 * max(scale, 1.0) * max(1.0, float(np.max(np.abs(qd)))):
         names = [model.coordinate_names[i] for i in given]
         what = []
         if names:
@@ -165,9 +169,9 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
             "give only independent velocities (at most one per degree of freedom)",
             ", ".join(names) or model.name,
         )
-    change = float(jnp.max(jnp.abs(qd - qd_in), initial=0.0))
+    change = float(np.max(np.abs(qd - qd_in), initial=0.0))
     if full and change > 1e-8 * size:
-        k = int(jnp.argmax(jnp.abs(qd - qd_in)))
+        k = int(np.argmax(np.abs(qd - qd_in)))
         raise ModelError(
             f"the initial velocities qd0 violate the velocity constraints (making them "
             f"consistent would change {model.coordinate_names[k]} by {change:.3g}); give a "
@@ -175,7 +179,7 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
             "{coordinate: velocity} (the others follow)",
             model.name,
         )
-    return q, qd
+    return jax.device_put(q), jax.device_put(qd)  # JAX arrays, as before (no program)
 
 
 @cached_jit
@@ -258,7 +262,7 @@ def _raise_failure(problem: Problem, traj, ts, method):
     t = float(traj.t_fail)
     # Diagnose at the last accepted state (the failure), not at the last output time.
     q = np.asarray(traj.q_last)
-    J = np.asarray(_jac(problem.c, jnp.asarray(q), jnp.asarray(t, dtype=jnp.float64)))
+    J = np.asarray(_jac(problem.c, q, np.asarray(t, dtype=np.float64)))
     rows = dependent_rows(J, 1e-8) if J.size else []
     names = []
     for i in rows:
@@ -347,7 +351,7 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
     Wn, Wc = extra["work.nonconservative"], extra["work.constraints"]
     bal = (T + V) - (T[0] + V[0]) - Wn - Wc
     span = float(ts[-1] - ts[0])
-    mass = float(np.sum(problem.model.mass_diagonal[::3]))
+    mass = float(np.sum(np.asarray(problem.model.mass_diagonal)[::3]))
     rest = mass * (length_scale(problem.model) / span) ** 2
     scale = max(np.ptp(T), np.ptp(V), np.max(np.abs(Wn)), np.max(np.abs(Wc)), rest, 1e-300)
     rel = np.abs(bal) / scale
@@ -362,7 +366,7 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
     singular = float(np.min(ratio[: k + 1])) < 1e-3
     names = []
     if singular:
-        J = np.asarray(_jac(problem.c, jnp.asarray(Q[near]), jnp.asarray(ts[near])))
+        J = np.asarray(_jac(problem.c, Q[near], np.asarray(ts[near], dtype=np.float64)))
         for i in dependent_rows(J, 1e-3) if J.size else []:
             e = problem.c.element_names[problem.c.owners[problem.c.active[i]]]
             if e not in names:
@@ -432,9 +436,7 @@ def simulate(
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)
     Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
-    qdd, _, ratio, cols = _post(
-        problem, jnp.asarray(ts), jnp.asarray(Q), jnp.asarray(QD), n_drivers
-    )
+    qdd, _, ratio, cols = _post(problem, np.asarray(ts, dtype=np.float64), Q, QD, n_drivers)
     extra = {k: np.asarray(v) for k, v in cols.items()}
     extra["work.nonconservative"] = W[:, 0]
     extra["work.constraints"] = W[:, 1]

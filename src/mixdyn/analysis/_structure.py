@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 
-import jax.numpy as jnp
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
@@ -327,8 +326,8 @@ def analyse(
             ``"auto"`` (dense up to :data:`DENSE_MAX_ENTRIES` Jacobian entries).
     """
     c = Constraints.of(model, drivers)
-    q = jnp.asarray(start_q(model) if q is None else q, dtype=jnp.float64)
-    t = jnp.asarray(t, dtype=jnp.float64)
+    q = np.asarray(start_q(model) if q is None else q, dtype=np.float64)
+    t = np.asarray(t, dtype=np.float64)
     if method not in ("dense", "sparse", "auto"):
         raise ModelError(f"method must be 'dense', 'sparse' or 'auto', got {method!r}")
     if method == "auto":
