@@ -358,7 +358,13 @@ def run(
 
 def _execute(runner, plans, out, parquet, figures, mode, file):
     """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
-    ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time)."""
+    ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
+
+    The figures and animations are drawn by one worker thread while the next runs compute
+    (matplotlib, only ever used from that thread, is imported there as the first run
+    starts); a failure there is raised here as if drawn in turn."""
+    from concurrent.futures import ThreadPoolExecutor
+
     from rich.console import Console
     from rich.progress import (
         BarColumn,
@@ -383,69 +389,100 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
         TimeElapsedColumn(),
     )
     disable = mode in ("off", "log")
-    with Progress(*columns, console=console, disable=disable, transient=False) as bar:
-        tasks = {}
-        for plan in plans:
-            span = float(plan.times[-1] - plan.times[0]) or 1.0
-            tasks[plan.name] = bar.add_task(
-                f"{plan.name} ({plan.spec.kind})",
-                total=span if mode == "steps" else None,
-                start=False,
-            )
-
-        def hook(plan):
-            if mode not in ("steps", "log") or plan.spec.kind in ("kinematic", "inverse"):
-                return None
-            if mode == "log":
-                return _progress_log(plan)
-            task, t0 = tasks[plan.name], float(plan.times[0])
-
-            def at(t):
-                bar.update(task, completed=float(t) - t0)
-
-            return at
-
-        def done(plan, result, seconds):
-            total = bar.tasks[tasks[plan.name]].total or 1.0
-            bar.update(tasks[plan.name], total=total, completed=total)
-            folder = pathlib.Path(out) / plan.name
-            figs = [p.file for p in plan.spec.plots] if figures else []
-            anim = []
-            if figures and plan.spec.animation is not None:
-                a = plan.spec.animation
-                anim = [a.file] + (
-                    [str(pathlib.Path(a.file).with_suffix(".html"))] if a.html else []
+    drawing = figures and any(p.spec.plots or p.spec.animation is not None for p in plans)
+    painter = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mixdyn-figures")
+    pending = []
+    try:
+        if drawing:
+            pending.append(painter.submit(_preload_figures))
+        with Progress(*columns, console=console, disable=disable, transient=False) as bar:
+            tasks = {}
+            for plan in plans:
+                span = float(plan.times[-1] - plan.times[0]) or 1.0
+                tasks[plan.name] = bar.add_task(
+                    f"{plan.name} ({plan.spec.kind})",
+                    total=span if mode == "steps" else None,
+                    start=False,
                 )
-            written.extend(
-                write_result(
-                    result,
-                    folder,
-                    parquet=parquet,
-                    settings=run_settings(plan.spec),
-                    extra={
-                        "file": str(file),
-                        "run": plan.name,
-                        "wall_time_s": round(seconds, 3),
-                        "figures": figs,
-                        "animation": anim,
-                    },
-                )
-            )
-            if figures:
-                written.extend(_figures(runner, plan, result, folder))
-            console.print(
-                f"{plan.name}: {result.kind}, {len(result.t)} rows, {seconds:.2f} s -> {folder}",
-                highlight=False,
-                soft_wrap=True,
-            )
 
-        runner.execute(
-            [p.name for p in plans],
-            progress=hook,
-            on_start=lambda plan: bar.start_task(tasks[plan.name]),
-            on_done=done,
-        )
+            def hook(plan):
+                if mode not in ("steps", "log") or plan.spec.kind in ("kinematic", "inverse"):
+                    return None
+                if mode == "log":
+                    return _progress_log(plan)
+                task, t0 = tasks[plan.name], float(plan.times[0])
+
+                def at(t):
+                    bar.update(task, completed=float(t) - t0)
+
+                return at
+
+            def done(plan, result, seconds):
+                total = bar.tasks[tasks[plan.name]].total or 1.0
+                bar.update(tasks[plan.name], total=total, completed=total)
+                folder = pathlib.Path(out) / plan.name
+                figs = [p.file for p in plan.spec.plots] if figures else []
+                anim = []
+                if figures and plan.spec.animation is not None:
+                    a = plan.spec.animation
+                    anim = [a.file] + (
+                        [str(pathlib.Path(a.file).with_suffix(".html"))] if a.html else []
+                    )
+                written.extend(
+                    write_result(
+                        result,
+                        folder,
+                        parquet=parquet,
+                        settings=run_settings(plan.spec),
+                        extra={
+                            "file": str(file),
+                            "run": plan.name,
+                            "wall_time_s": round(seconds, 3),
+                            "figures": figs,
+                            "animation": anim,
+                        },
+                    )
+                )
+                if drawing:
+                    pending.append(painter.submit(_figures, runner, plan, result, folder))
+                console.print(
+                    f"{plan.name}: {result.kind}, {len(result.t)} rows, {seconds:.2f} s -> "
+                    f"{folder}",
+                    highlight=False,
+                    soft_wrap=True,
+                )
+
+            runner.execute(
+                [p.name for p in plans],
+                progress=hook,
+                on_start=lambda plan: bar.start_task(tasks[plan.name]),
+                on_done=done,
+            )
+    except KeyboardInterrupt:
+        for job in pending:
+            job.cancel()
+        raise
+    except Exception:  # a run failed: its predecessors' figures are still written
+        for job in pending:
+            with contextlib.suppress(Exception):
+                job.result()
+        raise
+    finally:
+        painter.shutdown(wait=True)
+    for job in pending:  # in order: the first failure is raised, as if drawn in turn
+        written.extend(job.result() or [])
     return written
+
+
+def _preload_figures() -> list:
+    """Import what the figures need (matplotlib, Pillow) ahead of the first figure."""
+    from matplotlib.backends import backend_agg  # noqa: F401
+    from matplotlib.figure import Figure
+
+    from . import viz  # noqa: F401
+
+    Figure()  # matplotlib reads its settings and font list on the first figure
+    return []
 
 
 #: Seconds between two progress lines when stderr is not a terminal.
