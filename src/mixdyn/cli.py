@@ -8,9 +8,10 @@ error that can be found without computing is found by ``mixdyn check`` and by ``
 before it computes anything (run settings, options, output paths). A model file is a regular
 file of UTF-8 text of at most 20 MB (:data:`mixdyn.io._yaml.MAX_BYTES`).
 
-Compiled code is kept between invocations in JAX's persistent compilation cache, in
-``$MIXDYN_CACHE_DIR`` or ``$XDG_CACHE_HOME/mixdyn/jax`` (``~/.cache/mixdyn/jax``); set
-``MIXDYN_NO_CACHE=1`` to turn it off. ``MIXDYN_DEBUG=1`` shows tracebacks of unexpected errors.
+Traced and compiled programs are kept between invocations (per model structure: a file with
+other numbers reuses them), in ``$MIXDYN_CACHE_DIR`` or ``$XDG_CACHE_HOME/mixdyn/jax``
+(``~/.cache/mixdyn/jax``); set ``MIXDYN_NO_CACHE=1`` to turn that off (see
+:mod:`mixdyn._compile`). ``MIXDYN_DEBUG=1`` shows tracebacks of unexpected errors.
 """
 
 from __future__ import annotations
@@ -319,10 +320,11 @@ def run(
         bool | None,
         typer.Option(
             "--progress/--no-progress",
-            help="--progress: a bar per run following the simulated time (dynamic runs then "
-            "skip the persistent compilation cache: the bar is a callback inside the compiled "
-            "loop); --no-progress: nothing. Default: one line per run with its elapsed time, "
-            "when the terminal is interactive.",
+            help="--progress: a bar per run following the simulated time (the bar is a "
+            "callback inside the compiled loop, which JAX cannot keep between invocations: "
+            "each invocation compiles the integrator again, once); --no-progress: nothing. "
+            "Default: one line per run with its elapsed time, when the terminal is "
+            "interactive.",
         ),
     ] = None,
 ):
