@@ -26,6 +26,7 @@ folder is trusted code, as JAX's own cache is: do not share it with users you do
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import functools
 import hashlib
@@ -270,13 +271,27 @@ class _Program:
 #: Counters of this process (for tests and profiling): programs traced by export, read
 #: from disk, and calls that fell back to tracing.
 stats = {"exported": 0, "loaded": 0, "fallback": 0}
+#: How many times the Python body of each :func:`cached_jit` function ran, i.e. was traced
+#: (by ``filter_jit`` or by export), by ``module.qualname``.
+traces: collections.Counter = collections.Counter()
+
+
+def _counting(fn: Callable, name: str) -> Callable:
+    """``fn`` counting its calls in :data:`traces` (its body runs only when traced)."""
+
+    @functools.wraps(fn)
+    def traced(*args, **kwargs):
+        traces[name] += 1
+        return fn(*args, **kwargs)
+
+    return traced
 
 
 class _CachedJit:
     def __init__(self, fn: Callable):
-        self.fn = fn
-        self.jit = eqx.filter_jit(fn)
         self.name = f"{fn.__module__}.{fn.__qualname__}"
+        self.fn = _counting(fn, self.name)
+        self.jit = eqx.filter_jit(self.fn)
         self.programs: dict = {}
         functools.update_wrapper(self, fn, updated=())
 
@@ -318,7 +333,7 @@ class _CachedJit:
             ).hexdigest()
         except _UncacheableError:
             return False
-        path = pathlib.Path(folder, EXPORTED, f"{self.fn.__qualname__}-{key}.bin")
+        path = pathlib.Path(folder, EXPORTED, f"{self.name.rsplit('.', 1)[-1]}-{key}.bin")
         try:
             with open(path, "rb") as f:
                 blob = pickle.load(f)
@@ -402,4 +417,5 @@ __all__ = [
     "set_cache",
     "skeleton",
     "stats",
+    "traces",
 ]

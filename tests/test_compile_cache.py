@@ -1,0 +1,226 @@
+"""Compiled once: traced programs kept per model structure (``mixdyn._compile``), in this
+process and across processes, and progress callbacks that do not force a new program.
+
+The other tests run with ``MIXDYN_NO_CACHE=1`` (conftest); the tests here that need the
+persistent cache turn it on in a temporary folder and off again, or run in a subprocess.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import textwrap
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+from fixtures import paper_mechanism, pendulum
+from mixdyn import _compile
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+TS = np.linspace(0.0, 0.2, 11)
+HOLD = ("crank.phi", "coupler.phi")
+
+
+@pytest.fixture
+def cache(tmp_path):
+    """The persistent caches on, in a fresh folder, for one test."""
+    folder = _compile.set_cache(tmp_path / "cache")
+    assert folder is not None
+    yield pathlib.Path(folder)
+    _compile.set_cache(False)
+
+
+def paper(T=500.0, F0=10.0, mass=0.0221):
+    """The paper's mechanism under its loads; the numbers can be changed, not the structure."""
+    model = paper_mechanism(
+        forces=(
+            md.Torque("M2", "crank", law=T),
+            md.Torque("M3", "coupler", law=-T),
+            md.PointForce("F1", "slider", along=(1, 0), law=md.Harmonic(F0, np.pi / 2)),
+        )
+    )
+    return eqx.tree_at(lambda m: m.bodies[0].mass, model, np.float64(mass))
+
+
+def traced_now() -> dict:
+    return dict(_compile.traces)
+
+
+def new_traces(before: dict) -> dict:
+    return {k: v - before.get(k, 0) for k, v in _compile.traces.items() if v != before.get(k, 0)}
+
+
+# ------------------------------------------------------------------ progress callbacks
+@pytest.mark.parametrize("method", ["projection", "generalized-alpha"])
+def test_a_new_progress_callback_is_not_a_new_program(method):
+    """Each run with a progress bar gets a new callback: it must not trace (and compile) the
+    integrator again; every callback is called, at the output times, with its own run."""
+    model = pendulum(theta0=0.3)
+    opts = {"dt": 0.01} if method == "generalized-alpha" else {}
+    seen = {1: [], 2: []}
+    md.forward(model, TS, method=method, progress=lambda t: seen[1].append(float(t)), **opts)
+    before = traced_now()
+    md.forward(model, TS, method=method, progress=lambda t: seen[2].append(float(t)), **opts)
+    assert new_traces(before) == {}
+    for k in (1, 2):
+        assert seen[k], f"callback {k} was not called"
+        assert seen[k][-1] == pytest.approx(TS[-1])
+        assert set(np.round(seen[k], 9)) <= set(np.round(TS, 9))
+
+
+def test_progress_registry_is_emptied():
+    """A run's callback is dropped from the registry when the run ends (also on failure)."""
+    from mixdyn.analysis.integrators import _common
+
+    with _common.progress_hook(lambda t: None) as hook:
+        assert int(hook.key) in _common._PROGRESS
+    assert int(hook.key) not in _common._PROGRESS
+    with pytest.raises(RuntimeError), _common.progress_hook(print) as hook:
+        raise RuntimeError
+    assert int(hook.key) not in _common._PROGRESS
+
+
+# ------------------------------------------------------------------ in one process
+def test_the_same_structure_traces_nothing_again(cache):
+    """A second run of the same structure, and a run with other numbers (loads, a mass, the
+    tolerances), traces none of the cached functions; the numbers are those of a fresh run."""
+    md.forward(paper(), TS, hold=HOLD, rtol=1e-9, atol=1e-9)
+    before = traced_now()
+    again = md.forward(paper(), TS, hold=HOLD, rtol=1e-9, atol=1e-9)
+    assert new_traces(before) == {}
+    other = md.forward(paper(T=300.0, F0=4.0, mass=0.03), TS, hold=HOLD, rtol=1e-8, atol=1e-8)
+    assert new_traces(before) == {}
+    assert not np.allclose(other.q, again.q)  # other numbers did change the motion
+    _compile.set_cache(False)
+    fresh = md.forward(paper(T=300.0, F0=4.0, mass=0.03), TS, hold=HOLD, rtol=1e-8, atol=1e-8)
+    np.testing.assert_allclose(other.q, fresh.q, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(
+        other.extra["energy.total"], fresh.extra["energy.total"], rtol=1e-12, atol=1e-12
+    )
+
+
+def test_exported_program_gives_the_traced_numbers(cache):
+    """Round trip: a program exported, written, read back (a new wrapper, as in a new
+    process) gives the numbers the traced program gives."""
+    from mixdyn.analysis._problem import Problem
+    from mixdyn.analysis._simulate import _post_arrays, _velocity_fix
+    from mixdyn.equations import Constraints
+
+    model = paper()
+    c = Constraints.of(model)
+    q = np.asarray(md.assemble(model, hold=HOLD).q)
+    qd = np.linspace(-1.0, 1.0, model.nq)
+    args = (c, q, qd, np.asarray(0.1), np.asarray([2, 5], dtype=np.int64))
+    traced = eqx.filter_jit(_velocity_fix.fn)(*args)
+    first = _compile.cached_jit(_velocity_fix.fn.__wrapped__)
+    exported = first(*args)
+    assert _compile.stats["exported"] >= 1
+    loaded_before = _compile.stats["loaded"]
+    reread = _compile.cached_jit(_velocity_fix.fn.__wrapped__)(*args)
+    assert _compile.stats["loaded"] == loaded_before + 1
+    for a, b, r in zip(traced, exported, reread, strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(r))
+    problem = Problem(model, c)
+    Q = np.tile(q, (3, 1))
+    QD = np.tile(qd, (3, 1)) * 0.0
+    ts = np.array([0.0, 0.1, 0.2])
+    want = eqx.filter_jit(_post_arrays.fn)(problem, ts, Q, QD)
+    got = _compile.cached_jit(_post_arrays.fn.__wrapped__)(problem, ts, Q, QD)
+    assert jax.tree.structure(want) == jax.tree.structure(got)
+    for a, b in zip(jax.tree.leaves(want), jax.tree.leaves(got), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+class _Local(eqx.Module):
+    scale: float = eqx.field(static=True)
+
+
+def _scaled(m: _Local, x):
+    return m.scale * x
+
+
+def test_code_outside_mixdyn_is_not_keyed(cache):
+    """A static part naming code that the key's versions do not cover (a class or function of
+    a test, a script) is traced as by filter_jit, never looked up by its name on disk."""
+    f = _compile.cached_jit(_scaled)
+    fallback = _compile.stats["fallback"]
+    assert float(f(_Local(2.0), jnp.asarray(3.0))) == 6.0
+    assert float(f(_Local(5.0), jnp.asarray(3.0))) == 15.0
+    assert _compile.stats["fallback"] == fallback + 2
+    assert not list((cache / _compile.EXPORTED).iterdir())
+
+
+def test_cache_switch(tmp_path):
+    """set_cache turns the caches on (a folder) and off (None), JAX's compilation cache with
+    them."""
+    try:
+        assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
+        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
+        assert jax.config.jax_enable_compilation_cache
+        assert (tmp_path / "c" / _compile.EXPORTED).is_dir()
+    finally:
+        assert _compile.set_cache(False) is None
+    assert _compile.cache_folder() is None
+    assert not jax.config.jax_enable_compilation_cache
+
+
+# ------------------------------------------------------------------ across processes
+SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    import numpy as np
+    sys.path.insert(0, {tests!r})
+    import mixdyn as md
+    from mixdyn import _compile
+    from test_compile_cache import paper, TS, HOLD
+    T = float(sys.argv[1])
+    res = md.forward(paper(T=T), TS, hold=HOLD, rtol=1e-9, atol=1e-9)
+    np.save(sys.argv[2], res.q)
+    print(json.dumps({{"folder": _compile.cache_folder(), "stats": _compile.stats,
+                      "traces": dict(_compile.traces)}}))
+    """
+)
+
+
+def _run(script: pathlib.Path, env: dict, *args) -> dict:
+    out = subprocess.run(
+        [sys.executable, str(script), *map(str, args)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+@pytest.mark.timeout(900)
+def test_a_second_process_traces_nothing(tmp_path):
+    """A first process exports the programs of the paper's mechanism; a second one, with
+    other numbers, reads them back and traces none of them, and gets the numbers a process
+    without the cache gets."""
+    script = tmp_path / "run.py"
+    script.write_text(SCRIPT.format(tests=str(ROOT / "tests")))
+    env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("MIXDYN_NO_CACHE", None)
+    first = _run(script, env, 500.0, tmp_path / "a.npy")
+    assert first["folder"] == str(tmp_path / "cache")
+    assert first["stats"]["exported"] > 0 and first["stats"]["fallback"] == 0
+    second = _run(script, env, 350.0, tmp_path / "b.npy")
+    assert second["stats"]["exported"] == 0 and second["stats"]["fallback"] == 0
+    assert second["stats"]["loaded"] == first["stats"]["exported"]
+    assert second["traces"] == {}
+    off = dict(env, MIXDYN_NO_CACHE="1")
+    reference = _run(script, off, 350.0, tmp_path / "c.npy")
+    assert reference["folder"] is None and reference["traces"]
+    np.testing.assert_array_equal(np.load(tmp_path / "b.npy"), np.load(tmp_path / "c.npy"))
+    assert not np.allclose(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
