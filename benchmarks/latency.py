@@ -1,0 +1,175 @@
+"""Latency of a model-file run and of a second Python process (issue 12).
+
+Times whole processes (wall clock, ``time.perf_counter`` around ``subprocess.run``), each
+scenario ``--repeat`` times, and prints the median, min and max, the target and the ratio
+median / target; with ``--baseline REV`` the same scenarios on a checkout of ``REV`` (a
+temporary ``git worktree``, put first on ``PYTHONPATH``) and the ratio baseline / current.
+
+Scenarios:
+
+- ``cli-empty``: ``mixdyn run examples/antonya.yaml --out OUT`` (figures and animation) with
+  an empty cache folder each time;
+- ``cli-warm``: the same, the cache filled by a first run;
+- ``cli-changed``: the file with one number changed (the parameter ``T``, a new value each
+  time), the cache filled by the original file;
+- ``api-second``: a Python process building the paper's mechanism and calling
+  ``md.forward`` on it (the file's forward run), the cache filled by a first process.
+
+Usage::
+
+    python benchmarks/latency.py [--repeat 5] [--baseline REV] [--only cli-warm ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import re
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "antonya.yaml"
+#: Targets of issue 12 [s].
+TARGETS = {"cli-empty": 8.0, "cli-warm": 2.0, "cli-changed": 2.5, "api-second": 2.0}
+XLA_FLAGS = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
+
+API_SCRIPT = """
+import numpy as np
+import mixdyn as md
+import mixdyn.io as mio
+spec = mio.read({file!r})
+model = mio.Runner(spec).model
+res = md.forward(model, np.linspace(0, 2, 201), hold=("crank.phi", "coupler.phi"),
+                 rtol=1e-10, atol=1e-10)
+assert res.q.shape == (201, model.nq)
+"""
+
+
+def _env(src: pathlib.Path, cache: pathlib.Path) -> dict:
+    env = dict(os.environ)
+    env.pop("MIXDYN_NO_CACHE", None)
+    env["MIXDYN_CACHE_DIR"] = str(cache)
+    env["XLA_FLAGS"] = env.get("XLA_FLAGS") or XLA_FLAGS
+    env["PYTHONPATH"] = os.pathsep.join([str(src), env.get("PYTHONPATH", "")]).rstrip(os.pathsep)
+    return env
+
+
+def _time(cmd: list[str], env: dict, cwd: pathlib.Path) -> float:
+    t0 = time.perf_counter()
+    proc = subprocess.run(cmd, env=env, cwd=cwd, capture_output=True, text=True, timeout=900)
+    seconds = time.perf_counter() - t0
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr[-2000:]}")
+    return seconds
+
+
+def _changed(tmp: pathlib.Path, k: int) -> pathlib.Path:
+    """The example with the parameter T changed (a new value for each k)."""
+    text = EXAMPLE.read_text(encoding="utf-8")
+    new, n = re.subn(r"(?m)^(\s*T:\s*)500\b", rf"\g<1>{500 + k + 1}", text)
+    assert n == 1, "the example's parameter T: 500 was not found"
+    path = tmp / f"antonya_T{500 + k + 1}.yaml"
+    path.write_text(new, encoding="utf-8")
+    return path
+
+
+def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[str, list]]:
+    """Seconds per variant (a mixdyn ``src`` folder) and scenario, the variants taking turns
+    run by run (so that a drift of the machine's speed touches them alike)."""
+    py = sys.executable
+    cli = [py, "-m", "mixdyn.cli", "run"]
+    out = {v: {} for v in srcs}
+    with tempfile.TemporaryDirectory(prefix="mixdyn-latency-") as tmp_:
+        tmp = pathlib.Path(tmp_)
+        result = tmp / "out"
+        script = tmp / "api.py"
+        script.write_text(API_SCRIPT.format(file=str(EXAMPLE)), encoding="utf-8")
+        env = {v: _env(src, tmp / v / "cache") for v, src in srcs.items()}
+        api_env = {v: _env(src, tmp / v / "api-cache") for v, src in srcs.items()}
+        for v in srcs:  # fill the caches: a first run, a first process
+            if {"cli-warm", "cli-changed"} & set(only):
+                _time([*cli, str(EXAMPLE), "--out", str(result)], env[v], tmp)
+            if "api-second" in only:
+                _time([py, str(script)], api_env[v], tmp)
+        for k in range(repeat):
+            changed = _changed(tmp, k)
+            for v, src in srcs.items():
+                t = out[v]
+                if "cli-empty" in only:
+                    empty = tmp / v / f"empty{k}"
+                    t.setdefault("cli-empty", []).append(
+                        _time([*cli, str(EXAMPLE), "--out", str(result)], _env(src, empty), tmp)
+                    )
+                    shutil.rmtree(empty, ignore_errors=True)
+                if "cli-warm" in only:
+                    t.setdefault("cli-warm", []).append(
+                        _time([*cli, str(EXAMPLE), "--out", str(result)], env[v], tmp)
+                    )
+                if "cli-changed" in only:
+                    t.setdefault("cli-changed", []).append(
+                        _time([*cli, str(changed), "--out", str(result)], env[v], tmp)
+                    )
+                if "api-second" in only:
+                    t.setdefault("api-second", []).append(_time([py, str(script)], api_env[v], tmp))
+    return out
+
+
+def _row(name, times, base=None) -> str:
+    med = statistics.median(times)
+    target = TARGETS[name]
+    cells = [
+        name,
+        f"{med:.2f}",
+        f"{min(times):.2f}",
+        f"{max(times):.2f}",
+        f"{target:g}",
+        f"{med / target:.2f}",
+    ]
+    if base is not None:
+        b = statistics.median(base[name])
+        cells += [f"{b:.2f}", f"{b / med:.2f}"]
+    return "| " + " | ".join(cells) + " |"
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawTextHelpFormatter)
+    ap.add_argument("--repeat", type=int, default=5, help="runs per scenario (default 5)")
+    ap.add_argument("--baseline", help="a git revision to compare with (e.g. a commit)")
+    ap.add_argument("--only", nargs="+", choices=list(TARGETS), default=list(TARGETS))
+    args = ap.parse_args(argv)
+    srcs = {"current": ROOT / "src"}
+    with tempfile.TemporaryDirectory(prefix="mixdyn-baseline-") as wt:
+        if args.baseline:
+            subprocess.run(
+                ["git", "worktree", "add", "--detach", wt, args.baseline],
+                cwd=ROOT,
+                check=True,
+                capture_output=True,
+            )
+            srcs["baseline"] = pathlib.Path(wt) / "src"
+        try:
+            times = measure(srcs, args.repeat, args.only)
+        finally:
+            if args.baseline:
+                subprocess.run(["git", "worktree", "remove", "--force", wt], cwd=ROOT, check=False)
+    current, base = times["current"], times.get("baseline")
+    head = "| scenario | median [s] | min | max | target [s] | median / target |"
+    rule = "|---|---|---|---|---|---|"
+    if base is not None:
+        head += f" baseline {args.baseline} median [s] | baseline / current |"
+        rule += "---|---|"
+    print(f"{args.repeat} runs per scenario, wall clock of whole processes, {os.cpu_count()} CPUs")
+    print(head)
+    print(rule)
+    for name in args.only:
+        print(_row(name, current[name], base))
+
+
+if __name__ == "__main__":
+    main()
