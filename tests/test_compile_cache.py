@@ -224,3 +224,63 @@ def test_a_second_process_traces_nothing(tmp_path):
     assert reference["folder"] is None and reference["traces"]
     np.testing.assert_array_equal(np.load(tmp_path / "b.npy"), np.load(tmp_path / "c.npy"))
     assert not np.allclose(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+
+
+# ------------------------------------------------------------------ figures while computing
+def _motion():
+    model = pendulum(theta0=0.4)
+    t = np.linspace(0.0, 1.0, 21)
+    q = np.tile(np.asarray(model.q0), (len(t), 1))
+    q[:, 2] = 0.4 * np.cos(3 * t)
+    return model, t, q
+
+
+def test_the_figure_worker_draws_what_this_process_draws(tmp_path):
+    """mixdyn run's worker process (no JAX) writes the same bytes as drawing here."""
+    from mixdyn.cli import _Painter
+    from mixdyn.viz import _draw, movie_data, plot_columns
+
+    model, t, q = _motion()
+    data = movie_data(model=model, t=t, q=q, frames=10, trace=["bob.O"])
+    table = {"t": t, "bob.phi": q[:, 2]}
+    painter = _Painter()
+    try:
+        assert painter.proc is not None
+        painter.draw("plot", table, ["bob.phi"], tmp_path / "w.png", units={"t": "s"}, title="a")
+        painter.draw("movie", data, tmp_path / "w.gif", fps=10)
+        painter.done(tmp_path / "x.html")
+        assert painter.results() == [tmp_path / "w.png", tmp_path / "w.gif", tmp_path / "x.html"]
+    finally:
+        painter.close()
+    plot_columns(table, ["bob.phi"], tmp_path / "h.png", units={"t": "s"}, title="a")
+    _draw.movie(data, tmp_path / "h.gif", fps=10)
+    assert (tmp_path / "w.png").read_bytes() == (tmp_path / "h.png").read_bytes()
+    assert (tmp_path / "w.gif").read_bytes() == (tmp_path / "h.gif").read_bytes()
+
+
+def test_a_figure_failure_in_the_worker_is_raised_here(tmp_path):
+    from mixdyn.cli import _Painter
+
+    t = np.linspace(0.0, 1.0, 5)
+    painter = _Painter()
+    try:
+        painter.draw("plot", {"t": t, "y": t}, ["y"], tmp_path / "bad.txt")
+        with pytest.raises(ValueError, match="cannot write a plot"):
+            painter.results()
+    finally:
+        painter.close()
+
+
+def test_a_lost_worker_leaves_the_figures_to_this_process(tmp_path):
+    from mixdyn.cli import _Painter
+
+    t = np.linspace(0.0, 1.0, 5)
+    painter = _Painter()
+    try:
+        painter.proc.kill()
+        painter.proc.wait()
+        painter.draw("plot", {"t": t, "y": t}, ["y"], tmp_path / "a.png")
+        assert painter.results() == [tmp_path / "a.png"]
+        assert (tmp_path / "a.png").stat().st_size > 0
+    finally:
+        painter.close()

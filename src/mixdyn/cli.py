@@ -362,11 +362,9 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
     """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
     ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
 
-    The figures and animations are drawn by one worker thread while the next runs compute
-    (matplotlib, only ever used from that thread, is imported there as the first run
-    starts); a failure there is raised here as if drawn in turn."""
-    from concurrent.futures import ThreadPoolExecutor
-
+    The figures and animations are drawn by a worker process while the next runs compute
+    (:class:`_Painter`: matplotlib is imported there as the first run starts, on another
+    core); a failure there is raised here as if drawn in turn."""
     from rich.console import Console
     from rich.progress import (
         BarColumn,
@@ -392,11 +390,8 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
     )
     disable = mode in ("off", "log")
     drawing = figures and any(p.spec.plots or p.spec.animation is not None for p in plans)
-    painter = ThreadPoolExecutor(max_workers=1, thread_name_prefix="mixdyn-figures")
-    pending = []
+    painter = _Painter() if drawing else None
     try:
-        if drawing:
-            pending.append(painter.submit(_preload_figures))
         with Progress(*columns, console=console, disable=disable, transient=False) as bar:
             tasks = {}
             for plan in plans:
@@ -446,7 +441,7 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
                     )
                 )
                 if drawing:
-                    pending.append(painter.submit(_figures, runner, plan, result, folder))
+                    _figures(runner, plan, result, folder, painter)
                 console.print(
                     f"{plan.name}: {result.kind}, {len(result.t)} rows, {seconds:.2f} s -> "
                     f"{folder}",
@@ -460,31 +455,121 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
                 on_start=lambda plan: bar.start_task(tasks[plan.name]),
                 on_done=done,
             )
+        if painter is not None:  # in order: the first failure is raised, as if drawn in turn
+            written.extend(painter.results())
     except KeyboardInterrupt:
-        for job in pending:
-            job.cancel()
         raise
     except Exception:  # a run failed: its predecessors' figures are still written
-        for job in pending:
+        if painter is not None:
             with contextlib.suppress(Exception):
-                job.result()
+                painter.results()
         raise
     finally:
-        painter.shutdown(wait=True)
-    for job in pending:  # in order: the first failure is raised, as if drawn in turn
-        written.extend(job.result() or [])
+        if painter is not None:
+            painter.close()
     return written
 
 
-def _preload_figures() -> list:
-    """Import what the figures need (matplotlib, Pillow) ahead of the first figure."""
-    from matplotlib.backends import backend_agg  # noqa: F401
-    from matplotlib.figure import Figure
+class _Painter:
+    """Draws the figures and animations of ``mixdyn run`` in a worker process
+    (:mod:`mixdyn.viz._worker`: matplotlib, no JAX) while the runs compute, and here where
+    no worker can be started or it is lost.
 
-    from . import viz  # noqa: F401
+    :meth:`draw` hands over a task, :meth:`done` a file already written (to keep the order),
+    :meth:`results` waits for all of them in order and raises the first failure.
+    """
 
-    Figure()  # matplotlib reads its settings and font list on the first figure
-    return []
+    def __init__(self):
+        import subprocess
+        import tempfile
+
+        from . import viz
+
+        self.tasks: list = []  # (task or None, path or None, sent)
+        self.tmp = tempfile.mkdtemp(prefix="mixdyn-figures-")
+        worker = pathlib.Path(viz.__file__).with_name("_worker.py")
+        try:
+            self.proc = subprocess.Popen(
+                [sys.executable, str(worker)],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.DEVNULL,
+                text=True,
+            )
+        except OSError:
+            self.proc = None
+
+    def draw(self, kind: str, *args, **kwargs) -> None:
+        import pickle
+
+        task = (kind, args, kwargs)
+        if self.proc is not None:
+            name = os.path.join(self.tmp, f"task{len(self.tasks)}.pickle")
+            try:
+                with open(name, "wb") as f:
+                    pickle.dump(task, f, protocol=pickle.HIGHEST_PROTOCOL)
+                self.proc.stdin.write(name + "\n")
+                self.proc.stdin.flush()
+                self.tasks.append((task, None, True))
+                return
+            except (OSError, ValueError, pickle.PicklingError):
+                self._lose()
+        self.tasks.append((task, None, False))
+
+    def done(self, path) -> None:
+        self.tasks.append((None, path, False))
+
+    def results(self) -> list[pathlib.Path]:
+        import pickle
+
+        out = []
+        tasks, self.tasks = self.tasks, []
+        for task, path, sent in tasks:
+            if task is None:
+                out.append(path)
+                continue
+            reply = None
+            if sent and self.proc is not None:
+                line = self.proc.stdout.readline()
+                if line.strip():
+                    reply = pickle.loads(bytes.fromhex(line.strip()))
+                else:
+                    self._lose()
+            if reply is None:  # no worker: drawn here
+                out.append(_draw_here(*task))
+                continue
+            status, value = reply
+            if status == "error":
+                raise value
+            out.append(pathlib.Path(value))
+        return out
+
+    def _lose(self) -> None:
+        if self.proc is not None:
+            with contextlib.suppress(OSError):
+                self.proc.kill()
+            self.proc.wait()
+            self.proc = None
+
+    def close(self) -> None:
+        import shutil
+        import subprocess
+
+        if self.proc is not None:
+            with contextlib.suppress(OSError, ValueError):
+                self.proc.stdin.close()
+            try:
+                self.proc.wait(timeout=10)
+            except subprocess.TimeoutExpired:
+                self._lose()
+            self.proc = None
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+
+def _draw_here(kind: str, args, kwargs) -> pathlib.Path:
+    from .viz import _draw, plot_columns
+
+    return {"plot": plot_columns, "movie": _draw.movie}[kind](*args, **kwargs)
 
 
 #: Seconds between two progress lines when stderr is not a terminal.
@@ -515,11 +600,13 @@ def _progress_log(plan, every: float = PROGRESS_LOG_EVERY):
     return at
 
 
-def _figures(runner, plan, result, folder) -> list[pathlib.Path]:
-    """The plots and animation a run asks for."""
-    from .viz import animate, html, plot_columns, result_columns
+def _figures(runner, plan, result, folder, painter: _Painter) -> None:
+    """Hand the plots and animation a run asks for to ``painter`` (the data is prepared
+    here: columns, references, the scene; the HTML page is written here)."""
+    import shutil
 
-    out = []
+    from .viz import html, movie_data, result_columns
+
     for k, p in enumerate(plan.spec.plots):
         try:
             cols, units = result_columns(result, p.columns)
@@ -532,23 +619,30 @@ def _figures(runner, plan, result, folder) -> list[pathlib.Path]:
                 _reference(runner, p.reference, result.t),
                 p.reference.label or p.reference.expr,
             )
-        out.append(
-            plot_columns(
-                cols,
-                p.columns,
-                folder / p.file,
-                units=units,
-                title=p.title,
-                ylabel=p.ylabel,
-                reference=reference,
-            )
+        painter.draw(
+            "plot",
+            cols,
+            p.columns,
+            folder / p.file,
+            units=units,
+            title=p.title,
+            ylabel=p.ylabel,
+            reference=reference,
         )
     a = plan.spec.animation
     if a is not None:
         path = folder / a.file
-        out.append(animate(result, path, fps=a.fps, frames=a.frames, trace=a.trace))
+        if path.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+            raise ValueError(
+                "writing MP4 needs ffmpeg, which is not installed; write a .gif or .html"
+            )
+        if path.suffix.lower() == ".html":
+            painter.done(html(result, path, fps=a.fps, frames=a.frames, trace=a.trace))
+        else:
+            data = movie_data(result, frames=a.frames, trace=a.trace)
+            painter.draw("movie", data, path, fps=a.fps)
         if a.html:
-            out.append(
+            painter.done(
                 html(
                     result,
                     path.with_suffix(".html"),
@@ -557,7 +651,6 @@ def _figures(runner, plan, result, folder) -> list[pathlib.Path]:
                     trace=a.trace,
                 )
             )
-    return out
 
 
 def _reference(runner, ref, t):

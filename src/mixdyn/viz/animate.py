@@ -16,20 +16,10 @@ import numpy as np
 
 from ..model import Model, PinInSlot, Revolute, Translational
 from ..model._element import Resolver
+from . import _draw
+from ._draw import COLORS as _COLORS
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
-_COLORS = (
-    "#1f77b4",
-    "#ff7f0e",
-    "#2ca02c",
-    "#d62728",
-    "#9467bd",
-    "#8c564b",
-    "#e377c2",
-    "#7f7f7f",
-    "#bcbd22",
-    "#17becf",
-)
 
 
 def _hull(points: np.ndarray) -> np.ndarray:
@@ -188,110 +178,36 @@ def animate(
         raise ValueError(
             f"cannot write an animation to {path.name!r}; use {', '.join(ANIMATION_SUFFIXES)}"
         )
-    from matplotlib import animation
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Polygon
-
     if suffix == ".mp4" and shutil.which("ffmpeg") is None:
         raise ValueError("writing MP4 needs ffmpeg, which is not installed; write a .gif or .html")
+    return _draw.movie(
+        movie_data(result, model=model, t=t, q=q, frames=frames, trace=trace, title=title),
+        path,
+        fps=fps,
+        size=size,
+        dpi=dpi,
+    )
+
+
+def movie_data(result=None, *, model=None, t=None, q=None, frames=80, trace=(), title=None):
+    """What :func:`animate` draws, as plain data (NumPy arrays, strings): the scene at the
+    frames' times, their times, the title and units (see :func:`mixdyn.viz._draw.movie`)."""
     model, ts, qs = _motion(result, model, t, q)
     idx = _frames(len(ts), frames)
     scene = Scene(model, qs[idx], trace)
-    x0, x1, y0, y1 = scene.bounds
-    if size is None:
-        aspect = (y1 - y0) / max(x1 - x0, 1e-12)
-        size = (6.4, float(np.clip(6.4 * aspect + 0.9, 3.0, 7.0)))
-    fig = Figure(figsize=size, dpi=dpi, layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    ax.set_xlim(x0, x1)
-    ax.set_ylim(y0, y1)
-    ax.set_aspect("equal")
-    ax.grid(True, alpha=0.25)
-    u = model.units.length
-    ax.set_xlabel(f"x [{u}]")
-    ax.set_ylabel(f"y [{u}]")
-    for g in scene.guides:
-        ax.plot(g[:, 0], g[:, 1], color="0.55", lw=1.0, ls="-.", zorder=1)
-    if len(scene.ground):
-        ax.plot(scene.ground[:, 0], scene.ground[:, 1], "^", color="0.3", ms=9, zorder=2)
-    patches = []
-    for k, outline in enumerate(scene.outlines):
-        color = _COLORS[k % len(_COLORS)]
-        closed = outline.shape[1] > 2
-        patch = Polygon(
-            outline[0],
-            closed=closed,
-            fc=color if closed else "none",
-            ec=color,
-            alpha=0.85,
-            lw=3.0 if not closed else 1.5,
-            zorder=3,
-            label=scene.names[k],
-        )
-        ax.add_patch(patch)
-        patches.append(patch)
-    (pins,) = ax.plot([], [], "o", mfc="white", mec="k", ms=6, zorder=5)
-    trace_lines = [
-        ax.plot([], [], "-", lw=1.0, color="k", alpha=0.6, zorder=4)[0] for _ in scene.traces
-    ]
-    label = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top", fontsize=9)
-    ax.set_title(title if title is not None else model.name)
-    ax.legend(loc="upper right", fontsize="x-small")
-    tu = model.units.time
-
-    def draw(i):
-        for patch, outline in zip(patches, scene.outlines, strict=True):
-            patch.set_xy(outline[i])
-        if scene.pins.shape[1]:
-            pins.set_data(scene.pins[i, :, 0], scene.pins[i, :, 1])
-        for line, tr in zip(trace_lines, scene.traces, strict=True):
-            line.set_data(tr[: i + 1, 0], tr[: i + 1, 1])
-        label.set_text(f"t = {ts[idx[i]]:.3f} {tu}")
-        return [*patches, pins, *trace_lines, label]
-
-    # Lay the figure out once, then keep that layout for every frame.
-    draw(0)
-    fig.canvas.draw()
-    fig.set_layout_engine("none")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    if suffix == ".mp4":
-        anim = animation.FuncAnimation(fig, draw, frames=len(idx), blit=False, repeat=False)
-        anim.save(str(path), writer=animation.FFMpegWriter(fps=fps), dpi=fig.dpi)
-        return path
-    # GIF: draw the still parts once and only the moving ones per frame (blitting).
-    moving = draw(0)
-    for a in moving:
-        a.set_animated(True)
-    canvas = fig.canvas
-    canvas.draw()
-    background = canvas.copy_from_bbox(fig.bbox)
-    writer = _gif_writer(fps)
-    with writer.saving(fig, str(path), dpi=fig.dpi):
-        for i in range(len(idx)):
-            canvas.restore_region(background)
-            for a in draw(i):
-                ax.draw_artist(a)
-            writer.grab_frame()
-    return path
-
-
-def _gif_writer(fps: int):
-    from matplotlib import animation
-    from PIL import Image
-
-    class GifWriter(animation.PillowWriter):
-        """matplotlib's PillowWriter, taking each frame from the Agg canvas as drawn (no
-        re-rendering) and reducing it to a palette with a fast quantizer."""
-
-        def grab_frame(self, **savefig_kwargs):
-            canvas = self.fig.canvas
-            rgba = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
-            frame = rgba.convert("RGB").quantize(colors=128, method=Image.Quantize.FASTOCTREE)
-            self._frames.append(frame)
-
-    return GifWriter(fps=fps)
+    return {
+        "outlines": scene.outlines,
+        "names": scene.names,
+        "pins": scene.pins,
+        "ground": scene.ground,
+        "guides": scene.guides,
+        "traces": scene.traces,
+        "bounds": scene.bounds,
+        "times": ts[idx],
+        "title": title if title is not None else model.name,
+        "length_unit": model.units.length,
+        "time_unit": model.units.time,
+    }
 
 
 def html(
@@ -439,4 +355,4 @@ requestAnimationFrame(tick);
 </html>
 """
 
-__all__ = ["ANIMATION_SUFFIXES", "Scene", "animate", "html"]
+__all__ = ["ANIMATION_SUFFIXES", "Scene", "animate", "html", "movie_data"]

@@ -1,0 +1,137 @@
+"""Drawing an animation from plain data (NumPy arrays and strings), with matplotlib's Agg
+canvas and Pillow.
+
+This module imports nothing from mixdyn (nor JAX), so that a process that only draws
+(:mod:`mixdyn.viz._worker`) can load it by its path; :func:`mixdyn.viz.animate` builds the
+data (:func:`mixdyn.viz.animate.movie_data`) and calls :func:`movie`.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+COLORS = (
+    "#1f77b4",
+    "#ff7f0e",
+    "#2ca02c",
+    "#d62728",
+    "#9467bd",
+    "#8c564b",
+    "#e377c2",
+    "#7f7f7f",
+    "#bcbd22",
+    "#17becf",
+)
+
+
+def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 80) -> pathlib.Path:
+    """Write the animation ``data`` (see :func:`mixdyn.viz.animate.movie_data`) to ``path``:
+    ``.gif`` (Pillow) or ``.mp4`` (ffmpeg).
+
+    Returns:
+        The path written.
+    """
+    from matplotlib import animation
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Polygon
+
+    path = pathlib.Path(path)
+    suffix = path.suffix.lower()
+    outlines, names = data["outlines"], data["names"]
+    pins_xy, ground, guides, traces = data["pins"], data["ground"], data["guides"], data["traces"]
+    times = np.asarray(data["times"])
+    x0, x1, y0, y1 = data["bounds"]
+    if size is None:
+        aspect = (y1 - y0) / max(x1 - x0, 1e-12)
+        size = (6.4, float(np.clip(6.4 * aspect + 0.9, 3.0, 7.0)))
+    fig = Figure(figsize=size, dpi=dpi, layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.25)
+    u = data["length_unit"]
+    ax.set_xlabel(f"x [{u}]")
+    ax.set_ylabel(f"y [{u}]")
+    for g in guides:
+        ax.plot(g[:, 0], g[:, 1], color="0.55", lw=1.0, ls="-.", zorder=1)
+    if len(ground):
+        ax.plot(ground[:, 0], ground[:, 1], "^", color="0.3", ms=9, zorder=2)
+    patches = []
+    for k, outline in enumerate(outlines):
+        color = COLORS[k % len(COLORS)]
+        closed = outline.shape[1] > 2
+        patch = Polygon(
+            outline[0],
+            closed=closed,
+            fc=color if closed else "none",
+            ec=color,
+            alpha=0.85,
+            lw=3.0 if not closed else 1.5,
+            zorder=3,
+            label=names[k],
+        )
+        ax.add_patch(patch)
+        patches.append(patch)
+    (pins,) = ax.plot([], [], "o", mfc="white", mec="k", ms=6, zorder=5)
+    trace_lines = [ax.plot([], [], "-", lw=1.0, color="k", alpha=0.6, zorder=4)[0] for _ in traces]
+    label = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top", fontsize=9)
+    ax.set_title(data["title"])
+    ax.legend(loc="upper right", fontsize="x-small")
+    tu = data["time_unit"]
+
+    def draw(i):
+        for patch, outline in zip(patches, outlines, strict=True):
+            patch.set_xy(outline[i])
+        if pins_xy.shape[1]:
+            pins.set_data(pins_xy[i, :, 0], pins_xy[i, :, 1])
+        for line, tr in zip(trace_lines, traces, strict=True):
+            line.set_data(tr[: i + 1, 0], tr[: i + 1, 1])
+        label.set_text(f"t = {times[i]:.3f} {tu}")
+        return [*patches, pins, *trace_lines, label]
+
+    # Lay the figure out once, then keep that layout for every frame.
+    draw(0)
+    fig.canvas.draw()
+    fig.set_layout_engine("none")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if suffix == ".mp4":
+        anim = animation.FuncAnimation(fig, draw, frames=len(times), blit=False, repeat=False)
+        anim.save(str(path), writer=animation.FFMpegWriter(fps=fps), dpi=fig.dpi)
+        return path
+    # GIF: draw the still parts once and only the moving ones per frame (blitting).
+    moving = draw(0)
+    for a in moving:
+        a.set_animated(True)
+    canvas = fig.canvas
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    writer = _gif_writer(fps)
+    with writer.saving(fig, str(path), dpi=fig.dpi):
+        for i in range(len(times)):
+            canvas.restore_region(background)
+            for a in draw(i):
+                ax.draw_artist(a)
+            writer.grab_frame()
+    return path
+
+
+def _gif_writer(fps: int):
+    from matplotlib import animation
+    from PIL import Image
+
+    class GifWriter(animation.PillowWriter):
+        """matplotlib's PillowWriter, taking each frame from the Agg canvas as drawn (no
+        re-rendering) and reducing it to a palette with a fast quantizer."""
+
+        def grab_frame(self, **savefig_kwargs):
+            canvas = self.fig.canvas
+            rgba = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
+            frame = rgba.convert("RGB").quantize(colors=128, method=Image.Quantize.FASTOCTREE)
+            self._frames.append(frame)
+
+    return GifWriter(fps=fps)
