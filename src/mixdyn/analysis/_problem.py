@@ -15,7 +15,7 @@ acceleration problem exist: ``"augmented"`` (Schur complement, any ``B``) and
 
 from __future__ import annotations
 
-import functools
+from typing import NamedTuple
 
 import equinox as eqx
 import jax
@@ -24,8 +24,8 @@ import jax.scipy.linalg as jsl
 import numpy as np
 
 from ..equations import Constraints, applied_forces, force_directions, potential_energy
-from ..linalg import lu_solve_checked, min_pivot, solve_kkt, solve_ranked
-from ..linalg._dense import SINGULAR_DAMPING, SINGULAR_RATIO
+from ..equations._jacobian import JacobianOperator
+from ..linalg import lu_solve_checked, min_pivot
 from ..model import Model
 
 
@@ -41,6 +41,26 @@ def pivot_columns(A, k: int):
     mask = jnp.ones(n, dtype=bool).at[dep].set(False)
     rest = jnp.argsort(~mask, stable=True)[: n - k]
     return dep, rest
+
+
+class Stages(NamedTuple):
+    """One state's stages (:meth:`Problem.stages`), in the manner of MJX's ``Data``.
+
+    Attributes:
+        q, qd: (nq,) positions and velocities; t: time.
+        phi: (m,) constraint residuals ``Phi(q, t)``.
+        J: the operator ``Phi_q(q, t)`` of the set's path.
+        qdd: (nq,) accelerations; mu: (m,) multipliers; ratio: the pivot ratio of the solve.
+    """
+
+    q: jax.Array
+    qd: jax.Array
+    t: jax.Array
+    phi: jax.Array
+    J: JacobianOperator
+    qdd: jax.Array
+    mu: jax.Array
+    ratio: jax.Array
 
 
 class Problem(eqx.Module):
@@ -88,9 +108,9 @@ class Problem(eqx.Module):
     @property
     def sparse(self) -> bool:
         """Whether the sparse linear-solver path is taken: the constraints ask for it and the
-        augmented solver is used (the partition solver stays dense). Mixed problems whose
-        unknown forces are not collocated are solved there by a rank-``p`` update of the
-        symmetric system (:meth:`_woodbury_accelerations`)."""
+        augmented solver is used (the partition solver stays dense). Read only by the
+        partitioning integrator and the run's statistics; every solve dispatches through the
+        constraint set's operator (:meth:`kkt`)."""
         return self.c.linear_solver == "sparse" and self.solver == "augmented"
 
     # ------------------------------------------------------------------ forces
@@ -98,150 +118,49 @@ class Problem(eqx.Module):
         """Known generalized forces ``Q`` (nq,)."""
         return applied_forces(self.model, q, qd, t, exclude=self.unknown)
 
-    def G(self, q, qd, t, C):
-        """Force directions of the multipliers, (nq, m): ``[Phi_q^T | -B]``."""
-        if self.p == 0:
-            return C.T
-        B = force_directions(self.model, self.unknown, q, qd, t)
-        return jnp.concatenate([C[: C.shape[0] - self.p].T, -B], axis=1)
-
     # ------------------------------------------------------------------ accelerations
-    def accelerations(self, q, qd, t, alpha=None, beta=None):
-        """``(qdd (nq,), mu (m,), pivot_ratio)`` at one state.
+    def kkt(self, q, qd, t, J=None):
+        """The matrix ``[[M, G], [C, 0]]`` at one state, factorized once (through its Schur
+        complement ``C M^-1 G``) by the constraint set's operator
+        (:meth:`~mixdyn.equations._jacobian.JacobianOperator.kkt`: dense LU, banded
+        Cholesky, or its Woodbury update for unknown forces of any direction); ``J`` the
+        operator at ``(q, t)`` if already built.
+
+        Returns:
+            ``(solve, ratio)``: ``solve(r1 (nq,), r2 (m,)) -> (x (nq,), mu (m,))`` with
+            ``M x + G mu = r1``, ``C x = r2``; the pivot ratio of the Schur complement.
+        """
+        J = self.c.jacobian(q, t) if J is None else J
+        B = force_directions(self.model, self.unknown, q, qd, t) if self.p else None
+        return J.kkt(self.Minv, B, self.collocated)
+
+    def accelerations(self, q, qd, t, alpha=None, beta=None, J=None):
+        """``(qdd (nq,), mu (m,), pivot_ratio)`` at one state (``J``: the operator at
+        ``(q, t)`` if already built).
 
         With ``alpha``, ``beta`` [1/time] the acceleration constraints are Baumgarte-stabilized:
         ``C qdd = gamma - 2 alpha (Phi_q qd + Phi_t) - beta**2 Phi``.
         """
-        if self.sparse:
-            return self._sparse_accelerations(q, qd, t, alpha, beta)
-        C = self.c.phi_q(q, t)
-        gam = self.c.gamma(q, qd, t)
-        if alpha is not None:
-            gam = gam - 2 * alpha * (C @ qd + self.c.phi_t(q, t)) - beta**2 * self.c(q, t)
-        Q = self.known_forces(q, qd, t)
-        if self.solver == "partition":
-            return self._partition(q, qd, t, C, gam, Q)
-        return solve_kkt(self.Minv, C, self.G(q, qd, t, C), Q, gam, self.c.rank)
-
-    def _sparse_accelerations(self, q, qd, t, alpha, beta):
-        """The Schur complement solve on the sparse path (see :mod:`mixdyn.linalg`)."""
-        c, Minv = self.c, self.Minv
-        v = c.jacobian_values(q, t)
+        c = self.c
+        J = c.jacobian(q, t) if J is None else J
         gam = c.gamma(q, qd, t)
         if alpha is not None:
-            gam = gam - 2 * alpha * (c.matvec(v, qd) + c.phi_t(q, t)) - beta**2 * c(q, t)
+            gam = gam - 2 * alpha * (J.mv(qd) + c.phi_t(q, t)) - beta**2 * c(q, t)
         Q = self.known_forces(q, qd, t)
-        rhs = c.matvec(v, Minv * Q) - gam
-        if self.p and not self.collocated:
-            return self._woodbury_accelerations(q, qd, t, v, Q, rhs)
-        # the symmetric system M qdd + C^T y = Q, C qdd = gam
-        mu, ratio = c.schur_solve(v, Minv, rhs)
-        mu = jax.lax.cond(
-            ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
-            lambda: self._dense_schur_solve(q, qd, t, rhs),
-            lambda: mu,
-        )
-        qdd = Minv * (Q - c.rmatvec(v, mu))
-        if self.p:
-            # Collocated unknown forces: -B[:, a] u_a = Psi_q[b]^T y_b with B[:, a] = s_a
-            # Psi_q[b]^T, so u_a = -y_b / s_a.
-            mk = c.m - self.p
-            rows = mk + np.asarray(self.collocated, dtype=int)
-            B = force_directions(self.model, self.unknown, q, qd, t)
-            PsiT = self._row_gradients(v, rows)
-            scale = jnp.sum(B * PsiT, axis=0) / jnp.sum(PsiT**2, axis=0)
-            mu = jnp.concatenate([mu[:mk], -mu[rows] / scale])
+        if self.solver == "partition":
+            return self._partition(q, qd, t, J.dense(), gam, Q)
+        solve, ratio = self.kkt(q, qd, t, J)
+        qdd, mu = solve(Q, gam)
         return qdd, mu, ratio
 
-    def _row_gradients(self, v, rows):
-        """``Phi_q[rows]^T`` (nq, len(rows)) from the sparse values ``v``."""
-        E = jnp.zeros((self.c.m, len(rows))).at[rows, np.arange(len(rows))].set(1.0)
-        return jax.vmap(lambda e: self.c.rmatvec(v, e), in_axes=1, out_axes=1)(E)
-
-    def _dense_schur_solve(self, q, qd, t, b, symmetric=True):
-        """The sparse path's fallback at a singular position (the factorization loses rank
-        for an instant), as on the dense path: a damped SVD solve of the Schur complement
-        formed densely, ``C M^-1 C^T`` (or ``C M^-1 G`` with ``symmetric=False``)."""
-        c = self.c
-        C = c.phi_q(q, t)
-        G = C.T if symmetric else self.G(q, qd, t, C)
-        return solve_ranked(C @ (self.Minv[:, None] * G), b, c.rank, damping=SINGULAR_DAMPING)[0]
-
-    def schur_solver(self, q, qd, t, v):
-        """Sparse path: ``(solve, ratio, g_times)`` with ``solve(b)`` solving ``S mu = b`` for
-        the Schur complement ``S = C M^-1 G`` (m, m), factorized once, and ``g_times(mu)`` the
-        generalized force ``G mu`` (nq,), from the Jacobian values ``v`` at ``(q, t)``:
-        ``G = C^T`` through the banded Cholesky factors (:meth:`Constraints.schur_solver`),
-        mixed problems through :meth:`woodbury_solver`; below :data:`SINGULAR_RATIO` a dense
-        damped SVD solve."""
-        if self.p:
-            return self.woodbury_solver(q, qd, t, v)
-        c = self.c
-        solve_sym, ratio = c.schur_solver(v, self.Minv)
-
-        def solve(b):
-            return jax.lax.cond(
-                ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
-                lambda b: self._dense_schur_solve(q, qd, t, b),
-                solve_sym,
-                b,
-            )
-
-        return solve, ratio, lambda mu: c.rmatvec(v, mu)
-
-    def _woodbury_accelerations(self, q, qd, t, v, Q, rhs):
-        """Mixed dynamics on the sparse path with unknown forces of any direction
-        (:meth:`woodbury_solver`)."""
-        solve, ratio, g_times = self.woodbury_solver(q, qd, t, v)
-        mu = solve(rhs)
-        return self.Minv * (Q - g_times(mu)), mu, ratio
-
-    def woodbury_solver(self, q, qd, t, v):
-        """Sparse path, mixed problem: ``(solve, ratio, g_times)`` with ``solve(b)`` solving
-        ``S mu = b`` for the Schur complement ``S = C M^-1 G`` (m, m) and ``g_times(mu)`` the
-        generalized force ``G mu`` (nq,), from the Jacobian values ``v`` at ``(q, t)``.
-
-        ``S`` differs from the symmetric ``S_sym = C M^-1 C^T`` in its last ``p`` columns only
-        (``G = [Phi_q^T | -B]``, ``C^T = [Phi_q^T | Psi_q^T]``): ``S = S_sym + U E^T`` with
-        ``U = -C M^-1 (B + Psi_q^T)`` (m, p) and ``E`` the last ``p`` columns of the identity.
-        By the Sherman–Morrison–Woodbury formula ``S^-1 b = y - Z K^-1 E^T y``,
-        ``y = S_sym^-1 b``, ``Z = S_sym^-1 U``, ``K = I + E^T Z`` (p, p): one banded Cholesky
-        factorization, ``p`` solves once and one per right-hand side, and a ``p x p`` LU.
-        ``K`` is singular exactly where ``S`` is (the mixed problem is not solvable there);
-        the pivot ratio is the smaller of the two factorizations'. Below
-        :data:`SINGULAR_RATIO` the solve is a dense damped SVD, as on the dense path.
-        """
-        c, Minv, p = self.c, self.Minv, self.p
-        mk = c.m - p
-        B = force_directions(self.model, self.unknown, q, qd, t)  # (nq, p)
-        cols = functools.partial(jax.vmap, in_axes=1, out_axes=1)
-        PsiT = self._row_gradients(v, mk + np.arange(p))  # (nq, p)
-        U = cols(lambda f: c.matvec(v, Minv * f))(-(B + PsiT))  # (m, p)
-        solve_sym, ratio = c.schur_solver(v, Minv)
-        Z = cols(solve_sym)(U)
-        K = jnp.eye(p) + Z[mk:]
-        lu, piv = jsl.lu_factor(K)
-        d = jnp.abs(jnp.diag(lu))
-        ratio = jnp.minimum(ratio, jnp.min(d) / jnp.maximum(jnp.max(d), 1e-300))
-        ratio = jnp.where(jnp.isfinite(ratio), ratio, 0.0)
-
-        def woodbury(b):
-            y = solve_sym(b)
-            return y - Z @ jsl.lu_solve((lu, piv), y[mk:])
-
-        def solve(b):  # dense below SINGULAR_RATIO: a singular position or unsolvable instant
-            return jax.lax.cond(
-                ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
-                lambda b: self._dense_schur_solve(q, qd, t, b, symmetric=False),
-                woodbury,
-                b,
-            )
-
-        def g_times(mu):
-            lam = jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])
-            return c.rmatvec(v, lam) - B @ mu[mk:]
-
-        return solve, ratio, g_times
+    def stages(self, q, qd, t) -> Stages:
+        """The state record of ``(q, qd, t)`` filled stage by stage (positions: ``Phi`` and
+        the operator ``Phi_q``; accelerations and multipliers from them), each equation
+        evaluated once for everything that reads it (reactions, powers, checks)."""
+        J = self.c.jacobian(q, t)
+        phi = self.c(q, t)
+        qdd, mu, ratio = self.accelerations(q, qd, t, J=J)
+        return Stages(q, qd, t, phi, J, qdd, mu, ratio)
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""
@@ -283,16 +202,12 @@ class Problem(eqx.Module):
         return qdd, jnp.concatenate([lam, u]), jnp.minimum(ratio, r2)
 
     # ------------------------------------------------------------------ work
-    def powers(self, q, qd, t, mu):
+    def powers(self, q, qd, t, mu, J=None):
         """Power of each multiplier's force (m,): ``-(G[:, r] mu_r) . qd``, with
-        ``G^T qd = [Phi_q qd; -B^T qd]`` (``Phi_q qd`` from the sparse values on the sparse
-        path)."""
+        ``G^T qd = [Phi_q qd; -B^T qd]`` (``J``: the operator at ``(q, t)`` if built)."""
         c = self.c
-        if c.linear_solver == "sparse":
-            Cqd = c.matvec(c.jacobian_values(q, t), qd)
-        else:
-            Cqd = c.phi_q(q, t) @ qd
-        Gqd = Cqd[: c.m - self.p]
+        J = c.jacobian(q, t) if J is None else J
+        Gqd = J.mv(qd)[: c.m - self.p]
         if self.p:
             B = force_directions(self.model, self.unknown, q, qd, t)
             Gqd = jnp.concatenate([Gqd, -(B.T @ qd)])
@@ -333,41 +248,20 @@ class Problem(eqx.Module):
 
         def body(state):
             k, q, r, _ = state
-            if c.linear_solver == "sparse":
-                v = c.jacobian_values(q, t)
-                y, _ = c.schur_solve(v, Minv, r)
-                q = q - Minv * c.rmatvec(v, y)
-            else:
-                J = c.phi_q(q, t)
-                MJ = Minv[:, None] * J.T
-                q = q - MJ @ self._projection_solve(J @ MJ, r)
+            q = q - c.jacobian(q, t).min_norm(Minv, guard=True).solve(r)
             return (k + 1, q, *residual(q))
 
         _, q, r, _ = jax.lax.while_loop(cond, body, (0, q, *residual(q)))
         return q, jnp.max(jnp.abs(r), initial=0.0)
 
     def project_velocities(self, q, qd, t):
-        """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``."""
-        if self.c.linear_solver == "sparse":
-            c, Minv = self.c, self.Minv
-            v = c.jacobian_values(q, t)
-            y, _ = c.schur_solve(v, Minv, c.matvec(v, qd) + c.phi_t(q, t))
-            return qd - Minv * c.rmatvec(v, y)
-        J = self.c.phi_q(q, t)
-        r = J @ qd + self.c.phi_t(q, t)
-        MJ = self.Minv[:, None] * J.T
-        return qd - MJ @ self._projection_solve(J @ MJ, r)
+        """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``.
 
-    def _projection_solve(self, S, r):
-        """``S^-1 r`` for a projection's ``S = Phi_q M^-1 Phi_q^T`` (dense path): near a
-        singular position the damped SVD solve, as for the accelerations, so that the
-        residual's part along the direction losing rank (rounding, drift) is not amplified
-        like ``1/s`` into a jump of the positions or velocities."""
-        y, ratio = self.c.solve(S, r)
-        if self.c.rank is not None or S.shape[0] == 0:
-            return y
-        return jax.lax.cond(
-            ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
-            lambda: solve_ranked(S, r, None, damping=SINGULAR_DAMPING)[0],
-            lambda: y,
-        )
+        Both projections solve with ``S = Phi_q M^-1 Phi_q^T`` through the path's operator
+        (:meth:`~mixdyn.equations.Constraints.jacobian`); near a singular position the damped
+        SVD solve, as for the accelerations, so that the residual's part along the direction
+        losing rank (rounding, drift) is not amplified like ``1/s`` into a jump of the
+        positions or velocities."""
+        J = self.c.jacobian(q, t)
+        r = J.mv(qd) + self.c.phi_t(q, t)
+        return qd - J.min_norm(self.Minv, guard=True).solve(r)

@@ -62,11 +62,12 @@ def _sparse_map(c: Constraints, bodies):
     return take, 3 * own[take] + cols[take] % 3, sign[take]
 
 
-def joint_reactions(c: Constraints, q, t, lam) -> jax.Array:
+def joint_reactions(c: Constraints, q, t, lam, J=None) -> jax.Array:
     """Reactions (n_joints, 3) ``[Fx, Fy, M]`` of every joint at one time: the force and the
     moment (about the joint point) that body i exerts on body j (on body i, sign flipped, if j
-    is the ground), from ``q`` (nq,), ``t`` and the multipliers ``lam`` (m,). Vectorize over
-    time with ``jax.vmap`` or ``jax.lax.map``."""
+    is the ground), from ``q`` (nq,), ``t`` and the multipliers ``lam`` (m,); ``J``: the
+    operator ``c.jacobian(q, t)`` if already built. Vectorize over time with ``jax.vmap`` or
+    ``jax.lax.map``."""
     nj = len(c.joints)
     if nj == 0:
         return jnp.zeros((0, 3))
@@ -74,12 +75,13 @@ def joint_reactions(c: Constraints, q, t, lam) -> jax.Array:
     if c.linear_solver == "sparse":
         rows, _ = c.coo()
         take, slot, sign = _sparse_map(c, bodies)
-        v = c.jacobian_values(q, t)
+        v = c.jacobian_values(q, t) if J is None else J.values
         contrib = -(v[take] * lam[rows[take]]) * sign
         w = jax.ops.segment_sum(contrib, jnp.asarray(slot), num_segments=3 * nj)
         w = w.reshape(nj, 3)
     else:
-        Qc = -(c.phi_q(q, t) * lam[:, None])  # (m, nq): generalized force of each row
+        C = c.phi_q(q, t) if J is None else J.dense()
+        Qc = -(C * lam[:, None])  # (m, nq): generalized force of each row
         owners = np.asarray([c.owners[i] for i in c.active])
         parts = []
         for k, (b, _, sign) in enumerate(bodies):

@@ -21,14 +21,18 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ..linalg._dense import solve_ranked
 from ..model import Driver, Joint, Model
+from ._jacobian import (  # noqa: F401  (REGULARIZATION, REFINE_REDUNDANT: re-exported)
+    REFINE_REDUNDANT,
+    REGULARIZATION,
+    BandedJacobian,
+    DenseJacobian,
+    JacobianOperator,
+)
 
 #: The linear-solver paths (see :mod:`mixdyn.linalg`).
 LINEAR_SOLVERS = ("dense", "sparse", "auto")
-#: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
-#: the steps of iterated regularization (see :meth:`Constraints.schur_solver`).
-REGULARIZATION = 1e-8
-REFINE_REDUNDANT = 4
 
 # Static fields that only name things (resolved into indices and arrays at binding): cleared
 # so that elements of one kind share one vectorized evaluation.
@@ -122,8 +126,6 @@ class Constraints(eqx.Module):
     def solve(self, A, b, extra_rank: int = 0):
         """Solve with a matrix built from ``Phi_q`` whose rank is ``self.rank + extra_rank``
         (LU when no row is redundant); returns ``(x, ratio)``."""
-        from ..linalg import solve_ranked
-
         return solve_ranked(A, b, None if self.rank is None else self.rank + extra_rank)
 
     # ------------------------------------------------------------------ sizes
@@ -281,106 +283,51 @@ class Constraints(eqx.Module):
         rows, cols = self.coo()
         return schur_structure(self.m, self.nq, rows, cols)
 
+    # ------------------------------------------------------------------ the operator
+    def jacobian(self, q, t) -> JacobianOperator:
+        """``Phi_q(q, t)`` as the linear operator of this set's path, the one place the path
+        is read: :class:`~mixdyn.equations._jacobian.DenseJacobian` (the matrix of
+        :meth:`phi_q`) or :class:`~mixdyn.equations._jacobian.BandedJacobian` (the values of
+        :meth:`jacobian_values`). Every solve with ``Phi_q`` goes through its methods."""
+        if self.linear_solver == "sparse":
+            return BandedJacobian(self, self.jacobian_values(q, t))
+        return DenseJacobian(self.phi_q(q, t), self.rank)
+
+    def operator(self, values) -> BandedJacobian:
+        """The sparse path's operator from Jacobian ``values`` already evaluated."""
+        return BandedJacobian(self, values)
+
     def matvec(self, values, x) -> jax.Array:
         """``Phi_q x`` from the sparse values."""
-        rows, cols = self.coo()
-        return jax.ops.segment_sum(values * x[cols], jnp.asarray(rows), num_segments=self.m)
+        return BandedJacobian(self, values).mv(x)
 
     def rmatvec(self, values, y) -> jax.Array:
         """``Phi_q^T y`` from the sparse values."""
-        rows, cols = self.coo()
-        return jax.ops.segment_sum(values * y[rows], jnp.asarray(cols), num_segments=self.nq)
+        return BandedJacobian(self, values).rmv(y)
 
     def schur_solve(self, values, Minv, b):
-        """Solve ``(Phi_q M^-1 Phi_q^T) x = b`` on the sparse path; ``(x, pivot_ratio)``.
-
-        With redundant rows (``rank`` given) ``S`` is singular: :meth:`schur_solver`'s
-        regularized solve."""
-        if self.rank is None:
-            return self.schur_structure().solve(values, Minv, b)
-        solve, ratio = self.schur_solver(values, Minv)
-        return solve(b), ratio
+        """Solve ``(Phi_q M^-1 Phi_q^T) x = b`` on the sparse path; ``(x, pivot_ratio)``
+        (:meth:`BandedJacobian.schur_solve`)."""
+        return BandedJacobian(self, values).schur_solve(Minv, b)
 
     def schur_solver(self, values, W, shift=None):
-        """``(solve, pivot_ratio)``: ``solve(b)`` solves ``(Phi_q W Phi_q^T + shift I) y = b``
-        on the sparse path, with one factorization for every right-hand side.
-
-        Without redundant rows: the banded block Cholesky factors. With redundant rows of
-        consistent equations (``rank < m``), ``S`` is singular and its minimum-norm solution
-        is sought by iterated Tikhonov regularization: ``S + eps I`` is factorized, with
-        ``eps = REGULARIZATION * max diag S``, and each of :data:`REFINE_REDUNDANT` steps
-        adds ``(S + eps I)^-1`` of the residual of the unregularized system. A component along
-        an eigenvalue ``s`` of ``S`` converges by the factor ``eps / (s + eps)`` per step,
-        one in the null space of ``S`` (the redundancy) is never excited beyond rounding
-        (``~ 1e-16 / REGULARIZATION`` relative): the motion (which depends on ``Phi_q^T y``
-        only) matches the dense truncated-SVD solve to rounding, the split of the multipliers
-        among redundant rows its minimum-norm split to ``~1e-8`` relative. The pivot ratio
-        leaves out the ``m - rank`` smallest pivots (:meth:`SchurStructure.factor`).
-        """
-        st = self.schur_structure()
-        if self.rank is None:
-            fac, ratio = st.factor(values, W, shift)
-            return (lambda b: st.solve_factored(fac, b)), ratio
-        rows, cols = self.coo()
-        diag = jax.ops.segment_sum(values**2 * W[cols], jnp.asarray(rows), num_segments=self.m)
-        eps = REGULARIZATION * jnp.max(diag, initial=0.0)
-        extra = 0.0 if shift is None else shift
-        fac, ratio = st.factor(values, W, eps + extra, rank=self.rank)
-
-        def solve(b):
-            y = st.solve_factored(fac, b)
-            for _ in range(REFINE_REDUNDANT):
-                r = b - self.matvec(values, W * self.rmatvec(values, y)) - extra * y
-                y = y + st.solve_factored(fac, r)
-            return y
-
-        return solve, ratio
+        """``(solve, pivot_ratio)`` of ``Phi_q W Phi_q^T + shift I`` on the sparse path
+        (:meth:`BandedJacobian.schur`)."""
+        return tuple(BandedJacobian(self, values).schur(W, shift))
 
     def min_norm_solver(self, values, weights=None, shift=None, refine: int = 0):
-        """On the sparse path, a function ``b -> x`` giving the solution of ``Phi_q x = b`` of
-        least ``W^-1``-norm, ``x = W Phi_q^T (Phi_q W Phi_q^T + shift I)^-1 b`` (for a square,
-        regular ``Phi_q``: the solution), with ``S = Phi_q W Phi_q^T`` factorized once.
-
-        The Schur complement squares the condition number of ``Phi_q``: ``refine`` steps of
-        iterative refinement on the residual ``b - Phi_q x`` (with the same factors) bring the
-        error back to that of a direct solve of ``Phi_q`` (without a shift).
-
-        Args:
-            values: (nnz,) :meth:`jacobian_values`.
-            weights: (nq,) diagonal ``W`` (default ones; zeros keep coordinates fixed).
-            shift: Levenberg–Marquardt damping added to the diagonal of ``S``.
-            refine: steps of iterative refinement.
-
-        Returns:
-            ``(solve, ratio)``: ``ratio`` is the square root of the pivot ratio of ``S``'s
-            Cholesky factors, comparable to the LU pivot ratio of ``Phi_q`` on the dense path
-            (0 when the factorization failed: ``Phi_q`` lost rank).
-        """
-        W = jnp.ones(self.nq) if weights is None else weights
-        inner, ratio = self.schur_solver(values, W, shift)
-
-        def once(b):
-            return W * self.rmatvec(values, inner(b))
-
-        def solve(b):
-            x = once(b)
-            for _ in range(refine):
-                x = x + once(b - self.matvec(values, x))
-            return x
-
-        return solve, jnp.sqrt(ratio)
+        """``(solve, ratio)``: on the sparse path the least-``W^-1``-norm solution of
+        ``Phi_q x = b`` (:meth:`JacobianOperator.min_norm`)."""
+        return tuple(BandedJacobian(self, values).min_norm(weights, shift, refine))
 
     def jacobian_solver(self, q, t, refine: int = 0):
         """A function ``b -> (x, pivot_ratio)`` solving ``Phi_q(q, t) x = b`` on this set's
-        path: dense, LU of ``Phi_q`` (a truncated-SVD least-squares solve with redundant rows);
-        sparse, the minimum-norm solution through the Schur complement
-        (:meth:`min_norm_solver`, factorized once for every right-hand side, with ``refine``
-        steps of iterative refinement). The pivot ratios are comparable (see there)."""
-        if self.linear_solver == "sparse":
-            solve, ratio = self.min_norm_solver(self.jacobian_values(q, t), refine=refine)
-            return lambda b: (solve(b), ratio)
-        J = self.phi_q(q, t)
-        return lambda b: self.solve(J, b)
+        path, factorized once (:meth:`JacobianOperator.solver`: LU of ``Phi_q``, a
+        truncated-SVD least-squares solve with redundant rows; on the sparse path the
+        minimum-norm solution through the Schur complement with ``refine`` steps of
+        iterative refinement). The pivot ratios are comparable."""
+        f = self.jacobian(q, t).solver(refine)
+        return lambda b: (f.solve(b), f.ratio)
 
 
 class _Static:

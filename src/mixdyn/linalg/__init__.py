@@ -10,31 +10,39 @@ Two paths, chosen per constraint set (``Constraints.linear_solver``, from the an
   motion; ``W = I``: minimum-norm kinematic steps, refined iteratively where accuracy matters).
 
 ``"auto"`` (:func:`choose_solver`) takes the sparse path for large mechanisms of small
-bandwidth. Redundant equations make the Schur complement singular: the sparse path solves it by
-iterated regularization (``Constraints.schur_solver``).
+bandwidth. The choice is made once per constraint set: ``Constraints.jacobian(q, t)`` returns
+the path's operator (:mod:`mixdyn.equations._jacobian`), whose methods factorize once and
+return a :class:`Factor` (``solve``, pivot ratio). Redundant equations make the Schur
+complement singular: the sparse path solves it by iterated regularization.
 """
 
 from ._dense import (
+    Factor,
     dependent_rows,
+    factor_ranked,
+    guarded,
     independent_rows,
+    lu_factor_checked,
     lu_solve_checked,
     min_norm_step,
     min_pivot,
-    solve_kkt,
     solve_ranked,
 )
 from ._sparse import AUTO_MIN_ROWS, SchurStructure, choose_solver, schur_structure
 
 __all__ = [
     "AUTO_MIN_ROWS",
+    "Factor",
     "SchurStructure",
     "choose_solver",
     "dependent_rows",
+    "factor_ranked",
+    "guarded",
     "independent_rows",
+    "lu_factor_checked",
     "lu_solve_checked",
     "min_norm_step",
     "min_pivot",
     "schur_structure",
-    "solve_kkt",
     "solve_ranked",
 ]

@@ -8,11 +8,37 @@ lost rank (a singular configuration, a mixed problem that cannot be solved).
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import NamedTuple
+
 import jax
 import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
 import scipy.linalg as sl
+
+
+class Factor(NamedTuple):
+    """A factorization done once and solved with many times (lineax's ``init``/``compute``).
+
+    Attributes:
+        solve: ``b -> x``, ``b`` (m,) or (m, k).
+        ratio: the pivot ratio of the factorization (scale free; near 0: the matrix lost rank),
+            comparable between the dense and the sparse path.
+    """
+
+    solve: Callable[[jax.Array], jax.Array]
+    ratio: jax.Array
+
+
+def lu_factor_checked(A: jax.Array) -> Factor:
+    """Partial-pivoting LU of the square ``A`` (n, n), factorized once."""
+    if A.shape[0] == 0:
+        return Factor(lambda b: b, jnp.ones(()))
+    lu, piv = jsl.lu_factor(A)
+    d = jnp.abs(jnp.diag(lu))
+    ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(A.dtype).tiny)
+    return Factor(lambda b: jsl.lu_solve((lu, piv), b), ratio)
 
 
 def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
@@ -22,21 +48,38 @@ def lu_solve_checked(A: jax.Array, b: jax.Array) -> tuple[jax.Array, jax.Array]:
         A: (n, n) matrix.
         b: (n,) or (n, k) right-hand side.
     """
-    if A.shape[0] == 0:
-        return b, jnp.ones(())
-    lu, piv = jsl.lu_factor(A)
-    d = jnp.abs(jnp.diag(lu))
-    ratio = jnp.min(d) / jnp.maximum(jnp.max(d), jnp.finfo(A.dtype).tiny)
-    return jsl.lu_solve((lu, piv), b), ratio
+    f = lu_factor_checked(A)
+    return f.solve(b), f.ratio
 
 
-#: Pivot ratio under which :func:`solve_kkt` switches to a damped SVD solve.
+#: Pivot ratio under which a guarded factorization (:func:`guarded`) switches to the damped SVD
+#: solve.
 SINGULAR_RATIO = 1e-10
-#: Relative singular-value cutoff of the truncated-SVD solves (generalized-alpha's).
-SINGULAR_RCOND = 1e-12
 #: Relative Tikhonov damping ``kappa`` of the SVD solve near a singular position: singular
 #: values ``s`` of the Schur complement are inverted as ``s / (s^2 + (kappa s_max)^2)``.
 SINGULAR_DAMPING = 1e-9
+
+
+def factor_ranked(
+    A: jax.Array, rank: int | None = None, rcond: float = 0.0, damping: float = 0.0
+) -> Factor:
+    """Factorize ``A`` (m, n) once for :func:`solve_ranked`'s least-squares, minimum-norm
+    solves knowing ``rank(A)`` (see there); the ratio is ``s[rank-1] / s[0]`` (or the LU
+    pivot ratio)."""
+    if rank is None and A.shape[0] == A.shape[1] and rcond == 0.0 and damping == 0.0:
+        return lu_factor_checked(A)
+    U, s, Vt = jnp.linalg.svd(A, full_matrices=False)
+    r = min(A.shape) if rank is None else rank
+    keep = (jnp.arange(s.shape[0]) < r) & (s > rcond * s[0])
+    mu2 = (damping * s[0]) ** 2 if s.shape[0] else 0.0
+    inv = jnp.where(keep, s / jnp.where(keep, s * s + mu2, 1.0), 0.0)
+
+    def solve(b):
+        Ub = U.T @ b
+        return Vt.T @ (inv[:, None] * Ub if b.ndim == 2 else inv * Ub)
+
+    ratio = s[r - 1] / jnp.maximum(s[0], jnp.finfo(A.dtype).tiny) if r > 0 else jnp.ones(())
+    return Factor(solve, ratio)
 
 
 def solve_ranked(
@@ -53,17 +96,25 @@ def solve_ranked(
     exact for ``s >> kappa s[0]``, smoothly to zero below, so that the solution stays a
     smooth, bounded function of ``A`` and ``b`` through a loss of rank.
     """
-    if rank is None and A.shape[0] == A.shape[1] and rcond == 0.0 and damping == 0.0:
-        return lu_solve_checked(A, b)
-    U, s, Vt = jnp.linalg.svd(A, full_matrices=False)
-    r = min(A.shape) if rank is None else rank
-    keep = (jnp.arange(s.shape[0]) < r) & (s > rcond * s[0])
-    mu2 = (damping * s[0]) ** 2 if s.shape[0] else 0.0
-    inv = jnp.where(keep, s / jnp.where(keep, s * s + mu2, 1.0), 0.0)
-    Ub = U.T @ b
-    x = Vt.T @ (inv[:, None] * Ub if b.ndim == 2 else inv * Ub)
-    ratio = s[r - 1] / jnp.maximum(s[0], jnp.finfo(A.dtype).tiny) if r > 0 else jnp.ones(())
-    return x, ratio
+    f = factor_ranked(A, rank, rcond, damping)
+    return f.solve(b), f.ratio
+
+
+def guarded(f: Factor, A: Callable[[], jax.Array], rank: int | None = None) -> Factor:
+    """``f`` with the damped SVD solve of the dense ``A()`` below :data:`SINGULAR_RATIO`
+    (a singular position, a NaN ratio too): near a loss of rank the part of ``b`` along the
+    vanishing direction (rounding, an RK stage off the constraints) is not amplified like
+    ``1/s`` into a jump. ``A`` is formed only in the branch taken there (outside ``vmap``)."""
+
+    def solve(b):
+        return jax.lax.cond(
+            ~(f.ratio >= SINGULAR_RATIO),
+            lambda b: solve_ranked(A(), b, rank, damping=SINGULAR_DAMPING)[0],
+            f.solve,
+            b,
+        )
+
+    return Factor(solve, f.ratio)
 
 
 def min_pivot(A: jax.Array) -> jax.Array:
@@ -73,43 +124,6 @@ def min_pivot(A: jax.Array) -> jax.Array:
         return jnp.asarray(jnp.inf)
     lu, _ = jsl.lu_factor(A)
     return jnp.min(jnp.abs(jnp.diag(lu)))
-
-
-def solve_kkt(Minv, C, G, Q, rhs, rank=None) -> tuple[jax.Array, jax.Array, jax.Array]:
-    """Solve the constrained equations of motion for accelerations and multipliers.
-
-    Solves ``M qdd + G mu = Q``, ``C qdd = rhs`` with ``M = diag(1/Minv)``, by the Schur
-    complement ``(C M^-1 G) mu = C M^-1 Q - rhs``; ``qdd = M^-1 (Q - G mu)``.
-    In forward dynamics ``G = C^T = Phi_q^T`` and ``mu = lambda``; in mixed dynamics ``G``
-    also holds ``-B``, the directions of the unknown forces.
-
-    Args:
-        Minv: (n,) inverse of the diagonal mass matrix.
-        C: (m, n) constraint Jacobian.
-        G: (n, m) force directions of the unknowns ``mu``.
-        Q: (n,) known generalized forces.
-        rhs: (m,) right-hand side of the acceleration constraints (``gamma``).
-        rank: rank of ``C`` when some rows are redundant (least-squares solve), else None.
-
-    Returns:
-        ``(qdd (n,), mu (m,), pivot_ratio)``.
-    """
-    MinvG = Minv[:, None] * G
-    S = C @ MinvG
-    b = C @ (Minv * Q) - rhs
-    mu, ratio = solve_ranked(S, b, rank)
-    if rank is None and S.shape[0] > 0:
-        # At a singular position (a bifurcation, a dead point) S loses rank for an instant.
-        # Off the constraint manifold (an RK stage, rounding) the part of b along the lost
-        # direction is not zero there, and 1/s would make it a force like a pole; the damped
-        # SVD solve keeps the accelerations bounded and smooth in the state.
-        mu = jax.lax.cond(
-            ~(ratio >= SINGULAR_RATIO),  # NaN: singular too
-            lambda: solve_ranked(S, b, None, damping=SINGULAR_DAMPING)[0],
-            lambda: mu,
-        )
-    qdd = Minv * Q - MinvG @ mu
-    return qdd, mu, ratio
 
 
 def min_norm_step(J, r, weights=None, damping=0.0) -> jax.Array:
@@ -178,11 +192,14 @@ def dependent_rows(A, rtol: float = 1e-9) -> np.ndarray:
 
 
 __all__ = [
+    "Factor",
     "dependent_rows",
+    "factor_ranked",
+    "guarded",
     "independent_rows",
+    "lu_factor_checked",
     "lu_solve_checked",
     "min_norm_step",
     "min_pivot",
-    "solve_kkt",
     "solve_ranked",
 ]

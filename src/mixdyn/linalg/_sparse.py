@@ -37,9 +37,6 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 #: Smallest block size: fewer, larger blocks amortize the scan's per-step overhead.
 MIN_BLOCK = 16
 UNROLL = 1
-#: ``"scan"`` (sequential block Cholesky, the default: measured fastest on CPU) or ``"cr"``
-#: (block cyclic reduction, log depth; 1.5x slower on CPU at 256 bodies, a GPU candidate).
-METHOD = "scan"
 
 #: ``"auto"`` takes the sparse path from this many constraint rows on, when the reordered
 #: bandwidth is at most :data:`MAX_AUTO_BLOCK`. Measured (``benchmarks/sparse_scaling.py``,
@@ -113,12 +110,6 @@ class SchurStructure:
         self.pad_slot = (pad // B * B + pad % B) * B + pad % B
         real = np.arange(m)  # the diagonal of S (order irrelevant: a shift adds to all)
         self.diag_slot = (real // B * B + real % B) * B + real % B
-        # cyclic reduction: nblk padded to 2^L - 1 blocks; which pivots are real rows
-        self.method = METHOD
-        self.n_cr = 2 ** int(np.ceil(np.log2(nblk + 1))) - 1
-        real = np.zeros((self.n_cr, B), dtype=bool)
-        real.reshape(-1)[:m] = True
-        self.cr_real = np.concatenate(_cr_order(real))
 
     # ------------------------------------------------------------------ numeric
     def blocks(self, values, Minv, shift=None):
@@ -146,26 +137,15 @@ class SchurStructure:
         rhs = bb[self.perm]
         rhs = jnp.concatenate([rhs, jnp.zeros((nblk * B - self.m, rhs.shape[1]), rhs.dtype)])
         rhs = rhs.reshape(nblk, B, -1)
-        if self.method == "scan":
-            L, W, y = _block_cholesky_forward(D, E, rhs)
-            x = _block_backward(L, W, y)
-            d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: self.m] ** 2
-        else:
-            N = self.n_cr
-            eye = jnp.broadcast_to(jnp.eye(B, dtype=D.dtype), (N - nblk, B, B))
-            D = jnp.concatenate([D, eye])
-            E = jnp.concatenate([E, jnp.zeros((N - nblk, B, B), D.dtype)])
-            rhs = jnp.concatenate([rhs, jnp.zeros((N - nblk, *rhs.shape[1:]), rhs.dtype)])
-            x, pivots = _cyclic_reduction(D, E, rhs)
-            x = x[:nblk]
-            d = pivots[self.cr_real] ** 2
+        L, W, y = _block_cholesky_forward(D, E, rhs)
+        x = _block_backward(L, W, y)
+        d = jnp.diagonal(L, axis1=1, axis2=2).reshape(-1)[: self.m] ** 2
         x = x.reshape(nblk * B, -1)[: self.m][self.inv]
         return (x[:, 0] if vec else x), _ratio(d)
 
     def factor(self, values, Minv, shift=None, rank=None):
         """Block Cholesky factors of ``S`` (or ``S + shift I``) for several solves with
-        :meth:`solve_factored`; returns ``(factor, pivot_ratio)``. Always the sequential
-        block Cholesky (whatever :data:`METHOD`).
+        :meth:`solve_factored`; returns ``(factor, pivot_ratio)``.
 
         With ``rank`` (``S`` has ``m - rank`` redundant rows, factorized with a ``shift``) the
         pivot ratio leaves out the ``m - rank`` smallest pivots, those of the redundancy:
@@ -207,49 +187,6 @@ def _ranked_ratio(d, rank: int):
     ds = jnp.sort(d)[::-1]
     ratio = ds[rank - 1] / jnp.maximum(ds[0], jnp.finfo(d.dtype).tiny)
     return jnp.where(jnp.all(jnp.isfinite(d)), ratio, 0.0)
-
-
-def _cr_order(a):
-    """The blocks of ``a`` (N, ...) in the order cyclic reduction eliminates them."""
-    if a.shape[0] == 1:
-        return [a.reshape(-1)]
-    return [a[0::2].reshape(-1), *_cr_order(a[1::2])]
-
-
-def _cho_solve(L, X):
-    return jax.vmap(lambda L, X: jsl.cho_solve((L, True), X))(L, X)
-
-
-def _cyclic_reduction(D, E, b):
-    """Solve the SPD block-tridiagonal system (diagonal blocks ``D`` (N, B, B), sub-diagonal
-    ``E`` (N - 1, B, B), ``E[i]`` = block ``(i + 1, i)``), ``N = 2^L - 1`` blocks, by block
-    cyclic reduction: each level eliminates the even blocks at once (batched Cholesky), so
-    the depth is ``L = log2(N + 1)`` and the work ``O(N B^3)``.
-
-    Returns ``(x (N, B, k), pivots)``: the diagonals of the Cholesky factors met, in
-    elimination order (:func:`_cr_order`).
-    """
-    Lc = jnp.linalg.cholesky(D[0::2])
-    piv = jnp.diagonal(Lc, axis1=1, axis2=2).reshape(-1)
-    if D.shape[0] == 1:
-        return _cho_solve(Lc, b), piv
-    El, Er = E[0::2], E[1::2]  # odd block j: E[j - 1] (left), E[j] (right, transposed)
-    ElT = jnp.swapaxes(El, 1, 2)
-    ErT = jnp.swapaxes(Er, 1, 2)
-    U = _cho_solve(Lc[:-1], ElT)  # D[j-1]^-1 E[j-1]^T
-    V = _cho_solve(Lc[1:], Er)  # D[j+1]^-1 E[j]
-    ue = _cho_solve(Lc, b[0::2])
-    Do = D[1::2] - El @ U - ErT @ V
-    bo = b[1::2] - El @ ue[:-1] - ErT @ ue[1:]
-    Eo = -El[1:] @ V[:-1]
-    xo, piv_o = _cyclic_reduction(Do, Eo, bo)
-    zero = jnp.zeros_like(xo[:1])
-    left = jnp.concatenate([zero, Er @ xo])  # E[2k-1] x[2k-1]
-    right = jnp.concatenate([ElT @ xo, zero])  # E[2k]^T x[2k+1]
-    xe = _cho_solve(Lc, b[0::2] - left - right)
-    x = jnp.stack([xe[:-1], xo], axis=1).reshape(-1, *xo.shape[1:])
-    x = jnp.concatenate([x, xe[-1:]])
-    return x, jnp.concatenate([piv, piv_o])
 
 
 def _block_cholesky_forward(D, E, rhs):

@@ -14,7 +14,8 @@ of ``G mu`` with respect to ``q``, ``C = Phi_q``). Two iterations are available:
 * *modified* Newton drops the ``O(beta')`` stiffness and damping terms: the matrix
   ``[[M, G], [C, 0]]`` is the acceleration-level KKT matrix, taken at the step's predicted
   state and factorized once per step through its Schur complement ``C M^-1 G`` (dense LU, or
-  the banded block Cholesky of the sparse path); the residual's ``G mu`` comes from one
+  the banded block Cholesky of the sparse path; the damped SVD solve at a singular position,
+  as for the accelerations); the residual's ``G mu`` comes from one
   reverse pass through ``Phi``, so an iteration needs no Jacobian. It contracts by a factor
   ``~ beta' |K| / M`` per iteration (``~1e-3`` for pendulum chains at ``h = 1e-3``);
 * *full* Newton builds the exact matrix by forward differentiation of the residual (dense,
@@ -39,11 +40,9 @@ from __future__ import annotations
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import jax.scipy.linalg as jsl
 
 from ...equations import force_directions
 from ...errors import ModelError
-from ...linalg._dense import SINGULAR_RATIO, SINGULAR_RCOND
 from .._problem import Problem
 from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory
 
@@ -110,75 +109,13 @@ def _constraint_terms(problem: Problem):
     return terms
 
 
-def _svd_inverse(S, keep):
-    """``(U, 1/s, Vt)`` of ``S`` with the singular values not kept zeroed."""
-    U, s, Vt = jnp.linalg.svd(S, full_matrices=False)
-    keep = keep(s)
-    return U, jnp.where(keep, 1.0 / jnp.where(keep, s, 1.0), 0.0), Vt
-
-
-def _schur_factor_dense(S, rank):
-    """``(solve, ratio)``: ``solve(b)`` with the Schur complement ``S``, factorized once,
-    solved as :func:`~mixdyn.linalg.solve_kkt` solves it: truncated SVD when ``rank`` is given
-    (redundant rows), else LU with a truncated-SVD fallback at a singular position; ``ratio``
-    the pivot ratio (of the ``rank`` largest singular values with redundant rows)."""
-    m = S.shape[0]
-    if rank is not None:
-        U, sinv, Vt = _svd_inverse(S, lambda s: (jnp.arange(m) < rank) & (s > 0))
-        ratio = sinv[0] / jnp.maximum(jnp.max(sinv), jnp.finfo(S.dtype).tiny)
-        return (lambda b: Vt.T @ (sinv * (U.T @ b))), ratio
-    lu, piv = jsl.lu_factor(S)
-    d = jnp.abs(jnp.diag(lu))
-    singular = ~(jnp.min(d) >= SINGULAR_RATIO * jnp.max(d))
-    ratio = jnp.where(singular, 0.0, jnp.min(d) / jnp.max(d))
-    U, sinv, Vt = jax.lax.cond(
-        singular,
-        lambda: _svd_inverse(S, lambda s: s > SINGULAR_RCOND * s[0]),
-        lambda: (jnp.zeros_like(S), jnp.zeros(m, S.dtype), jnp.zeros_like(S)),
-    )
-    return (
-        lambda b: jax.lax.cond(
-            singular, lambda: Vt.T @ (sinv * (U.T @ b)), lambda: jsl.lu_solve((lu, piv), b)
-        )
-    ), ratio
-
-
-def _iteration_matrix(problem: Problem, sparse: bool):
+def _iteration_matrix(problem: Problem):
     """``factorize(q, qd, t) -> (kkt, ratio)``: the modified Newton matrix ``[[M, G], [C, 0]]``
-    at one state, factorized (through its Schur complement ``C M^-1 G``, whose pivot ratio is
-    ``ratio``); ``kkt(r1, r2)`` returns ``(dqdd, dmu)`` solving
-    ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
-    c, Minv = problem.c, problem.Minv
-    if c.m == 0:
-        return lambda q, qd, t: ((lambda r1, r2: (Minv * r1, r2)), jnp.ones(()))
-    if sparse:
-
-        def factorize(q, qd, t):
-            # the banded Cholesky factors of C M^-1 C^T (mixed problems: their Woodbury
-            # update), a dense truncated SVD at a singular position: Problem.schur_solver
-            v = c.jacobian_values(q, t)
-            solve, ratio, g_times = problem.schur_solver(q, qd, t, v)
-
-            def kkt(r1, r2):
-                dmu = solve(c.matvec(v, Minv * r1) - r2)
-                return Minv * (r1 - g_times(dmu)), dmu
-
-            return kkt, ratio
-
-        return factorize
-
-    def factorize(q, qd, t):
-        C = c.phi_q(q, t)
-        MinvG = Minv[:, None] * problem.G(q, qd, t, C)
-        solve, ratio = _schur_factor_dense(C @ MinvG, c.rank)
-
-        def kkt(r1, r2):
-            dmu = solve(C @ (Minv * r1) - r2)
-            return Minv * r1 - MinvG @ dmu, dmu
-
-        return kkt, ratio
-
-    return factorize
+    at one state, factorized once (:meth:`Problem.kkt`: through its Schur complement
+    ``C M^-1 G``, whose pivot ratio is ``ratio``; dense LU, the banded Cholesky factors or
+    their Woodbury update, the damped SVD at a singular position); ``kkt(r1, r2)`` returns
+    ``(dqdd, dmu)`` solving ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
+    return problem.kkt
 
 
 @eqx.filter_jit
@@ -220,10 +157,8 @@ def generalized_alpha(
     am, af, gm, bt = coefficients(rho_inf)
     Mdiag = problem.model.mass_diagonal
     n = q0.shape[0]
-    # The sparse path (mixed problems through the Woodbury update of the symmetric system).
-    sparse = problem.sparse
     constraint_terms = _constraint_terms(problem)
-    factorize = _iteration_matrix(problem, sparse)
+    factorize = _iteration_matrix(problem)
     qdd0, mu0, _ = problem.accelerations(q0, qd0, ts[0])
     fscale = jnp.maximum(
         jnp.max(jnp.abs(Mdiag * qdd0)) + jnp.max(jnp.abs(problem.known_forces(q0, qd0, ts[0]))),

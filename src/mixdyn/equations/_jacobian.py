@@ -1,0 +1,366 @@
+"""``Phi_q`` at one state as a linear operator, on the linear-solver path chosen once per
+constraint set (:meth:`Constraints.jacobian`).
+
+Every solve an analysis needs is built from ``Phi_q`` (m, n) and a diagonal metric ``W`` (n,):
+
+* the Schur complement ``S = Phi_q W Phi_q^T`` (``W = M^-1``: the equations of motion and the
+  mass-weighted projections; ``W = I``: least-norm kinematic steps);
+* the least-``W^-1``-norm solution of ``Phi_q x = b``, ``x = W Phi_q^T S^-1 b``;
+* the solution of ``Phi_q x = b`` itself (a square, regular ``Phi_q``; least squares with
+  redundant rows).
+
+Both operators keep one contract, in the manner of lineax's ``AbstractLinearSolver``
+(``init`` factorizes once, ``compute`` solves, a result code): each method factorizes once and
+returns a :class:`~mixdyn.linalg.Factor`, ``solve(b)`` for any number of right-hand sides and
+the pivot ratio (near 0: the matrix lost rank; comparable between the two paths).
+
+* :class:`DenseJacobian`: the dense matrix; LU, or a truncated SVD of known rank where rows are
+  redundant.
+* :class:`BandedJacobian`: values on the set's static sparsity pattern; ``S`` by the banded
+  block Cholesky factorization (:mod:`mixdyn.linalg._sparse`), redundant rows by iterated
+  regularization.
+
+With ``guard=True`` a factorization whose pivot ratio falls below
+:data:`~mixdyn.linalg._dense.SINGULAR_RATIO` (a singular position) is solved instead by the
+damped SVD of ``S`` formed densely, on either path (:func:`~mixdyn.linalg._dense.guarded`).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import jax.scipy.linalg as jsl
+import numpy as np
+
+from ..linalg._dense import Factor, factor_ranked, guarded
+
+#: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
+#: the steps of iterated regularization (see :meth:`BandedJacobian.schur`).
+REGULARIZATION = 1e-8
+REFINE_REDUNDANT = 4
+
+
+class JacobianOperator(eqx.Module):
+    """``Phi_q`` (m, n) at one state. Subclasses: :class:`DenseJacobian`,
+    :class:`BandedJacobian`; the shapes and the rank are static."""
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        raise NotImplementedError
+
+    @property
+    def rank(self) -> int | None:
+        """The rank when rows are redundant (least-squares solves), else None."""
+        raise NotImplementedError
+
+    def mv(self, x) -> jax.Array:
+        """``Phi_q x`` (m,) for ``x`` (n,)."""
+        raise NotImplementedError
+
+    def rmv(self, y) -> jax.Array:
+        """``Phi_q^T y`` (n,) for ``y`` (m,)."""
+        raise NotImplementedError
+
+    def dense(self) -> jax.Array:
+        """The matrix (m, n)."""
+        raise NotImplementedError
+
+    def schur(self, W, shift=None, guard: bool = False) -> Factor:
+        """Factor of ``S = Phi_q W Phi_q^T`` (plus ``shift I``: a Levenberg–Marquardt
+        damping), ``W`` (n,) a positive diagonal (zeros keep coordinates out)."""
+        raise NotImplementedError
+
+    def schur_matrix(self, W) -> jax.Array:
+        """``S = Phi_q W Phi_q^T`` formed densely (m, m)."""
+        J = self.dense()
+        return J @ (W[:, None] * J.T)
+
+    def min_norm(self, W=None, shift=None, refine: int = 0, guard: bool = False) -> Factor:
+        """Factor giving the least-``W^-1``-norm solution of ``Phi_q x = b``,
+        ``x = W Phi_q^T (S + shift I)^-1 b``, with ``refine`` steps of iterative refinement on
+        the residual ``b - Phi_q x`` (the Schur complement squares the condition number of
+        ``Phi_q``; a step brings the error back to that of a direct solve). Its ratio is the
+        square root of ``S``'s, comparable to the LU pivot ratio of ``Phi_q``."""
+        W = jnp.ones(self.shape[1]) if W is None else W
+        inner = self.schur(W, shift, guard)
+
+        def once(b):
+            return W * self.rmv(inner.solve(b))
+
+        def solve(b):
+            x = once(b)
+            for _ in range(refine):
+                x = x + once(b - self.mv(x))
+            return x
+
+        return Factor(solve, jnp.sqrt(inner.ratio))
+
+    def solver(self, refine: int = 0) -> Factor:
+        """Factor for ``Phi_q x = b`` on this path (see the subclasses)."""
+        raise NotImplementedError
+
+    def weighted_rmv(self, W, y) -> jax.Array:
+        """``W Phi_q^T y`` (n,)."""
+        return W * self.rmv(y)
+
+    def kkt(self, W, B=None, collocated=()):
+        """The constrained-dynamics matrix at one state, factorized once through its Schur
+        complement ``S = C W G``:
+
+            W^-1 x + G mu = r1,     C x = r2,     G = [Phi_q^T | -B]
+
+        with ``C = Phi_q`` (this operator; its last ``p`` rows the prescribed motions of a
+        mixed problem) and ``B`` (n, p) the directions of the unknown forces (None: ``p = 0``,
+        ``G = C^T``). ``collocated``: for each unknown force, the prescribed motion along whose
+        gradient it acts, or ``()`` (see :class:`~mixdyn.analysis._problem.Problem`).
+
+        Returns:
+            ``(solve, ratio)``: ``solve(r1 (n,), r2 (m,)) -> (x (n,), mu (m,))``, and the
+            pivot ratio of ``S`` (below ``SINGULAR_RATIO`` the damped SVD solve of ``S``).
+        """
+        raise NotImplementedError
+
+
+class DenseJacobian(JacobianOperator):
+    """``Phi_q`` as a dense matrix.
+
+    Attributes:
+        J: (m, n) the matrix.
+        rank_: the rank when rows are redundant, else None (static).
+    """
+
+    J: jax.Array
+    rank_: int | None = eqx.field(static=True, default=None)
+
+    @property
+    def shape(self):
+        return self.J.shape
+
+    @property
+    def rank(self):
+        return self.rank_
+
+    def mv(self, x):
+        return self.J @ x
+
+    def rmv(self, y):
+        return self.J.T @ y
+
+    def dense(self):
+        return self.J
+
+    def schur(self, W, shift=None, guard=False):
+        """LU of ``S`` (a truncated SVD of the known rank with redundant rows)."""
+        S = self.schur_matrix(W)
+        if shift is not None:
+            S = S + shift * jnp.eye(S.shape[0])
+        f = factor_ranked(S, self.rank)
+        if guard and self.rank is None and S.shape[0]:
+            return guarded(f, lambda: S)
+        return f
+
+    def min_norm(self, W=None, shift=None, refine=0, guard=False):
+        """As :meth:`JacobianOperator.min_norm`, with ``W Phi_q^T`` formed once (no
+        refinement is needed: ``refine`` is ignored on the dense path)."""
+        W = jnp.ones(self.shape[1]) if W is None else W
+        WJt = W[:, None] * self.J.T
+        S = self.J @ WJt
+        if shift is not None:
+            S = S + shift * jnp.eye(S.shape[0])
+        f = factor_ranked(S, self.rank)
+        if guard and self.rank is None and S.shape[0]:
+            f = guarded(f, lambda: S)
+        return Factor(lambda b: WJt @ f.solve(b), jnp.sqrt(f.ratio))
+
+    def solver(self, refine=0):
+        """LU of ``Phi_q`` (square), or its truncated SVD of the known rank (least squares,
+        minimum norm) with redundant rows; ``refine`` is ignored (a direct solve)."""
+        return factor_ranked(self.J, self.rank)
+
+    def weighted_rmv(self, W, y):
+        return (W[:, None] * self.J.T) @ y
+
+    def kkt(self, W, B=None, collocated=()):
+        """LU of the dense ``S = C W G`` (any ``B``; a truncated SVD of the known rank with
+        redundant rows). In forward dynamics ``G = C^T`` and ``mu = lambda``; in mixed
+        dynamics ``G`` also holds ``-B``."""
+        C = self.J
+        m = C.shape[0]
+        G = C.T if B is None else jnp.concatenate([C[: m - B.shape[1]].T, -B], axis=1)
+        WG = W[:, None] * G
+        S = C @ WG
+        f = factor_ranked(S, self.rank)
+        if self.rank is None and m:
+            f = guarded(f, lambda: S)
+
+        def solve(r1, r2):
+            mu = f.solve(C @ (W * r1) - r2)
+            return W * r1 - WG @ mu, mu
+
+        return solve, f.ratio
+
+
+class BandedJacobian(JacobianOperator):
+    """``Phi_q`` as values on the constraint set's static sparsity pattern.
+
+    Attributes:
+        c: the constraint set (its static pattern and rank; its numbers are not read).
+        values: (nnz,) the Jacobian's values on ``c.coo()``.
+    """
+
+    c: object
+    values: jax.Array
+
+    @property
+    def shape(self):
+        return (self.c.m, self.c.nq)
+
+    @property
+    def rank(self):
+        return self.c.rank
+
+    def mv(self, x):
+        rows, cols = self.c.coo()
+        return jax.ops.segment_sum(self.values * x[cols], jnp.asarray(rows), num_segments=self.c.m)
+
+    def rmv(self, y):
+        rows, cols = self.c.coo()
+        return jax.ops.segment_sum(self.values * y[rows], jnp.asarray(cols), num_segments=self.c.nq)
+
+    def dense(self):
+        rows, cols = self.c.coo()
+        return jnp.zeros(self.shape, self.values.dtype).at[rows, cols].add(self.values)
+
+    def schur_solve(self, W, b):
+        """One solve ``S x = b`` (fused factorization and forward sweep); ``(x, ratio)``.
+        With redundant rows, :meth:`schur`'s regularized solve."""
+        if self.rank is None:
+            return self.c.schur_structure().solve(self.values, W, b)
+        f = self.schur(W)
+        return f.solve(b), f.ratio
+
+    def schur(self, W, shift=None, guard=False):
+        """The banded block Cholesky factors of ``S`` (+ ``shift I``).
+
+        With redundant rows of consistent equations (``rank < m``), ``S`` is singular and its
+        minimum-norm solution is sought by iterated Tikhonov regularization: ``S + eps I`` is
+        factorized, with ``eps = REGULARIZATION * max diag S``, and each of
+        :data:`REFINE_REDUNDANT` steps adds ``(S + eps I)^-1`` of the residual of the
+        unregularized system. A component along an eigenvalue ``s`` of ``S`` converges by the
+        factor ``eps / (s + eps)`` per step, one in the null space of ``S`` (the redundancy)
+        is never excited beyond rounding (``~ 1e-16 / REGULARIZATION`` relative): the motion
+        (which depends on ``Phi_q^T y`` only) matches the dense truncated-SVD solve to
+        rounding, the split of the multipliers among redundant rows its minimum-norm split to
+        ``~1e-8`` relative. The pivot ratio leaves out the ``m - rank`` smallest pivots.
+        """
+        c, v = self.c, self.values
+        st = c.schur_structure()
+        if self.rank is None:
+            fac, ratio = st.factor(v, W, shift)
+            f = Factor(lambda b: st.solve_factored(fac, b), ratio)
+        else:
+            rows, cols = c.coo()
+            diag = jax.ops.segment_sum(v**2 * W[cols], jnp.asarray(rows), num_segments=c.m)
+            eps = REGULARIZATION * jnp.max(diag, initial=0.0)
+            extra = 0.0 if shift is None else shift
+            fac, ratio = st.factor(v, W, eps + extra, rank=self.rank)
+
+            def solve(b):
+                y = st.solve_factored(fac, b)
+                for _ in range(REFINE_REDUNDANT):
+                    r = b - self.mv(W * self.rmv(y)) - extra * y
+                    y = y + st.solve_factored(fac, r)
+                return y
+
+            f = Factor(solve, ratio)
+        if guard and c.m:
+            return guarded(f, lambda: self.schur_matrix(W), self.rank)
+        return f
+
+    def solver(self, refine=0):
+        """The minimum-norm solution through the Schur complement (:meth:`min_norm` with
+        ``W = I``; for a square, regular ``Phi_q``: the solution)."""
+        return self.min_norm(refine=refine)
+
+    def _row_gradients(self, rows):
+        """``Phi_q[rows]^T`` (n, len(rows))."""
+        E = jnp.zeros((self.c.m, len(rows))).at[rows, np.arange(len(rows))].set(1.0)
+        return jax.vmap(self.rmv, in_axes=1, out_axes=1)(E)
+
+    def kkt(self, W, B=None, collocated=()):
+        """The banded block Cholesky factors of the symmetric ``C W C^T``: directly for
+        ``p = 0`` and for collocated unknown forces (``B[:, a] = s_a Psi_q[b]^T``, so that
+        ``G = C^T diag(1, -1/s)``), by a rank-``p`` Woodbury update for unknown forces of any
+        direction (:meth:`_woodbury`). Below ``SINGULAR_RATIO`` the damped SVD of ``S``
+        formed densely."""
+        m = self.c.m
+        if B is not None and not collocated:
+            return self._woodbury(W, B)
+        f = self.schur(W, guard=True)
+        p = 0 if B is None else B.shape[1]
+        if p:
+            # Collocated unknown forces: -B[:, a] u_a = Psi_q[b]^T y_b with B[:, a] = s_a
+            # Psi_q[b]^T, so u_a = -y_b / s_a.
+            rows = m - p + np.asarray(collocated, dtype=int)
+            PsiT = self._row_gradients(rows)
+            scale = jnp.sum(B * PsiT, axis=0) / jnp.sum(PsiT**2, axis=0)
+
+        def solve(r1, r2):
+            y = f.solve(self.mv(W * r1) - r2)
+            x = W * (r1 - self.rmv(y))
+            if p:
+                y = jnp.concatenate([y[: m - p], -y[rows] / scale])
+            return x, y
+
+        return solve, f.ratio
+
+    def _woodbury(self, W, B):
+        """Unknown forces of any direction: ``S = C W G`` differs from the symmetric
+        ``S_sym = C W C^T`` in its last ``p`` columns only (``G = [Phi_q^T | -B]``,
+        ``C^T = [Phi_q^T | Psi_q^T]``): ``S = S_sym + U E^T`` with ``U = -C W (B + Psi_q^T)``
+        (m, p) and ``E`` the last ``p`` columns of the identity. By the Sherman–Morrison–
+        Woodbury formula ``S^-1 b = y - Z K^-1 E^T y``, ``y = S_sym^-1 b``, ``Z = S_sym^-1 U``,
+        ``K = I + E^T Z`` (p, p): one banded Cholesky factorization, ``p`` solves once and one
+        per right-hand side, and a ``p x p`` LU. ``K`` is singular exactly where ``S`` is (the
+        mixed problem is not solvable there); the pivot ratio is the smaller of the two
+        factorizations'. Below ``SINGULAR_RATIO`` the solve is the damped SVD of the dense
+        ``S``, as on the dense path."""
+        m, p = self.c.m, B.shape[1]
+        mk = m - p
+        cols = functools.partial(jax.vmap, in_axes=1, out_axes=1)
+        PsiT = self._row_gradients(mk + np.arange(p))  # (n, p)
+        U = cols(lambda f: self.mv(W * f))(-(B + PsiT))  # (m, p)
+        sym = self.schur(W)
+        Z = cols(sym.solve)(U)
+        K = jnp.eye(p) + Z[mk:]
+        lu, piv = jsl.lu_factor(K)
+        d = jnp.abs(jnp.diag(lu))
+        ratio = jnp.minimum(sym.ratio, jnp.min(d) / jnp.maximum(jnp.max(d), 1e-300))
+        ratio = jnp.where(jnp.isfinite(ratio), ratio, 0.0)
+
+        def woodbury(b):
+            y = sym.solve(b)
+            return y - Z @ jsl.lu_solve((lu, piv), y[mk:])
+
+        def dense_S():
+            C = self.dense()
+            G = jnp.concatenate([C[:mk].T, -B], axis=1)
+            return C @ (W[:, None] * G)
+
+        f = guarded(Factor(woodbury, ratio), dense_S, self.rank)
+
+        def g_times(mu):
+            lam = jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])
+            return self.rmv(lam) - B @ mu[mk:]
+
+        def solve(r1, r2):
+            mu = f.solve(self.mv(W * r1) - r2)
+            return W * (r1 - g_times(mu)), mu
+
+        return solve, ratio
+
+
+__all__ = ["BandedJacobian", "DenseJacobian", "JacobianOperator"]

@@ -1,0 +1,199 @@
+"""The linear-solver contract, for every operator class of ``Phi_q``.
+
+:class:`DenseJacobian` and :class:`BandedJacobian` (``Constraints.jacobian``) factorize once and
+return a ``Factor`` (``solve``, pivot ratio). Each is checked against NumPy's dense linear
+algebra (an independent implementation) on random well-conditioned systems on a real sparsity
+pattern, on a rank-deficient system (a parallelogram with a redundant link), on a
+near-singular one (two nearly dependent rows: the damped SVD solve), and for gradients
+against central finite differences.
+"""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from fixtures import parallelogram_with_extra_link, pendulum_chain, slider_crank
+from mixdyn.equations import Constraints
+from mixdyn.equations._jacobian import BandedJacobian, DenseJacobian
+from mixdyn.linalg._dense import SINGULAR_DAMPING, SINGULAR_RATIO
+
+PATHS = ("dense", "banded")
+
+
+def _operator(path, c, v):
+    """The operator of ``path`` for the matrix with values ``v`` on ``c``'s pattern."""
+    op = BandedJacobian(c, v)
+    return op if path == "banded" else DenseJacobian(op.dense(), c.rank)
+
+
+@pytest.fixture(scope="module")
+def chain():
+    """A 12-link chain's constraint pattern (24 rows, 36 columns) with random values."""
+    c = Constraints.of(pendulum_chain(12)).with_linear_solver("sparse")
+    rows, _ = c.coo()
+    rng = np.random.default_rng(7)
+    v = rng.normal(size=rows.size)
+    return c, jnp.asarray(v)
+
+
+def _dense_np(c, v):
+    rows, cols = c.coo()
+    J = np.zeros((c.m, c.nq))
+    np.add.at(J, (rows, cols), np.asarray(v))
+    return J
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_products_agree_with_the_matrix(chain, path):
+    c, v = chain
+    J = _dense_np(c, v)
+    op = _operator(path, c, v)
+    rng = np.random.default_rng(1)
+    x, y = rng.normal(size=c.nq), rng.normal(size=c.m)
+    np.testing.assert_allclose(op.mv(jnp.asarray(x)), J @ x, rtol=1e-13, atol=1e-13)
+    np.testing.assert_allclose(op.rmv(jnp.asarray(y)), J.T @ y, rtol=1e-13, atol=1e-13)
+    np.testing.assert_array_equal(np.asarray(op.dense()), J)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("shift", [None, 0.3])
+def test_schur_solve_well_conditioned(chain, path, shift):
+    c, v = chain
+    J = _dense_np(c, v)
+    rng = np.random.default_rng(2)
+    W = rng.uniform(0.5, 2.0, size=c.nq)
+    S = J @ np.diag(W) @ J.T + (0.0 if shift is None else shift) * np.eye(c.m)
+    assert np.linalg.cond(S) < 1e6  # the premise: a well-conditioned system
+    B = rng.normal(size=(c.m, 3))
+    f = _operator(path, c, v).schur(jnp.asarray(W), shift)
+    X = np.asarray(f.solve(jnp.asarray(B)))
+    np.testing.assert_allclose(X, np.linalg.solve(S, B), rtol=1e-9, atol=1e-11)
+    x1 = np.asarray(f.solve(jnp.asarray(B[:, 0])))  # a vector right-hand side too
+    np.testing.assert_allclose(x1, X[:, 0], rtol=1e-12, atol=1e-14)
+    assert 1e-8 < float(f.ratio) <= 1.0
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_guard_leaves_regular_systems_alone(chain, path):
+    c, v = chain
+    op = _operator(path, c, v)
+    W = jnp.ones(c.nq)
+    b = jnp.arange(c.m, dtype=float)
+    np.testing.assert_array_equal(
+        np.asarray(op.schur(W, guard=True).solve(b)), np.asarray(op.schur(W).solve(b))
+    )
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_min_norm_solution(chain, path):
+    c, v = chain
+    J = _dense_np(c, v)
+    rng = np.random.default_rng(3)
+    W = rng.uniform(0.5, 2.0, size=c.nq)
+    b = rng.normal(size=c.m)
+    f = _operator(path, c, v).min_norm(jnp.asarray(W), refine=1)
+    x = np.asarray(f.solve(jnp.asarray(b)))
+    # the least W^-1-norm solution of J x = b, from NumPy's dense solve
+    ref = W * (J.T @ np.linalg.solve(J @ np.diag(W) @ J.T, b))
+    np.testing.assert_allclose(x, ref, rtol=1e-9, atol=1e-11)
+    np.testing.assert_allclose(J @ x, b, rtol=1e-10, atol=1e-11)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_solver_square_system(path):
+    model = slider_crank()
+    base = Constraints.of(model)
+    assert base.m == model.nq
+    c = base.with_linear_solver("sparse")
+    q = model.q0
+    J = np.asarray(base.phi_q(q, 0.0))
+    op = c.jacobian(q, 0.0) if path == "banded" else base.jacobian(q, 0.0)
+    assert isinstance(op, BandedJacobian if path == "banded" else DenseJacobian)
+    b = np.linspace(-1.0, 1.0, model.nq)
+    f = op.solver(refine=1)
+    np.testing.assert_allclose(
+        np.asarray(f.solve(jnp.asarray(b))), np.linalg.solve(J, b), rtol=1e-9, atol=1e-12
+    )
+    # the pivot ratios of both paths measure Phi_q's conditioning on one scale
+    s = np.linalg.svd(J, compute_uv=False)
+    assert 1e-3 * s[-1] / s[0] < float(f.ratio) <= 1.0
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_rank_deficient_minimum_norm(path):
+    """A parallelogram with an extra link: 13 rows of rank 12. Consistent right-hand sides
+    are solved exactly and with the minimum-norm multipliers (NumPy's pseudo-inverse)."""
+    model = parallelogram_with_extra_link()
+    q = model.q0
+    J = np.asarray(Constraints.of(model).phi_q(q, 0.0))
+    rank = np.linalg.matrix_rank(J)
+    assert rank == J.shape[0] - 1
+    c = Constraints.of(model).with_rank(rank)
+    c = c.with_linear_solver("sparse") if path == "banded" else c
+    op = c.jacobian(q, 0.0)
+    W = 1.0 / np.asarray(model.mass_diagonal)
+    S = J @ np.diag(W) @ J.T
+    rng = np.random.default_rng(4)
+    b = S @ rng.normal(size=S.shape[0])  # in the range of S
+    f = op.schur(jnp.asarray(W))
+    y = np.asarray(f.solve(jnp.asarray(b)))
+    np.testing.assert_allclose(S @ y, b, rtol=1e-8, atol=1e-10 * np.abs(b).max())
+    np.testing.assert_allclose(y, np.linalg.pinv(S) @ b, rtol=1e-6, atol=1e-7 * np.abs(y).max())
+    assert float(f.ratio) > 1e-8  # the redundancy is not a loss of rank
+    # least-norm solutions of Phi_q x = r for r in the range of Phi_q
+    r = J @ rng.normal(size=J.shape[1])
+    x = np.asarray(op.min_norm(jnp.asarray(W)).solve(jnp.asarray(r)))
+    np.testing.assert_allclose(J @ x, r, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(x, W * (J.T @ (np.linalg.pinv(S) @ r)), rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_near_singular_reports_and_damps(chain, path):
+    """Two nearly dependent rows: the ratio falls below SINGULAR_RATIO on both paths, and the
+    guarded solve is the damped SVD solve (Tikhonov filter factors), computed here by NumPy."""
+    c, v = chain
+    rows, cols = c.coo()
+    J = _dense_np(c, v)
+    J[0] = J[1] + 1e-9 * J[0]  # rows 0 and 1 share the pattern (the same joint)
+    v2 = jnp.asarray(J[rows, cols])
+    op = _operator(path, c, v2)
+    W = np.ones(c.nq)
+    f = op.schur(jnp.asarray(W), guard=True)
+    assert float(f.ratio) < SINGULAR_RATIO
+    b = np.random.default_rng(5).normal(size=c.m)
+    y = np.asarray(f.solve(jnp.asarray(b)))
+    S = J @ J.T
+    U, s, Vt = np.linalg.svd(S)
+    ref = Vt.T @ (s / (s**2 + (SINGULAR_DAMPING * s[0]) ** 2) * (U.T @ b))
+    np.testing.assert_allclose(y, ref, rtol=1e-5, atol=1e-8 * np.abs(ref).max())
+    assert np.all(np.isfinite(y))
+
+
+def _fd_grad(fun, x, h=1e-6):
+    x = np.asarray(x, dtype=float)
+    g = np.zeros_like(x)
+    for i in range(x.size):
+        e = np.zeros_like(x)
+        e[i] = h
+        g[i] = (float(fun(jnp.asarray(x + e))) - float(fun(jnp.asarray(x - e)))) / (2 * h)
+    return g
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("kind", ["schur", "min_norm"])
+def test_gradients_match_finite_differences(chain, path, kind):
+    c, v = chain
+    rng = np.random.default_rng(6)
+    W = jnp.asarray(rng.uniform(0.5, 2.0, size=c.nq))
+    b = jnp.asarray(rng.normal(size=c.m))
+    out = rng.normal(size=c.nq if kind == "min_norm" else c.m)
+
+    def fun(vals):
+        op = _operator(path, c, vals)
+        f = op.schur(W) if kind == "schur" else op.min_norm(W, refine=1)
+        return jnp.dot(jnp.asarray(out), f.solve(b))
+
+    g = np.asarray(jax.jit(jax.grad(fun))(v))
+    scale = np.abs(g).max()  # central differences: rounding ~ 1e-16 |f| / h
+    np.testing.assert_allclose(g, _fd_grad(jax.jit(fun), v), rtol=1e-5, atol=1e-8 * scale)
