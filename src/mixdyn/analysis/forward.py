@@ -6,20 +6,16 @@ integrator. The model's drivers, if any, act as motion constraints; their effort
 
 from __future__ import annotations
 
-import numpy as np
-
-from ..equations import Constraints
 from ..model import Model
+from ._prepare import prepare_dynamic
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
-    consistent_state,
     integrator_options,
     output_times,
     require_masses,
     simulate,
 )
-from ._structure import analyse
 from .result import Result
 
 
@@ -83,15 +79,23 @@ def forward(
     ts = output_times(t)
     opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts, energy_tol)
     require_masses(model)
-    c_full = Constraints.of(model).with_linear_solver(linear_solver)
-    q, qd = consistent_state(model, c_full, float(ts[0]), q0, qd0, hold)
-    report, keep = analyse(model, np.asarray(q), float(ts[0]))
+    prep = prepare_dynamic(
+        model, float(ts[0]), q0=q0, qd0=qd0, hold=hold, linear_solver=linear_solver
+    )
     # The partitioning integrator needs independent rows; the others solve redundant
     # constraints in the least-squares sense (robust where the redundancy moves).
-    c = c_full.with_active(keep) if method == "partitioning" else c_full.with_rank(len(keep))
-    problem = Problem(model, c.with_linear_solver(linear_solver))
+    problem = Problem(model, prep.constraints(method == "partitioning"))
     res = simulate(
-        "forward", problem, ts, q, qd, method, opts, len(model.drivers), progress, energy_tol
+        "forward",
+        problem,
+        ts,
+        prep.q,
+        prep.qd,
+        method,
+        opts,
+        len(model.drivers),
+        progress,
+        energy_tol,
     )
-    res.stats["redundant_equations"] = report.redundant
+    res.stats["redundant_equations"] = prep.report.redundant
     return res

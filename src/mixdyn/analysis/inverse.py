@@ -10,12 +10,11 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from ..equations import Constraints
 from ..model import Model
+from ._prepare import prepare_kinematic
 from ._problem import Problem
 from ._simulate import _post, output_times, post_kinds, require_masses
-from ._structure import analyse
-from .kinematic import kinematic
+from .kinematic import run_kinematic
 from .result import Result
 
 
@@ -41,9 +40,18 @@ def inverse(
     """
     ts = output_times(t)
     require_masses(model)
-    kin = kinematic(model, ts, q0=q0, hold=hold, linear_solver=linear_solver, **kinematic_options)
-    _, keep = analyse(model, kin.q[0], float(ts[0]))
-    c = Constraints.of(model).with_rank(len(keep)).with_linear_solver(linear_solver)
+    kin_options = dict(kinematic_options)
+    assemble_first = kin_options.pop("assemble_first", True)
+    prep = prepare_kinematic(
+        model,
+        float(ts[0]),
+        q0=q0,
+        hold=hold,
+        assemble_first=assemble_first,
+        linear_solver=linear_solver,
+    )
+    kin = run_kinematic(prep, ts, **kin_options)
+    c = prep.constraints()  # the kinematic run's rows: assembled and analysed once
     problem = Problem(model, c)
     _, _, ratio, cols = _post(
         problem, jnp.asarray(ts), jnp.asarray(kin.q), jnp.asarray(kin.qd), len(model.drivers)

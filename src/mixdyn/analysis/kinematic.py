@@ -17,9 +17,9 @@ from ..equations import Constraints
 from ..errors import ConvergenceError, SingularityError
 from ..linalg import dependent_rows
 from ..model import Model
-from ._assembly import assemble, length_scale
+from ._assembly import length_scale
 from ._newton import newton_positions
-from ._structure import analyse, require_balanced
+from ._prepare import Prepared, prepare_kinematic
 from .result import Result
 
 
@@ -144,15 +144,28 @@ def kinematic(
     """
     ts = output_times(t, minimum=1)
     drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
-    q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
-    if assemble_first:
-        q = jnp.asarray(assemble(model, q, hold=hold, linear_solver=linear_solver).q)
-    report, keep = analyse(model, q, float(ts[0]), drivers)
-    require_balanced(report)
-    c = Constraints.of(model, drivers).with_rank(len(keep)).with_linear_solver(linear_solver)
+    prep = prepare_kinematic(
+        model,
+        float(ts[0]),
+        drivers=drivers,
+        q0=q0,
+        hold=hold,
+        assemble_first=assemble_first,
+        linear_solver=linear_solver,
+    )
+    return run_kinematic(prep, ts, tol=tol, max_iter=max_iter, singular_tol=singular_tol)
+
+
+def run_kinematic(
+    prep: Prepared, ts, *, tol: float | None = None, max_iter: int = 25, singular_tol=1e-7
+) -> Result:
+    """:func:`kinematic` from its prepared start (:func:`~mixdyn.analysis._prepare.
+    prepare_kinematic`): the jitted scan over the output times ``ts`` (N,), then the checks."""
+    model = prep.model
+    c = prep.constraints()
     tol = 1e-12 * length_scale(model) if tol is None else tol
     q_all, qd, qdd, it, res, ratio = _kinematic_scan(
-        c, q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)
+        c, prep.q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)
     )
     q_all = np.asarray(q_all)
     check_run(c, ts, q_all, it, res, ratio, tol, max_iter, singular_tol)
@@ -168,7 +181,7 @@ def kinematic(
             "max_newton_iterations": int(np.max(it)),
             "max_residual": float(np.max(res)),
             "min_pivot_ratio": float(np.min(ratio)),
-            "redundant_equations": report.redundant,
+            "redundant_equations": prep.report.redundant,
             "tolerance": tol,
             "linear_solver": c.linear_solver,
         },

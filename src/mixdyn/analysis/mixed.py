@@ -29,16 +29,16 @@ from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
+from ._prepare import prepare_dynamic
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
-    consistent_state,
     integrator_options,
     output_times,
     require_masses,
     simulate,
 )
-from ._structure import _jac, analyse
+from ._structure import _jac
 from .result import Result
 
 SOLVERS = ("augmented", "partition")
@@ -258,10 +258,16 @@ def _setup(
                 "actuator) can be unknown",
                 name,
             )
-    drivers = (*model.drivers, *prescribed)
-    c_full = Constraints(model.joints, drivers, model.nq, linear_solver=linear_solver)
-    q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
-    report, keep = analyse(model, np.asarray(q), t0, drivers)
+    prep = prepare_dynamic(
+        model,
+        t0,
+        drivers=(*model.drivers, *prescribed),
+        q0=q0,
+        qd0=qd0,
+        hold=hold,
+        linear_solver=linear_solver,
+    )
+    q, qd, report = prep.q, prep.qd, prep.report
     bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
     if bad:
         raise SolvabilityError(
@@ -269,8 +275,7 @@ def _setup(
             "drivers; prescribe a coordinate that is free",
             ", ".join(bad),
         )
-    independent_rows_only = solver == "partition" or method == "partitioning"
-    c = c_full.with_active(keep) if independent_rows_only else c_full.with_rank(len(keep))
+    c = prep.constraints(independent_rows_only=solver == "partition" or method == "partitioning")
     mk = c.m - len(prescribed)
     _check_solvable(model, c, q, qd, t0, mk, unknown, prescribed)
     j_index, i_index = (), ()
