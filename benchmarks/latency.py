@@ -12,8 +12,9 @@ Scenarios:
 - ``cli-warm``: the same, the cache filled by a first run;
 - ``cli-changed``: the file with one number changed (the parameter ``T``, a new value each
   time), the cache filled by the original file;
-- ``api-second``: a Python process building the paper's mechanism and calling
-  ``md.forward`` on it (the file's forward run), the cache filled by a first process.
+- ``api-second``: a Python process building the paper's mechanism with the Python API
+  (``tests/fixtures.py``, the paper's loads) and calling ``md.forward`` on it as the file's
+  forward run does, the cache filled by a first process.
 
 Usage::
 
@@ -40,11 +41,17 @@ TARGETS = {"cli-empty": 8.0, "cli-warm": 2.0, "cli-changed": 2.5, "api-second": 
 XLA_FLAGS = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
 
 API_SCRIPT = """
+import sys
 import numpy as np
+sys.path.insert(0, {tests!r})
 import mixdyn as md
-import mixdyn.io as mio
-spec = mio.read({file!r})
-model = mio.Runner(spec).model
+from fixtures import paper_mechanism
+loads = [
+    md.Torque("T2", "crank", law=500.0),
+    md.Torque("T3", "coupler", law=-500.0),
+    md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
+]
+model = paper_mechanism(forces=loads)
 res = md.forward(model, np.linspace(0, 2, 201), hold=("crank.phi", "coupler.phi"),
                  rtol=1e-10, atol=1e-10)
 assert res.q.shape == (201, model.nq)
@@ -89,7 +96,7 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
         tmp = pathlib.Path(tmp_)
         result = tmp / "out"
         script = tmp / "api.py"
-        script.write_text(API_SCRIPT.format(file=str(EXAMPLE)), encoding="utf-8")
+        script.write_text(API_SCRIPT.format(tests=str(ROOT / "tests")), encoding="utf-8")
         env = {v: _env(src, tmp / v / "cache") for v, src in srcs.items()}
         api_env = {v: _env(src, tmp / v / "api-cache") for v, src in srcs.items()}
         for v in srcs:  # fill the caches: a first run, a first process
