@@ -1,0 +1,113 @@
+"""Per-step speed of small mechanisms: this tree against another revision of mixdyn.
+
+Each case runs warm (after a first, compiling call) in a fresh process per revision, best of
+``--repeat`` calls; the table gives the time per call and the ratio this / other. The other
+revision is checked out into a temporary git worktree (default: ``HEAD``, i.e. the last
+commit, so the ratio measures uncommitted work; pass ``--rev`` for another). Set
+``XLA_FLAGS=--xla_cpu_enable_concurrency_optimized_scheduler=false`` as the tests do.
+
+    python benchmarks/per_step.py --rev 8576fb5
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+CASE_CODE = r"""
+import json, sys, time
+sys.path.insert(0, {tests!r})
+import numpy as np
+import mixdyn as md
+from fixtures import four_bar, pendulum_chain, slider_crank
+
+def chain(method, n, T, **kw):
+    m = pendulum_chain(n)
+    t = np.linspace(0, T, 11)
+    return lambda: md.forward(m, t, method=method, dt=1e-3, energy_tol=None, **kw)
+
+def projection():
+    m = slider_crank()
+    free = m.replace(drivers=())
+    t = np.linspace(0, 2, 201)
+    return lambda: md.forward(free, t, rtol=1e-8, atol=1e-10, energy_tol=None)
+
+def kinematic():
+    m = four_bar()
+    t = np.linspace(0, 2, 1001)
+    return lambda: md.kinematic(m, t)
+
+CASES = {{
+    "chain-4 baumgarte 1 s (1000 steps)": chain("baumgarte", 4, 1.0),
+    "chain-4 generalized-alpha 1 s (1000 steps)": chain("generalized-alpha", 4, 1.0),
+    "chain-16 baumgarte 0.2 s (200 steps)": chain("baumgarte", 16, 0.2),
+    "slider-crank projection tsit5 2 s": projection(),
+    "four-bar kinematic 1001 times": kinematic(),
+}}
+out = {{}}
+for name, run in CASES.items():
+    try:
+        r = run()
+        best = float("inf")
+        for _ in range({repeat}):
+            t0 = time.perf_counter()
+            run()
+            best = min(best, time.perf_counter() - t0)
+        out[name] = {{"s": best, "steps": r.stats.get("steps", r.stats.get("newton_iterations"))}}
+    except Exception as e:  # a case the other revision cannot run
+        out[name] = {{"error": f"{{type(e).__name__}}: {{e}}"}}
+print("JSON" + json.dumps(out))
+"""
+
+
+def run_tree(src: pathlib.Path, tests: pathlib.Path, repeat: int) -> dict:
+    code = CASE_CODE.format(tests=str(tests), repeat=repeat)
+    env = dict(os.environ, PYTHONPATH=str(src), MIXDYN_NO_CACHE="1")
+    env.setdefault("XLA_FLAGS", "--xla_cpu_enable_concurrency_optimized_scheduler=false")
+    p = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=False
+    )
+    for line in p.stdout.splitlines():
+        if line.startswith("JSON"):
+            return json.loads(line[4:])
+    raise RuntimeError(p.stderr[-3000:])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--rev", default="HEAD", help="the other revision (default HEAD)")
+    ap.add_argument("--repeat", type=int, default=5)
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        wt = pathlib.Path(tmp) / "other"
+        subprocess.run(
+            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(wt), args.rev],
+            check=True,
+            capture_output=True,
+        )
+        try:
+            other = run_tree(wt / "src", ROOT / "tests", args.repeat)
+        finally:
+            subprocess.run(
+                ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(wt)], check=False
+            )
+    this = run_tree(ROOT / "src", ROOT / "tests", args.repeat)
+    print(f"| case | this tree [ms] | {args.rev} [ms] | ratio this / {args.rev} |")
+    print("|---|---|---|---|")
+    for name in this:
+        a, b = this[name], other.get(name, {"error": "missing"})
+        if "s" in a and "s" in b:
+            print(f"| {name} | {1e3 * a['s']:.2f} | {1e3 * b['s']:.2f} | {a['s'] / b['s']:.2f} |")
+        else:
+            print(f"| {name} | {a.get('error', a.get('s'))} | {b.get('error', b.get('s'))} | - |")
+
+
+if __name__ == "__main__":
+    main()
