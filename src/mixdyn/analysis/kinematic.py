@@ -8,11 +8,11 @@ second-order Taylor prediction from the previous time), velocities from
 
 from __future__ import annotations
 
-import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._compile import cached_jit
 from ..equations import Constraints
 from ..errors import ConvergenceError, SingularityError
 from ..linalg import dependent_rows
@@ -37,7 +37,7 @@ def output_times(t, minimum: int = 2) -> np.ndarray:
     return ts
 
 
-@eqx.filter_jit
+@cached_jit
 def _kinematic_scan(c: Constraints, q_start, ts, tol, max_iter):
     def step(carry, t):
         q, qd, qdd, t_prev = carry
@@ -57,7 +57,7 @@ def _kinematic_scan(c: Constraints, q_start, ts, tol, max_iter):
     return out
 
 
-@eqx.filter_jit
+@cached_jit
 def _jacobian(c: Constraints, q, t):
     return c.phi_q(q, t)
 

@@ -20,11 +20,11 @@ from __future__ import annotations
 
 import itertools
 
-import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 import scipy.linalg as sl
 
+from .._compile import cached_jit
 from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
@@ -44,7 +44,7 @@ from .result import Result
 SOLVERS = ("augmented", "partition")
 
 #: ``B`` at one state, compiled once per model structure and list of names.
-_directions = eqx.filter_jit(force_directions)
+_directions = cached_jit(force_directions)
 
 
 def prescribe(result: Result, coordinate: str, name: str | None = None) -> Driver:
