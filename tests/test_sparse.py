@@ -1,7 +1,8 @@
 """The sparse linear-solver path (issue 7) against the dense one: Jacobian, accelerations,
-projections and forward runs agree to <= 1e-12; gradients through the sparse solve match
-central finite differences; redundant constraints are solved on the sparse path too (the dense
-path's motion, the minimum-norm split of the multipliers)."""
+projections and a generalized-alpha run agree to <= 1e-12 (the forward runs of the other
+integrators: ``test_sparse_all.py``); gradients through the sparse solve match central finite
+differences; redundant constraints are solved on the sparse path too (the dense path's motion,
+the minimum-norm split of the multipliers)."""
 
 from __future__ import annotations
 
@@ -38,8 +39,23 @@ def _rel(a, b):
 
 
 @eqx.filter_jit
-def _acc(problem, q, qd, t):
-    return problem.accelerations(q, qd, t)
+def _evaluate(problem, q, qd, t):
+    """What the analyses evaluate at one state on ``problem``'s path, in one compiled
+    program (evaluated op by op, the same numbers took a minute)."""
+    c = problem.c
+    qdd, mu, ratio = problem.accelerations(q, qd, t)
+    out = dict(
+        phi=c(q, t),
+        gamma=c.gamma(q, qd, t),
+        phi_t=c.phi_t(q, t),
+        qdd=qdd,
+        mu=mu,
+        ratio=ratio,
+        velocities=problem.project_velocities(q, qd, t),
+        positions=problem.project_positions(q, t, 1e-14)[0],
+    )
+    out["jacobian"] = c.jacobian_values(q, t) if c.linear_solver == "sparse" else c.phi_q(q, t)
+    return out
 
 
 @pytest.mark.parametrize("name", list(MODELS))
@@ -49,47 +65,21 @@ def test_jacobian_gamma_and_accelerations_agree(name):
     cs = c.with_linear_solver("sparse")
     assert cs.linear_solver == "sparse"
     q, qd = _state(model)
-    t = 0.3
+    t = jnp.asarray(0.3)
+    d = _evaluate(Problem(model, c), q, qd, t)
+    s = _evaluate(Problem(model, cs), q, qd, t)
     rows, cols = cs.coo()
     P = np.zeros((c.m, c.nq))
-    np.add.at(P, (rows, cols), np.asarray(cs.jacobian_values(q, t)))
-    assert np.array_equal(P, np.asarray(c.phi_q(q, t)))
-    assert _rel(cs(q, t), c(q, t)) <= 1e-14
-    assert _rel(cs.gamma(q, qd, t), c.gamma(q, qd, t)) <= 1e-14
-    assert _rel(cs.phi_t(q, t), c.phi_t(q, t)) <= 1e-14
-    pd, ps = Problem(model, c), Problem(model, cs)
-    qdd_d, mu_d, _ = _acc(pd, q, qd, t)
-    qdd_s, mu_s, r_s = _acc(ps, q, qd, t)
-    assert _rel(qdd_s, qdd_d) <= 1e-12
-    assert _rel(mu_s, mu_d) <= 1e-12
-    assert 0 < float(r_s) <= 1
-    assert _rel(ps.project_velocities(q, qd, t), pd.project_velocities(q, qd, t)) <= 1e-12
-    assert _rel(ps.project_positions(q, t, 1e-14)[0], pd.project_positions(q, t, 1e-14)[0]) <= 1e-12
-
-
-def test_forward_runs_agree():
-    model = chain(12)
-    ts = np.linspace(0.0, 0.2, 5)
-    kw = dict(rtol=1e-10, atol=1e-12)
-    d = md.forward(model, ts, linear_solver="dense", **kw)
-    s = md.forward(model, ts, linear_solver="sparse", **kw)
-    for col in ("b11.x", "b11.y", "b5.phi", "J3.Fx"):
-        scale = max(float(np.max(np.abs(d[col]))), 1.0)
-        assert float(np.max(np.abs(s[col] - d[col]))) <= 1e-12 * scale, col
-
-
-def test_forward_paper_sparse_agrees():
-    from test_mixed import paper_loads
-
-    model = paper_mechanism(forces=paper_loads())
-    ts = np.linspace(0.0, 0.5, 6)
-    hold = ("crank.phi", "coupler.phi")
-    kw = dict(rtol=1e-10, atol=1e-10, hold=hold)
-    d = md.forward(model, ts, linear_solver="dense", **kw)
-    s = md.forward(model, ts, linear_solver="sparse", **kw)
-    for col in ("slider.x", "crank.phi"):
-        scale = max(float(np.max(np.abs(d[col]))), 1.0)
-        assert float(np.max(np.abs(s[col] - d[col]))) <= 1e-12 * scale, col
+    np.add.at(P, (rows, cols), np.asarray(s["jacobian"]))
+    assert np.array_equal(P, np.asarray(d["jacobian"]))
+    assert _rel(s["phi"], d["phi"]) <= 1e-14
+    assert _rel(s["gamma"], d["gamma"]) <= 1e-14
+    assert _rel(s["phi_t"], d["phi_t"]) <= 1e-14
+    assert _rel(s["qdd"], d["qdd"]) <= 1e-12
+    assert _rel(s["mu"], d["mu"]) <= 1e-12
+    assert 0 < float(s["ratio"]) <= 1
+    assert _rel(s["velocities"], d["velocities"]) <= 1e-12
+    assert _rel(s["positions"], d["positions"]) <= 1e-12
 
 
 def test_generalized_alpha_sparse_agrees():
@@ -111,27 +101,31 @@ def test_generalized_alpha_sparse_agrees():
         assert r.stats["newton_iterations"] <= 2.5 * r.stats["steps"]
 
 
+def _objective(problem, q, qd):
+    qdd, mu, _ = problem.accelerations(q, qd, 0.0)
+    return jnp.sum(qdd**2) + jnp.sum(jnp.sin(mu))
+
+
+def _qdd_squared(problem, q, qd):
+    return jnp.sum(problem.accelerations(q, qd, 0.0)[0] ** 2)
+
+
 def test_gradient_through_sparse_solve():
     model = chain(20)
     ps = Problem(model, Constraints.of(model).with_linear_solver("sparse"))
     q, qd = _state(model, 1)
-
-    def f(q):
-        qdd, mu, _ = ps.accelerations(q, qd, 0.0)
-        return jnp.sum(qdd**2) + jnp.sum(jnp.sin(mu))
-
-    g = jax.grad(f)(q)
+    f = eqx.filter_jit(_objective)
+    g = eqx.filter_jit(jax.grad(_objective, argnums=1))(ps, q, qd)
     rng = np.random.default_rng(2)
     for _ in range(3):
         d = jnp.asarray(rng.normal(size=model.nq))
         h = 1e-6
-        fd = (f(q + h * d) - f(q - h * d)) / (2 * h)
+        fd = (f(ps, q + h * d, qd) - f(ps, q - h * d, qd)) / (2 * h)
         assert abs(float(g @ d) - float(fd)) <= 1e-6 * max(abs(float(fd)), 1.0)
     # the same gradient as the dense path
     pd = Problem(model, Constraints.of(model))
-    gd = jax.grad(lambda q: jnp.sum(pd.accelerations(q, qd, 0.0)[0] ** 2))(q)
-    gs = jax.grad(lambda q: jnp.sum(ps.accelerations(q, qd, 0.0)[0] ** 2))(q)
-    assert _rel(gs, gd) <= 1e-10
+    grad = eqx.filter_jit(jax.grad(_qdd_squared, argnums=1))
+    assert _rel(grad(ps, q, qd), grad(pd, q, qd)) <= 1e-10
 
 
 def test_schur_solve_vmap_and_jacfwd():
@@ -145,12 +139,13 @@ def test_schur_solve_vmap_and_jacfwd():
     C = np.zeros((30, 51))
     np.add.at(C, (rows, cols), np.asarray(v))
     S = C @ np.diag(Minv) @ C.T
-    x = jax.vmap(lambda b: st.solve(v, Minv, b)[0])(b)
+    x = jax.jit(jax.vmap(lambda b: st.solve(v, Minv, b)[0]))(b)
     assert np.allclose(x, np.linalg.solve(S, b.T).T, rtol=1e-10, atol=1e-12)
-    J = jax.jacfwd(lambda v: st.solve(v, Minv, b[0])[0])(v)
+    solve = jax.jit(lambda v: st.solve(v, Minv, b[0])[0])
+    J = jax.jit(jax.jacfwd(solve))(v)
     h = 1e-6
     e = jnp.zeros_like(v).at[7].set(h)
-    fd = (st.solve(v + e, Minv, b[0])[0] - st.solve(v - e, Minv, b[0])[0]) / (2 * h)
+    fd = (solve(v + e) - solve(v - e)) / (2 * h)
     assert np.allclose(J[:, 7], fd, rtol=1e-6, atol=1e-8)
 
 
@@ -184,12 +179,17 @@ def test_regularized_schur_solve_is_the_minimum_norm_solution():
     c0 = Constraints.of(model)  # 12 joint equations and the motor, of rank 12
     c = c0.with_rank(c0.m - 1).with_linear_solver("sparse")
     q, t = model.q0, 0.0
-    C = np.asarray(c.phi_q(q, t))
+    C = np.asarray(eqx.filter_jit(c.phi_q)(q, t))
     Minv = 1.0 / np.asarray(model.mass_diagonal)
     S = C @ (Minv[:, None] * C.T)
     assert np.linalg.matrix_rank(S) == c.m - 1
     b = S @ np.random.default_rng(1).normal(size=c.m)
-    y, ratio = c.schur_solve(c.jacobian_values(q, t), jnp.asarray(Minv), jnp.asarray(b))
+
+    @eqx.filter_jit
+    def schur_solve(c, q, t, Minv, b):
+        return c.schur_solve(c.jacobian_values(q, t), Minv, b)
+
+    y, ratio = schur_solve(c, q, t, jnp.asarray(Minv), jnp.asarray(b))
     y_ref = np.linalg.pinv(S, rcond=1e-10) @ b
     assert np.max(np.abs(C.T @ (np.asarray(y) - y_ref))) <= 1e-12 * np.max(np.abs(C.T @ y_ref))
     assert np.max(np.abs(np.asarray(y) - y_ref)) <= 1e-8 * np.max(np.abs(y_ref))

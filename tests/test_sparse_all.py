@@ -1,9 +1,13 @@
 """One linear-solver layer for every analysis (issue 7): with ``linear_solver="sparse"`` the
-kinematic analysis (assembly, Newton, velocities, accelerations), inverse dynamics, forward
-runs (consistent start, reactions at the output times) and collocated mixed runs agree with
-``linear_solver="dense"`` to <= 1e-12 (relative to each quantity's scale) on every fixture and
-example the sparse path applies to; a dead point is still detected on the sparse path; the
-problems the sparse path cannot solve are refused with clear errors."""
+equations of every fixture and example the sparse path applies to equal the dense path's
+(``Phi``, ``Phi_q``, ``Phi_t``, ``gamma``, the products with ``Phi_q``, the Schur solve and the
+joint reactions, at random states), and each analysis path (kinematic, inverse, forward with
+each integrator, collocated and non-collocated mixed) agrees with ``linear_solver="dense"`` to
+<= 1e-12 (relative to each quantity's scale) on one fixture; a dead point is still detected on
+the sparse path; the problems the sparse path cannot solve are refused with clear errors.
+
+(The analyses run the same code on every model once the equations are evaluated: the
+equations are compared fixture by fixture, the time integrations once per path.)"""
 
 from __future__ import annotations
 
@@ -30,6 +34,7 @@ from fixtures import (
     spring_slider,
 )
 from mixdyn.analysis._problem import Problem
+from mixdyn.analysis._reactions import joint_reactions
 from mixdyn.equations import Constraints
 from mixdyn.model._element import Resolver
 
@@ -141,17 +146,73 @@ def _agree_columns(s, d, kinds=("force", "torque")):
             _agree(np.stack([s[n] for n in names]), np.stack([d[n] for n in names]), kind)
 
 
-# ------------------------------------------------------------------ the Jacobian
-@pytest.mark.parametrize("name", list(DRIVEN))
-def test_scattered_jacobian_is_the_ad_jacobian(name):
-    """``phi_q`` scattered from the per-element Jacobians (sparse path) equals ``jax.jacfwd``
-    of the dense path's ``Phi``."""
-    model, _ = DRIVEN[name]()
-    c = Constraints.of(model)
-    q = jnp.asarray(np.asarray(model.q0)) + 1e-2
-    J = c.with_linear_solver("sparse").phi_q(q, 0.3)
-    ad = jax.jacfwd(c, argnums=0)(q, 0.3)
-    assert float(jnp.max(jnp.abs(J - ad))) <= 1e-15 * float(jnp.max(jnp.abs(ad)))
+#: The fixtures whose equations are compared: every model of ``DRIVEN`` (the joints of the
+#: ``FREE`` model of the same name with drivers added) and the ``FREE`` examples.
+EQUATIONS = {
+    **{name: (lambda name=name: DRIVEN[name]()[0]) for name in DRIVEN},
+    **{name: (lambda name=name: FREE[name]()[0]) for name in FREE if name.startswith("example_")},
+}
+
+
+@eqx.filter_jit
+def _equations(c, Minv, q, qd, t, x, y, b, lam):
+    """Everything the analyses evaluate of the constraints on ``c``'s path, at one state:
+    through the public methods of :class:`Constraints` (and the joint reactions); on the
+    sparse path also the products with ``Phi_q`` and the Schur solve from its values."""
+    out = dict(
+        full=c.full(q, t),
+        phi=c(q, t),
+        phi_q=c.phi_q(q, t),
+        phi_t=c.phi_t(q, t),
+        gamma=c.gamma(q, qd, t),
+        reactions=joint_reactions(c, q, t, lam),
+    )
+    if c.linear_solver == "sparse":
+        v = c.jacobian_values(q, t)
+        out["matvec"], out["rmatvec"] = c.matvec(v, x), c.rmatvec(v, y)
+        out["schur"], out["ratio"] = c.schur_solve(v, Minv, b)
+    return out
+
+
+@pytest.mark.parametrize("name", list(EQUATIONS))
+def test_sparse_equations_equal_the_dense_ones(name):
+    """At three random states near the fixture's start: ``Phi`` (all rows and the rows kept),
+    ``Phi_t`` and ``gamma`` of the sparse path (per element, vectorized per kind) equal the
+    dense path's to 1e-14; ``Phi_q`` scattered from the per-element Jacobians equals
+    ``jax.jacfwd`` of the dense ``Phi`` to 1e-15; ``Phi_q x`` and ``Phi_q^T y`` from the
+    sparse values equal the dense products; the banded Cholesky solve of
+    ``Phi_q M^-1 Phi_q^T y = b`` equals NumPy's dense solve to 1e-10; the joint reactions from
+    the multipliers equal the dense path's to 1e-12. (These are all the analyses take from the
+    constraints: what each analysis does with them is compared once per path below.)"""
+    model = EQUATIONS[name]()
+    cd = Constraints.of(model).with_linear_solver("dense")
+    cs = cd.with_linear_solver("sparse")
+    assert (cd.linear_solver, cs.linear_solver) == ("dense", "sparse")
+    Minv = 1.0 / np.asarray(model.mass_diagonal)
+    rng = np.random.default_rng(sum(map(ord, name)))
+    for _ in range(3):
+        state = (
+            np.asarray(model.q0) + 1e-2 * rng.normal(size=model.nq),  # q
+            rng.normal(size=model.nq),  # qd
+            rng.uniform(0.0, 1.0),  # t
+            rng.normal(size=model.nq),  # x
+            rng.normal(size=cd.m),  # y
+            rng.normal(size=cd.m),  # b
+            rng.normal(size=cd.m),  # multipliers
+        )
+        args = [jnp.asarray(a) for a in (Minv, *state)]
+        d, s = _equations(cd, *args), _equations(cs, *args)
+        for key in ("full", "phi", "phi_t", "gamma"):
+            _agree(s[key], d[key], key, 1e-14)
+        C = np.asarray(d["phi_q"])
+        _agree(s["phi_q"], C, "Phi_q", 1e-15)
+        x, y, b = state[3], state[4], state[5]
+        _agree(s["matvec"], C @ x, "Phi_q x", 1e-14)
+        _agree(s["rmatvec"], C.T @ y, "Phi_q^T y", 1e-14)
+        S = C @ (Minv[:, None] * C.T)
+        _agree(s["schur"], np.linalg.solve(S, b), "Schur solve", 1e-10)
+        assert 0.0 < float(s["ratio"]) <= 1.0
+        _agree(s["reactions"], d["reactions"], "joint reactions")
 
 
 def test_elements_with_laws_of_different_shapes_group_apart():
@@ -186,9 +247,11 @@ def test_rank_analysis_fast_path_agrees_with_the_qr(monkeypatch):
 
 
 # ------------------------------------------------------------------ kinematics
-@pytest.mark.parametrize("name", list(DRIVEN))
-def test_kinematic_and_inverse_agree(name):
-    model, hold = DRIVEN[name]()
+def test_inverse_agrees():
+    """Inverse dynamics (and the kinematic analysis under it: assembly with held coordinates,
+    Newton's positions, velocities, accelerations) on the paper's mechanism driven by two
+    motors: positions, velocities, accelerations, driver efforts, reactions and multipliers."""
+    model, hold = DRIVEN["paper_mechanism"]()
     ts = np.linspace(0.0, 0.2, 4)
     d = md.inverse(model, ts, hold=hold, linear_solver="dense")
     s = md.inverse(model, ts, hold=hold, linear_solver="sparse")
@@ -206,6 +269,7 @@ def test_kinematic_sparse_under_auto():
     d = md.kinematic(model, ts, linear_solver="dense")
     assert a.stats["linear_solver"] == "sparse"
     _agree(a.q, d.q, "positions")
+    _agree(a.qd, d.qd, "velocities")
     _agree(a.qdd, d.qdd, "accelerations")
 
 
@@ -261,9 +325,11 @@ def test_dead_point_detected_on_the_sparse_path():
 
 
 # ------------------------------------------------------------------ forward dynamics
-@pytest.mark.parametrize("name", list(FREE))
-def test_forward_agrees(name):
-    model, hold, qd0 = FREE[name]()
+def test_forward_baumgarte_agrees():
+    """RK4 + Baumgarte on the paper's mechanism under its loads (two torques and a point force;
+    the start assembled with two coordinates held): positions, velocities, accelerations,
+    reactions, powers and energies."""
+    model, hold, qd0 = FREE["paper_mechanism"]()
     ts = np.linspace(0.0, 0.004, 3)
     kw = dict(hold=hold, qd0=qd0, method="baumgarte", dt=1e-3)
     d = md.forward(model, ts, linear_solver="dense", **kw)
@@ -275,13 +341,12 @@ def test_forward_agrees(name):
     _agree_columns(s, d, ("force", "torque", "power", "energy"))
 
 
-@pytest.mark.parametrize("name", ["slider_crank", "paper_mechanism", "pendulum_chain"])
-def test_partitioning_agrees(name):
+def test_partitioning_agrees():
     """Coordinate partitioning: on the sparse path the dependent coordinates are solved by the
     minimum-norm solve weighted to the dependent block (one banded Cholesky pattern whatever
     the partition); the same run as the dense LU of ``Phi_qD`` (measured 5e-14 m on a
-    30-link chain, 3x faster)."""
-    model, hold, qd0 = FREE[name]()
+    30-link chain, 3x faster), here on the slider-crank."""
+    model, hold, qd0 = FREE["slider_crank"]()
     ts = np.linspace(0.0, 0.05, 3)
     kw = dict(hold=hold, qd0=qd0, method="partitioning", rtol=1e-10, atol=1e-10)
     d = md.forward(model, ts, linear_solver="dense", **kw)
@@ -292,12 +357,17 @@ def test_partitioning_agrees(name):
 
 
 def test_forward_projection_chain_agrees():
+    """Adaptive Tsit5 with projection (the default) on an 8-link pendulum chain: positions,
+    velocities, accelerations and reactions."""
     model = pendulum_chain(8)
     ts = np.linspace(0.0, 0.05, 3)
     kw = dict(rtol=1e-10, atol=1e-12)
     d = md.forward(model, ts, linear_solver="dense", **kw)
     s = md.forward(model, ts, linear_solver="sparse", **kw)
+    assert s.stats["linear_solver"] == "sparse"
     _agree(s.q, d.q, "positions")
+    _agree(s.qd, d.qd, "velocities")
+    _agree(s.qdd, d.qdd, "accelerations")
     _agree_columns(s, d)
 
 
