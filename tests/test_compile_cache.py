@@ -161,16 +161,23 @@ def test_code_outside_mixdyn_is_not_keyed(cache):
 
 def test_cache_switch(tmp_path):
     """set_cache turns the caches on (a folder) and off (None), JAX's compilation cache with
-    them."""
+    them; a JAX cache that the user configured is left alone."""
     try:
         assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
         assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
-        assert jax.config.jax_enable_compilation_cache
         assert (tmp_path / "c" / _compile.EXPORTED).is_dir()
     finally:
         assert _compile.set_cache(False) is None
     assert _compile.cache_folder() is None
-    assert not jax.config.jax_enable_compilation_cache
+    assert jax.config.jax_compilation_cache_dir is None
+    try:
+        jax.config.update("jax_compilation_cache_dir", str(tmp_path / "mine"))
+        assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
+        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "mine")
+        assert _compile.set_cache(False) is None
+        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "mine")
+    finally:
+        jax.config.update("jax_compilation_cache_dir", None)
 
 
 # ------------------------------------------------------------------ across processes

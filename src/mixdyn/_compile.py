@@ -88,10 +88,14 @@ def default_folder() -> str:
 def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
     """Turn mixdyn's persistent caches on or off for this process.
 
+    JAX's persistent compilation cache is pointed at the same folder only if nothing else
+    configured it (``jax_compilation_cache_dir`` unset, or set by mixdyn): a cache the user
+    set up for JAX is left as it is, on or off.
+
     Args:
         enabled: True (the default folder, see the module's documentation), a folder, or
-            False (nothing is read from or written to disk; programs are traced and compiled
-            in each process).
+            False (nothing is read from or written to disk by mixdyn; programs are traced and
+            compiled in each process).
 
     Returns:
         The cache folder in use, or None when off (or when the folder cannot be created: a
@@ -110,12 +114,13 @@ def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
         if folder == _state["folder"]:
             return folder
         _state["folder"] = folder
+        current = jax.config.jax_compilation_cache_dir
+        if current is not None and current != _state.get("jax_dir"):
+            return folder  # JAX's cache is the user's: not ours to move or turn off
         try:
-            if folder is None:
-                jax.config.update("jax_enable_compilation_cache", False)
-            else:
-                jax.config.update("jax_enable_compilation_cache", True)
-                jax.config.update("jax_compilation_cache_dir", folder)
+            jax.config.update("jax_compilation_cache_dir", folder)
+            _state["jax_dir"] = folder
+            if folder is not None:
                 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
                 jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
             cc.reset_cache()  # JAX opens its cache once: make it see the new setting
