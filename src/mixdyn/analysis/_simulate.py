@@ -33,7 +33,6 @@ from .integrators._common import (
     STEP_COLLAPSE,
     UNCLOSED,
     progress_hook,
-    solo_progress,
 )
 from .kinematic import output_times
 from .result import Result
@@ -196,13 +195,13 @@ def _post_arrays(problem: Problem, ts, Q, QD):
 
     def one(x):
         q, qd, t = x
-        qdd, mu, ratio = problem.accelerations(q, qd, t)
-        R = joint_reactions(c, q, t, mu)
-        powers = problem.powers(q, qd, t, mu)
+        st = problem.stages(q, qd, t)  # Phi, Phi_q, accelerations: each evaluated once
+        R = joint_reactions(c, q, t, st.mu, st.J)
+        powers = problem.powers(q, qd, t, st.mu, st.J)
         T = kinetic_energy(problem.model, qd)
         V = potential_energy(problem.model, q)
-        viol = jnp.max(jnp.abs(c(q, t))) if c.m else jnp.zeros(())
-        return qdd, mu, ratio, R, powers, jnp.stack([T, V, T + V]), viol
+        viol = jnp.max(jnp.abs(st.phi)) if c.m else jnp.zeros(())
+        return st.qdd, st.mu, st.ratio, R, powers, jnp.stack([T, V, T + V]), viol
 
     return jax.lax.map(one, (Q, QD, ts))
 
@@ -394,8 +393,6 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
 
 #: Integrators whose tolerances may be arrays (used only in traced arithmetic).
 _ARRAY_TOLERANCES = ("projection", "partitioning")
-#: Integrators that call their progress callback with ``jax.debug.callback`` themselves.
-_PLAIN_PROGRESS = ("generalized-alpha",)
 
 
 @functools.cache
@@ -428,10 +425,8 @@ def simulate(
         if opts.get(name) is not None:
             opts[name] = np.asarray(opts[name], dtype=np.float64)
     integrator = _integrator(method)
-    # A progress callback is passed as a key into a registry (one program for every
-    # callback), or for generalized-alpha, which calls it directly, as one fixed function.
-    hook = solo_progress if method in _PLAIN_PROGRESS else progress_hook
-    with hook(progress) as cb:
+    # A progress callback is passed as a key into a registry: one program for every callback.
+    with progress_hook(progress) as cb:
         traj = integrator(problem, np.asarray(ts, dtype=np.float64), q0, qd0, progress=cb, **opts)
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)

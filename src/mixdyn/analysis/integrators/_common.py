@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import contextlib
 import itertools
-import threading
 from collections.abc import Callable
 
 import diffrax
@@ -111,34 +110,6 @@ def report_progress(progress, t, when=None) -> None:
         emit()
     else:
         jax.lax.cond(when, emit, lambda: None)
-
-
-#: A host function of fixed identity for integrators that call ``jax.debug.callback(progress,
-#: t)`` themselves (generalized-alpha): it calls the function :func:`solo_progress` set.
-_SOLO: list = [None]
-_SOLO_LOCK = threading.Lock()
-
-
-def _solo(t) -> None:
-    fn = _SOLO[0]
-    if fn is not None:
-        fn(t)
-
-
-@contextlib.contextmanager
-def solo_progress(fn: Callable | None):
-    """For an integrator that takes a plain callable: yields :func:`_solo` (the same
-    function every run, so no new program) dispatching to ``fn``; runs with a progress
-    callback through it take turns (a lock), since the dispatch has no key."""
-    if fn is None:
-        yield None
-        return
-    with _SOLO_LOCK:
-        _SOLO[0] = fn
-        try:
-            yield _solo
-        finally:
-            _SOLO[0] = None
 
 
 def rms_error(y0, y1, yerr, rtol, atol):

@@ -44,7 +44,7 @@ import jax.numpy as jnp
 from ...equations import force_directions
 from ...errors import ModelError
 from .._problem import Problem
-from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory
+from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory, report_progress
 
 #: The Newton iterations of ``newton=...`` (see the module docstring).
 NEWTON_CHOICES = ("auto", "modified", "full")
@@ -322,8 +322,7 @@ def generalized_alpha(
         i, state, status, t, viol = jax.lax.while_loop(
             inner_cond, inner_body, (0, state, status, t, viol)
         )
-        if progress is not None:
-            jax.debug.callback(progress, t)
+        report_progress(progress, t)
         Q, QD, W = Q.at[k].set(state[0]), QD.at[k].set(state[1]), W.at[k].set(state[5])
         return k + 1, state, Q, QD, W, nsteps + i, status, t, viol
 
