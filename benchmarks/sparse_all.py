@@ -31,7 +31,8 @@ sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 import mixdyn as md
 from fixtures import horizontal_chain as chain
 from mixdyn.analysis._problem import Problem
-from mixdyn.analysis._simulate import _post, consistent_state
+from mixdyn.analysis._simulate import _post
+from mixdyn.analysis._start import consistent_state
 from mixdyn.equations import Constraints
 
 

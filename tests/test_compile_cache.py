@@ -111,7 +111,8 @@ def test_exported_program_gives_the_traced_numbers(cache):
     """Round trip: a program exported, written, read back (a new wrapper, as in a new
     process) gives the numbers the traced program gives."""
     from mixdyn.analysis._problem import Problem
-    from mixdyn.analysis._simulate import _post_arrays, _velocity_fix
+    from mixdyn.analysis._simulate import _post_arrays
+    from mixdyn.analysis._start import _velocity_fix
     from mixdyn.equations import Constraints
 
     model = paper()

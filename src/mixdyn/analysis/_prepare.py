@@ -19,6 +19,7 @@ import numpy as np
 from ..equations import Constraints
 from ..model import Model
 from ._assembly import assemble
+from ._start import consistent_state
 from ._structure import DofReport, analyse, require_balanced
 
 
@@ -61,9 +62,7 @@ def prepare_dynamic(
     model: Model, t0: float, *, drivers=None, q0=None, qd0=None, hold=(), linear_solver="auto"
 ) -> Prepared:
     """Forward and mixed dynamics: positions and velocities made consistent
-    (:func:`~mixdyn.analysis._simulate.consistent_state`), then the mobility analysis there."""
-    from ._simulate import consistent_state  # _simulate imports kinematic, which imports us
-
+    (:func:`~mixdyn.analysis._start.consistent_state`), then the mobility analysis there."""
     drivers = tuple(model.drivers if drivers is None else drivers)
     c_full = Constraints(model.joints, drivers, model.nq, linear_solver=linear_solver)
     q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
