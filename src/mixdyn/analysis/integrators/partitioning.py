@@ -15,14 +15,13 @@ collapses (:data:`RECHOOSE_RATIO`), by the dense pivoted LU of the first choice.
 
 from __future__ import annotations
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 
 from ...linalg import lu_solve_checked
 from .._problem import Problem, pivot_columns
-from ._common import SOLVERS, Trajectory, adaptive_loop
+from ._common import Trajectory, adaptive_loop, ode_term, runge_kutta
 
 #: Sparse path: the partition is chosen again (dense pivoted LU) only when the square root of
 #: the pivot ratio of ``Phi_qD Phi_qD^T``'s Cholesky factors falls below this.
@@ -111,8 +110,7 @@ def partitioning(
 
     Args: as :func:`~.projection.projection`.
     """
-    cls, order = SOLVERS[solver]
-    rk = cls()
+    rk, order = runge_kutta(solver)
     tol = 1e-3 * atol
     t0 = ts[0]
     D0, I0 = _choose(problem, q0, t0)
@@ -131,7 +129,7 @@ def partitioning(
         qdd, _, _ = problem.accelerations(q, qd, t)
         return (vd, qdd[I], problem.work_rates(q, qd, t, qdd))
 
-    term = diffrax.ODETerm(f)
+    term = ode_term(f)
 
     def step(t0, t1, y, args):
         state = rk.init(term, t0, t1, y, args)

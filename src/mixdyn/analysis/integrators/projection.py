@@ -4,12 +4,11 @@ each accepted step (mass-weighted least-norm projection)."""
 
 from __future__ import annotations
 
-import diffrax
 import equinox as eqx
 import jax.numpy as jnp
 
 from .._problem import Problem
-from ._common import SOLVERS, Trajectory, adaptive_loop
+from ._common import Trajectory, adaptive_loop, ode_term, runge_kutta
 
 
 def _vector_field(problem: Problem):
@@ -18,7 +17,7 @@ def _vector_field(problem: Problem):
         qdd, _, _ = problem.accelerations(q, qd, t)
         return (qd, qdd, problem.work_rates(q, qd, t, qdd))
 
-    return diffrax.ODETerm(f)
+    return ode_term(f)
 
 
 @eqx.filter_jit
@@ -50,8 +49,7 @@ def projection(
             output interval, whichever is shorter); the controller adapts it from there.
         progress: optional callback ``f(t)`` at each output time.
     """
-    cls, order = SOLVERS[solver]
-    rk = cls()
+    rk, order = runge_kutta(solver)
     term = _vector_field(problem)
     tol_pos = 1e-3 * atol
 
