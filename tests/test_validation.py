@@ -308,6 +308,7 @@ def nfourbar_exact(n: int, ts) -> np.ndarray:
     return np.stack([np.sin(sol.y[0]), np.cos(sol.y[0])], axis=1)
 
 
+@pytest.mark.slow
 def test_nfourbar_40_follows_exact_reduction():
     """The IFToMM N-four-bar at N = 40 (81 bars, 243 coordinates, 242 joint equations) on
     mixdyn's default linear-solver choice, which is the sparse path here (banded block
@@ -326,6 +327,7 @@ def test_nfourbar_40_follows_exact_reduction():
     assert err <= 1e-3, err
 
 
+@pytest.mark.slow
 def test_nfourbar_40_generalized_alpha_through_a_flat_position():
     """Generalized-alpha at N = 40 through the first flat position (t ~ 1.24 s) on a step grid
     (dt = 5e-4, outputs 0.1 s apart) whose step lands so near the singular point that the
@@ -340,6 +342,7 @@ def test_nfourbar_40_generalized_alpha_through_a_flat_position():
     assert err <= 1e-4, err
 
 
+@pytest.mark.slow
 def test_nfourbar_40_default_projection_over_20s():
     """The IFToMM N-four-bar at N = 40 over its full 20 s with ``md.forward``'s defaults
     (adaptive Tsit5 with projection, rtol 1e-8, sparse path): through every flat position the
