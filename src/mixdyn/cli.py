@@ -657,11 +657,15 @@ def _reference(runner, ref, t):
     import numpy as np
 
     from .io import ExpressionLaw
+    from .io.expressions import evaluate
     from .io.quantities import factor
 
     scale = 1.0 if ref.unit is None else factor(ref.unit, None, runner.b.units)
     law = ExpressionLaw(ref.expr, runner.b.parameters, ref.unit, scale)
-    return np.asarray(law(np.asarray(t, dtype=float)))
+    # evaluated by NumPy: each jax.numpy operation outside a compiled program is one of its own
+    t = np.asarray(t, dtype=float)
+    values = np.asarray(law.values)
+    return float(law.scale) * (np.asarray(evaluate(law.tree, t, values, xp=np)) + 0.0 * t)
 
 
 # --------------------------------------------------------------------------- plot

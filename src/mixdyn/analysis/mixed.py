@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import itertools
 
-import jax.numpy as jnp
 import numpy as np
 import scipy.linalg as sl
 
+from .._arrays import as_f64
 from .._compile import cached_jit
 from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
@@ -90,13 +90,11 @@ def _null_space(A):
 
 def _mobility(problem_c: Constraints, model: Model, q, qd, t, mk: int, names):
     """``W`` (p, len(names)): prescribed accelerations produced per unit of each force."""
-    J = np.asarray(_jac(problem_c, jnp.asarray(q), jnp.asarray(t, dtype=jnp.float64)))
+    J = np.asarray(_jac(problem_c, as_f64(q), as_f64(t)))
     Phi_q, Psi_q = J[:mk], J[mk:]
     N = _null_space(Phi_q)
     Mdiag = np.asarray(model.mass_diagonal)
-    B = np.asarray(
-        _directions(model, tuple(names), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
-    )
+    B = np.asarray(_directions(model, tuple(names), as_f64(q), as_f64(qd), as_f64(t)))
     red = N.T @ (Mdiag[:, None] * N)
     # Accelerations of the prescribed motions per unit generalized force, (p, nq); its norm
     # times |B| is the scale against which W is judged singular.
@@ -161,9 +159,7 @@ def _check_solvable(model, c, q, qd, t, mk, unknown, prescribed):
 
 def _collocation(model, unknown, prescribed, q, qd, t):
     """Coordinates ``j`` of the partition solver, checking each unknown force is collocated."""
-    B = np.asarray(
-        _directions(model, tuple(unknown), jnp.asarray(q), jnp.asarray(qd), jnp.asarray(t))
-    )
+    B = np.asarray(_directions(model, tuple(unknown), as_f64(q), as_f64(qd), as_f64(t)))
     driven = {d.index: d.name for d in prescribed if isinstance(d, CoordinateDriver)}
     j = []
     for a, name in enumerate(unknown):
@@ -200,10 +196,8 @@ def _collocated(model, c: Constraints, q, qd, t, mk: int, unknown):
         dq = 0.0 if k == 0 else 1e-2 * (np.abs(q) + 1.0) * rng.normal(size=q.size)
         dqd = 0.0 if k == 0 else rng.normal(size=q.size)
         qk, qdk, tk = q + dq, qd + dqd, t
-        Psi = np.asarray(_jac(c, jnp.asarray(qk), jnp.asarray(tk, dtype=jnp.float64)))[mk:]
-        B = np.asarray(
-            _directions(model, tuple(unknown), jnp.asarray(qk), jnp.asarray(qdk), jnp.asarray(tk))
-        )
+        Psi = np.asarray(_jac(c, as_f64(qk), as_f64(tk)))[mk:]
+        B = np.asarray(_directions(model, tuple(unknown), as_f64(qk), as_f64(qdk), as_f64(tk)))
         nB = np.linalg.norm(B, axis=0)
         nP = np.linalg.norm(Psi, axis=1)
         dot = B.T @ Psi.T  # (p unknowns, p prescribed)
@@ -295,7 +289,7 @@ def _setup(
                     "an independent coordinate cannot be prescribed", ", ".join(independent)
                 )
             k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
-            J = np.asarray(_jac(c, jnp.asarray(q), jnp.asarray(t0, dtype=jnp.float64)))[:mk]
+            J = np.asarray(_jac(c, as_f64(q), as_f64(t0)))[:mk]
             sv = np.linalg.svd(J[:, k_index], compute_uv=False)
             if sv.size and sv[-1] < 1e-9 * sv[0]:
                 raise SolvabilityError(

@@ -472,7 +472,7 @@ def _stack_groups(st: _Static, joints: tuple, drivers: tuple) -> tuple:
             if _is_traced(xs):
                 leaves.append(jnp.stack(xs))
             else:
-                leaves.append(jnp.asarray(np.stack([np.asarray(x) for x in xs])))
+                leaves.append(jax.device_put(np.stack([np.asarray(x) for x in xs])))
         out.append(jax.tree_util.tree_unflatten(loc_def, leaves))
     out = tuple(out)
     if cached:

@@ -30,6 +30,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._arrays import as_f64
 from ..errors import ModelError
 from ..model import Law
 
@@ -557,8 +558,8 @@ class ExpressionLaw(Law):
         self.tree = p.tree
         self.names = p.parameters
         self.unit = unit
-        self.values = jnp.asarray([float(parameters[n]) for n in p.parameters], dtype=jnp.float64)
-        self.scale = jnp.asarray(float(scale), dtype=jnp.float64)
+        self.values = as_f64([float(parameters[n]) for n in p.parameters])
+        self.scale = as_f64(float(scale))
 
     def __call__(self, t):
         t = jnp.asarray(t, dtype=jnp.float64)

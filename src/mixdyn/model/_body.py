@@ -7,6 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._arrays import as_f64
 from ..errors import ModelError
 
 GROUND_NAME = "ground"
@@ -20,7 +21,7 @@ def _points(points, owner: str) -> dict[str, jax.Array]:
             raise ModelError(
                 f"point {key!r} must be two finite numbers (x, y), got {value!r}", owner
             )
-        out[str(key)] = jnp.asarray(arr)
+        out[str(key)] = as_f64(arr)
     return out
 
 
@@ -70,12 +71,12 @@ class Body(eqx.Module):
         for label, v in (("mass", mass), ("inertia", inertia)):
             if not np.isfinite(float(v)) or float(v) < 0:
                 raise ModelError(f"{label} must be a finite number >= 0, got {v!r}", name)
-        self.mass = jnp.asarray(float(mass))
-        self.inertia = jnp.asarray(float(inertia))
+        self.mass = as_f64(float(mass))
+        self.inertia = as_f64(float(inertia))
         q0 = np.asarray(q0, dtype=float)
         if q0.shape != (3,) or not np.all(np.isfinite(q0)):
             raise ModelError("q0 must be three finite numbers [x, y, phi]", name)
-        self.q0 = jnp.asarray(q0)
+        self.q0 = as_f64(q0)
         self.points = _points(points, name)
         vecs = _points(vectors, name)
         for key, v in vecs.items():

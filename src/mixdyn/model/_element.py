@@ -6,6 +6,7 @@ import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
 
+from .._arrays import as_f64
 from ..errors import ModelError
 from ._body import GROUND_NAME
 from ._geometry import GROUND
@@ -62,7 +63,7 @@ class Resolver:
         body_name, _, pname = ref.partition(".")
         b = self.body(body_name, element)
         if not pname:
-            return b, jnp.zeros(2)
+            return b, as_f64(np.zeros(2))
         points = self.ground.points if b == GROUND else self._body_objs[b].points
         if pname not in points:
             raise ModelError(
@@ -90,7 +91,7 @@ class Resolver:
         n = np.linalg.norm(v)
         if not np.isfinite(n) or n == 0:
             raise ModelError(f"direction {ref!r} has zero length", element)
-        return jnp.asarray(v / n)
+        return as_f64(v / n)
 
 
 def static_direction(value):

@@ -17,6 +17,7 @@ import equinox as eqx
 import jax
 import jax.numpy as jnp
 
+from .._arrays import as_f64
 from ._element import Element, Resolver, moving, static_direction
 from ._geometry import angle, cross, point, vector
 from ._validate import finite
@@ -25,7 +26,7 @@ _UNBOUND = -2
 
 
 def _f64(x):
-    return jnp.asarray(x, dtype=jnp.float64)
+    return as_f64(x)
 
 
 class Joint(Element):

@@ -15,12 +15,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._arrays import as_f64
 from ..errors import ModelError
 from ._validate import finite
 
 
 def _f64(x) -> jax.Array:
-    return jnp.asarray(x, dtype=jnp.float64)
+    return as_f64(x)
 
 
 class Law(eqx.Module):

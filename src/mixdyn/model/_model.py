@@ -7,6 +7,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._arrays import as_f64
 from ..errors import ModelError
 from ..units import SI, UnitSystem
 from ._body import GROUND_NAME, Body, Ground
@@ -103,7 +104,7 @@ class Model(eqx.Module):
             g = np.full(1, np.nan)
         if g.shape != (2,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity must be two finite numbers (gx, gy), got {gravity!r}", name)
-        self.gravity = jnp.asarray(g)
+        self.gravity = as_f64(g)
         if not isinstance(units, UnitSystem):
             raise ModelError("units must be a mixdyn.UnitSystem", name)
         self.units = units
@@ -173,7 +174,7 @@ class Model(eqx.Module):
             return jnp.concatenate([jnp.stack([b.mass, b.mass, b.inertia]) for b in self.bodies])
         m = np.asarray([np.asarray(x) for x in m])
         inertia = np.asarray([np.asarray(x) for x in inertia])
-        return jnp.asarray(np.stack([m, m, inertia], axis=1).reshape(-1))
+        return as_f64(np.stack([m, m, inertia], axis=1).reshape(-1))
 
     @property
     def n_joint_equations(self) -> int:
