@@ -58,7 +58,10 @@ def _evaluate(problem, q, qd, t):
     return out
 
 
-@pytest.mark.parametrize("name", list(MODELS))
+@pytest.mark.parametrize(
+    "name",
+    [pytest.param(n, marks=pytest.mark.slow) if n == "chain40" else n for n in MODELS],
+)
 def test_jacobian_gamma_and_accelerations_agree(name):
     model = MODELS[name]()
     c = Constraints.of(model)
@@ -82,6 +85,7 @@ def test_jacobian_gamma_and_accelerations_agree(name):
     assert _rel(s["positions"], d["positions"]) <= 1e-12
 
 
+@pytest.mark.slow  # default run: test_sparse_all.py::test_generalized_alpha_mixed_agrees
 def test_generalized_alpha_sparse_agrees():
     """Generalized-alpha on the sparse path (the modified Newton matrix through the banded
     Cholesky of its Schur complement, G mu by a reverse pass through Phi, no dense Phi_q)
@@ -110,6 +114,7 @@ def _qdd_squared(problem, q, qd):
     return jnp.sum(problem.accelerations(q, qd, 0.0)[0] ** 2)
 
 
+@pytest.mark.slow  # default run: test_solver_contract.py, gradients of both paths
 def test_gradient_through_sparse_solve():
     model = chain(20)
     ps = Problem(model, Constraints.of(model).with_linear_solver("sparse"))

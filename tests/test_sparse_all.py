@@ -262,6 +262,7 @@ def test_inverse_agrees():
     _agree_columns(s, d)  # driver efforts, reactions, multipliers
 
 
+@pytest.mark.slow  # default run: test_inverse_agrees (the kinematic analysis under it)
 def test_kinematic_sparse_under_auto():
     model, _ = _chain_driven(24)  # 48 joint rows + 24 drivers >= 64 rows
     ts = np.linspace(0.0, 0.1, 3)

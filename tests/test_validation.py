@@ -55,6 +55,7 @@ def test_andrews_angle_conversion_round_trip():
     np.testing.assert_allclose(andrews_angles(phi), ANDREWS_Q0, rtol=0, atol=1e-15)
 
 
+@pytest.mark.slow  # a long validation run (CI runs it)
 def test_andrews_squeezer_matches_test_set():
     """Andrews' squeezing mechanism at t = 0.03 s against the Test Set for IVP Solvers.
 
@@ -189,6 +190,7 @@ def test_double_fourbar_reduction_matches_exudyn(fourbar_exact):
     assert np.max(np.abs(richardson - exact)) <= 1e-7
 
 
+@pytest.mark.slow  # a long validation run (CI runs it)
 def test_double_fourbar_baumgarte(fourbar_exact):
     """The double four-bar in mixdyn's absolute coordinates (15 coordinates, 14 joint
     equations, independent except at the singular positions) with fixed-step RK4 + Baumgarte
