@@ -293,10 +293,6 @@ class Constraints(eqx.Module):
             return BandedJacobian(self, self.jacobian_values(q, t))
         return DenseJacobian(self.phi_q(q, t), self.rank)
 
-    def operator(self, values) -> BandedJacobian:
-        """The sparse path's operator from Jacobian ``values`` already evaluated."""
-        return BandedJacobian(self, values)
-
     def matvec(self, values, x) -> jax.Array:
         """``Phi_q x`` from the sparse values."""
         return BandedJacobian(self, values).mv(x)

@@ -102,10 +102,6 @@ class JacobianOperator(eqx.Module):
         """Factor for ``Phi_q x = b`` on this path (see the subclasses)."""
         raise NotImplementedError
 
-    def weighted_rmv(self, W, y) -> jax.Array:
-        """``W Phi_q^T y`` (n,)."""
-        return W * self.rmv(y)
-
     def kkt(self, W, B=None, collocated=()):
         """The constrained-dynamics matrix at one state, factorized once through its Schur
         complement ``S = C W G``:
@@ -179,9 +175,6 @@ class DenseJacobian(JacobianOperator):
         """LU of ``Phi_q`` (square), or its truncated SVD of the known rank (least squares,
         minimum norm) with redundant rows; ``refine`` is ignored (a direct solve)."""
         return factor_ranked(self.J, self.rank)
-
-    def weighted_rmv(self, W, y):
-        return (W[:, None] * self.J.T) @ y
 
     def kkt(self, W, B=None, collocated=()):
         """LU of the dense ``S = C W G`` (any ``B``; a truncated SVD of the known rank with
