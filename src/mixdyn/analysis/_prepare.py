@@ -6,17 +6,24 @@ consistent), ``prepare_kinematic`` kinematic and inverse dynamics (positions ass
 drivers checked against the degrees of freedom). Both return a :class:`Prepared` record, from
 which an analysis takes the constraint rows its solver needs
 (:meth:`Prepared.constraints`).
+
+A set-up can be made once and handed to the analysis (their ``prepared=`` keyword): the
+model-file runner (:mod:`mixdyn.io.runs`) checks a run on the set-up the run then starts from,
+so that each run is assembled and analysed once. :func:`use_prepared` refuses a set-up made
+for another call (model, drivers, start time, rough start, held coordinates, linear solver).
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints
+from ..errors import ModelError
 from ..model import Model
 from ._assembly import assemble
 from ._start import consistent_state
@@ -36,6 +43,8 @@ class Prepared:
         report: the degrees-of-freedom report at ``(q, t0)``.
         keep: the constraint rows kept (independent joint rows, then the drivers).
         linear_solver: the path asked for (``"auto"``, ``"dense"``, ``"sparse"``).
+        inputs: what the start was made from (the kind of set-up, the rough positions and
+            velocities, the held coordinates...), compared by :func:`use_prepared`.
     """
 
     model: Model
@@ -46,6 +55,7 @@ class Prepared:
     report: DofReport
     keep: tuple[int, ...]
     linear_solver: str
+    inputs: tuple = ()
 
     def constraints(self, independent_rows_only: bool = False) -> Constraints:
         """The constraint set of the run on its path: only the independent rows (for the
@@ -65,9 +75,10 @@ def prepare_dynamic(
     (:func:`~mixdyn.analysis._start.consistent_state`), then the mobility analysis there."""
     drivers = tuple(model.drivers if drivers is None else drivers)
     c_full = Constraints(model.joints, drivers, model.nq, linear_solver=linear_solver)
+    inputs = _dynamic_inputs(q0, qd0, hold)
     q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), t0, drivers)
-    return Prepared(model, drivers, t0, q, qd, report, keep, linear_solver)
+    return Prepared(model, drivers, t0, q, qd, report, keep, linear_solver, inputs)
 
 
 def prepare_kinematic(
@@ -79,17 +90,148 @@ def prepare_kinematic(
     hold=(),
     assemble_first: bool = True,
     linear_solver="auto",
+    balanced: bool = True,
 ) -> Prepared:
     """Kinematic and inverse dynamics: the rough pose assembled (unless
     ``assemble_first=False``), the mobility analysis there, and the drivers checked to fix
-    every degree of freedom (:class:`~mixdyn.errors.DegreesOfFreedomError` otherwise)."""
+    every degree of freedom (:class:`~mixdyn.errors.DegreesOfFreedomError` otherwise; not with
+    ``balanced=False``, for a caller that reports the balance itself: the analysis checks it
+    again when handed the set-up)."""
     drivers = tuple(model.drivers if drivers is None else drivers)
+    inputs = _kinematic_inputs(q0, hold, assemble_first)
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     if assemble_first:
         q = jnp.asarray(assemble(model, q, hold=hold, linear_solver=linear_solver).q)
     report, keep = analyse(model, q, t0, drivers)
-    require_balanced(report)
-    return Prepared(model, drivers, t0, q, None, report, keep, linear_solver)
+    if balanced:
+        require_balanced(report)
+    return Prepared(model, drivers, t0, q, None, report, keep, linear_solver, inputs)
 
 
-__all__ = ["Prepared", "prepare_dynamic", "prepare_kinematic"]
+def use_prepared(
+    prepared,
+    model: Model,
+    t0: float,
+    *,
+    what: str,
+    drivers=None,
+    q0=None,
+    qd0=None,
+    hold=(),
+    assemble_first: bool = True,
+    linear_solver="auto",
+) -> Prepared:
+    """A set-up handed to an analysis, checked to be the one the analysis would make itself.
+
+    Args:
+        prepared: the :class:`Prepared` handed over.
+        model: the analysis' model.
+        t0: its start time [time].
+        what: ``"forward"``, ``"mixed"`` (dynamic set-ups), ``"kinematic"`` or ``"inverse"``
+            (kinematic ones), for the set-up's kind and the messages.
+        drivers: the drivers of the run (default: the model's).
+        q0, qd0, hold, assemble_first, linear_solver: the analysis' arguments.
+
+    Returns:
+        ``prepared``; a kinematic set-up with its drivers checked against the degrees of
+        freedom (:func:`~mixdyn.analysis._structure.require_balanced`).
+
+    Raises:
+        ModelError: ``prepared`` is no :class:`Prepared`, or was made for another model,
+            other drivers, another start time, another rough start or held coordinates
+            (or, for a kinematic set-up, ``assemble_first``) or another linear solver.
+    """
+    if not isinstance(prepared, Prepared):
+        raise ModelError(
+            f"prepared must be the set-up of a run (mixdyn.analysis._prepare.Prepared), got "
+            f"{type(prepared).__name__}",
+            "prepared",
+        )
+    dynamic = what in ("forward", "mixed")
+    drivers = tuple(model.drivers if drivers is None else drivers)
+    wrong = []
+    if not _same_model(prepared.model, model):
+        wrong.append("another model")
+    if not _same_drivers(prepared.drivers, drivers):
+        names = ", ".join(d.name for d in prepared.drivers) or "none"
+        wrong.append(f"other drivers ({names})")
+    if prepared.t0 != float(t0):
+        wrong.append(f"another start time (t = {prepared.t0:g}, not {float(t0):g})")
+    inputs = (
+        _dynamic_inputs(q0, qd0, hold) if dynamic else _kinematic_inputs(q0, hold, assemble_first)
+    )
+    if prepared.inputs[:1] != inputs[:1]:
+        kind = {("dynamic",): "a dynamic run's", ("kinematic",): "a kinematic run's"}
+        wrong.append(f"{kind.get(prepared.inputs[:1], 'an unrecorded')} start")
+    elif prepared.inputs != inputs:
+        wrong.append("another rough start (q0, qd0, hold or assemble_first)")
+    if prepared.linear_solver != linear_solver:
+        wrong.append(f"the linear solver {prepared.linear_solver!r}, not {linear_solver!r}")
+    if wrong:
+        raise ModelError(
+            f"the prepared set-up does not match this {what} analysis: it was made for "
+            + "; ".join(wrong)
+            + ". Leave prepared out (the analysis prepares its own start), or prepare it from "
+            "the same arguments",
+            "prepared",
+        )
+    if not dynamic:
+        require_balanced(prepared.report)  # as prepare_kinematic checks it
+    return prepared
+
+
+def _same_model(a: Model, b: Model) -> bool:
+    """Whether two models are the same: the same object, or equal structure and numbers."""
+    return a is b or _same_tree(a, b)
+
+
+def _same_drivers(a, b) -> bool:
+    """Whether two driver sequences are equal, driver by driver (kinds, bodies, laws)."""
+    a, b = tuple(a), tuple(b)
+    return len(a) == len(b) and all(x is y or _same_tree(x, y) for x, y in zip(a, b, strict=True))
+
+
+def _same_tree(a, b) -> bool:
+    """Equal PyTrees: the same structure and static data, leaf by leaf the same numbers."""
+    la, ta = jax.tree_util.tree_flatten(a)
+    lb, tb = jax.tree_util.tree_flatten(b)
+    try:
+        if ta != tb:
+            return False
+    except (TypeError, ValueError):  # static data that does not compare (arrays)
+        return False
+    for x, y in zip(la, lb, strict=True):
+        if x is y:
+            continue
+        x, y = np.asarray(x), np.asarray(y)
+        if x.shape != y.shape or x.dtype != y.dtype or x.tobytes() != y.tobytes():
+            return False
+    return True
+
+
+def _key(x):
+    """A comparable record of an argument: its numbers (shape and bytes), else its text."""
+    if x is None:
+        return None
+    try:
+        a = np.asarray(x, dtype=np.float64)
+    except (TypeError, ValueError):
+        return ("text", repr(x))
+    return (a.shape, a.tobytes())
+
+
+def _dynamic_inputs(q0, qd0, hold) -> tuple:
+    """What a dynamic start is made from (see :attr:`Prepared.inputs`)."""
+    if isinstance(qd0, Mapping):
+        qd = ("conditions", tuple(sorted((str(k), _key(v)) for k, v in qd0.items())))
+    else:
+        qd = _key(qd0)
+    return ("dynamic", _key(q0), qd, tuple(hold))
+
+
+def _kinematic_inputs(q0, hold, assemble_first) -> tuple:
+    """What a kinematic start is made from (see :attr:`Prepared.inputs`)."""
+    return ("kinematic", _key(q0), tuple(hold), bool(assemble_first))
+
+
+__all__ = ["Prepared", "prepare_dynamic", "prepare_kinematic", "use_prepared"]

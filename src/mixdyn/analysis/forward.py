@@ -7,7 +7,7 @@ integrator. The model's drivers, if any, act as motion constraints; their effort
 from __future__ import annotations
 
 from ..model import Model
-from ._prepare import prepare_dynamic
+from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
@@ -33,6 +33,7 @@ def forward(
     progress=None,
     linear_solver: str = "auto",
     energy_tol: float | str | None = ENERGY_TOL,
+    prepared: Prepared | None = None,
     **options,
 ) -> Result:
     """Simulate the mechanism under its forces from a consistent initial state.
@@ -67,6 +68,12 @@ def forward(
             (not checked). A run that breaks it, e.g. by jumping to another branch at a
             singular position, raises :class:`~mixdyn.errors.EnergyBalanceError` rather
             than returning a wrong motion.
+        prepared: the run's set-up (consistent start and mobility analysis), made beforehand
+            by :func:`~mixdyn.analysis._prepare.prepare_dynamic` from the same model, start
+            time ``t[0]``, ``q0``, ``qd0``, ``hold`` and ``linear_solver`` (the model-file
+            runner checks a run on it, then runs from it, so that the run is assembled and
+            analysed once). Default None: the run prepares its own. A set-up made for another
+            call is refused (:class:`~mixdyn.errors.ModelError`).
         **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
             ``rho_inf``, ``max_steps``...).
 
@@ -79,9 +86,21 @@ def forward(
     ts = output_times(t)
     opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts, energy_tol)
     require_masses(model)
-    prep = prepare_dynamic(
-        model, float(ts[0]), q0=q0, qd0=qd0, hold=hold, linear_solver=linear_solver
-    )
+    if prepared is None:
+        prep = prepare_dynamic(
+            model, float(ts[0]), q0=q0, qd0=qd0, hold=hold, linear_solver=linear_solver
+        )
+    else:
+        prep = use_prepared(
+            prepared,
+            model,
+            float(ts[0]),
+            what="forward",
+            q0=q0,
+            qd0=qd0,
+            hold=hold,
+            linear_solver=linear_solver,
+        )
     # The partitioning integrator needs independent rows; the others solve redundant
     # constraints in the least-squares sense (robust where the redundancy moves).
     problem = Problem(model, prep.constraints(method == "partitioning"))

@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..model import Model
-from ._prepare import prepare_kinematic
+from ._prepare import Prepared, prepare_kinematic, use_prepared
 from ._problem import Problem
 from ._simulate import _post, output_times, post_kinds, require_masses
 from .kinematic import run_kinematic
@@ -19,7 +19,14 @@ from .result import Result
 
 
 def inverse(
-    model: Model, t, *, q0=None, hold=(), linear_solver: str = "auto", **kinematic_options
+    model: Model,
+    t,
+    *,
+    q0=None,
+    hold=(),
+    linear_solver: str = "auto",
+    prepared: Prepared | None = None,
+    **kinematic_options,
 ) -> Result:
     """Driver efforts and joint reactions of a fully driven mechanism over time.
 
@@ -32,6 +39,10 @@ def inverse(
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
             of small bandwidth, see :mod:`mixdyn.linalg`): the
             path of the kinematic analysis and of the multipliers' solve.
+        prepared: the run's set-up, as in :func:`~mixdyn.kinematic` (made by
+            :func:`~mixdyn.analysis._prepare.prepare_kinematic` from the same model, start
+            time, ``q0``, ``hold``, ``assemble_first`` and ``linear_solver``; another is
+            refused). Default None: the run prepares its own.
         **kinematic_options: passed to :func:`~mixdyn.kinematic` (``tol``, ``max_iter``...).
 
     Returns:
@@ -42,14 +53,11 @@ def inverse(
     require_masses(model)
     kin_options = dict(kinematic_options)
     assemble_first = kin_options.pop("assemble_first", True)
-    prep = prepare_kinematic(
-        model,
-        float(ts[0]),
-        q0=q0,
-        hold=hold,
-        assemble_first=assemble_first,
-        linear_solver=linear_solver,
-    )
+    args = dict(q0=q0, hold=hold, assemble_first=assemble_first, linear_solver=linear_solver)
+    if prepared is None:
+        prep = prepare_kinematic(model, float(ts[0]), **args)
+    else:
+        prep = use_prepared(prepared, model, float(ts[0]), what="inverse", **args)
     kin = run_kinematic(prep, ts, **kin_options)
     c = prep.constraints()  # the kinematic run's rows: assembled and analysed once
     problem = Problem(model, c)

@@ -19,7 +19,7 @@ from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import length_scale
 from ._newton import newton_positions
-from ._prepare import Prepared, prepare_kinematic
+from ._prepare import Prepared, prepare_kinematic, use_prepared
 from .result import Result
 
 
@@ -114,6 +114,7 @@ def kinematic(
     max_iter: int = 25,
     singular_tol: float = 1e-7,
     linear_solver: str = "auto",
+    prepared: Prepared | None = None,
 ) -> Result:
     """Positions, velocities and accelerations of a fully driven mechanism over time.
 
@@ -133,6 +134,12 @@ def kinematic(
             with ``singular_tol`` is the square root of that factorization's) or ``"auto"``
             (sparse for large mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The assembly takes the same path.
+        prepared: the run's set-up (assembled start and mobility analysis), made beforehand
+            by :func:`~mixdyn.analysis._prepare.prepare_kinematic` from the same model,
+            drivers, start time ``t[0]``, ``q0``, ``hold``, ``assemble_first`` and
+            ``linear_solver`` (the model-file runner checks a run on it, then runs from it).
+            Default None: the run prepares its own. A set-up made for another call is refused
+            (:class:`~mixdyn.errors.ModelError`).
 
     Returns:
         A :class:`Result` with the body coordinates, velocities and accelerations and, in
@@ -144,15 +151,17 @@ def kinematic(
     """
     ts = output_times(t, minimum=1)
     drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
-    prep = prepare_kinematic(
-        model,
-        float(ts[0]),
+    args = dict(
         drivers=drivers,
         q0=q0,
         hold=hold,
         assemble_first=assemble_first,
         linear_solver=linear_solver,
     )
+    if prepared is None:
+        prep = prepare_kinematic(model, float(ts[0]), **args)
+    else:
+        prep = use_prepared(prepared, model, float(ts[0]), what="kinematic", **args)
     return run_kinematic(prep, ts, tol=tol, max_iter=max_iter, singular_tol=singular_tol)
 
 

@@ -29,7 +29,7 @@ from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
-from ._prepare import prepare_dynamic
+from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
@@ -221,8 +221,10 @@ def _setup(
     qd0,
     hold,
     linear_solver="auto",
+    prepared: Prepared | None = None,
 ):
-    """Everything a mixed run does before integrating: checks, consistent start, problem."""
+    """Everything a mixed run does before integrating: checks, consistent start, problem
+    (the start and its mobility analysis taken from ``prepared`` where given)."""
     if solver not in SOLVERS:
         raise ModelError(
             f"unknown mixed solver {solver!r}; use 'augmented' or 'partition'", "solver"
@@ -252,15 +254,17 @@ def _setup(
                 "actuator) can be unknown",
                 name,
             )
-    prep = prepare_dynamic(
-        model,
-        t0,
+    args = dict(
         drivers=(*model.drivers, *prescribed),
         q0=q0,
         qd0=qd0,
         hold=hold,
         linear_solver=linear_solver,
     )
+    if prepared is None:
+        prep = prepare_dynamic(model, t0, **args)
+    else:
+        prep = use_prepared(prepared, model, t0, what="mixed", **args)
     q, qd, report = prep.q, prep.qd, prep.report
     bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
     if bad:
@@ -327,13 +331,15 @@ def check_mixed(
     qd0=None,
     hold=(),
     linear_solver: str = "auto",
+    prepared: Prepared | None = None,
 ) -> None:
     """Check that a mixed problem is solvable, without integrating it.
 
     Runs every check of :func:`mixed` at the start time ``t0`` [time]: the counts, the unknown
     forces' names, a consistent start, the prescribed motions' independence, the pairing of
     forces and motions, and (for ``solver="partition"``) the collocation and the partition.
-    Returns None; raises the same errors as :func:`mixed`.
+    Returns None; raises the same errors as :func:`mixed`. ``prepared``: the run's set-up, as
+    in :func:`mixed` (checked on it, not prepared again).
     """
     _setup(
         model,
@@ -347,6 +353,7 @@ def check_mixed(
         qd0,
         hold,
         linear_solver,
+        prepared,
     )
 
 
@@ -368,6 +375,7 @@ def mixed(
     progress=None,
     linear_solver: str = "auto",
     energy_tol: float | str | None = ENERGY_TOL,
+    prepared: Prepared | None = None,
     **options,
 ) -> Result:
     """Mixed dynamics: find the unknown forces that produce the prescribed motions while the
@@ -397,6 +405,14 @@ def mixed(
             takes it silently, ``"sparse"`` raises a :class:`ModelError`. The
             consistent start (assembly, velocities) takes the path asked for in any case; the
             solvability checks of the start state are dense.
+        prepared: the run's set-up (consistent start and mobility analysis), made beforehand
+            by :func:`~mixdyn.analysis._prepare.prepare_dynamic` with the model's drivers
+            followed by the prescribed motions bound to the bodies
+            (:func:`bind_prescribed`), from the same start time, ``q0``, ``qd0``, ``hold`` and
+            ``linear_solver`` (the model-file runner checks a run on it, then runs from it).
+            Default None: the run prepares its own. A set-up made for another call (other
+            prescribed motions included) is refused (:class:`~mixdyn.errors.ModelError`);
+            the solvability checks are run on it in any case.
 
     Returns:
         A :class:`Result` with the motion, a column per unknown force (named after it, in force
@@ -422,6 +438,7 @@ def mixed(
         qd0,
         hold,
         linear_solver,
+        prepared,
     )
     res = simulate(
         "mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress, energy_tol

@@ -22,6 +22,7 @@ import numpy as np
 
 from .. import analysis as an
 from .. import model as m
+from ..analysis._prepare import Prepared, prepare_dynamic, prepare_kinematic
 from ..analysis.mixed import bind_prescribed
 from ..errors import AssemblyError, ModelError, NumericalError
 from . import schema as s
@@ -379,6 +380,12 @@ class Runner:
         """Degrees of freedom of a run's model with its drivers and prescribed motions, at the
         assembled start.
 
+        The check is made on the run's own set-up where it can be (:meth:`prepare`: the start
+        the run will start from and its mobility analysis), which :meth:`execute_one` then
+        hands to the analysis, so that the check and the run share one assembly and one rank
+        analysis. A run replaying another run's motion (``from_run``) is checked with a
+        stand-in for that motion and prepares itself when it runs.
+
         The prescribed motions are bound to their bodies as :func:`mixdyn.mixed` binds them,
         so the check counts the coordinates the run will drive. A mixed run is then checked
         as :meth:`check_solvable` does (its start with the held coordinates, the pairing of
@@ -396,46 +403,19 @@ class Runner:
         """
         r = plan.spec
         mixed = isinstance(r, s.MixedRunSpec)
-        if mixed:
-            model = self.run_model(plan, ())
+        report = None
+        if _replays(plan):
+            if mixed:
+                report = self._standin_report(plan)
         else:
-            model = self.run_model(
-                plan,
-                [
-                    self._dummy_driver(k, p)
-                    if p.from_run is not None
-                    else self._prescribed_driver(p, (*plan.path, "prescribed", k))
-                    for k, p in enumerate(r.prescribed)
-                ],
-            )
-        # Assembly and analysis are cached by what they depend on (the drivers, the held
-        # coordinates, the start, the time): runs that share them are analysed once.
-        import jax
-
-        def _drivers_key(drivers) -> tuple:  # the drivers' kinds, structure and numbers
-            out = []
-            for d in drivers:
-                leaves, treedef = jax.tree_util.tree_flatten(d)
-                out.append((treedef, tuple(np.asarray(x).tobytes() for x in leaves)))
-            return tuple(out)
-
-        cache = self.__dict__.setdefault("_mobility_cache", {})
-        hold = self.hold(plan)
-        try:
-            q_rough = np.asarray(self.q_start(plan, model), dtype=float)
-            key = ("assemble", _drivers_key(model.drivers), hold, q_rough.tobytes())
-            if key not in cache:
-                cache[key] = np.asarray(an.assemble(model, q_rough, hold=hold).q)
-            q = cache[key]
-            prescribed = self._prescribed_motions(plan, model, q) if mixed else ()
-        except ModelError as e:
-            self._model_error(plan, e)
-        drivers = (*model.drivers, *prescribed)
-        t0 = float(plan.times[0])
-        key = ("dof", _drivers_key(drivers), q.tobytes(), t0)
-        if key not in cache:
-            cache[key] = an.degrees_of_freedom(model, q, t0, drivers=drivers)
-        report = cache[key]
+            try:
+                report = self.prepare(plan).report
+            except FileError:
+                raise
+            except (ModelError, NumericalError):
+                pass  # checked as before below; the run prepares itself and says why it fails
+        if report is None:
+            report = self._rough_report(plan)
         n = report.n_drivers
         if r.kind in ("kinematic", "inverse"):
             if report.redundant_drivers:
@@ -469,6 +449,189 @@ class Runner:
             self.check_solvable(plan)
         return report
 
+    # ----------------------------------------------------------------- set-ups
+    def prepare(self, plan: Plan) -> Prepared:
+        """The run's set-up, made as its analysis would make it: the consistent start (a
+        dynamic run) or the assembled one (kinematic, inverse), and the mobility analysis
+        there (:mod:`mixdyn.analysis._prepare`). Kept for :meth:`execute_one`, which hands it
+        to the analysis; made once per run (and once for runs with the same set-up).
+
+        Args:
+            plan: a run that replays no other run's motion (``from_run``: that motion is known
+                only once the other run has run).
+
+        Returns:
+            The :class:`~mixdyn.analysis._prepare.Prepared` set-up (its drivers are not
+            checked against the degrees of freedom here: :meth:`mobility` reports that).
+
+        Raises:
+            ModelError, NumericalError: the start cannot be made (the run itself would fail
+                there).
+        """
+        kept = self._prepared.get(plan.name)
+        if kept is not None:
+            return kept[1]
+        if _replays(plan):
+            raise ModelError("a run replaying another run's motion prepares itself", plan.name)
+        r = plan.spec
+        mixed = isinstance(r, s.MixedRunSpec)
+        laws = [
+            self._prescribed_driver(p, (*plan.path, "prescribed", k))
+            for k, p in enumerate(r.prescribed)
+        ]
+        model = self.run_model(plan, () if mixed else laws)
+        args = self._start_args(plan, model)
+        t0 = float(plan.times[0])
+        kinematic = r.kind in ("kinematic", "inverse")
+        drivers = (*model.drivers, *(bind_prescribed(model, laws) if mixed else ()))
+        key = (
+            "kinematic" if kinematic else "dynamic",
+            _drivers_key(drivers),
+            t0,
+            tuple(sorted((k, _arg_key(v)) for k, v in args.items())),
+        )
+        cache = self._setups
+        if key not in cache:
+            try:
+                if kinematic:
+                    cache[key] = prepare_kinematic(
+                        model, t0, drivers=drivers, balanced=False, **args
+                    )
+                else:
+                    cache[key] = prepare_dynamic(model, t0, drivers=drivers, **args)
+            except (ModelError, NumericalError) as e:
+                cache[key] = e  # not made again by the checks that follow
+        if isinstance(cache[key], Exception):
+            raise cache[key]
+        self._prepared[plan.name] = (args, cache[key])
+        return cache[key]
+
+    def _mixed_setup(self, plan: Plan):
+        """What :meth:`check_solvable` checks a mixed run on: ``(model, q0, qd0, prescribed
+        motions, Prepared)``, the run's own set-up (:meth:`prepare`) or, for a run replaying
+        another run's motion, the stand-ins' (:meth:`_standin_report`); None where the start
+        cannot be made."""
+        if _replays(plan):
+            if plan.name not in self._checked:
+                self._standin_report(plan)
+            return self._checked.get(plan.name)
+        try:
+            prep = self.prepare(plan)
+        except FileError:
+            raise
+        except (ModelError, NumericalError):
+            return None
+        args, _ = self._prepared[plan.name]
+        prescribed = prep.drivers[len(prep.model.drivers) :]
+        return prep.model, args["q0"], args["qd0"], prescribed, prep
+
+    def _start_args(self, plan: Plan, model: m.Model) -> dict:
+        """The arguments a run's analysis makes its start from: ``q0`` (the rough start),
+        ``hold``, ``linear_solver``, and ``qd0`` (dynamic runs) or ``assemble_first``
+        (kinematic and inverse runs; an inverse run's option). An inverse run that does not
+        assemble first starts from the rough start closed with its held coordinates."""
+        r = plan.spec
+        opts = getattr(r, "options", {}) or {}
+        ls = opts.get("linear_solver", r.linear_solver)
+        q0 = self.q_start(plan, model)
+        hold = self.hold(plan)
+        if r.kind not in ("kinematic", "inverse"):
+            qd0 = self.qd_start(plan, model)
+            return dict(q0=q0, qd0=qd0, hold=hold, linear_solver=ls)
+        first = bool(opts.get("assemble_first", True)) if r.kind == "inverse" else True
+        if hold and not first:
+            q0 = np.asarray(an.assemble(model, q0, hold=hold, linear_solver=ls).q)
+            hold = ()
+        return dict(q0=q0, hold=hold, assemble_first=first, linear_solver=ls)
+
+    @property
+    def _prepared(self) -> dict:
+        """The runs' set-ups made by the checks: ``{run name: (start arguments, Prepared)}``."""
+        return self.__dict__.setdefault("_prepared_runs", {})
+
+    @property
+    def _setups(self) -> dict:
+        """The set-ups by what they are made from (runs with the same start share one)."""
+        return self.__dict__.setdefault("_setup_cache", {})
+
+    def _standin_report(self, plan: Plan):
+        """A mixed run replaying another run's motion, checked with stand-ins held at their
+        value at the assembled start (:meth:`_prescribed_motions`): the start the checks of
+        :func:`mixdyn.check_mixed` make, kept for :meth:`check_solvable`. None where that
+        start cannot be made (the checks then report as before)."""
+        r = plan.spec
+        model = self.run_model(plan, ())
+        hold = self.hold(plan)
+        try:
+            q = self._assembled(plan, model, hold)
+            prescribed = self._prescribed_motions(plan, model, q)
+        except ModelError as e:
+            self._model_error(plan, e)
+        try:
+            prep = prepare_dynamic(
+                model,
+                float(plan.times[0]),
+                drivers=(*model.drivers, *prescribed),
+                q0=q,
+                hold=hold,
+                linear_solver=r.linear_solver,
+            )
+        except FileError:
+            raise
+        except (ModelError, NumericalError):
+            return None
+        self._checked[plan.name] = (model, q, None, prescribed, prep)
+        return prep.report
+
+    @property
+    def _checked(self) -> dict:
+        """Mixed runs' set-ups for :meth:`check_solvable`: ``{run name: (model, q0, qd0,
+        prescribed motions, Prepared)}``."""
+        return self.__dict__.setdefault("_checked_runs", {})
+
+    def _assembled(self, plan: Plan, model: m.Model, hold) -> np.ndarray:
+        """The rough start closed on the joints (the run's drivers aside) with ``hold``,
+        made once for runs that share it."""
+        cache = self.__dict__.setdefault("_mobility_cache", {})
+        q_rough = np.asarray(self.q_start(plan, model), dtype=float)
+        key = ("assemble", _drivers_key(model.drivers), hold, q_rough.tobytes())
+        if key not in cache:
+            cache[key] = np.asarray(an.assemble(model, q_rough, hold=hold).q)
+        return cache[key]
+
+    def _rough_report(self, plan: Plan):
+        """The mobility of a run at its rough start closed on the joints, where the run's own
+        start could not be made (the run then fails there, saying why)."""
+        r = plan.spec
+        mixed = isinstance(r, s.MixedRunSpec)
+        if mixed:
+            model = self.run_model(plan, ())
+        else:
+            model = self.run_model(
+                plan,
+                [
+                    self._dummy_driver(k, p)
+                    if p.from_run is not None
+                    else self._prescribed_driver(p, (*plan.path, "prescribed", k))
+                    for k, p in enumerate(r.prescribed)
+                ],
+            )
+        # Assembly and analysis are cached by what they depend on (the drivers, the held
+        # coordinates, the start, the time): runs that share them are analysed once.
+        cache = self.__dict__.setdefault("_mobility_cache", {})
+        hold = self.hold(plan)
+        try:
+            q = self._assembled(plan, model, hold)
+            prescribed = self._prescribed_motions(plan, model, q) if mixed else ()
+        except ModelError as e:
+            self._model_error(plan, e)
+        drivers = (*model.drivers, *prescribed)
+        t0 = float(plan.times[0])
+        key = ("dof", _drivers_key(drivers), q.tobytes(), t0)
+        if key not in cache:
+            cache[key] = an.degrees_of_freedom(model, q, t0, drivers=drivers)
+        return cache[key]
+
     def check_solvable(self, plan: Plan) -> None:
         """For a mixed run, every solvability check of :func:`mixdyn.check_mixed` at the
         assembled start, without integrating.
@@ -491,8 +654,30 @@ class Runner:
         done = self.__dict__.setdefault("_solvable_runs", set())
         if plan.name in done:
             return
-        model = self.run_model(plan, ())
         hold = self.hold(plan)
+        setup = self._mixed_setup(plan)
+        if setup is not None:  # on the set-up the run starts from (no second assembly)
+            model, q0, qd0, prescribed, prep = setup
+            try:
+                an.check_mixed(
+                    model,
+                    prescribed,
+                    tuple(r.unknown),
+                    t0=float(plan.times[0]),
+                    solver=r.solver,
+                    independent=r.independent,
+                    q0=q0,
+                    qd0=qd0,
+                    hold=hold,
+                    linear_solver=prep.linear_solver,
+                    prepared=prep,
+                )
+            except (ModelError, NumericalError):
+                self._prepared.pop(plan.name, None)  # the run prepares itself; see below why
+            else:
+                done.add(plan.name)
+                return
+        model = self.run_model(plan, ())
         try:
             q = np.asarray(an.assemble(model, self.q_start(plan, model), hold=hold).q)
             prescribed = self._prescribed_motions(plan, model, q)
@@ -626,36 +811,35 @@ class Runner:
             else:
                 drivers.append(self._prescribed_driver(p, (*plan.path, "prescribed", k)))
         mixed = isinstance(r, s.MixedRunSpec)
-        model = self.run_model(plan, () if mixed else drivers)
-        q0 = self.q_start(plan, model)
-        qd0 = self.qd_start(plan, model)
-        hold = self.hold(plan)
+        # The set-up the check made (mobility), if any: the run starts from it, not assembled
+        # and analysed again.
+        args, prep = self._prepared.get(plan.name, (None, None))
+        model = prep.model if prep is not None else self.run_model(plan, () if mixed else drivers)
         ts = plan.times
         opts = dict(getattr(r, "options", {}) or {})
+        opts.pop("linear_solver", None)
         dt = None
         if getattr(r, "dt", None) is not None:
             dt = self.b.scalar(r.dt, "time", (*plan.path, "dt"))
         try:
             try:
-                ls = opts.pop("linear_solver", r.linear_solver)
+                if args is None:
+                    args = self._start_args(plan, model)
                 if r.kind in ("kinematic", "inverse"):
-                    if hold:
-                        q0 = an.assemble(model, q0, hold=hold, linear_solver=ls).q
                     if r.kind == "kinematic":
                         kw = {"max_iter": r.max_iter}
                         if r.tol is not None:
                             kw["tol"] = r.tol
-                        return an.kinematic(model, ts, q0=q0, linear_solver=ls, **kw)
-                    return an.inverse(model, ts, q0=q0, linear_solver=ls, **opts)
+                        return an.kinematic(model, ts, prepared=prep, **args, **kw)
+                    opts.pop("assemble_first", None)
+                    return an.inverse(model, ts, prepared=prep, **args, **opts)
                 common = dict(
                     method=r.method,
                     rtol=r.rtol,
                     atol=r.atol,
                     dt=dt,
-                    q0=q0,
-                    qd0=qd0,
-                    hold=hold,
-                    linear_solver=ls,
+                    **args,
+                    prepared=prep,
                     **opts,
                 )
                 if progress is not None:
@@ -720,6 +904,32 @@ def start_q(model: m.Model) -> np.ndarray:
     """The bodies' rough start ``q0`` stacked with NumPy (``Model.q0`` compiles a JAX
     concatenation of every body, whose compile time grows quadratically with their number)."""
     return np.concatenate([np.asarray(b.q0, dtype=float) for b in model.bodies])
+
+
+def _replays(plan: Plan) -> bool:
+    """Whether a run replays another run's motion (``from_run``): its set-up needs that run's
+    result."""
+    return any(p.from_run is not None for p in plan.spec.prescribed)
+
+
+def _drivers_key(drivers) -> tuple:
+    """The drivers' kinds, structure and numbers, for the caches of set-ups."""
+    import jax
+
+    out = []
+    for d in drivers:
+        leaves, treedef = jax.tree_util.tree_flatten(d)
+        out.append((treedef, tuple(np.asarray(x).tobytes() for x in leaves)))
+    return tuple(out)
+
+
+def _arg_key(value):
+    """A start argument (an array, a mapping of velocities, a hold...) as a key."""
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, value.dtype.str, value.tobytes())
+    if isinstance(value, dict):
+        return ("map", tuple(sorted((k, _arg_key(v)) for k, v in value.items())))
+    return value
 
 
 def _position_kind(coord: str) -> str:
