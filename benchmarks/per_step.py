@@ -39,6 +39,11 @@ def projection():
     t = np.linspace(0, 2, 201)
     return lambda: md.forward(free, t, rtol=1e-8, atol=1e-10, energy_tol=None)
 
+def moving(method):
+    m = pendulum_chain(5)
+    t = np.linspace(0, 2, 201)
+    return lambda: md.forward(m, t, method=method, rtol=1e-8, atol=1e-10, energy_tol=None)
+
 def kinematic():
     m = four_bar()
     t = np.linspace(0, 2, 1001)
@@ -49,6 +54,8 @@ CASES = {{
     "chain-4 generalized-alpha 1 s (1000 steps)": chain("generalized-alpha", 4, 1.0),
     "chain-16 baumgarte 0.2 s (200 steps)": chain("baumgarte", 16, 0.2),
     "slider-crank projection tsit5 2 s": projection(),
+    "chain-5 projection tsit5 2 s (272 steps)": moving("projection"),
+    "chain-5 partitioning tsit5 2 s (272 steps)": moving("partitioning"),
     "four-bar kinematic 1001 times": kinematic(),
 }}
 out = {{}}

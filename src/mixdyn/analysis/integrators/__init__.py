@@ -1,7 +1,10 @@
 """Time integrators for the constrained equations of motion (a :class:`~._problem.Problem`).
 
-Every integrator is one jitted loop (``lax.while_loop``) that lands exactly on the output times
-and returns the state there. Integrators are looked up by name in :data:`INTEGRATORS`.
+Every integrator is one jitted loop that lands exactly on the output times and returns the state
+there: the explicit ones (projection, partitioning, Baumgarte) are ``diffrax.diffeqsolve`` with
+a Runge–Kutta method wrapped to end each step on the constraints (:mod:`._constrained`);
+generalized-alpha, an implicit method of its own, is a ``lax.while_loop``.
+Integrators are looked up by name in :data:`INTEGRATORS`.
 """
 
 from ._common import STATUS_MESSAGES, Trajectory

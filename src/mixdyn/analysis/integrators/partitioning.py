@@ -21,7 +21,7 @@ import jax.numpy as jnp
 
 from ...linalg import lu_solve_checked
 from .._problem import Problem, pivot_columns
-from ._common import Trajectory, adaptive_loop, ode_term, runge_kutta
+from ._common import Trajectory
 
 #: Sparse path: the partition is chosen again (dense pivoted LU) only when the square root of
 #: the pivot ratio of ``Phi_qD Phi_qD^T``'s Cholesky factors falls below this.
@@ -91,6 +91,87 @@ def _conditioning(problem: Problem, q, t, D):
     return jnp.linalg.svd(problem.c.phi_q(q, t)[:, D], compute_uv=False)[-1]
 
 
+def _solver_class():
+    """The partitioning step as a diffrax wrapped solver (diffrax imported when traced)."""
+    from ._constrained import ConstrainedSolver
+
+    class Partitioned(ConstrainedSolver):
+        """A Runge–Kutta step of the independent coordinates, the dependent ones completed
+        by Newton; the partition ``(D, I)`` is carried in the solver state and chosen again
+        where the dependent block becomes ill-conditioned."""
+
+        problem: Problem
+        tol: jax.Array
+        reduced: object  # the vector field of the independent coordinates (an ODETerm)
+
+        def inner_terms(self, terms):
+            return self.reduced
+
+        def initial_data(self, y0, t0):
+            return _choose(self.problem, y0[0], t0)
+
+        def reduce(self, y, data, t):
+            q, qd, w = y
+            D, I = data
+            return (q[I], qd[I], w), (q, qd, D, I, t)
+
+        def finish(self, t0, t1, y0, z1, z_err, data):
+            problem = self.problem
+            q0, qd0, _ = y0
+            D, I = data
+            v, vd, w = z1
+            # Newton starts from the last accepted state moved on by its velocity: near a
+            # bifurcation (a parallelogram's flat position) the old positions alone are as
+            # near the other branch as the one the motion is on.
+            q_ref = q0 + qd0 * (t1 - t0)
+            if problem.sparse:
+                q, qd, ratio = _complete_sparse(problem, q_ref, D, I, v, vd, t1, self.tol)
+            else:
+                q, qd = _complete(problem, q_ref, D, I, v, vd, t1, self.tol)
+            viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
+            err = None if self.fixed else self._full_error(q0, t0, D, I, z_err)
+            if problem.sparse:
+                # Choose again (dense pivoted LU, in a branch taken only then) when the
+                # current dependent block's factorization becomes ill-conditioned.
+                D, I = jax.lax.cond(
+                    ~(ratio >= RECHOOSE_RATIO), lambda: _choose(problem, q, t1), lambda: (D, I)
+                )
+            else:
+                # Choose again when the current dependent block is much worse than a fresh
+                # choice.
+                D_new, I_new = _choose(problem, q, t1)
+                worse = _conditioning(problem, q, t1, D) < 0.5 * _conditioning(
+                    problem, q, t1, D_new
+                )
+                D = jnp.where(worse, D_new, D)
+                I = jnp.where(worse, I_new, I)
+            return (q, qd, w), err, (D, I), jnp.asarray(True), viol
+
+        def _full_error(self, q_ref, t0, D, I, z_err):
+            """The error of every coordinate: an error ``dv`` of the independent ones moves
+            the dependent ones by ``-Phi_qD^-1 Phi_qI dv``, which may be much larger."""
+            problem = self.problem
+            ev, evd, ew = z_err
+            if problem.sparse:
+                c = problem.c
+                vals = c.jacobian_values(q_ref, t0)
+                solve, _ = _dependent_solver(problem, q_ref, t0, D, vals)
+                E = jnp.stack(
+                    [
+                        solve(c.matvec(vals, jnp.zeros_like(q_ref).at[I].set(e)))[D]
+                        for e in (ev, evd)
+                    ],
+                    axis=1,
+                )
+            else:
+                J = problem.c.phi_q(q_ref, t0)
+                E, _ = lu_solve_checked(J[:, D], J[:, I] @ jnp.stack([ev, evd], axis=1))
+            full = lambda e, k: jnp.zeros_like(q_ref).at[I].set(e).at[D].set(-E[:, k])  # noqa: E731
+            return full(ev, 0), full(evd, 1), jnp.zeros_like(ew)
+
+    return Partitioned
+
+
 @eqx.filter_jit
 def partitioning(
     problem: Problem,
@@ -110,103 +191,41 @@ def partitioning(
 
     Args: as :func:`~.projection.projection`.
     """
-    rk, order = runge_kutta(solver)
-    tol = 1e-3 * atol
-    t0 = ts[0]
-    D0, I0 = _choose(problem, q0, t0)
+    from . import _constrained as cs
 
-    def predicted(args, t):
-        # Newton starts from the last accepted state moved on by its velocity: near a
-        # bifurcation (a parallelogram's flat position) the old positions alone are as near
-        # the other branch as the one the motion is on.
-        q_ref, qd_ref, _, _, t_ref = args
-        return q_ref + qd_ref * (t - t_ref)
+    tol = 1e-3 * jnp.asarray(atol, ts.dtype)
 
-    def f(t, y, args):
-        v, vd, _ = y
-        _, _, D, I, _ = args
-        q, qd = _complete(problem, predicted(args, t), D, I, v, vd, t, tol)
+    def f(t, z, args):
+        v, vd, _ = z
+        q_ref, qd_ref, D, I, t_ref = args
+        q, qd = _complete(problem, q_ref + qd_ref * (t - t_ref), D, I, v, vd, t, tol)
         qdd, _, _ = problem.accelerations(q, qd, t)
         return (vd, qdd[I], problem.work_rates(q, qd, t, qdd))
 
-    term = ode_term(f)
+    def f_full(t, y, args):
+        q, qd, _ = y
+        qdd, _, _ = problem.accelerations(q, qd, t)
+        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
 
-    def step(t0, t1, y, args):
-        state = rk.init(term, t0, t1, y, args)
-        y1, yerr, _, _, _ = rk.step(term, t0, t1, y, args, state, made_jump=False)
-        # Control the error of every coordinate: an error dv of the independent ones moves
-        # the dependent ones by -Phi_qD^-1 Phi_qI dv, which may be much larger.
-        q_ref, qd_ref, D, I, _ = args
-        if problem.sparse:
-            c = problem.c
-            vals = c.jacobian_values(q_ref, t0)
-            solve, _ = _dependent_solver(problem, q_ref, t0, D, vals)
-            E = jnp.stack(
-                [solve(c.matvec(vals, jnp.zeros_like(q_ref).at[I].set(e)))[D] for e in yerr[:2]],
-                axis=1,
-            )
-        else:
-            J = problem.c.phi_q(q_ref, t0)
-            E, _ = lu_solve_checked(J[:, D], J[:, I] @ jnp.stack([yerr[0], yerr[1]], axis=1))
-        full_err = (jnp.concatenate([yerr[0], -E[:, 0]]), jnp.concatenate([yerr[1], -E[:, 1]]))
-        full0 = (jnp.concatenate([y[0], q_ref[D]]), jnp.concatenate([y[1], qd_ref[D]]))
-        return y1, full_err, full0, full0
-
-    def accept(t1, y1, args):
-        v, vd, w = y1
-        _, _, D, I, _ = args
-        q_ref = predicted(args, t1)
-        if problem.sparse:
-            q, qd, ratio = _complete_sparse(problem, q_ref, D, I, v, vd, t1, tol)
-        else:
-            q, qd = _complete(problem, q_ref, D, I, v, vd, t1, tol)
-        viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
-        if problem.sparse:
-            # Choose again (dense pivoted LU, in a branch taken only then) when the current
-            # dependent block's factorization becomes ill-conditioned.
-            D, I = jax.lax.cond(
-                ~(ratio >= RECHOOSE_RATIO), lambda: _choose(problem, q, t1), lambda: (D, I)
-            )
-        else:
-            # Choose again when the current dependent block is much worse than a fresh choice.
-            D_new, I_new = _choose(problem, q, t1)
-            switch = _conditioning(problem, q, t1, D) < 0.5 * _conditioning(problem, q, t1, D_new)
-            D = jnp.where(switch, D_new, D)
-            I = jnp.where(switch, I_new, I)
-        return (q[I], qd[I], w), (q, qd, D, I, t1), viol
-
+    dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
+    step = _solver_class()(
+        cs.runge_kutta(solver), dt_min, dt is not None, ts, problem, tol, cs.ode_term(f)
+    )
     span = ts[-1] - ts[0]
     h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
     if first_step is not None:
         h0 = jnp.asarray(first_step, dtype=ts.dtype)
-    # Outputs carry the full state through args; integrate (v, vd, w) and rebuild q at outputs.
-    y0 = (q0[I0], qd0[I0], jnp.zeros(2))
-    full0 = (q0, qd0)
-
-    def step_full(t0, t1, yfull, args):
-        y, _ = yfull
-        y1, yerr, a, b = step(t0, t1, y, args)
-        return (y1, full0), yerr, a, b
-
-    def accept_full(t1, yfull, args):
-        y, _ = yfull
-        y1, args1, viol = accept(t1, y, args)
-        q, qd, _, _, _ = args1
-        return (y1, (q, qd)), args1, viol
-
-    outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
-        step_full,
-        accept_full,
+    ctrl = cs.controller(
         ts,
-        (y0, full0),
-        (q0, qd0, D0, I0, jnp.asarray(t0, dtype=ts.dtype)),
         rtol=rtol,
         atol=atol,
-        order=order,
-        dt=dt,
+        norm=cs.rms_of_first(2),
         h0=h0,
-        max_steps=max_steps,
+        dt=dt,
+        dt_min=dt_min,
         progress=progress,
     )
-    (_, _, w), (q, qd) = outs
-    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[1][0])
+    (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
+        cs.ode_term(f_full), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=max_steps
+    )
+    return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])

@@ -5,19 +5,36 @@ each accepted step (mass-weighted least-norm projection)."""
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from .._problem import Problem
-from ._common import Trajectory, adaptive_loop, ode_term, runge_kutta
+from ._common import Trajectory
 
 
-def _vector_field(problem: Problem):
-    def f(t, y, args):
-        q, qd, _ = y
-        qdd, _, _ = problem.accelerations(q, qd, t)
-        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
+def _solver_class():
+    """The projection step as a diffrax wrapped solver (diffrax imported when traced)."""
+    from ._constrained import ConstrainedSolver
 
-    return ode_term(f)
+    class Projected(ConstrainedSolver):
+        """A Runge–Kutta step, then positions and velocities projected onto the constraints;
+        a projection that cannot close the constraints (past a dead point, at a lock-up)
+        rejects the step."""
+
+        problem: Problem
+        tol_pos: jax.Array
+        tol_closed: jax.Array
+
+        def finish(self, t0, t1, y0, z1, z_err, data):
+            p = self.problem
+            q, qd, w = z1
+            viol = jnp.max(jnp.abs(p.c(q, t1))) if p.c.m else jnp.zeros(())
+            q, residual = p.project_positions(q, t1, self.tol_pos)
+            qd = p.project_velocities(q, qd, t1)
+            err = None if self.fixed else (z_err[0], z_err[1], jnp.zeros_like(w))
+            return (q, qd, w), err, data, residual <= self.tol_closed, viol
+
+    return Projected
 
 
 @eqx.filter_jit
@@ -49,43 +66,38 @@ def projection(
             output interval, whichever is shorter); the controller adapts it from there.
         progress: optional callback ``f(t)`` at each output time.
     """
-    rk, order = runge_kutta(solver)
-    term = _vector_field(problem)
-    tol_pos = 1e-3 * atol
+    from . import _constrained as cs
 
-    def step(t0, t1, y, args):
-        state = rk.init(term, t0, t1, y, None)
-        y1, yerr, _, _, _ = rk.step(term, t0, t1, y, None, state, made_jump=False)
-        return y1, yerr[:2], y[:2], y1[:2]
+    def f(t, y, args):
+        q, qd, _ = y
+        qdd, _, _ = problem.accelerations(q, qd, t)
+        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
 
-    # A projection that cannot close the constraints (past a dead point, at a lock-up) is a
-    # rejected step; a step size that collapses on it is then a named failure.
-    tol_closed = 1e-6 * jnp.maximum(jnp.max(jnp.abs(q0)), 1.0)
-
-    def accept(t1, y1, args):
-        q, qd, w = y1
-        viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
-        q, residual = problem.project_positions(q, t1, tol_pos)
-        qd = problem.project_velocities(q, qd, t1)
-        return (q, qd, w), args, viol, residual <= tol_closed
-
+    dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
+    step = _solver_class()(
+        cs.runge_kutta(solver),
+        dt_min,
+        dt is not None,
+        ts,
+        problem,
+        1e-3 * jnp.asarray(atol, ts.dtype),
+        1e-6 * jnp.maximum(jnp.max(jnp.abs(q0)), 1.0),
+    )
     span = ts[-1] - ts[0]
     h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
     if first_step is not None:
         h0 = jnp.asarray(first_step, dtype=ts.dtype)
-    outs, _, n, nrej, viol, status, t, y_last = adaptive_loop(
-        step,
-        accept,
+    ctrl = cs.controller(
         ts,
-        (q0, qd0, jnp.zeros(2)),
-        jnp.zeros(()),
         rtol=rtol,
         atol=atol,
-        order=order,
-        dt=dt,
+        norm=cs.rms_of_first(2),
         h0=h0,
-        max_steps=max_steps,
+        dt=dt,
+        dt_min=dt_min,
         progress=progress,
     )
-    q, qd, w = outs
+    (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
+        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=max_steps
+    )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])
