@@ -10,9 +10,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from fixtures import pendulum_chain
 
 import mixdyn as md
+from fixtures import pendulum_chain
 from mixdyn.analysis._prepare import prepare_dynamic
 from mixdyn.analysis._problem import Problem
 from mixdyn.analysis.integrators import INTEGRATORS
