@@ -4,10 +4,9 @@ The constraint force on the bodies is ``-Phi_q^T lambda``. For a joint between b
 its rows give on body j a force ``F`` [force] at the body origin and a moment about it; the
 reported moment ``M`` is taken about the joint's point on body j. The force on body i is ``-F``.
 
-Only the entries of ``Phi_q`` in the joint's rows and body j's columns take part: on the sparse
-path they are taken from the per-element Jacobian values
-(:meth:`~mixdyn.equations.Constraints.jacobian_values`) by one segment sum, without a dense
-``Phi_q``; on the dense path from the dense ``Phi_q``.
+Only the entries of ``Phi_q`` in the joint's rows and body j's columns take part: they are taken
+at the constraint set's static sparsity pattern from the operator (``values_on``, either path)
+and summed by one segment sum.
 """
 
 from __future__ import annotations
@@ -72,25 +71,11 @@ def joint_reactions(c: Constraints, q, t, lam, J=None) -> jax.Array:
     if nj == 0:
         return jnp.zeros((0, 3))
     bodies = _reaction_bodies(c)
-    if c.linear_solver == "sparse":
-        rows, _ = c.coo()
-        take, slot, sign = _sparse_map(c, bodies)
-        v = c.jacobian_values(q, t) if J is None else J.values
-        contrib = -(v[take] * lam[rows[take]]) * sign
-        w = jax.ops.segment_sum(contrib, jnp.asarray(slot), num_segments=3 * nj)
-        w = w.reshape(nj, 3)
-    else:
-        C = c.phi_q(q, t) if J is None else J.dense()
-        Qc = -(C * lam[:, None])  # (m, nq): generalized force of each row
-        owners = np.asarray([c.owners[i] for i in c.active])
-        parts = []
-        for k, (b, _, sign) in enumerate(bodies):
-            rows = np.where(owners == k)[0]
-            if rows.size:
-                parts.append(sign * jnp.sum(Qc[rows, 3 * b : 3 * b + 3], axis=0))
-            else:
-                parts.append(jnp.zeros(3))
-        w = jnp.stack(parts)
+    rows, cols = c.coo()
+    take, slot, sign = _sparse_map(c, bodies)
+    v = (c.jacobian(q, t) if J is None else J).values_on(rows, cols)
+    contrib = -(v[take] * lam[rows[take]]) * sign
+    w = jax.ops.segment_sum(contrib, jnp.asarray(slot), num_segments=3 * nj).reshape(nj, 3)
     b = np.asarray([b for b, _, _ in bodies], dtype=np.int64)
     s = jnp.stack([jnp.asarray(s, dtype=q.dtype) for _, s, _ in bodies])
     phi = q[3 * b + 2]

@@ -17,28 +17,19 @@ from ._assembly import assemble, length_scale
 
 
 @cached_jit
-def _velocity_fix(c: Constraints, q, qd, t, hold_idx):
-    J = c.phi_q(q, t)
-    rhs = -c.phi_t(q, t)
-    if hold_idx.size:
-        E = jnp.eye(q.shape[0])[hold_idx]
-        J = jnp.concatenate([J, E])
-        rhs = jnp.concatenate([rhs, qd[hold_idx]])
-    r = rhs - J @ qd
-    dqd, *_ = jnp.linalg.lstsq(J, r)
-    return qd + dqd, jnp.max(jnp.abs(c.phi_q(q, t) @ (qd + dqd) + c.phi_t(q, t)), initial=0.0)
-
-
-@cached_jit
-def _velocity_fix_sparse(c: Constraints, q, qd, t, weights):
-    """:func:`_velocity_fix` on the sparse path: the least change ``dqd = -W J^T (J W J^T)^-1
-    (J qd + Phi_t)``, ``W`` zero on the held coordinates (so the same least-squares solution),
-    with one step of iterative refinement; returns ``(qd, residual, pivot_ratio)``."""
-    v = c.jacobian_values(q, t)
+def _velocity_fix(c: Constraints, q, qd, t, weights):
+    """The least change of ``qd`` (n,) that satisfies ``Phi_q qd = -Phi_t``, the coordinates of
+    weight 0 (the held ones and those whose velocity is given) unchanged:
+    ``dqd = -W Phi_q^T (Phi_q W Phi_q^T)^-1 (Phi_q qd + Phi_t)``, on the constraint set's path
+    through its operator, guarded at singular positions (redundant rows, conditions that
+    fight the joints: a least-squares answer whose residual then tells), and one step of
+    iterative refinement. Returns ``(qd, residual)``."""
+    J = c.jacobian(q, t)
     phi_t = c.phi_t(q, t)
-    solve, ratio = c.min_norm_solver(v, weights, refine=1)
-    qd = qd - solve(c.matvec(v, qd) + phi_t)
-    return qd, jnp.max(jnp.abs(c.matvec(v, qd) + phi_t), initial=0.0), ratio
+    solve = J.min_norm(weights, guard=True).solve
+    for _ in range(2):  # the solve, then one refinement on its residual
+        qd = qd - solve(J.mv(qd) + phi_t)
+    return qd, jnp.max(jnp.abs(J.mv(qd) + phi_t), initial=0.0)
 
 
 def _velocity_conditions(model: Model, qd0) -> tuple[np.ndarray, list[int], bool]:
@@ -88,8 +79,8 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
     - ``qd0`` a full (nq,) vector: it must satisfy the velocity constraints (to 1e-8 of its
       size; rounding is corrected), else a :class:`ModelError`.
 
-    Both on ``c``'s linear-solver path (the sparse one falls back to the dense least-squares
-    solve where ``Phi_q`` is rank deficient: redundant equations, too many held coordinates).
+    Both on ``c``'s linear-solver path, through its operator (guarded where ``Phi_q`` is rank
+    deficient: redundant equations, too many held coordinates).
     """
     # NumPy between the compiled programs: each JAX operation outside them would be a
     # program of its own to look up (and, in a new process, to load).
@@ -98,17 +89,11 @@ def consistent_state(model: Model, c: Constraints, t0: float, q0=None, qd0=None,
     q = np.asarray(asm.q, dtype=np.float64)
     qd, given, full = _velocity_conditions(model, qd0)
     hold_idx = sorted({model.coordinate_index(h) for h in hold} | set(given))
-    qd_in, ok = qd, False
+    qd_in = qd
     t0_ = np.asarray(t0, dtype=np.float64)
-    if c.linear_solver == "sparse":
-        W = np.ones(model.nq)
-        W[hold_idx] = 0.0
-        qd, err, ratio = _velocity_fix_sparse(c, q, qd_in, t0_, W)
-        ok = float(ratio) >= 1e-8 and bool(np.all(np.isfinite(np.asarray(qd))))
-    if not ok:
-        qd, err = _velocity_fix(
-            c.with_linear_solver("dense"), q, qd_in, t0_, np.asarray(hold_idx, dtype=np.int64)
-        )
+    W = np.ones(model.nq)
+    W[hold_idx] = 0.0
+    qd, err = _velocity_fix(c, q, qd_in, t0_, W)
     qd = np.array(qd)  # a copy: writable
     if hold_idx:  # the conditions hold to rounding: keep the given numbers bit for bit
         qd[hold_idx] = qd_in[hold_idx]

@@ -68,6 +68,11 @@ class JacobianOperator(eqx.Module):
         """The matrix (m, n)."""
         raise NotImplementedError
 
+    def values_on(self, rows, cols) -> jax.Array:
+        """(nnz,) the entries at the constraint set's static pattern ``(rows, cols)``
+        (``Constraints.coo()``)."""
+        raise NotImplementedError
+
     def schur(self, W, shift=None, guard: bool = False) -> Factor:
         """Factor of ``S = Phi_q W Phi_q^T`` (plus ``shift I``: a Levenberg–Marquardt
         damping), ``W`` (n,) a positive diagonal (zeros keep coordinates out)."""
@@ -148,6 +153,9 @@ class DenseJacobian(JacobianOperator):
     def dense(self):
         return self.J
 
+    def values_on(self, rows, cols):
+        return self.J[rows, cols]
+
     def schur(self, W, shift=None, guard=False):
         """LU of ``S`` (a truncated SVD of the known rank with redundant rows)."""
         S = self.schur_matrix(W)
@@ -226,6 +234,9 @@ class BandedJacobian(JacobianOperator):
     def dense(self):
         rows, cols = self.c.coo()
         return jnp.zeros(self.shape, self.values.dtype).at[rows, cols].add(self.values)
+
+    def values_on(self, rows, cols):
+        return self.values  # the same pattern: the set's own
 
     def schur_solve(self, W, b):
         """One solve ``S x = b`` (fused factorization and forward sweep); ``(x, ratio)``.
