@@ -119,7 +119,9 @@ def test_exported_program_gives_the_traced_numbers(cache):
     c = Constraints.of(model)
     q = np.asarray(md.assemble(model, hold=HOLD).q)
     qd = np.linspace(-1.0, 1.0, model.nq)
-    args = (c, q, qd, np.asarray(0.1), np.asarray([2, 5], dtype=np.int64))
+    weights = np.ones(model.nq)
+    weights[[2, 5]] = 0.0  # two coordinates held
+    args = (c, q, qd, np.asarray(0.1), weights)
     traced = eqx.filter_jit(_velocity_fix.fn)(*args)
     first = _compile.cached_jit(_velocity_fix.fn.__wrapped__)
     exported = first(*args)

@@ -101,6 +101,33 @@ def test_min_norm_solution(chain, path):
 
 
 @pytest.mark.parametrize("path", PATHS)
+def test_partition_solves_the_dependent_block(chain, path):
+    """``partition(D)``: ``x`` zero outside ``D`` with ``Phi_qD x_D = b`` (NumPy's solve of
+    the block), and a ratio that sees the block's conditioning: a well-conditioned choice
+    (column-pivoted QR) scores far above a block made nearly singular."""
+    import scipy.linalg as sla
+
+    c, v = chain
+    J = _dense_np(c, v)
+    _, _, piv = sla.qr(J, pivoting=True)  # m well-conditioned columns (column pivoting)
+    D = np.sort(piv[: c.m])
+    assert np.linalg.cond(J[:, D]) < 1e6  # the premise
+    rng = np.random.default_rng(4)
+    b = rng.normal(size=c.m)
+    f = _operator(path, c, v).partition(jnp.asarray(D))
+    x = np.asarray(f.solve(jnp.asarray(b)))
+    others = np.setdiff1d(np.arange(c.nq), D)
+    assert np.max(np.abs(x[others])) < 1e-12
+    np.testing.assert_allclose(x[D], np.linalg.solve(J[:, D], b), rtol=1e-8, atol=1e-10)
+    # a block with one column nearly zero (on the same pattern): the ratio collapses
+    _, cols = c.coo()
+    vbad = np.asarray(v).copy()
+    vbad[cols == D[1]] *= 1e-9
+    bad = _operator(path, c, jnp.asarray(vbad)).partition(jnp.asarray(D))
+    assert float(bad.ratio) < 1e-6 * float(f.ratio)
+
+
+@pytest.mark.parametrize("path", PATHS)
 def test_solver_square_system(path):
     model = slider_crank()
     base = Constraints.of(model)

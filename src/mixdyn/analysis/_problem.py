@@ -108,9 +108,8 @@ class Problem(eqx.Module):
     @property
     def sparse(self) -> bool:
         """Whether the sparse linear-solver path is taken: the constraints ask for it and the
-        augmented solver is used (the partition solver stays dense). Read only by the
-        partitioning integrator and the run's statistics; every solve dispatches through the
-        constraint set's operator (:meth:`kkt`)."""
+        augmented solver is used (the partition solver stays dense). Read only by the run's
+        statistics; every solve dispatches through the constraint set's operator."""
         return self.c.linear_solver == "sparse" and self.solver == "augmented"
 
     # ------------------------------------------------------------------ forces

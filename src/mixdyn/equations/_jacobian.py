@@ -35,7 +35,7 @@ import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
 
-from ..linalg._dense import Factor, factor_ranked, guarded
+from ..linalg._dense import Factor, factor_ranked, guarded, lu_factor_checked
 
 #: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
 #: the steps of iterated regularization (see :meth:`BandedJacobian.schur`).
@@ -106,6 +106,14 @@ class JacobianOperator(eqx.Module):
     def solver(self, refine: int = 0) -> Factor:
         """Factor for ``Phi_q x = b`` on this path (see the subclasses)."""
         raise NotImplementedError
+
+    def partition(self, D) -> Factor:
+        """Factor for the dependent block of a coordinate partition: ``solve(b)`` is the
+        ``x`` (n,), zero outside ``D`` (m,) (the dependent coordinates' indices), with
+        ``Phi_qD x_D = b``; its ratio is comparable to ``Phi_qD``'s LU pivot ratio (how far
+        the partition is from singular)."""
+        W = jnp.zeros(self.shape[1]).at[D].set(1.0)
+        return self.min_norm(W, refine=1)
 
     def kkt(self, W, B=None, collocated=()):
         """The constrained-dynamics matrix at one state, factorized once through its Schur
@@ -183,6 +191,18 @@ class DenseJacobian(JacobianOperator):
         """LU of ``Phi_q`` (square), or its truncated SVD of the known rank (least squares,
         minimum norm) with redundant rows; ``refine`` is ignored (a direct solve)."""
         return factor_ranked(self.J, self.rank)
+
+    def partition(self, D):
+        """As :meth:`JacobianOperator.partition`: the LU of ``Phi_qD`` (m, m); the ratio is
+        ``s_min / s_max`` of its singular values (an LU pivot ratio depends on the rows'
+        scaling and would trigger needless new partitions; under ``jit`` the SVD is dropped
+        where the ratio is not used)."""
+        JD = self.J[:, D]
+        f = lu_factor_checked(JD)
+        s = jnp.linalg.svd(JD, compute_uv=False)
+        ratio = s[-1] / s[0] if s.shape[0] else jnp.ones(())
+        n = self.shape[1]
+        return Factor(lambda b: jnp.zeros(n, self.J.dtype).at[D].set(f.solve(b)), ratio)
 
     def kkt(self, W, B=None, collocated=()):
         """LU of the dense ``S = C W G`` (any ``B``; a truncated SVD of the known rank with
