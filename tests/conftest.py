@@ -6,11 +6,15 @@ The tests directory is put on ``sys.path`` so that test modules can ``from fixtu
 
 import os
 import pathlib
+import shutil
 import sys
+import tempfile
 
-# The CLI tests call the CLI in this process: keep them from turning on JAX's persistent
-# compilation cache for every later test (and from writing to the user's cache folder).
+# The CLI tests call the CLI in this process: keep them from turning on mixdyn's caches (its
+# exported traces, tested on their own in test_compile_cache.py) for every later test, and from
+# writing to the user's cache folder.
 os.environ.setdefault("MIXDYN_NO_CACHE", "1")
+
 
 import jax
 import pytest
@@ -20,6 +24,31 @@ import mixdyn  # noqa: F401  (enables float64)
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 
 assert jax.config.jax_enable_x64, "mixdyn must enable float64 on import"
+
+#: JAX's persistent compilation cache (compiled XLA programs, not traces) for one test session,
+#: shared by its xdist workers (the folder is made by the first process, the controller, before
+#: the workers start, and inherited through the environment) and by a second session that is
+#: given the same folder (.ci/run: the slow set after the default one). Every test still traces
+#: what it runs; programs that two workers or two modules share are compiled once.
+TEST_XLA_CACHE = "MIXDYN_TEST_XLA_CACHE"
+
+
+def pytest_configure(config):
+    folder = os.environ.get(TEST_XLA_CACHE)
+    if not folder:
+        folder = tempfile.mkdtemp(prefix="mixdyn-test-xla-")
+        os.environ[TEST_XLA_CACHE] = folder
+        config._mixdyn_made_xla_cache = folder  # removed at the end by who made it
+    jax.config.update("jax_compilation_cache_dir", folder)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+
+
+def pytest_unconfigure(config):
+    folder = getattr(config, "_mixdyn_made_xla_cache", None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+
 
 #: Share of the system's limit on memory mappings per process (``vm.max_map_count``, 65530 by
 #: default) above which JAX's compiled programs are dropped after a test module.

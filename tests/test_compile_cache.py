@@ -164,23 +164,29 @@ def test_code_outside_mixdyn_is_not_keyed(cache):
 
 def test_cache_switch(tmp_path):
     """set_cache turns the caches on (a folder) and off (None), JAX's compilation cache with
-    them; a JAX cache that the user configured is left alone."""
+    them; a JAX cache that the user configured is left alone. (The test session's own JAX
+    cache, tests/conftest.py, is put back afterwards.)"""
+    import jax._src.compilation_cache as cc
+
+    session = jax.config.jax_compilation_cache_dir
+    jax.config.update("jax_compilation_cache_dir", None)
     try:
-        assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
-        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
-        assert (tmp_path / "c" / _compile.EXPORTED).is_dir()
-    finally:
-        assert _compile.set_cache(False) is None
-    assert _compile.cache_folder() is None
-    assert jax.config.jax_compilation_cache_dir is None
-    try:
+        try:
+            assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
+            assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
+            assert (tmp_path / "c" / _compile.EXPORTED).is_dir()
+        finally:
+            assert _compile.set_cache(False) is None
+        assert _compile.cache_folder() is None
+        assert jax.config.jax_compilation_cache_dir is None
         jax.config.update("jax_compilation_cache_dir", str(tmp_path / "mine"))
         assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
         assert jax.config.jax_compilation_cache_dir == str(tmp_path / "mine")
         assert _compile.set_cache(False) is None
         assert jax.config.jax_compilation_cache_dir == str(tmp_path / "mine")
     finally:
-        jax.config.update("jax_compilation_cache_dir", None)
+        jax.config.update("jax_compilation_cache_dir", session)
+        cc.reset_cache()
 
 
 # ------------------------------------------------------------------ across processes

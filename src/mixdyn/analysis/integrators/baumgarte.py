@@ -5,6 +5,7 @@ the index-1 equations with Baumgarte stabilization of the acceleration constrain
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 
 from .._problem import Problem
@@ -54,6 +55,7 @@ def baumgarte(
     """
     from . import _constrained as cs
 
+    @jax.jit  # traced once, however often diffrax traces its loop's body
     def f(t, y, args):
         q, qd, _ = y
         qdd, _, _ = problem.accelerations(q, qd, t, alpha, beta)

@@ -60,6 +60,47 @@ def _choose(problem: Problem, q, t):
     return D, I, problem.c.jacobian(q, t).partition(D).ratio
 
 
+@eqx.filter_jit  # traced once, however often diffrax traces its loop's body
+def _finish(problem: Problem, tol, fixed: bool, t0, t1, y0, z1, z_err, data):
+    """The end of a partitioning step (:meth:`ConstrainedSolver.finish`): the dependent
+    coordinates completed, the error of every coordinate, and the partition kept or chosen
+    again."""
+    q0, qd0, _ = y0
+    D, I, chosen = data
+    v, vd, w = z1
+    # Newton starts from the last accepted state moved on by its velocity: near a bifurcation
+    # (a parallelogram's flat position) the old positions alone are as near the other branch
+    # as the one the motion is on.
+    q_ref = q0 + qd0 * (t1 - t0)
+    q, qd, ratio = _complete(problem, q_ref, D, I, v, vd, t1, tol)
+    viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
+    err = None if fixed else _full_error(problem, q0, t0, D, I, z_err)
+
+    # Look for a better partition (a dense pivoted LU, in a branch taken only then) once the
+    # block has degraded; take it if its block is clearly better.
+    def look():
+        fresh = _choose(problem, q, t1)
+        better = fresh[2] > 2.0 * ratio
+        # no better one: look again only after the block degrades further
+        return jax.tree.map(
+            lambda a, b: jnp.where(better, a, b), fresh, (D, I, jnp.minimum(chosen, ratio))
+        )
+
+    data = jax.lax.cond(~(ratio >= RECHOOSE_FACTOR * chosen), look, lambda: (D, I, chosen))
+    return (q, qd, w), err, data, jnp.asarray(True), viol
+
+
+def _full_error(problem: Problem, q_ref, t0, D, I, z_err):
+    """The error of every coordinate: an error ``dv`` of the independent ones moves the
+    dependent ones by ``-Phi_qD^-1 Phi_qI dv``, which may be much larger."""
+    ev, evd, ew = z_err
+    J = problem.c.jacobian(q_ref, t0)
+    solve = J.partition(D).solve
+    E = jnp.stack([solve(J.mv(jnp.zeros_like(q_ref).at[I].set(e)))[D] for e in (ev, evd)], axis=1)
+    full = lambda e, k: jnp.zeros_like(q_ref).at[I].set(e).at[D].set(-E[:, k])  # noqa: E731
+    return full(ev, 0), full(evd, 1), jnp.zeros_like(ew)
+
+
 def _solver_class():
     """The partitioning step as a diffrax wrapped solver (diffrax imported when traced)."""
     from ._constrained import ConstrainedSolver
@@ -85,44 +126,7 @@ def _solver_class():
             return (q[I], qd[I], w), (q, qd, D, I, t)
 
         def finish(self, t0, t1, y0, z1, z_err, data):
-            problem = self.problem
-            q0, qd0, _ = y0
-            D, I, chosen = data
-            v, vd, w = z1
-            # Newton starts from the last accepted state moved on by its velocity: near a
-            # bifurcation (a parallelogram's flat position) the old positions alone are as
-            # near the other branch as the one the motion is on.
-            q_ref = q0 + qd0 * (t1 - t0)
-            q, qd, ratio = _complete(problem, q_ref, D, I, v, vd, t1, self.tol)
-            viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
-            err = None if self.fixed else self._full_error(q0, t0, D, I, z_err)
-
-            # Choose again (in a branch taken only then) when the dependent block degrades.
-            # Look for a better partition (a dense pivoted LU, in a branch taken only then)
-            # once the block has degraded; take it if its block is clearly better.
-            def look():
-                fresh = _choose(problem, q, t1)
-                better = fresh[2] > 2.0 * ratio
-                # no better one: look again only after the block degrades further
-                return jax.tree.map(
-                    lambda a, b: jnp.where(better, a, b), fresh, (D, I, jnp.minimum(chosen, ratio))
-                )
-
-            data = jax.lax.cond(~(ratio >= RECHOOSE_FACTOR * chosen), look, lambda: (D, I, chosen))
-            return (q, qd, w), err, data, jnp.asarray(True), viol
-
-        def _full_error(self, q_ref, t0, D, I, z_err):
-            """The error of every coordinate: an error ``dv`` of the independent ones moves
-            the dependent ones by ``-Phi_qD^-1 Phi_qI dv``, which may be much larger."""
-            problem = self.problem
-            ev, evd, ew = z_err
-            J = problem.c.jacobian(q_ref, t0)
-            solve = J.partition(D).solve
-            E = jnp.stack(
-                [solve(J.mv(jnp.zeros_like(q_ref).at[I].set(e)))[D] for e in (ev, evd)], axis=1
-            )
-            full = lambda e, k: jnp.zeros_like(q_ref).at[I].set(e).at[D].set(-E[:, k])  # noqa: E731
-            return full(ev, 0), full(evd, 1), jnp.zeros_like(ew)
+            return _finish(self.problem, self.tol, self.fixed, t0, t1, y0, z1, z_err, data)
 
     return Partitioned
 
@@ -150,6 +154,7 @@ def partitioning(
 
     tol = 1e-3 * jnp.asarray(atol, ts.dtype)
 
+    @jax.jit  # traced once, however often diffrax traces its loop's body
     def f(t, z, args):
         v, vd, _ = z
         q_ref, qd_ref, D, I, t_ref = args

@@ -12,6 +12,15 @@ from .._problem import Problem
 from ._common import Trajectory
 
 
+@eqx.filter_jit  # traced once, however often diffrax traces its loop's body
+def _project(p: Problem, q, qd, t, tol):
+    """Positions, then velocities, projected on the constraints at ``t``; the position
+    residual after and the violation before [length]."""
+    viol = jnp.max(jnp.abs(p.c(q, t))) if p.c.m else jnp.zeros(())
+    q, residual = p.project_positions(q, t, tol)
+    return q, p.project_velocities(q, qd, t), residual, viol
+
+
 def _solver_class():
     """The projection step as a diffrax wrapped solver (diffrax imported when traced)."""
     from ._constrained import ConstrainedSolver
@@ -26,11 +35,8 @@ def _solver_class():
         tol_closed: jax.Array
 
         def finish(self, t0, t1, y0, z1, z_err, data):
-            p = self.problem
             q, qd, w = z1
-            viol = jnp.max(jnp.abs(p.c(q, t1))) if p.c.m else jnp.zeros(())
-            q, residual = p.project_positions(q, t1, self.tol_pos)
-            qd = p.project_velocities(q, qd, t1)
+            q, qd, residual, viol = _project(self.problem, q, qd, t1, self.tol_pos)
             err = None if self.fixed else (z_err[0], z_err[1], jnp.zeros_like(w))
             return (q, qd, w), err, data, residual <= self.tol_closed, viol
 
@@ -68,6 +74,7 @@ def projection(
     """
     from . import _constrained as cs
 
+    @jax.jit  # traced once, however often diffrax traces its loop's body
     def f(t, y, args):
         q, qd, _ = y
         qdd, _, _ = problem.accelerations(q, qd, t)
