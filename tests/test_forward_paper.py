@@ -42,6 +42,10 @@ def runs(model):
     return out
 
 
+# The six runs of the `runs` fixture take ~50 s: slow set (CI). The default run keeps the
+# paper's round trip (test_mixed.py), its model-file run (test_cli.py) and every integrator on
+# smaller mechanisms (test_forward.py).
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["projection", "partitioning", "baumgarte", "generalized-alpha"])
 def test_integrators_agree(runs, method):
     ref = runs["projection-dopri8"]
@@ -49,6 +53,7 @@ def test_integrators_agree(runs, method):
         assert np.max(np.abs(runs[method][col] - ref[col])) <= 1e-7, col
 
 
+@pytest.mark.slow
 def test_generalized_alpha_is_second_order(runs):
     ref = runs["projection-dopri8"]
     ga1, ga2 = runs["_ga_raw"]
@@ -57,6 +62,7 @@ def test_generalized_alpha_is_second_order(runs):
     assert 3.5 < e1 / e2 < 4.5
 
 
+@pytest.mark.slow
 def test_generalized_alpha_newton_variants_agree(runs, model):
     """The run above uses generalized-alpha's default Newton iteration (the modified one on
     the acceleration-level KKT matrix, full Newton only where it contracts poorly); the exact
@@ -70,6 +76,7 @@ def test_generalized_alpha_newton_variants_agree(runs, model):
         assert np.max(np.abs(ga1[col] - full[col])) <= 1e-9, col
 
 
+@pytest.mark.slow
 def test_constraints_and_energy_bookkeeping(runs):
     """Constraints held to rounding; energy balance T + V - W = const holds (the loads are
     non-conservative: their work is integrated alongside)."""

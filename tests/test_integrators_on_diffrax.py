@@ -65,7 +65,10 @@ def _final_angle_coordinate(method, mass, **options):
 
 
 @pytest.mark.slow  # 20-45 s of compiling the reverse pass
-@pytest.mark.parametrize(("method", "options"), [("partitioning", {}), ("baumgarte", {"dt": 1e-3})])
+@pytest.mark.parametrize(
+    ("method", "options"),
+    [("projection", {}), ("partitioning", {}), ("baumgarte", {"dt": 1e-3})],
+)
 def test_reverse_mode_gradient_through_the_loop(method, options):
     """``jax.grad`` (reverse mode, diffrax's checkpointed loop) of a final coordinate with
     respect to a mass, against central finite differences of the same integrator."""

@@ -326,6 +326,7 @@ def test_dead_point_detected_on_the_sparse_path():
 
 
 # ------------------------------------------------------------------ forward dynamics
+@pytest.mark.slow  # default run: the projection agreement below and the operator contract
 def test_forward_baumgarte_agrees():
     """RK4 + Baumgarte on the paper's mechanism under its loads (two torques and a point force;
     the start assembled with two coordinates held): positions, velocities, accelerations,
@@ -342,6 +343,7 @@ def test_forward_baumgarte_agrees():
     _agree_columns(s, d, ("force", "torque", "power", "energy"))
 
 
+@pytest.mark.slow  # default run: JacobianOperator.partition in test_solver_contract.py
 def test_partitioning_agrees():
     """Coordinate partitioning: on the sparse path the dependent coordinates are solved by the
     minimum-norm solve weighted to the dependent block (one banded Cholesky pattern whatever
@@ -478,6 +480,7 @@ def _acc(problem, q, qd, t):
     return problem.accelerations(q, qd, t)
 
 
+@pytest.mark.slow  # default run: the mixed agreements above (the same Woodbury solve)
 def test_generalized_alpha_mixed_agrees():
     """Generalized-alpha on a non-collocated mixed problem: on the sparse path its iteration
     matrix is the Woodbury-updated Schur complement; the same run as the dense LU (to the

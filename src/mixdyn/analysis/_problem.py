@@ -237,20 +237,18 @@ class Problem(eqx.Module):
 
         c, Minv = self.c, self.Minv
 
-        def residual(q):
-            r = c(q, t)
-            return r, jnp.max(jnp.abs(r), initial=0.0) > tol
-
-        def cond(state):
-            k, _, _, far = state
-            return (k < iters) & far
-
-        def body(state):
-            k, q, r, _ = state
+        def newton(q, r):
             q = q - c.jacobian(q, t).min_norm(Minv, guard=True).solve(r)
-            return (k + 1, q, *residual(q))
+            return q, c(q, t)
 
-        _, q, r, _ = jax.lax.while_loop(cond, body, (0, q, *residual(q)))
+        def body(_, state):
+            q, r = state
+            far = jnp.max(jnp.abs(r), initial=0.0) > tol
+            # a branch taken only while far (one Newton step after most integration steps);
+            # a loop of static length, which reverse-mode differentiation goes through
+            return jax.lax.cond(far, newton, lambda q, r: (q, r), q, r)
+
+        q, r = jax.lax.fori_loop(0, iters, body, (q, c(q, t)))
         return q, jnp.max(jnp.abs(r), initial=0.0)
 
     def project_velocities(self, q, qd, t):
