@@ -154,6 +154,7 @@ def test_schur_solve_vmap_and_jacfwd():
     assert np.allclose(J[:, 7], fd, rtol=1e-6, atol=1e-8)
 
 
+@pytest.mark.slow  # default run: the rank-deficient operator contract (test_solver_contract.py)
 def test_redundant_constraints_on_the_sparse_path():
     """Twelve joint equations of rank 11: the sparse path's regularized Schur complement gives
     the closed-form motion (the coupler translates on a circle), the dense path's constraint
