@@ -659,18 +659,8 @@ class Runner:
         if setup is not None:  # on the set-up the run starts from (no second assembly)
             model, q0, qd0, prescribed, prep = setup
             try:
-                an.check_mixed(
-                    model,
-                    prescribed,
-                    tuple(r.unknown),
-                    t0=float(plan.times[0]),
-                    solver=r.solver,
-                    independent=r.independent,
-                    q0=q0,
-                    qd0=qd0,
-                    hold=hold,
-                    linear_solver=prep.linear_solver,
-                    prepared=prep,
+                self._solvable_at(
+                    plan, model, prescribed, q0, qd0, hold, prep.linear_solver, prepared=prep
                 )
             except (ModelError, NumericalError):
                 self._prepared.pop(plan.name, None)  # the run prepares itself; see below why
@@ -688,18 +678,8 @@ class Runner:
         laws_only = all(p.from_run is None for p in r.prescribed)
 
         def check(hold):
-            an.check_mixed(
-                model,
-                prescribed,
-                tuple(r.unknown),
-                t0=float(plan.times[0]),
-                solver=r.solver,
-                independent=r.independent,
-                q0=q,
-                qd0=self.qd_start(plan, model) if laws_only else None,
-                hold=hold,
-                linear_solver=r.linear_solver,
-            )
+            qd0 = self.qd_start(plan, model) if laws_only else None
+            self._solvable_at(plan, model, prescribed, q, qd0, hold, r.linear_solver)
 
         try:
             check(hold)
@@ -723,6 +703,24 @@ class Runner:
                 raise
             self._model_error(plan, e)
         done.add(plan.name)
+
+    @staticmethod
+    def _solvable_at(plan: Plan, model, prescribed, q0, qd0, hold, linear_solver, prepared=None):
+        """:func:`mixdyn.check_mixed` of a mixed run's unknown forces and solver."""
+        r = plan.spec
+        an.check_mixed(
+            model,
+            prescribed,
+            tuple(r.unknown),
+            t0=float(plan.times[0]),
+            solver=r.solver,
+            independent=r.independent,
+            q0=q0,
+            qd0=qd0,
+            hold=hold,
+            linear_solver=linear_solver,
+            prepared=prepared,
+        )
 
     @staticmethod
     def _passes(check: Callable, hold) -> bool:

@@ -58,6 +58,29 @@ class RK4(diffrax.AbstractERK):
         return 4
 
 
+def equations_of_motion(problem, *stabilization):
+    """The vector field of the whole state ``(q, qd, w)``: ``(qd, qdd, work rates)``
+    (``stabilization``: Baumgarte's ``alpha, beta``), jitted so that diffrax's repeated traces
+    of its loop body reuse one trace."""
+
+    @jax.jit
+    def f(t, y, args):
+        q, qd, _ = y
+        qdd, _, _ = problem.accelerations(q, qd, t, *stabilization)
+        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
+
+    return f
+
+
+def first_step_size(ts, first_step=None):
+    """The first step [time]: ``first_step``, else 1e-4 of the span or the first output
+    interval, whichever is shorter."""
+    if first_step is not None:
+        return jnp.asarray(first_step, dtype=ts.dtype)
+    span = ts[-1] - ts[0]
+    return jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
+
+
 def ode_term(f):
     """``diffrax.ODETerm(f)``."""
     return diffrax.ODETerm(f)
@@ -381,6 +404,8 @@ __all__ = [
     "FixedStep",
     "Landing",
     "controller",
+    "equations_of_motion",
+    "first_step_size",
     "ode_term",
     "rms_of_first",
     "runge_kutta",

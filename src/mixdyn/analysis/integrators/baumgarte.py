@@ -5,7 +5,6 @@ the index-1 equations with Baumgarte stabilization of the acceleration constrain
 from __future__ import annotations
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 
 from .._problem import Problem
@@ -55,12 +54,7 @@ def baumgarte(
     """
     from . import _constrained as cs
 
-    @jax.jit  # traced once, however often diffrax traces its loop's body
-    def f(t, y, args):
-        q, qd, _ = y
-        qdd, _, _ = problem.accelerations(q, qd, t, alpha, beta)
-        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
-
+    f = cs.equations_of_motion(problem, alpha, beta)
     step = _solver_class()(cs.RK4(), jnp.zeros((), ts.dtype), True, ts, problem)
     ctrl = cs.controller(ts, rtol=0.0, atol=0.0, norm=None, dt=dt, dt_min=None, progress=progress)
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(

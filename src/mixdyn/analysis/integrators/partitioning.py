@@ -162,19 +162,12 @@ def partitioning(
         qdd, _, _ = problem.accelerations(q, qd, t)
         return (vd, qdd[I], problem.work_rates(q, qd, t, qdd))
 
-    def f_full(t, y, args):
-        q, qd, _ = y
-        qdd, _, _ = problem.accelerations(q, qd, t)
-        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
-
+    f_full = cs.equations_of_motion(problem)  # diffeqsolve's term (checked, not stepped)
     dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
     step = _solver_class()(
         cs.runge_kutta(solver), dt_min, dt is not None, ts, problem, tol, cs.ode_term(f)
     )
-    span = ts[-1] - ts[0]
-    h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
-    if first_step is not None:
-        h0 = jnp.asarray(first_step, dtype=ts.dtype)
+    h0 = cs.first_step_size(ts, first_step)
     ctrl = cs.controller(
         ts,
         rtol=rtol,

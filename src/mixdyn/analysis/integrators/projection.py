@@ -74,12 +74,7 @@ def projection(
     """
     from . import _constrained as cs
 
-    @jax.jit  # traced once, however often diffrax traces its loop's body
-    def f(t, y, args):
-        q, qd, _ = y
-        qdd, _, _ = problem.accelerations(q, qd, t)
-        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
-
+    f = cs.equations_of_motion(problem)
     dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
     step = _solver_class()(
         cs.runge_kutta(solver),
@@ -90,10 +85,7 @@ def projection(
         1e-3 * jnp.asarray(atol, ts.dtype),
         1e-6 * jnp.maximum(jnp.max(jnp.abs(q0)), 1.0),
     )
-    span = ts[-1] - ts[0]
-    h0 = jnp.minimum(span * 1e-4, ts[1] - ts[0]) if ts.shape[0] > 1 else span
-    if first_step is not None:
-        h0 = jnp.asarray(first_step, dtype=ts.dtype)
+    h0 = cs.first_step_size(ts, first_step)
     ctrl = cs.controller(
         ts,
         rtol=rtol,
