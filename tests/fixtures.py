@@ -618,3 +618,20 @@ def horizontal_chain(n: int, length: float = 0.1, mass_step: float = 0.1) -> md.
     return md.Model(
         bodies=bodies, joints=joints, gravity=(0.0, -9.81), units=md.UnitSystem("m", "kg", "s")
     )
+
+
+def antonya_mixed(model: md.Model, t, forward: md.Result, **kwargs) -> md.Result:
+    """The mixed run of ``examples/antonya.yaml`` through the Python API: ``F1`` unknown, the
+    slider's x replayed from ``forward``, the paper's partition solver with ``coupler.phi``
+    independent, tolerances 1e-10; ``kwargs`` (``hold``, ``q0``...) passed on."""
+    return md.mixed(
+        model,
+        t,
+        prescribed=[md.prescribe(forward, "slider.x")],
+        unknown=["F1"],
+        solver="partition",
+        independent=["coupler.phi"],
+        rtol=1e-10,
+        atol=1e-10,
+        **kwargs,
+    )

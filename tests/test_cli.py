@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 
 import mixdyn as md
 import mixdyn.io as mio
+from fixtures import antonya_mixed
 from mixdyn.cli import app, configure_cache
 
 EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
@@ -55,18 +56,7 @@ def _api(name: str, model: md.Model) -> dict:
         t = np.linspace(0, 2, 201)
         hold = ["crank.phi", "coupler.phi"]
         fwd = md.forward(model, t, rtol=1e-10, atol=1e-10, hold=hold)
-        mix = md.mixed(
-            model,
-            t,
-            prescribed=[md.prescribe(fwd, "slider.x")],
-            unknown=["F1"],
-            solver="partition",
-            independent=["coupler.phi"],
-            rtol=1e-10,
-            atol=1e-10,
-            hold=hold,
-        )
-        return {"forward": fwd, "mixed": mix}
+        return {"forward": fwd, "mixed": antonya_mixed(model, t, fwd, hold=hold)}
     raise AssertionError(name)
 
 

@@ -15,6 +15,7 @@ import mixdyn.analysis._prepare as prepare_module
 import mixdyn.analysis._start as start_module
 import mixdyn.analysis._structure as structure_module
 import mixdyn.io as mio
+from fixtures import antonya_mixed
 from mixdyn.analysis._prepare import prepare_dynamic, prepare_kinematic
 from mixdyn.analysis.mixed import bind_prescribed
 from mixdyn.errors import DegreesOfFreedomError, ModelError
@@ -99,18 +100,7 @@ def test_antonya_each_run_is_assembled_and_analysed_once(counts):
     q0, hold = runner.q_start(plan, model), runner.hold(plan)
     fwd = md.forward(model, plan.times, rtol=1e-10, atol=1e-10, q0=q0, hold=hold)
     _same(res["forward"], fwd, ["A.Fx", "energy.total"])
-    mx = md.mixed(
-        model,
-        runner.plans["mixed"].times,
-        prescribed=[md.prescribe(fwd, "slider.x")],
-        unknown=["F1"],
-        solver="partition",
-        independent=["coupler.phi"],
-        rtol=1e-10,
-        atol=1e-10,
-        q0=q0,
-        hold=hold,
-    )
+    mx = antonya_mixed(model, runner.plans["mixed"].times, fwd, q0=q0, hold=hold)
     _same(res["mixed"], mx, ["F1", "A.Fx"])
 
 
