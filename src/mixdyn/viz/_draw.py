@@ -111,6 +111,12 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 80) -> pathl
     canvas.draw()
     background = canvas.copy_from_bbox(fig.bbox)
     writer = _gif_writer(fps)
+    # One palette for every frame, from the last one (every body, the whole trace): mapping
+    # a frame onto it costs a quarter of quantizing each frame anew.
+    canvas.restore_region(background)
+    for a in draw(len(times) - 1):
+        ax.draw_artist(a)
+    writer.palette = writer.reduce(canvas)
     with writer.saving(fig, str(path), dpi=fig.dpi):
         for i in range(len(times)):
             canvas.restore_region(background)
@@ -126,12 +132,23 @@ def _gif_writer(fps: int):
 
     class GifWriter(animation.PillowWriter):
         """matplotlib's PillowWriter, taking each frame from the Agg canvas as drawn (no
-        re-rendering) and reducing it to a palette with a fast quantizer."""
+        re-rendering) and mapping it onto one palette (:attr:`palette`, from
+        :meth:`reduce`; without one each frame is quantized on its own)."""
+
+        palette = None
+
+        @staticmethod
+        def reduce(canvas):
+            rgb = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
+            return rgb.convert("RGB").quantize(colors=128, method=Image.Quantize.FASTOCTREE)
 
         def grab_frame(self, **savefig_kwargs):
             canvas = self.fig.canvas
-            rgba = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
-            frame = rgba.convert("RGB").quantize(colors=128, method=Image.Quantize.FASTOCTREE)
+            if self.palette is None:
+                self._frames.append(self.reduce(canvas))
+                return
+            rgb = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
+            frame = rgb.convert("RGB").quantize(palette=self.palette, dither=Image.Dither.NONE)
             self._frames.append(frame)
 
     return GifWriter(fps=fps)
