@@ -29,6 +29,9 @@ Dynamics (masses and inertias as published, or as stated in each builder):
 * :func:`andrews_mechanism` — Andrews' squeezing mechanism (seven bodies, spring, torque),
   with :func:`andrews_angles` / :func:`andrews_body_angles` converting to and from the
   test set's angles.
+
+Tracing: :func:`traced_now` and :func:`new_traces` count the traces of mixdyn's compiled
+functions (``mixdyn._compile.traces``) between two points of a test.
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from __future__ import annotations
 import math
 
 import mixdyn as md
+from mixdyn import _compile
 
 __all__ = [
     "ANDREWS",
@@ -51,12 +55,14 @@ __all__ = [
     "four_bar",
     "four_bar_pose",
     "horizontal_chain",
+    "new_traces",
     "paper_mechanism",
     "parallelogram_with_extra_link",
     "pendulum",
     "pendulum_chain",
     "slider_crank",
     "spring_slider",
+    "traced_now",
 ]
 
 
@@ -635,3 +641,14 @@ def antonya_mixed(model: md.Model, t, forward: md.Result, **kwargs) -> md.Result
         atol=1e-10,
         **kwargs,
     )
+
+
+# ----------------------------------------------------------------------------- tracing
+def traced_now() -> dict:
+    """The traces so far of each of mixdyn's compiled functions, by name."""
+    return dict(_compile.traces)
+
+
+def new_traces(before: dict) -> dict:
+    """The functions traced since ``before`` (:func:`traced_now`) and how often."""
+    return {k: v - before.get(k, 0) for k, v in _compile.traces.items() if v != before.get(k, 0)}

@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures import paper_mechanism, pendulum
+from fixtures import new_traces, paper_mechanism, pendulum, traced_now
 from mixdyn import _compile
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -48,14 +48,6 @@ def paper(T=500.0, F0=10.0, mass=0.0221):
         )
     )
     return eqx.tree_at(lambda m: m.bodies[0].mass, model, np.float64(mass))
-
-
-def traced_now() -> dict:
-    return dict(_compile.traces)
-
-
-def new_traces(before: dict) -> dict:
-    return {k: v - before.get(k, 0) for k, v in _compile.traces.items() if v != before.get(k, 0)}
 
 
 # ------------------------------------------------------------------ progress callbacks

@@ -16,6 +16,7 @@ from fixtures import pendulum_chain
 from mixdyn.analysis._prepare import prepare_dynamic
 from mixdyn.analysis._problem import Problem
 from mixdyn.analysis.integrators import INTEGRATORS
+from mixdyn.analysis.methods import OPTIONS
 from mixdyn.errors import NumericalError
 
 
@@ -60,7 +61,7 @@ def _final_angle_coordinate(method, mass, **options):
     model = eqx.tree_at(lambda m: m.bodies[0].mass, model, mass)
     problem = Problem(model, prep.constraints(method == "partitioning"))
     ts = jnp.linspace(0.0, 0.3, 4)
-    traj = INTEGRATORS[method](problem, ts, prep.q, prep.qd, **options)
+    traj = INTEGRATORS[method](problem, ts, prep.q, prep.qd, OPTIONS[method](**options))
     return traj.q[-1, 3]
 
 

@@ -6,13 +6,19 @@ from .forward import forward
 from .integrators import INTEGRATORS
 from .inverse import inverse
 from .kinematic import kinematic
+from .methods import Baumgarte, GeneralizedAlpha, IntegratorOptions, Partitioning, Projection
 from .mixed import check_mixed, mixed, prescribe
 from .result import Result
 
 __all__ = [
     "INTEGRATORS",
     "Assembly",
+    "Baumgarte",
     "DofReport",
+    "GeneralizedAlpha",
+    "IntegratorOptions",
+    "Partitioning",
+    "Projection",
     "Result",
     "assemble",
     "check_mixed",

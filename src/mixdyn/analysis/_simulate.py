@@ -3,7 +3,6 @@ integrator call, failures turned into named errors, and results in physical term
 
 from __future__ import annotations
 
-import difflib
 import functools
 
 import jax
@@ -22,7 +21,7 @@ from ..errors import (
 from ..linalg import dependent_rows
 from ..model import Model
 from ._assembly import length_scale
-from ._options import FIXED_STEP, check_options, value_problem
+from ._options import value_problem
 from ._problem import Problem
 from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
 from ._structure import _jac
@@ -34,6 +33,7 @@ from .integrators._common import (
     progress_hook,
 )
 from .kinematic import output_times
+from .methods import IntegratorOptions, resolve
 from .result import Result
 
 #: Default tolerance of a dynamic run's energy balance (see :func:`energy_tolerance`).
@@ -161,35 +161,38 @@ def _raise_failure(problem: Problem, traj, ts, method):
     raise cls(msg, t, names if singular else ())
 
 
-def energy_tolerance(energy_tol, method: str, options: dict) -> float | None:
+def energy_tolerance(energy_tol, options: IntegratorOptions) -> float | None:
     """The relative tolerance of a run's energy balance: ``energy_tol`` itself, or for
     ``"auto"`` 1000 times the relative tolerance of an adaptive run (between 1e-9 and 1e-4: a
     run that drifts far beyond what its tolerance promises does not meet its tolerance) and
-    1e-4 for a fixed-step run."""
+    1e-4 for a run at a fixed step."""
     if energy_tol != "auto":
         return energy_tol
     lo, hi = ENERGY_TOL_RANGE
-    if method in FIXED_STEP or options.get("dt") is not None:
+    if options.fixed_step or options.dt is not None:
         return hi
-    rtol = float(options.get("rtol", 1e-8))
-    return min(hi, max(lo, ENERGY_PER_RTOL * rtol))
+    return min(hi, max(lo, ENERGY_PER_RTOL * float(options.rtol)))
 
 
-def integrator_options(method: str, options: dict, ts, energy_tol=ENERGY_TOL) -> dict:
-    """The checked options of a run of integrator ``method`` (before any computing): unknown
-    names, values out of range, absurd step counts and a bad ``energy_tol`` are input errors
-    (:func:`~._options.check_options`, :func:`~._options.value_problem`)."""
+def run_options(
+    method: str | IntegratorOptions, ts, options: dict, energy_tol=ENERGY_TOL
+) -> tuple[IntegratorOptions, dict]:
+    """The checked integrator options of a run (before any computing) as their typed object,
+    and the options it records: a bad ``energy_tol``, an unknown method or option, a value
+    out of range, an absurd step count, or an options object given with integrator keywords
+    too, are input errors (:func:`~.methods.resolve`).
+
+    Args:
+        method: a method's name or its options object (:mod:`.methods`).
+        ts: (N,) output times [time].
+        options: the integrator keywords of the run (``rtol``, ``atol``, ``dt`` and the
+            method's own; None: not given).
+        energy_tol: the run's energy tolerance (checked here).
+    """
     problem = value_problem("energy_tol", energy_tol)
     if problem:
         raise ModelError(f"energy_tol {problem}, got {energy_tol!r}", "energy_tol")
-    if method not in INTEGRATORS:
-        close = difflib.get_close_matches(str(method), INTEGRATORS, n=2, cutoff=0.5)
-        hint = f"did you mean {' or '.join(close)}? " if close else ""
-        raise ModelError(
-            f"unknown integrator {method!r}; {hint}choose one of {', '.join(INTEGRATORS)}",
-            "method",
-        )
-    return check_options(method, INTEGRATORS[method], options, np.asarray(ts))
+    return resolve(method, np.asarray(ts), options)
 
 
 def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_tol) -> float:
@@ -266,10 +269,6 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
     )
 
 
-#: Integrators whose tolerances may be arrays (used only in traced arithmetic).
-_ARRAY_TOLERANCES = ("projection", "partitioning")
-
-
 @functools.cache
 def _integrator(method: str):
     """The integrator ``method``, its traced programs kept in the persistent cache."""
@@ -282,27 +281,26 @@ def simulate(
     ts,
     q0,
     qd0,
-    method: str,
-    options: dict,
+    options: IntegratorOptions,
     n_drivers: int,
     progress=None,
     energy_tol: float | str | None = ENERGY_TOL,
+    recorded: dict | None = None,
 ) -> Result:
     """Integrate ``problem`` from the consistent state ``(q0, qd0)`` and build the result.
 
-    ``options`` are the integrator's, checked by :func:`integrator_options`. A run whose
-    energy balance breaks by more than ``energy_tol`` of its energy scale fails
-    (:func:`check_energy_balance`).
+    ``options`` are the integrator's (its method and options, checked by
+    :func:`run_options`); ``recorded`` the options the result records (default:
+    :meth:`~.methods.IntegratorOptions.recorded`). A run whose energy balance breaks by more
+    than ``energy_tol`` of its energy scale fails (:func:`check_energy_balance`).
     """
-    opts = dict(options)
-    # Arrays, so that another tolerance or first step is not another program.
-    for name in ("first_step", *(("rtol", "atol") if method in _ARRAY_TOLERANCES else ())):
-        if opts.get(name) is not None:
-            opts[name] = np.asarray(opts[name], dtype=np.float64)
+    method = options.method
     integrator = _integrator(method)
     # A progress callback is passed as a key into a registry: one program for every callback.
     with progress_hook(progress) as cb:
-        traj = integrator(problem, np.asarray(ts, dtype=np.float64), q0, qd0, progress=cb, **opts)
+        traj = integrator(
+            problem, np.asarray(ts, dtype=np.float64), q0, qd0, options.as_argument(), progress=cb
+        )
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)
     Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
@@ -316,11 +314,11 @@ def simulate(
         raise SingularityError(
             "accelerations are not finite: singular equations of motion", float(ts[k])
         )
-    tol = energy_tolerance(energy_tol, method, options)
+    tol = energy_tolerance(energy_tol, options)
     balance = check_energy_balance(problem, ts, Q, extra, ratio, method, tol)
     stats = {
         "method": method,
-        "options": {k: v for k, v in options.items() if k != "progress"},
+        "options": dict(options.recorded() if recorded is None else recorded),
         "steps": int(traj.steps),
         "rejected_steps": int(traj.rejected),
         "newton_iterations": int(traj.newton),

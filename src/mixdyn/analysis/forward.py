@@ -11,11 +11,12 @@ from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
-    integrator_options,
     output_times,
     require_masses,
+    run_options,
     simulate,
 )
+from .methods import IntegratorOptions
 from .result import Result
 
 
@@ -23,9 +24,9 @@ def forward(
     model: Model,
     t,
     *,
-    method: str = "projection",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
+    method: str | IntegratorOptions = "projection",
+    rtol: float | None = None,
+    atol: float | None = None,
     dt: float | None = None,
     q0=None,
     qd0=None,
@@ -41,18 +42,24 @@ def forward(
     Args:
         model: the mechanism (every body with mass and inertia > 0).
         t: (N,) increasing output times [time]; ``t[0]`` is the start.
-        method: ``"projection"`` (default; adaptive RK + projection), ``"baumgarte"``
-            (fixed-step RK4), ``"partitioning"`` (Wehage–Haug) or ``"generalized-alpha"``
-            (implicit, index 3; options ``rho_inf`` (default 0.9), ``newton``: ``"auto"``
+        method: the integration method and its options: an object of
+            :class:`~mixdyn.Projection` (adaptive RK + projection), :class:`~mixdyn.Baumgarte`
+            (fixed-step RK4), :class:`~mixdyn.Partitioning` (Wehage–Haug) or
+            :class:`~mixdyn.GeneralizedAlpha` (implicit, index 3), e.g.
+            ``method=md.Projection(rtol=1e-10, solver="dopri8")``; or a method's name,
+            ``"projection"`` (default), ``"baumgarte"``, ``"partitioning"`` or
+            ``"generalized-alpha"``, with its options as keywords (``rtol``, ``atol``, ``dt``
+            and ``**options``: the same run). Generalized-alpha's ``newton``: ``"auto"``
             (default: modified Newton on the acceleration-level KKT matrix, switching within
             a step to the exact Newton matrix where it contracts poorly, e.g. a stiff spring
-            at a large step), ``"modified"`` or ``"full"``; ``tol``, ``max_newton``). For a
-            mechanism that passes through singular positions again and again (the IFToMM
-            N-four-bar) keep the projection's default ``solver="tsit5"`` (or use
-            ``"generalized-alpha"``): ``"dopri8"`` loses its grip there
-            (``benchmarks/RESULTS.md``, section 2b).
-        rtol, atol: local error tolerances of the adaptive methods (on q and qd, model units).
-        dt: step [time] of the fixed-step methods (or a fixed step for the adaptive ones).
+            at a large step), ``"modified"`` or ``"full"``. For a mechanism that passes
+            through singular positions again and again (the IFToMM N-four-bar) keep the
+            projection's default ``solver="tsit5"`` (or use generalized-alpha): ``"dopri8"``
+            loses its grip there (``benchmarks/RESULTS.md``, section 2b).
+        rtol, atol: local error tolerances of the adaptive methods (on q and qd, model units;
+            default 1e-8 and 1e-10), with a method's name only.
+        dt: step [time] of the fixed-step methods (or a fixed step for the adaptive ones),
+            with a method's name only.
         q0, qd0: (nq,) rough initial positions (default: the bodies' ``q0``) and velocities
             (default 0); made consistent before the run.
         hold: coordinates (``"crank.phi"``) kept at their given values while assembling.
@@ -74,8 +81,8 @@ def forward(
             runner checks a run on it, then runs from it, so that the run is assembled and
             analysed once). Default None: the run prepares its own. A set-up made for another
             call is refused (:class:`~mixdyn.errors.ModelError`).
-        **options: integrator options (``solver="dopri8"``, ``alpha``, ``beta``,
-            ``rho_inf``, ``max_steps``...).
+        **options: integrator options with a method's name (``solver="dopri8"``,
+            ``alpha``, ``beta``, ``rho_inf``, ``max_steps``...: the fields of its class).
 
     Returns:
         A :class:`Result` with the motion, the multipliers' physical meaning (joint reactions
@@ -84,7 +91,7 @@ def forward(
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
     """
     ts = output_times(t)
-    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts, energy_tol)
+    opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
     require_masses(model)
     if prepared is None:
         prep = prepare_dynamic(
@@ -103,18 +110,18 @@ def forward(
         )
     # The partitioning integrator needs independent rows; the others solve redundant
     # constraints in the least-squares sense (robust where the redundancy moves).
-    problem = Problem(model, prep.constraints(method == "partitioning"))
+    problem = Problem(model, prep.constraints(opts.method == "partitioning"))
     res = simulate(
         "forward",
         problem,
         ts,
         prep.q,
         prep.qd,
-        method,
         opts,
         len(model.drivers),
         progress,
         energy_tol,
+        recorded,
     )
     res.stats["redundant_equations"] = prep.report.redundant
     return res

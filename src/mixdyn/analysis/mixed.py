@@ -33,12 +33,13 @@ from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
-    integrator_options,
     output_times,
     require_masses,
+    run_options,
     simulate,
 )
 from ._structure import _jac
+from .methods import IntegratorOptions
 from .result import Result
 
 SOLVERS = ("augmented", "partition")
@@ -365,9 +366,9 @@ def mixed(
     unknown,
     solver: str = "augmented",
     independent=None,
-    method: str = "projection",
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
+    method: str | IntegratorOptions = "projection",
+    rtol: float | None = None,
+    atol: float | None = None,
     dt: float | None = None,
     q0=None,
     qd0=None,
@@ -391,7 +392,9 @@ def mixed(
         independent: for ``"partition"``, the independent coordinates ``i`` (e.g.
             ``["coupler.phi"]``); default: chosen by pivoted LU.
         method, rtol, atol, dt, q0, qd0, hold, progress, energy_tol, **options: as in
-            :func:`~mixdyn.forward`.
+            :func:`~mixdyn.forward` (``solver`` is the mixed solver: the Runge–Kutta method
+            of an adaptive integrator is chosen by an options object,
+            ``method=md.Projection(solver="dopri8")``).
         linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (the default: sparse for large
             mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The sparse path (banded Cholesky of the Schur complement
@@ -425,7 +428,7 @@ def mixed(
             (see above), or a bad option.
     """
     ts = output_times(t)
-    opts = integrator_options(method, dict(options, rtol=rtol, atol=atol, dt=dt), ts, energy_tol)
+    opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
     problem, q, qd, prescribed = _setup(
         model,
         float(ts[0]),
@@ -433,7 +436,7 @@ def mixed(
         unknown,
         solver,
         independent,
-        method,
+        opts.method,
         q0,
         qd0,
         hold,
@@ -441,7 +444,7 @@ def mixed(
         prepared,
     )
     res = simulate(
-        "mixed", problem, ts, q, qd, method, opts, len(model.drivers), progress, energy_tol
+        "mixed", problem, ts, q, qd, opts, len(model.drivers), progress, energy_tol, recorded
     )
     res.stats.update(
         solver=solver,

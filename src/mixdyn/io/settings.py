@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..analysis._options import CHOICES, FIXED_STEP, step_count, suggestions, value_problem
-from ..analysis._options import known_options as integrator_options
+from ..analysis._options import CHOICES, step_count, suggestions, value_problem
 from ..analysis._simulate import ENERGY_TOL
+from ..analysis.methods import FIXED_STEP, OPTIONS
 from . import schema as s
 from .expressions import ExpressionLaw, evaluate
 
@@ -35,15 +35,11 @@ DYNAMIC_OPTIONS = {"energy_tol": ENERGY_TOL}
 RUN_SETTINGS = ("rtol", "atol", "dt", "method", "linear_solver", "hold", "q0", "qd0", "drivers")
 
 
-def integrator(method: str):
-    """The integrator function of ``method``."""
-    from ..analysis.integrators import INTEGRATORS
-
-    return INTEGRATORS[method]
-
-
 def known_options(run) -> dict[str, object]:
-    """The options a run may give, with their defaults (``inspect.Parameter.empty`` if none).
+    """The options a run may give, with their defaults (None: none, or required): an
+    inverse run's, else the fields of its method's options class
+    (:mod:`mixdyn.analysis.methods`) but the run's own settings, and the analysis' own
+    (``energy_tol``).
 
     Args:
         run: the run's description.
@@ -52,7 +48,7 @@ def known_options(run) -> dict[str, object]:
         return dict(INVERSE_OPTIONS)
     known = {
         n: d
-        for n, d in integrator_options(integrator(run.method)).items()
+        for n, d in OPTIONS[run.method].defaults().items()
         if n not in RUN_SETTINGS and not (n == "solver" and isinstance(run, s.MixedRunSpec))
     }
     return {**known, **DYNAMIC_OPTIONS}

@@ -8,6 +8,7 @@ import equinox as eqx
 import jax.numpy as jnp
 
 from .._problem import Problem
+from ..methods import Baumgarte
 from ._common import Trajectory
 
 
@@ -29,35 +30,26 @@ def _solver_class():
 
 
 @eqx.filter_jit
-def baumgarte(
-    problem: Problem,
-    ts,
-    q0,
-    qd0,
-    *,
-    dt,
-    alpha=10.0,
-    beta=10.0,
-    max_steps=10_000_000,
-    progress=None,
-) -> Trajectory:
+def baumgarte(problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None) -> Trajectory:
     """Integrate with fixed-step RK4 and Baumgarte stabilization.
 
     Args:
         problem: the equations of motion.
         ts: (N,) output times [time].
         q0, qd0: (nq,) consistent initial state.
-        dt: step [time]; shortened where needed to land on the output times.
-        alpha, beta: stabilization parameters [1/time].
-        max_steps: step limit.
+        options: the method's options (:class:`~mixdyn.analysis.methods.Baumgarte`: the step
+            ``dt`` [time], shortened where needed to land on the output times; ``alpha``,
+            ``beta`` [1/time]; ``max_steps``).
         progress: optional callback ``f(t)`` at each output time.
     """
     from . import _constrained as cs
 
-    f = cs.equations_of_motion(problem, alpha, beta)
+    f = cs.equations_of_motion(problem, options.alpha, options.beta)
     step = _solver_class()(cs.RK4(), jnp.zeros((), ts.dtype), True, ts, problem)
-    ctrl = cs.controller(ts, rtol=0.0, atol=0.0, norm=None, dt=dt, dt_min=None, progress=progress)
+    ctrl = cs.controller(
+        ts, rtol=0.0, atol=0.0, norm=None, dt=options.dt, dt_min=None, progress=progress
+    )
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
-        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=max_steps
+        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=options.max_steps
     )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])

@@ -44,6 +44,7 @@ import jax.numpy as jnp
 from ...equations import force_directions
 from ...errors import ModelError
 from .._problem import Problem
+from ..methods import GeneralizedAlpha
 from ._common import NEWTON_FAILED, NOT_FINITE, OK, Trajectory, report_progress
 
 #: The Newton iterations of ``newton=...`` (see the module docstring).
@@ -120,19 +121,7 @@ def _iteration_matrix(problem: Problem):
 
 @eqx.filter_jit
 def generalized_alpha(
-    problem: Problem,
-    ts,
-    q0,
-    qd0,
-    *,
-    dt,
-    rho_inf=0.9,
-    tol=None,
-    max_newton=20,
-    newton="auto",
-    project_velocities=True,
-    max_steps=10_000_000,
-    progress=None,
+    problem: Problem, ts, q0, qd0, options: GeneralizedAlpha, progress=None
 ) -> Trajectory:
     """Integrate with the index-3 generalized-alpha method at fixed step ``dt``.
 
@@ -140,16 +129,21 @@ def generalized_alpha(
         problem: the equations of motion.
         ts: (N,) output times [time].
         q0, qd0: (nq,) consistent initial state.
-        dt: step [time]; each output interval is split into equal steps no longer than it.
-        rho_inf: spectral radius at infinite frequency, in [0, 1].
-        tol: Newton tolerance on the scaled residual (default ``1e-10 x`` force scale).
-        max_newton: Newton iterations per step.
-        newton: ``"auto"`` (default: modified Newton, switching to full Newton within a step
-            where it contracts poorly, e.g. a stiff spring at a large step), ``"modified"``
-            (the acceleration-level KKT matrix only: cheap, no Jacobian of the residual,
-            sparse on the sparse path) or ``"full"`` (the exact Newton matrix, dense).
-        project_velocities: project velocities onto the velocity constraints after a step.
+        options: the method's options (:class:`~mixdyn.analysis.methods.GeneralizedAlpha`):
+            ``dt``: step [time], each output interval split into equal steps no longer than
+            it; ``rho_inf``: spectral radius at infinite frequency, in [0, 1]; ``tol``: Newton
+            tolerance on the scaled residual (default ``1e-10 x`` force scale);
+            ``max_newton``: Newton iterations per step; ``newton``: ``"auto"`` (modified
+            Newton, switching to full Newton within a step where it contracts poorly, e.g. a
+            stiff spring at a large step), ``"modified"`` (the acceleration-level KKT matrix
+            only: cheap, no Jacobian of the residual, sparse on the sparse path) or ``"full"``
+            (the exact Newton matrix, dense); ``project_velocities``: project velocities onto
+            the velocity constraints after a step. (``max_steps`` bounds the step count
+            before the run: :func:`~mixdyn.analysis.methods.check_steps`.)
+        progress: optional callback ``f(t)`` at each output time.
     """
+    dt, rho_inf, tol = options.dt, options.rho_inf, options.tol
+    max_newton, newton = options.max_newton, options.newton
     if newton not in NEWTON_CHOICES:
         raise ModelError(
             f"newton must be one of {', '.join(NEWTON_CHOICES)}, got {newton!r}", "newton"
@@ -264,7 +258,7 @@ def generalized_alpha(
         x, r, res, it, _, done = jax.lax.while_loop(cond, body, init)
         q1, qd1, a1 = predict(x[:n])
         qdd1, mu1 = x[:n], x[n:]
-        if project_velocities:
+        if options.project_velocities:
             qd1 = problem.project_velocities(q1, qd1, t1)
         rates0 = problem.work_rates(q, qd, t1 - h, qdd)
         rates1 = problem.work_rates(q1, qd1, t1, qdd1)
@@ -327,5 +321,4 @@ def generalized_alpha(
         return k + 1, state, Q, QD, W, nsteps + i, status, t, viol
 
     _, state, Q, QD, W, nsteps, status, t, viol = jax.lax.while_loop(outer_cond, outer_body, init)
-    del max_steps
     return Trajectory(Q, QD, W, nsteps, jnp.asarray(0), state[6], viol, status, t, state[0])

@@ -21,6 +21,7 @@ import jax
 import jax.numpy as jnp
 
 from .._problem import Problem, pivot_columns
+from ..methods import Partitioning
 from ._common import Trajectory
 
 #: A better partition is looked for (pivoted LU of ``Phi_q^T``) when the pivot ratio of the
@@ -132,26 +133,15 @@ def _solver_class():
 
 
 @eqx.filter_jit
-def partitioning(
-    problem: Problem,
-    ts,
-    q0,
-    qd0,
-    *,
-    rtol=1e-8,
-    atol=1e-10,
-    dt=None,
-    solver="tsit5",
-    max_steps=1_000_000,
-    first_step=None,
-    progress=None,
-) -> Trajectory:
+def partitioning(problem: Problem, ts, q0, qd0, options: Partitioning, progress=None) -> Trajectory:
     """Integrate the independent coordinates; solve the dependent ones by Newton.
 
-    Args: as :func:`~.projection.projection`.
+    Args: as :func:`~.projection.projection` (``options``: a
+    :class:`~mixdyn.analysis.methods.Partitioning`).
     """
     from . import _constrained as cs
 
+    rtol, atol, dt = options.rtol, options.atol, options.dt
     tol = 1e-3 * jnp.asarray(atol, ts.dtype)
 
     @jax.jit  # traced once, however often diffrax traces its loop's body
@@ -165,9 +155,9 @@ def partitioning(
     f_full = cs.equations_of_motion(problem)  # diffeqsolve's term (checked, not stepped)
     dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
     step = _solver_class()(
-        cs.runge_kutta(solver), dt_min, dt is not None, ts, problem, tol, cs.ode_term(f)
+        cs.runge_kutta(options.solver), dt_min, dt is not None, ts, problem, tol, cs.ode_term(f)
     )
-    h0 = cs.first_step_size(ts, first_step)
+    h0 = cs.first_step_size(ts, options.first_step)
     ctrl = cs.controller(
         ts,
         rtol=rtol,
@@ -179,6 +169,6 @@ def partitioning(
         progress=progress,
     )
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
-        cs.ode_term(f_full), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=max_steps
+        cs.ode_term(f_full), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=options.max_steps
     )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])

@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 
 from .._problem import Problem
+from ..methods import Projection
 from ._common import Trajectory
 
 
@@ -44,40 +45,25 @@ def _solver_class():
 
 
 @eqx.filter_jit
-def projection(
-    problem: Problem,
-    ts,
-    q0,
-    qd0,
-    *,
-    rtol=1e-8,
-    atol=1e-10,
-    dt=None,
-    solver="tsit5",
-    max_steps=1_000_000,
-    first_step=None,
-    progress=None,
-) -> Trajectory:
+def projection(problem: Problem, ts, q0, qd0, options: Projection, progress=None) -> Trajectory:
     """Integrate with an adaptive explicit RK method and project after every step.
 
     Args:
         problem: the equations of motion.
         ts: (N,) output times [time]; ``ts[0]`` is the start.
         q0, qd0: (nq,) consistent initial state.
-        rtol, atol: tolerances of the local error (on ``q`` and ``qd``, model units).
-        dt: a fixed step [time] instead of error control (for convergence studies).
-        solver: ``"tsit5"`` (order 5), ``"dopri5"`` or ``"dopri8"`` (order 8).
-        max_steps: step limit.
-        first_step: the first step's size [time] (default: 1e-4 of the span or the first
-            output interval, whichever is shorter); the controller adapts it from there.
+        options: the method's options (:class:`~mixdyn.analysis.methods.Projection`: the
+            tolerances, a fixed step ``dt``, the Runge–Kutta ``solver``, ``max_steps``,
+            ``first_step``); the tolerances and first step may be arrays.
         progress: optional callback ``f(t)`` at each output time.
     """
     from . import _constrained as cs
 
+    rtol, atol, dt = options.rtol, options.atol, options.dt
     f = cs.equations_of_motion(problem)
     dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
     step = _solver_class()(
-        cs.runge_kutta(solver),
+        cs.runge_kutta(options.solver),
         dt_min,
         dt is not None,
         ts,
@@ -85,7 +71,7 @@ def projection(
         1e-3 * jnp.asarray(atol, ts.dtype),
         1e-6 * jnp.maximum(jnp.max(jnp.abs(q0)), 1.0),
     )
-    h0 = cs.first_step_size(ts, first_step)
+    h0 = cs.first_step_size(ts, options.first_step)
     ctrl = cs.controller(
         ts,
         rtol=rtol,
@@ -97,6 +83,6 @@ def projection(
         progress=progress,
     )
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
-        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=max_steps
+        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=options.max_steps
     )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])
