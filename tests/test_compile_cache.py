@@ -184,14 +184,16 @@ def test_cache_switch(tmp_path):
 # ------------------------------------------------------------------ across processes
 SCRIPT = textwrap.dedent(
     """
-    import json, sys
+    import contextlib, json, sys
     import numpy as np
     sys.path.insert(0, {tests!r})
     import mixdyn as md
     from mixdyn import _compile
     from test_compile_cache import paper, TS, HOLD
     T = float(sys.argv[1])
-    res = md.forward(paper(T=T), TS, hold=HOLD, rtol=1e-9, atol=1e-9)
+    job = sys.argv[3] if len(sys.argv) > 3 else None
+    with _compile.job(job) if job else contextlib.nullcontext():
+        res = md.forward(paper(T=T), TS, hold=HOLD, rtol=1e-9, atol=1e-9)
     np.save(sys.argv[2], res.q)
     print(json.dumps({{"folder": _compile.cache_folder(), "stats": _compile.stats,
                       "traces": dict(_compile.traces)}}))
@@ -215,14 +217,16 @@ def _run(script: pathlib.Path, env: dict, *args) -> dict:
 def test_a_second_process_traces_nothing(tmp_path):
     """A first process exports the programs of the paper's mechanism; a second one, with
     other numbers, reads them back and traces none of them, and gets the numbers a process
-    without the cache gets."""
+    without the cache gets; a third one, told the first one's job, reads them ahead
+    (:func:`mixdyn._compile.prefetch`) and gets the same numbers."""
     script = tmp_path / "run.py"
     script.write_text(SCRIPT.format(tests=str(ROOT / "tests")))
     env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("MIXDYN_NO_CACHE", None)
-    first = _run(script, env, 500.0, tmp_path / "a.npy")
+    first = _run(script, env, 500.0, tmp_path / "a.npy", "job")
     assert first["folder"] == str(tmp_path / "cache")
     assert first["stats"]["exported"] > 0 and first["stats"]["fallback"] == 0
+    assert first["stats"]["prefetched"] == 0  # no manifest yet
     second = _run(script, env, 350.0, tmp_path / "b.npy")
     assert second["stats"]["exported"] == 0 and second["stats"]["fallback"] == 0
     assert second["stats"]["loaded"] == first["stats"]["exported"]
@@ -232,6 +236,12 @@ def test_a_second_process_traces_nothing(tmp_path):
     assert reference["folder"] is None and reference["traces"]
     np.testing.assert_array_equal(np.load(tmp_path / "b.npy"), np.load(tmp_path / "c.npy"))
     assert not np.allclose(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    # The job's manifest: a third process reads every program ahead, in a second thread.
+    third = _run(script, env, 350.0, tmp_path / "d.npy", "job")
+    assert third["stats"]["prefetched"] == first["stats"]["exported"]
+    assert third["stats"]["loaded"] == third["stats"]["exported"] == 0
+    assert third["traces"] == {}
+    np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), np.load(tmp_path / "c.npy"))
 
 
 # ------------------------------------------------------------------ figures while computing

@@ -265,8 +265,8 @@ class _Program:
 
     __slots__ = ("call", "leaves", "treedef")
 
-    def __init__(self, exported: _export.Exported, skeleton):
-        self.call = jax.jit(exported.call)
+    def __init__(self, exported: _export.Exported, skeleton, compiled=None):
+        self.call = jax.jit(exported.call) if compiled is None else compiled
         self.leaves, self.treedef = jax.tree_util.tree_flatten(skeleton)
 
     def __call__(self, dynamic):
@@ -277,7 +277,7 @@ class _Program:
 
 #: Counters of this process (for tests and profiling): programs traced by export, read
 #: from disk, and calls that fell back to tracing.
-stats = {"exported": 0, "loaded": 0, "fallback": 0}
+stats = {"exported": 0, "loaded": 0, "fallback": 0, "prefetched": 0}
 #: How many times the Python body of each :func:`cached_jit` function ran, i.e. was traced
 #: (by ``filter_jit`` or by export), by ``module.qualname``.
 traces: collections.Counter = collections.Counter()
@@ -341,14 +341,18 @@ class _CachedJit:
         except _UncacheableError:
             return False
         path = pathlib.Path(folder, EXPORTED, f"{self.name.rsplit('.', 1)[-1]}-{key}.bin")
+        _used.append(path.name)
+        pending = _prefetched.get(str(path))
+        if pending is not None:
+            program = pending.get()
+            if program is not None:
+                stats["prefetched"] += 1
+                return program
         try:
-            with open(path, "rb") as f:
-                blob = pickle.load(f)
-            if blob is None:
-                return False  # not exportable (recorded by an earlier process)
-            program = _Program(_export.deserialize(bytearray(blob[0])), blob[1])
-            stats["loaded"] += 1
-            return program
+            program = _read(path)
+            if program is not None:
+                stats["loaded"] += 1
+                return program
         except FileNotFoundError:
             pass
         except Exception:  # a damaged entry: export it again
@@ -392,6 +396,154 @@ class _CachedJit:
         return blob
 
 
+def _read(path, compile: bool = False):
+    """The program stored at ``path``: a :class:`_Program` (compiled now if ``compile``),
+    False where an earlier process found it not exportable."""
+    with open(path, "rb") as f:
+        blob = pickle.load(f)
+    if blob is None:
+        return False  # not exportable (recorded by an earlier process)
+    exported = _export.deserialize(bytearray(blob[0]))
+    compiled = None
+    if compile:  # JAX's persistent cache gives the executable; this thread deserializes it
+        compiled = jax.jit(exported.call).lower(*exported.in_avals).compile()
+    return _Program(exported, blob[1], compiled)
+
+
+# --------------------------------------------------------------------------- prefetching
+#: The sub-folder of the cache folder holding the manifests of jobs (:func:`remember`).
+MANIFESTS = "manifests"
+#: Names of the program files this process used, in order (for :func:`remember`).
+_used: list[str] = []
+#: Programs being read by the prefetching thread, by path.
+_prefetched: dict[str, _Pending] = {}
+_stop = threading.Event()
+
+
+class _Pending:
+    """A program the prefetching thread reads: :meth:`get` waits for it (None if it could
+    not be read: the caller reads or exports it itself)."""
+
+    __slots__ = ("done", "value")
+
+    def __init__(self):
+        self.done = threading.Event()
+        self.value = None
+
+    def get(self):
+        self.done.wait()
+        return self.value
+
+
+def _manifest(folder: str, tag: str) -> pathlib.Path:
+    digest = hashlib.sha256(_environment() + tag.encode()).hexdigest()[:40]
+    return pathlib.Path(folder, MANIFESTS, f"{digest}.txt")
+
+
+def prefetch(tag: str) -> int:
+    """Start reading, in a background thread, the programs that the last job named ``tag``
+    used (recorded by :func:`remember`), in the order it used them, so that they are ready
+    when this job asks for them.
+
+    Reading a program (its executable from JAX's cache) is mostly C++ that runs beside the
+    job's own Python (importing, checking, assembling). A job whose structure changed since
+    asks for other programs: the ones read ahead are left unused, nothing else changes.
+
+    Args:
+        tag: names the job, e.g. ``"run:/abs/path/model.yaml"``.
+
+    Returns:
+        The number of programs queued (0 with the cache off or no manifest).
+    """
+    folder = _state["folder"]
+    if folder is None:
+        return 0
+    try:
+        names = _manifest(folder, tag).read_text().split()
+    except OSError:
+        return 0
+    queued = []
+    with _lock:
+        for name in names:
+            if not name.endswith(".bin") or os.sep in name or name.startswith("."):
+                continue  # only plain names of this folder's programs
+            path = str(pathlib.Path(folder, EXPORTED, name))
+            if path not in _prefetched and os.path.exists(path):
+                _prefetched[path] = _Pending()
+                queued.append(path)
+    if queued:
+        _stop.clear()
+        threading.Thread(target=_read_ahead, args=(queued,), name="mixdyn-prefetch").start()
+    return len(queued)
+
+
+def _read_ahead(paths: list[str]) -> None:
+    for path in paths:
+        pending = _prefetched[path]
+        try:
+            if not _stop.is_set():
+                pending.value = _read(path, compile=True)
+        except Exception:  # the job reads or exports it itself
+            pending.value = None
+        finally:
+            pending.done.set()
+
+
+def stop_prefetch() -> None:
+    """Let the prefetching thread stop after the program it is reading (a job that ends
+    early, e.g. on an input error, does not wait for the rest)."""
+    _stop.set()
+
+
+def remember(tag: str, since: int = 0) -> None:
+    """Record the programs this process used (in order; from the ``since``-th on) as the
+    manifest of job ``tag``, for :func:`prefetch` in the next process. Nothing is written
+    with the cache off."""
+    folder = _state["folder"]
+    used = _used[since:]
+    if folder is None or not used:
+        return
+    path = _manifest(folder, tag)
+    text = "\n".join(dict.fromkeys(used)) + "\n"
+    try:
+        if path.exists() and path.read_text() == text:
+            return
+        path.parent.mkdir(exist_ok=True)
+    except OSError:
+        return
+    _write_text(path, text)
+
+
+@contextlib.contextmanager
+def job(tag: str):
+    """A job whose programs are read ahead from its last run's manifest, and whose
+    programs are recorded as its manifest when it ends without an exception::
+
+        with job(f"run:{path}"):
+            ...  # the runs of a model file
+    """
+    since = len(_used)
+    prefetch(tag)
+    try:
+        yield
+    finally:
+        stop_prefetch()
+    remember(tag, since)
+
+
+def _write_text(path: pathlib.Path, text: str) -> None:
+    tmp = None
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except OSError:
+        if tmp is not None:
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
+
+
 def _write(path: pathlib.Path, blob) -> None:
     """Write an entry atomically (a concurrent reader sees all of it or nothing)."""
     tmp = None
@@ -420,9 +572,13 @@ __all__ = [
     "cache_folder",
     "cached_jit",
     "configure_from_env",
+    "job",
+    "prefetch",
     "register_key",
+    "remember",
     "set_cache",
     "skeleton",
     "stats",
+    "stop_prefetch",
     "traces",
 ]

@@ -332,6 +332,14 @@ def run(
     (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name),
     OUT/NAME/meta.json (units of every column, solver, tolerances, counters, version) and the
     figures and animation the run asks for."""
+    from . import _compile
+
+    # The programs this job used last time are read from the cache beside the checks below.
+    with _compile.job(f"run:{pathlib.Path(file).resolve()}:{','.join(runs or ())}"):
+        _run(file, runs, out, parquet, figures, progress)
+
+
+def _run(file, runs, out, parquet, figures, progress):
     with _guard(file):
         from .io import Runner, read
 
@@ -346,25 +354,33 @@ def run(
             )
         plans = runner.order(runs or None)
         _check_run_outputs(out, plans, figures)
-        for plan in plans:  # fail fast on ill-posed runs, before any long computation
-            if plan.spec.kind != "kinematic":
-                runner.check_masses(plan)
-            runner.mobility(plan)
+        drawing = figures and any(p.spec.plots or p.spec.animation is not None for p in plans)
+        painter = _Painter() if drawing else None  # its imports overlap the checks
+        try:
+            for plan in plans:  # fail fast on ill-posed runs, before any long computation
+                if plan.spec.kind != "kinematic":
+                    runner.check_masses(plan)
+                runner.mobility(plan)
+        except BaseException:
+            if painter is not None:
+                painter.close()
+            raise
         if progress is None:
             mode = "runs" if sys.stderr.isatty() else "off"
         else:
             mode = "steps" if progress else "off"
-        written = _execute(runner, plans, out, parquet, figures, mode, file)
+        written = _execute(runner, plans, out, parquet, figures, painter, mode, file)
         _say(f"wrote {len(written)} file(s) under {_esc(out)}")
 
 
-def _execute(runner, plans, out, parquet, figures, mode, file):
+def _execute(runner, plans, out, parquet, figures, painter, mode, file):
     """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
     ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
 
-    The figures and animations are drawn by a worker process while the next runs compute
-    (:class:`_Painter`: matplotlib is imported there as the first run starts, on another
-    core); a failure there is raised here as if drawn in turn."""
+    The figures and animations are drawn by ``painter`` (None: no figures), a worker process
+    that draws while the next runs compute (:class:`_Painter`: matplotlib is imported there
+    while the runs are checked, on another core); a failure there is raised here as if drawn
+    in turn. The painter is closed on return."""
     from rich.console import Console
     from rich.progress import (
         BarColumn,
@@ -389,8 +405,7 @@ def _execute(runner, plans, out, parquet, figures, mode, file):
         TimeElapsedColumn(),
     )
     disable = mode in ("off", "log")
-    drawing = figures and any(p.spec.plots or p.spec.animation is not None for p in plans)
-    painter = _Painter() if drawing else None
+    drawing = painter is not None
     try:
         with Progress(*columns, console=console, disable=disable, transient=False) as bar:
             tasks = {}
