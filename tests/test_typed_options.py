@@ -350,6 +350,30 @@ def test_a_second_run_with_an_object_traces_nothing():
     assert not np.allclose(first.q, other.q)
 
 
+@pytest.mark.parametrize(
+    ("first", "second"),
+    [
+        (md.Baumgarte(dt=0.01, alpha=5.0, beta=6.0), md.Baumgarte(dt=0.005, alpha=8.0, beta=9.0)),
+        (md.GeneralizedAlpha(dt=0.01, rho_inf=0.9), md.GeneralizedAlpha(dt=0.005, rho_inf=0.6)),
+        (md.Projection(dt=0.01), md.Projection(dt=0.005)),
+    ],
+    ids=["baumgarte", "generalized-alpha", "projection-fixed"],
+)
+def test_another_step_is_the_same_program(first, second):
+    """The step ``dt`` (and Baumgarte's ``alpha``, ``beta``, generalized-alpha's ``rho_inf``)
+    are numbers of the program, not part of it: a convergence study or an edited step traces
+    nothing again, and the run does take the new step (0.2 s in steps of 0.005 s: 40)."""
+    model = pendulum(theta0=0.3)
+    a = md.forward(model, TS, method=first)
+    assert a.stats["steps"] == 20
+    before = traced_now()
+    b = md.forward(model, TS, method=second)
+    assert new_traces(before) == {}
+    assert b.stats["steps"] == 40
+    assert not np.array_equal(a.q, b.q)
+    assert np.allclose(a.q, b.q, atol=1e-3)
+
+
 def test_objects_key_the_persistent_cache(tmp_path):
     """With mixdyn's persistent cache on, a run with an options object is exported and keyed
     (an object of a mixdyn class is trusted), not traced by a fallback; an equal object

@@ -16,10 +16,11 @@ the option): unknown names (with close matches), values of the wrong type or out
 (the vocabulary of :mod:`._options`), and a fixed-step method without ``dt``. Numbers are
 kept as Python numbers, so an object is hashable and equal to another with the same options.
 
-Inside the integrators, the tolerances and the first step of the adaptive methods are arrays
-(:meth:`IntegratorOptions.as_argument`): another tolerance is not another traced program, as
-with keyword options; the other options (the step ``dt``, the Runge–Kutta method, the step
-limit...) decide the program.
+Inside the integrators, the numbers that do not shape the computation (tolerances, first
+step, the step ``dt``, Baumgarte's ``alpha`` and ``beta``, ``rho_inf``) are arrays
+(:meth:`IntegratorOptions.as_argument`): another value is not another traced program, as with
+keyword options; the other options (the Runge–Kutta method, the step limit, Newton's
+variant...) and whether ``dt`` is given at all decide the program.
 """
 
 from __future__ import annotations
@@ -96,8 +97,8 @@ class IntegratorOptions(eqx.Module):
         }
 
     def as_argument(self) -> IntegratorOptions:
-        """The object the integrator is called with: the options of :attr:`_arrays` (the
-        adaptive methods' tolerances and first step) as float64 arrays, so that another value
+        """The object the integrator is called with: the options of :attr:`_arrays` (tolerances,
+        steps, stabilization and damping numbers) as float64 arrays, so that another value
         is another argument of the same program, not another program."""
         names = [n for n in self._arrays if getattr(self, n) is not None]
         if not names:
@@ -128,7 +129,7 @@ class Projection(IntegratorOptions):
     """
 
     method: ClassVar[str] = "projection"
-    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step")
+    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step", "dt")
 
     _: dataclasses.KW_ONLY
     rtol: float = eqx.field(default=1e-8, converter=_real)
@@ -157,7 +158,7 @@ class Partitioning(IntegratorOptions):
     """
 
     method: ClassVar[str] = "partitioning"
-    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step")
+    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step", "dt")
 
     _: dataclasses.KW_ONLY
     rtol: float = eqx.field(default=1e-8, converter=_real)
@@ -183,6 +184,7 @@ class Baumgarte(IntegratorOptions):
 
     method: ClassVar[str] = "baumgarte"
     fixed_step: ClassVar[bool] = True
+    _arrays: ClassVar[tuple[str, ...]] = ("dt", "alpha", "beta")
 
     _: dataclasses.KW_ONLY
     dt: float | None = eqx.field(default=None, converter=_optional)
@@ -214,6 +216,7 @@ class GeneralizedAlpha(IntegratorOptions):
 
     method: ClassVar[str] = "generalized-alpha"
     fixed_step: ClassVar[bool] = True
+    _arrays: ClassVar[tuple[str, ...]] = ("dt", "rho_inf", "tol")
 
     _: dataclasses.KW_ONLY
     dt: float | None = eqx.field(default=None, converter=_optional)
