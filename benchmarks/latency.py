@@ -10,8 +10,8 @@ Scenarios:
 - ``cli-empty``: ``mixdyn run examples/antonya.yaml --out OUT`` (figures and animation) with
   an empty cache folder each time;
 - ``cli-warm``: the same, the cache filled by a first run;
-- ``cli-changed``: the file with one number changed (the parameter ``T``, a new value each
-  time), the cache filled by the original file;
+- ``cli-changed``: the file edited in place, one number changed (the parameter ``T``, a new
+  value each time), the cache filled by a run of the file before the edit;
 - ``api-second``: a Python process building the paper's mechanism with the Python API
   (``tests/fixtures.py``, the paper's loads) and calling ``md.forward`` on it as the file's
   forward run does, the cache filled by a first process.
@@ -76,13 +76,15 @@ def _time(cmd: list[str], env: dict, cwd: pathlib.Path) -> float:
     return seconds
 
 
-def _changed(tmp: pathlib.Path, k: int) -> pathlib.Path:
-    """The example with the parameter T changed (a new value for each k)."""
+def _changed(tmp: pathlib.Path, k: int | None) -> pathlib.Path:
+    """The designer's copy of the example, ``edited.yaml``, as it is (k None) or edited in
+    place with the parameter T changed (a new value for each k)."""
     text = EXAMPLE.read_text(encoding="utf-8")
-    new, n = re.subn(r"(?m)^(\s*T:\s*)500\b", rf"\g<1>{500 + k + 1}", text)
-    assert n == 1, "the example's parameter T: 500 was not found"
-    path = tmp / f"antonya_T{500 + k + 1}.yaml"
-    path.write_text(new, encoding="utf-8")
+    if k is not None:
+        text, n = re.subn(r"(?m)^(\s*T:\s*)500\b", rf"\g<1>{500 + k + 1}", text)
+        assert n == 1, "the example's parameter T: 500 was not found"
+    path = tmp / "edited.yaml"
+    path.write_text(text, encoding="utf-8")
     return path
 
 
@@ -102,6 +104,8 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
         for v in srcs:  # fill the caches: a first run, a first process
             if {"cli-warm", "cli-changed"} & set(only):
                 _time([*cli, str(EXAMPLE), "--out", str(result)], env[v], tmp)
+            if "cli-changed" in only:
+                _time([*cli, str(_changed(tmp, None)), "--out", str(result)], env[v], tmp)
             if "api-second" in only:
                 _time([py, str(script)], api_env[v], tmp)
         for k in range(repeat):
