@@ -91,6 +91,7 @@ def test_andrews_squeezer_matches_test_set():
 
 
 # ------------------------------------------------------------------------ IFToMM A01
+@pytest.mark.slow  # a long validation run (CI runs it)
 def test_iftomm_a01_simple_pendulum_2000s():
     """IFToMM / MBS benchmark A01, the planar simple pendulum, over its full 2000 s.
 
@@ -205,6 +206,7 @@ def test_double_fourbar_baumgarte(fourbar_exact):
     assert np.ptp(res["energy.total"]) <= 1e-6
 
 
+@pytest.mark.slow  # a long validation run (CI runs it)
 def test_double_fourbar_generalized_alpha_vs_exudyn(fourbar_exact):
     """mixdyn's generalized-alpha (index 3, rho_inf = 0.95 as Exudyn's run) at Exudyn's step
     h = 1e-3 passes the singular positions; its error in the crank tip at 10 s is of the same
