@@ -209,3 +209,32 @@ def test_json_schema():
         assert key in schema["properties"]
     for kind in ("revolute", "translational", "point_force", "mixed", "kinematic"):
         assert f'"{kind}"' in text
+
+
+# ------------------------------------------------------------------ options: a check turned off
+def _pendulum_run(options: str) -> str:
+    text = (EXAMPLES / "pendulum.yaml").read_text(encoding="utf-8")
+    head = text[: text.index("runs:")]
+    return head + (
+        "runs:\n"
+        "  - name: loose\n"
+        "    kind: forward\n"
+        "    time: {span: [0, 1], n: 11}\n"
+        "    rtol: 1.0e-4\n"
+        "    atol: 1.0e-6\n"
+        f"    options: {options}\n"
+    )
+
+
+def test_energy_tol_null_turns_the_energy_check_off():
+    """``options: {energy_tol: null}`` (docs/model-files.md) is accepted and turns the energy
+    check off: the same run that a tolerance below its measured balance error refuses
+    (a named numerical failure) then ends with that balance error recorded."""
+    off = mio.Runner(mio.reads(_pendulum_run("{energy_tol: null}"), "pendulum.yaml")).execute()
+    balance = off["loose"].stats["energy_balance_error"]
+    assert balance > 0
+    tight = mio.reads(_pendulum_run(f"{{energy_tol: {balance / 10:.3e}}}"), "pendulum.yaml")
+    with pytest.raises(md.NumericalError, match="energy"):
+        mio.Runner(tight).execute()
+    with pytest.raises(mio.FileError, match=r"options\.first_step"):  # not for other options
+        mio.Runner(mio.reads(_pendulum_run("{first_step: null}"), "p.yaml"))

@@ -505,7 +505,7 @@ class KinematicRunSpec(_RunSpec):
 
 
 Method = Literal["projection", "baumgarte", "partitioning", "generalized-alpha"]
-Option = float | int | str | bool
+Option = float | int | str | bool | None  # None: a check turned off (energy_tol: null)
 
 
 class ForwardRunSpec(_RunSpec):
