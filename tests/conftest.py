@@ -44,6 +44,28 @@ def pytest_configure(config):
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
 
 
+#: Test modules whose module fixtures are long runs that most of their tests share: one xdist
+#: worker takes the whole module, so that those runs are computed once, not once per worker.
+#: (pytest-xdist's ``--dist loadgroup`` marks do not reach its scheduler under pytest 9: it
+#: renames items through an attribute pytest no longer reads.)
+WHOLE_MODULES = ("test_cli.py", "test_mixed.py", "test_mixed_files.py")
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist load`` (the default here), but with :data:`WHOLE_MODULES` each one unit."""
+    if config.getvalue("dist") != "load":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class Scheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            module = nodeid.split("::", 1)[0]
+            return module if module.rsplit("/", 1)[-1] in WHOLE_MODULES else nodeid
+
+    return Scheduling(config, log)
+
+
 def pytest_unconfigure(config):
     folder = getattr(config, "_mixdyn_made_xla_cache", None)
     if folder:
