@@ -151,6 +151,9 @@ def test_plot_and_animate_from_written_results(cli, antonya, tmp_path):
     assert fig.stat().st_size > 5000 and "<svg" in fig.read_text()[:500]
     res = cli.invoke(app, ["plot", str(out / "forward"), "-c", "nope"])
     assert res.exit_code == 2 and "no column 'nope'" in res.stderr
+    res = cli.invoke(app, ["plot", str(out / "forward"), "-c", "slider.xx"])  # a typo
+    assert res.exit_code == 2 and "did you mean 'slider.x'" in res.stderr
+    assert "crank.omega" not in res.stderr  # not every column
     base = tmp_path / "anim"
     _run(
         cli,

@@ -44,6 +44,9 @@ def test_svg_and_bad_suffix(motion, tmp_path):
         plot_columns(cols, ["slider.x"], tmp_path / "p.txt")
     with pytest.raises(KeyError, match="no column"):
         result_columns(motion, ["slider.nope"])
+    with pytest.raises(KeyError, match=r"did you mean 'slider\.x'") as info:
+        result_columns(motion, ["Slider.X"])  # case and a typo: close matches only
+    assert "crank.omega" not in str(info.value)
 
 
 def test_gif_frames_and_motion(motion, tmp_path):

@@ -702,6 +702,7 @@ def plot(
 ):
     """Plot chosen columns of written results against time, to PNG, SVG or PDF."""
     with _guard(results):
+        from ._hints import did_you_mean
         from .io import FileError, read_result
         from .viz import PLOT_SUFFIXES, plot_columns
 
@@ -717,7 +718,8 @@ def plot(
                 f"no column {missing[0]!r}",
                 "--column",
                 file=str(results),
-                hint="columns: " + ", ".join(map(str, table.columns)),
+                hint=did_you_mean(missing[0], table.columns)
+                + " (the first line of results.csv lists them all)",
             )
         if output is None:
             folder = results if results.is_dir() else results.parent

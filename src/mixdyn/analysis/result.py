@@ -9,6 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._hints import did_you_mean
 from ..model import Model
 from ..model._element import Resolver
 from ..model._geometry import point
@@ -103,7 +104,7 @@ class Result:
         cols = self.columns()
         if name in cols:
             return cols[name]
-        raise KeyError(f"no column {name!r}; columns: {', '.join(cols)}")
+        raise KeyError(f"no column {name!r}; {did_you_mean(name, cols)}")
 
     def table(self, points=()):
         """A pandas DataFrame indexed by ``t``; ``points`` adds point trajectories.

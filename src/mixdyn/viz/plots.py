@@ -26,7 +26,7 @@ def result_columns(result, names) -> tuple[dict[str, np.ndarray], dict[str, str]
     ``"body.point.x"`` (also ``.y``, ``.vx``, ``.vy``, ``.ax``, ``.ay``).
 
     Raises:
-        KeyError: an unknown column, with the list of known ones.
+        KeyError: an unknown column, with close matches (:meth:`mixdyn.Result.__getitem__`).
     """
     cols = result.columns()
     units = result.units()
@@ -49,7 +49,7 @@ def result_columns(result, names) -> tuple[dict[str, np.ndarray], dict[str, str]
                 kind = ("length", "velocity", "acceleration")[which]
                 out_units[name] = result.model.units.unit(kind)
                 continue
-        raise KeyError(f"no column {name!r}; columns: {', '.join(cols)}")
+        result[name]  # raises KeyError naming the column, with close matches
     return out, out_units
 
 
