@@ -110,7 +110,21 @@ class IntegratorOptions(eqx.Module):
         )
 
 
-class Projection(IntegratorOptions):
+class _AdaptiveRungeKutta(IntegratorOptions):
+    """The options that projection and partitioning share (see either)."""
+
+    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step", "dt")
+
+    _: dataclasses.KW_ONLY
+    rtol: float = eqx.field(default=1e-8, converter=_real)
+    atol: float = eqx.field(default=1e-10, converter=_real)
+    dt: float | None = eqx.field(default=None, converter=_optional)
+    solver: str = eqx.field(default="tsit5", converter=_name)
+    max_steps: int = eqx.field(default=1_000_000, converter=_count)
+    first_step: float | None = eqx.field(default=None, converter=_optional)
+
+
+class Projection(_AdaptiveRungeKutta):
     """``projection``: adaptive explicit Runge–Kutta on the index-1 equations of motion, with
     positions and velocities projected back onto the constraints after each accepted step
     (mass-weighted least-norm projection). The default method.
@@ -129,18 +143,9 @@ class Projection(IntegratorOptions):
     """
 
     method: ClassVar[str] = "projection"
-    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step", "dt")
-
-    _: dataclasses.KW_ONLY
-    rtol: float = eqx.field(default=1e-8, converter=_real)
-    atol: float = eqx.field(default=1e-10, converter=_real)
-    dt: float | None = eqx.field(default=None, converter=_optional)
-    solver: str = eqx.field(default="tsit5", converter=_name)
-    max_steps: int = eqx.field(default=1_000_000, converter=_count)
-    first_step: float | None = eqx.field(default=None, converter=_optional)
 
 
-class Partitioning(IntegratorOptions):
+class Partitioning(_AdaptiveRungeKutta):
     """``partitioning``: Wehage–Haug generalized coordinate partitioning. The independent
     coordinates are integrated by adaptive explicit Runge–Kutta, the dependent ones solved
     from the constraints by Newton at every stage.
@@ -158,15 +163,6 @@ class Partitioning(IntegratorOptions):
     """
 
     method: ClassVar[str] = "partitioning"
-    _arrays: ClassVar[tuple[str, ...]] = ("rtol", "atol", "first_step", "dt")
-
-    _: dataclasses.KW_ONLY
-    rtol: float = eqx.field(default=1e-8, converter=_real)
-    atol: float = eqx.field(default=1e-10, converter=_real)
-    dt: float | None = eqx.field(default=None, converter=_optional)
-    solver: str = eqx.field(default="tsit5", converter=_name)
-    max_steps: int = eqx.field(default=1_000_000, converter=_count)
-    first_step: float | None = eqx.field(default=None, converter=_optional)
 
 
 class Baumgarte(IntegratorOptions):
