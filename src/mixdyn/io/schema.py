@@ -125,7 +125,9 @@ Text = Annotated[str, AfterValidator(_text)]
 class Spec(BaseModel):
     """Base of every part of the description: unknown keys are errors; values immutable."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    # Field docstrings (the string below each field) become its description in the JSON
+    # Schema: hover help in editors.
+    model_config = ConfigDict(extra="forbid", frozen=True, use_attribute_docstrings=True)
 
 
 # --------------------------------------------------------------------------- laws
@@ -134,13 +136,19 @@ class ExpressionSpec(Spec):
     value is in ``unit`` (default: the model's unit of what it drives)."""
 
     expr: str
+    """An expression of ``t`` [model time unit] and the parameters, e.g. ``"10*sin(pi*t/2)"``;
+    force magnitudes may also use body states (``-c*wheel.omega``)."""
     unit: str | None = None
+    """Unit of the expression's value, e.g. ``deg`` or ``N`` (default: the model's unit of the
+    driven quantity)."""
 
 
 class ConstantSpec(Spec):
     """``{constant: 5}``."""
 
     constant: Scalar
+    """The constant value: a number in model units (angles in rad) or a quantity such as ``"5
+    N"``."""
 
 
 class PolynomialSpec(Spec):
@@ -148,25 +156,40 @@ class PolynomialSpec(Spec):
     (default: model units)."""
 
     polynomial: list[Scalar] = Field(min_length=1)
+    """Coefficients ``[c0, c1, ...]`` of ``c0 + c1 t + c2 t**2 + ...``; ``c_k`` in ``unit`` per
+    time unit**k."""
     unit: str | None = None
+    """Unit of the law's value, e.g. ``deg`` (default: the model's unit of the driven quantity)."""
 
 
 class RampArgs(Spec):
+    """Arguments of a ramp law: ``start + rate t``."""
+
     start: Scalar = 0.0
+    """Value at ``t = 0``, in model units of the driven quantity (angles in rad) or with a unit.
+    Default 0."""
     rate: Scalar
+    """Rate of change per model time unit, e.g. ``"2 rad/s"``."""
 
 
 class RampSpec(Spec):
     """``{ramp: {start: 0, rate: "2 rad/s"}}``: ``start + rate t``."""
 
     ramp: RampArgs
+    """The ramp's ``start`` and ``rate``."""
 
 
 class HarmonicArgs(Spec):
+    """Arguments of a harmonic law: ``offset + amplitude sin(omega t + phase)``."""
+
     amplitude: Scalar
+    """Amplitude, in model units of the driven quantity (angles in rad) or with a unit."""
     omega: Scalar
+    """Angular frequency [rad per model time unit], e.g. ``"2 rad/s"``."""
     phase: Scalar = 0.0
+    """Phase [rad] (or with a unit, ``"90 deg"``). Default 0."""
     offset: Scalar = 0.0
+    """Constant added to the sine, in model units of the driven quantity. Default 0."""
 
 
 class HarmonicSpec(Spec):
@@ -174,38 +197,59 @@ class HarmonicSpec(Spec):
     phase)``."""
 
     harmonic: HarmonicArgs
+    """The harmonic's ``amplitude``, ``omega``, ``phase`` and ``offset``."""
 
 
 class SplineArgs(Spec):
+    """Arguments of an interpolating spline law through ``(t, y)`` points."""
+
     t: list[Scalar] = Field(min_length=2)
+    """Knot times [model time unit], strictly increasing (at least 2)."""
     y: list[Scalar] = Field(min_length=2)
+    """Values at the knot times, one per time, in ``unit`` (default: model units)."""
     kind: Literal["cubic", "quintic"] = "cubic"
+    """Spline degree: ``cubic`` (default) or ``quintic``."""
     unit: str | None = None
+    """Unit of the values ``y``, e.g. ``deg`` (default: the model's unit of the driven quantity)."""
 
 
 class SplineSpec(Spec):
     """``{spline: {t: [...], y: [...], kind: cubic}}``: an interpolating spline."""
 
     spline: SplineArgs
+    """The spline's times ``t``, values ``y``, ``kind`` and ``unit``."""
 
 
 class HermiteArgs(Spec):
+    """Arguments of a quintic Hermite law: values and first two derivatives at given times."""
+
     t: list[Scalar] = Field(min_length=2)
+    """Knot times [model time unit], strictly increasing (at least 2)."""
     y: list[Scalar] = Field(min_length=2)
+    """Values at the knot times, one per time, in ``unit`` (default: model units)."""
     yd: list[Scalar] = Field(min_length=2)
+    """First time derivatives at the knot times, in ``unit`` per time unit."""
     ydd: list[Scalar] = Field(min_length=2)
+    """Second time derivatives at the knot times, in ``unit`` per time unit**2."""
     unit: str | None = None
+    """Unit of the values, e.g. ``deg`` (default: the model's unit of the driven quantity)."""
 
 
 class HermiteSpec(Spec):
     """``{hermite: {t, y, yd, ydd}}``: quintic Hermite through values and two derivatives."""
 
     hermite: HermiteArgs
+    """The times ``t``, values ``y``, derivatives ``yd``, ``ydd`` and ``unit``."""
 
 
 class PiecewiseArgs(Spec):
+    """Arguments of a piecewise polynomial law (scipy ``PPoly`` layout), in model units."""
+
     breaks: list[float] = Field(min_length=2)
+    """Break points [model time unit], strictly increasing (at least 2)."""
     coeffs: list[list[float]] = Field(min_length=1)
+    """Coefficient rows: ``coeffs[k][i]`` multiplies ``(t - breaks[i])**(K-k)``; each row has one
+    entry per interval. Plain numbers in model units."""
 
 
 class PiecewiseSpec(Spec):
@@ -213,6 +257,7 @@ class PiecewiseSpec(Spec):
     ``coeffs[k][i]`` of ``(t - breaks[i])**(K-k)``), in model units."""
 
     piecewise: PiecewiseArgs
+    """The ``breaks`` and ``coeffs``."""
 
 
 LAW_KEYS = ("expr", "constant", "polynomial", "ramp", "harmonic", "spline", "hermite", "piecewise")
@@ -259,14 +304,20 @@ class UnitsSpec(Spec):
     """The model's unit system (pint spellings); angles are always radians."""
 
     length: str = "m"
+    """Unit of length for every number without a unit (pint spelling, e.g. ``mm``). Default
+    ``m``."""
     mass: str = "kg"
+    """Unit of mass (pint spelling, e.g. ``g``). Default ``kg``."""
     time: str = "s"
+    """Unit of time, also that of ``t`` in laws (pint spelling, e.g. ``ms``). Default ``s``."""
 
 
 class GroundSpec(Spec):
     """The fixed frame: named points in global coordinates [length]."""
 
     points: dict[str, Vec2] = Field(default_factory=dict)
+    """Named fixed points ``{A: [x, y]}`` in global coordinates [length]; referred to as
+    ``ground.A``."""
 
 
 class BodySpec(Spec):
@@ -277,51 +328,105 @@ class BodySpec(Spec):
     """
 
     name: Name
+    """Unique name of the body (letters, digits, ``_``, ``-``); ``ground`` is reserved."""
     mass: Scalar = 0.0
+    """Mass [mass unit]; 0 (the default) is allowed for kinematics only."""
     inertia: Scalar = 0.0
+    """Moment of inertia about the centre of mass [mass*length**2], e.g. ``"20 kg*mm^2"``; >= 0.
+    Default 0."""
     q0: tuple[Scalar, Scalar, Scalar] = (0.0, 0.0, 0.0)
+    """Rough starting pose ``[x, y, phi]`` of the centre of mass [length, length, rad]; assembly
+    corrects it. Default ``[0, 0, 0]``."""
     points: dict[str, Vec2] = Field(default_factory=dict)
+    """Named points ``{B: [x, y]}`` in the body frame [length]; referred to as ``body.B``
+    (``body`` alone is the centre of mass)."""
     vectors: dict[str, Vec2] = Field(default_factory=dict)
+    """Named directions ``{u: [x, y]}`` in the body frame (e.g. a slider axis, used by a joint's
+    ``axis``)."""
 
 
 class RevoluteSpec(Spec):
+    """A revolute (pin) joint: two points coincide; the bodies rotate freely."""
+
     type: Literal["revolute"]
+    """Joint type: ``revolute``."""
     name: Name
+    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
+    ``name.M``."""
     point_i: Ref
+    """Point on body i: ``body.point``, ``body`` (centre of mass) or ``ground.point``."""
     point_j: Ref
+    """Point on body j (another body), coinciding with ``point_i``."""
 
 
 class WeldSpec(Spec):
+    """A weld (rigid) joint: two points coincide and the relative angle is fixed."""
+
     type: Literal["weld"]
+    """Joint type: ``weld``."""
     name: Name
+    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
+    ``name.M``."""
     point_i: Ref
+    """Point on body i: ``body.point``, ``body`` (centre of mass) or ``ground.point``."""
     point_j: Ref
+    """Point on body j (another body), coinciding with ``point_i``."""
     angle: Scalar = 0.0
+    """Fixed relative angle ``phi_j - phi_i`` [rad] (or with a unit, ``"30 deg"``). Default 0."""
 
 
 class TranslationalSpec(Spec):
+    """A translational (sliding) joint: ``point_j`` moves on a line through ``point_i`` fixed in
+    body i; no relative rotation."""
+
     type: Literal["translational"]
+    """Joint type: ``translational``."""
     name: Name
+    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
+    ``name.M``."""
     point_i: Ref
+    """Point of body i on the sliding line: ``body.point``, ``body`` or ``ground.point``."""
     point_j: Ref
+    """Point of body j (another body) that moves on the line."""
     axis: Vec2 | Name = (1.0, 0.0)
+    """Direction of the line in body i's frame: ``[x, y]`` or the name of one of body i's
+    ``vectors``. Default ``[1, 0]``."""
     angle: Scalar = 0.0
+    """Fixed relative angle ``phi_j - phi_i`` [rad] (or with a unit). Default 0."""
 
 
 class PinInSlotSpec(Spec):
+    """A pin-in-slot joint: ``point_j`` moves on a line through ``point_i`` fixed in body i; body
+    j rotates freely."""
+
     type: Literal["pin_in_slot"]
+    """Joint type: ``pin_in_slot``."""
     name: Name
+    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
+    ``name.M``."""
     point_i: Ref
+    """Point of body i on the slot's line: ``body.point``, ``body`` or ``ground.point``."""
     point_j: Ref
+    """Point (pin) of body j (another body) that moves in the slot."""
     axis: Vec2 | Name = (1.0, 0.0)
+    """Direction of the slot in body i's frame: ``[x, y]`` or the name of one of body i's
+    ``vectors``. Default ``[1, 0]``."""
 
 
 class DistanceSpec(Spec):
+    """A distance constraint (massless rod): two points stay ``length`` apart."""
+
     type: Literal["distance"]
+    """Joint type: ``distance``."""
     name: Name
+    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
+    ``name.M``."""
     point_i: Ref
+    """First point: ``body.point``, ``body`` or ``ground.point``."""
     point_j: Ref
+    """Second point, on another body."""
     length: Scalar
+    """Distance between the points [length], > 0, e.g. ``"120 mm"``."""
 
 
 JointSpec = Annotated[
@@ -334,33 +439,59 @@ class CoordinateDriverSpec(Spec):
     """Prescribes a body coordinate, ``coordinate: crank.phi``."""
 
     type: Literal["coordinate"]
+    """Driver type: ``coordinate``."""
     name: Name
+    """Unique name of the driver; its driving effort is the result column of that name."""
     coordinate: Ref
+    """The driven body coordinate: ``body.x``, ``body.y`` [length] or ``body.phi`` [rad]."""
     law: LawSpec
+    """The coordinate as a law of time, in length or rad, e.g. ``2*pi*t`` or ``{expr: 360*t,
+    unit: deg}``."""
 
 
 class PointDriverSpec(Spec):
+    """Prescribes the global ``x`` or ``y`` coordinate of a body point."""
+
     type: Literal["point"]
+    """Driver type: ``point``."""
     name: Name
+    """Unique name of the driver; its driving effort is the result column of that name."""
     point: Ref
+    """The driven point, ``body.point`` or ``body`` (not a ground point)."""
     coordinate: Literal["x", "y"]
+    """Which global coordinate of the point: ``x`` or ``y``."""
     law: LawSpec
+    """The coordinate [length] as a law of time, e.g. ``"10*sin(pi*t)"``."""
 
 
 class RelativeAngleDriverSpec(Spec):
+    """Prescribes the angle ``phi_j - phi_i`` of body j relative to body i."""
+
     type: Literal["relative_angle"]
+    """Driver type: ``relative_angle``."""
     name: Name
+    """Unique name of the driver; its driving effort is the result column of that name."""
     body_i: Name
+    """Body i (the reference body; may be ``ground``)."""
     body_j: Name
+    """Body j, whose angle relative to body i is driven."""
     law: LawSpec
+    """The angle ``phi_j - phi_i`` [rad] as a law of time, e.g. ``{expr: 90*t, unit: deg}``."""
 
 
 class DistanceDriverSpec(Spec):
+    """Prescribes the distance between two points (a linear actuator)."""
+
     type: Literal["distance"]
+    """Driver type: ``distance``."""
     name: Name
+    """Unique name of the driver; its driving effort is the result column of that name."""
     point_i: Ref
+    """First point: ``body.point``, ``body`` or ``ground.point``."""
     point_j: Ref
+    """Second point, on another body."""
     law: LawSpec
+    """The distance [length] as a law of time, e.g. ``100 + 20*t``."""
 
 
 DriverSpec = Annotated[
@@ -370,42 +501,87 @@ DriverSpec = Annotated[
 
 
 class PointForceSpec(Spec):
+    """A force at a body point along a fixed direction."""
+
     type: Literal["point_force"]
+    """Force type: ``point_force``."""
     name: Name
+    """Unique name of the force element (used in a mixed run's ``unknown``)."""
     point: Ref
+    """The loaded point, ``body.point`` or ``body`` (centre of mass)."""
     along: Vec2 = (1.0, 0.0)
+    """Direction of the force ``[x, y]``, in the ground or body frame (``frame``). Default ``[1,
+    0]``."""
     frame: Literal["ground", "body"] = "ground"
+    """Frame of ``along``: ``ground`` (fixed direction, default) or ``body`` (turns with the
+    body)."""
     law: LawSpec = 0.0
+    """Magnitude [force] along ``along``: a law of time, which may also use body states
+    (``-c*slider.vx``). Default 0."""
 
 
 class TorqueSpec(Spec):
+    """A torque on a body (counter-clockwise positive), optionally reacting on a second body."""
+
     type: Literal["torque"]
+    """Force type: ``torque``."""
     name: Name
+    """Unique name of the force element (used in a mixed run's ``unknown``)."""
     body: Name
+    """The body the torque acts on."""
     law: LawSpec = 0.0
+    """Magnitude [torque = force*length], counter-clockwise positive: a law of time, which may
+    also use body states (``-c*crank.omega``). Default 0."""
     reaction: Name | None = None
+    """A body that receives the opposite torque (e.g. a motor housing); default none
+    (``ground``)."""
 
 
 class SpringDamperSpec(Spec):
+    """A translational spring-damper-actuator between two points."""
+
     type: Literal["spring_damper"]
+    """Force type: ``spring_damper``."""
     name: Name
+    """Unique name of the force element (used in a mixed run's ``unknown``)."""
     point_i: Ref
+    """First attachment point: ``body.point``, ``body`` or ``ground.point``."""
     point_j: Ref
+    """Second attachment point, on another body."""
     stiffness: Scalar = 0.0
+    """Spring stiffness [force/length], e.g. ``"2 N/mm"``. Tension ``stiffness (L - free_length)
+    + damping dL/dt - actuator``. Default 0."""
     damping: Scalar = 0.0
+    """Damping coefficient [force*time/length], e.g. ``"5 N*s/m"``. Default 0."""
     free_length: Scalar = 0.0
+    """Unstretched length of the spring [length]. Default 0."""
     actuator: LawSpec = 0.0
+    """Actuator force [force] pushing the points apart: a law of time, which may also use body
+    states. Default 0."""
 
 
 class RotarySpringDamperSpec(Spec):
+    """A rotational spring-damper-actuator between two bodies (either may be ``ground``)."""
+
     type: Literal["rotary_spring_damper"]
+    """Force type: ``rotary_spring_damper``."""
     name: Name
+    """Unique name of the force element (used in a mixed run's ``unknown``)."""
     body_i: Name
+    """Body i (may be ``ground``)."""
     body_j: Name
+    """Body j (another body). The torque on j is ``-stiffness (theta - free_angle) - damping
+    dtheta/dt + actuator`` with ``theta = phi_j - phi_i``; the opposite acts on i."""
     stiffness: Scalar = 0.0
+    """Rotational stiffness [torque/rad], e.g. ``"500 N*mm/rad"``. Default 0."""
     damping: Scalar = 0.0
+    """Rotational damping [torque*time/rad]. Default 0."""
     free_angle: Scalar = 0.0
+    """Relative angle ``phi_j - phi_i`` at which the spring is relaxed [rad] (or with a unit).
+    Default 0."""
     actuator: LawSpec = 0.0
+    """Actuator torque [torque] on body j (opposite on body i): a law of time, which may also use
+    body states. Default 0."""
 
 
 ForceSpec = Annotated[
@@ -418,6 +594,8 @@ class AssemblySpec(Spec):
     """How the starting pose is closed: coordinates held at their ``q0`` value."""
 
     hold: list[Ref] = Field(default_factory=list)
+    """Coordinates (``body.x``, ``body.y``, ``body.phi``) kept at their ``q0`` value while the
+    joints are closed, e.g. ``[crank.phi]``. Default none."""
 
 
 # --------------------------------------------------------------------------- runs
@@ -425,9 +603,13 @@ class TimeSpec(Spec):
     """Output times: ``span`` with ``n`` points or a ``step``, or explicit ``values``."""
 
     span: tuple[Scalar, Scalar] | None = None
+    """Start and end time ``[t0, t1]`` [model time unit]; give with ``n`` or ``step``."""
     n: int | None = Field(default=None, ge=2, le=1_000_000)
+    """Number of output times over ``span``, including both ends (2 to 1,000,000)."""
     step: Scalar | None = None
+    """Spacing of the output times over ``span`` [model time unit], e.g. ``"1 ms"``."""
     values: list[Scalar] | None = Field(default=None, min_length=1)
+    """Explicit output times [model time unit], increasing; give alone, without ``span``."""
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -444,9 +626,16 @@ class PrescribedSpec(Spec):
     ``law`` or the motion computed by the run ``from_run``."""
 
     coordinate: Ref
+    """The prescribed coordinate: ``body.x``, ``body.y``, ``body.phi``, or a point's ``body.P.x``
+    / ``body.P.y``."""
     name: Name | None = None
+    """Name of the prescribed motion (its effort's result column); default ``prescribed
+    <coordinate>``."""
     law: LawSpec | None = None
+    """The motion as a law of time (length or rad); give either this or ``from_run``."""
     from_run: Name | None = None
+    """Name of another run whose computed motion of this coordinate is replayed (that run is
+    executed first)."""
 
     @model_validator(mode="after")
     def _one_source(self):
@@ -459,49 +648,83 @@ class ReferenceSpec(Spec):
     """A reference curve drawn beside the plotted columns: an expression of ``t``."""
 
     expr: str
+    """The reference curve: an expression of ``t`` [model time unit] and the parameters."""
     label: Text | None = None
+    """Legend label of the reference curve."""
     unit: str | None = None
+    """Unit of the expression's value, e.g. ``deg`` (default: model units)."""
 
 
 class PlotSpec(Spec):
     """A figure of some columns against time, written to the run's output folder."""
 
     file: PlotFile
+    """Figure file relative to the run's output folder: ``.png``, ``.svg`` or ``.pdf``."""
     columns: list[str] = Field(min_length=1)
+    """Result columns to plot, e.g. ``[slider.x, crank.phi, A.Fx]``."""
     title: Text | None = None
+    """Figure title (default: none)."""
     ylabel: Text | None = None
+    """Label of the y axis (default: none)."""
     reference: ReferenceSpec | None = None
+    """A reference curve ``{expr, label, unit}`` drawn beside the columns."""
 
 
 class AnimationSpec(Spec):
     """An animation of the run, written to the run's output folder."""
 
     file: AnimationFile = "animation.gif"
+    """Animation file relative to the run's output folder: ``.gif``, ``.mp4`` (needs ffmpeg) or
+    ``.html``. Default ``animation.gif``."""
     html: bool = True
+    """Also write an interactive ``.html`` animation beside ``file`` (same name). Default true."""
     fps: int = Field(default=20, ge=1, le=120)
+    """Frames per second (1 to 120). Default 20."""
     frames: int = Field(default=80, ge=2, le=2000)
+    """Largest number of frames, at evenly spaced output times (2 to 2000). Default 80."""
     trace: list[Ref] = Field(default_factory=list)
+    """Points whose paths are drawn, e.g. ``[coupler.C]``. Default none."""
 
 
 class _RunSpec(Spec):
+    """Settings common to every kind of run."""
+
     name: Name
+    """Unique name of the run (its output folder's name)."""
     time: TimeSpec
+    """Output times: ``{span: [0, 2], n: 201}``, ``{span, step}`` or ``{values: [...]}``."""
     linear_solver: Literal["auto", "dense", "sparse"] = "auto"
+    """Linear algebra: ``auto`` (default: sparse for large mechanisms of small bandwidth),
+    ``dense`` or ``sparse``."""
     drivers: list[Name] | None = None
+    """Names of the model's drivers used by this run (default: all)."""
     prescribed: list[PrescribedSpec] = Field(default_factory=list)
+    """Extra prescribed motions of this run (in a mixed run, one per unknown force)."""
     hold: list[Ref] | None = None
+    """Coordinates kept at their starting value (and speed) while the joints are closed (default:
+    ``assembly.hold``; ``[]`` holds nothing)."""
     initial: dict[str, Scalar] = Field(default_factory=dict)
+    """Rough start positions ``{coordinate: value}`` overriding ``q0``, e.g. ``{crank.phi: 10
+    deg}`` [length or rad]."""
     velocities: dict[str, Scalar] = Field(default_factory=dict)
+    """Start velocities kept exactly, forward/mixed runs only, ``{coordinate: value}`` [length or
+    rad per time unit], e.g. ``{crank.phi: 1 rad/s}`` (default: at rest)."""
     plots: list[PlotSpec] = Field(default_factory=list)
+    """Figures of result columns to write."""
     animation: AnimationSpec | None = None
+    """An animation of the run to write."""
 
 
 class KinematicRunSpec(_RunSpec):
     """Motion prescribed for every degree of freedom (``mixdyn.kinematic``)."""
 
     kind: Literal["kinematic"]
+    """Run kind: ``kinematic``."""
     tol: float | None = Field(default=None, gt=0, allow_inf_nan=False)
+    """Newton tolerance on the largest constraint residual [length] (default: 1e-12 times the
+    mechanism's size)."""
     max_iter: int = Field(default=25, ge=1, le=1000)
+    """Newton iterations per output time (1 to 1000). Default 25."""
 
 
 Method = Literal["projection", "baumgarte", "partitioning", "generalized-alpha"]
@@ -512,32 +735,55 @@ class ForwardRunSpec(_RunSpec):
     """Forces known, motion sought (``mixdyn.forward``)."""
 
     kind: Literal["forward"]
+    """Run kind: ``forward``."""
     method: Method = "projection"
+    """Integrator: ``projection`` (default), ``baumgarte``, ``partitioning`` or
+    ``generalized-alpha``."""
     rtol: float = Field(default=1e-8, gt=0, allow_inf_nan=False)
+    """Relative tolerance of the adaptive integrators. Default 1e-8."""
     atol: float = Field(default=1e-10, gt=0, allow_inf_nan=False)
+    """Absolute tolerance of the adaptive integrators, in model units. Default 1e-10."""
     dt: Scalar | None = None
+    """Time step of the fixed-step methods [model time unit], e.g. ``"1 ms"``."""
     options: dict[str, Option] = Field(default_factory=dict)
+    """Integrator options, e.g. ``{rho_inf: 0.9}``, ``{energy_tol: 1.0e-3}`` (``null`` turns the
+    energy check off), ``{solver: dopri8, max_steps: 100000}``; unknown options are errors."""
 
 
 class InverseRunSpec(_RunSpec):
     """Motion prescribed, driving forces and reactions sought (``mixdyn.inverse``)."""
 
     kind: Literal["inverse"]
+    """Run kind: ``inverse``."""
     options: dict[str, Option] = Field(default_factory=dict)
+    """Options of the position analysis: ``tol`` [length], ``max_iter`` (default 25),
+    ``singular_tol`` (default 1e-7), ``assemble_first`` (default true); unknown ones are errors."""
 
 
 class MixedRunSpec(_RunSpec):
     """Some forces unknown, as many motions prescribed (``mixdyn.mixed``)."""
 
     kind: Literal["mixed"]
+    """Run kind: ``mixed``."""
     unknown: list[Name] = Field(min_length=1)
+    """Force elements whose magnitude is sought, e.g. ``[F1]`` (as many as prescribed motions)."""
     solver: Literal["augmented", "partition"] = "augmented"
+    """Mixed solver: ``augmented`` (default, general) or ``partition`` (coordinate partitioning)."""
     independent: list[Ref] | None = None
+    """For ``solver: partition``, the independent coordinates, e.g. ``[coupler.phi]`` (default:
+    chosen by pivoted LU)."""
     method: Method = "projection"
+    """Integrator: ``projection`` (default), ``baumgarte``, ``partitioning`` or
+    ``generalized-alpha``."""
     rtol: float = Field(default=1e-8, gt=0, allow_inf_nan=False)
+    """Relative tolerance of the adaptive integrators. Default 1e-8."""
     atol: float = Field(default=1e-10, gt=0, allow_inf_nan=False)
+    """Absolute tolerance of the adaptive integrators, in model units. Default 1e-10."""
     dt: Scalar | None = None
+    """Time step of the fixed-step methods [model time unit], e.g. ``"1 ms"``."""
     options: dict[str, Option] = Field(default_factory=dict)
+    """Integrator options, e.g. ``{rho_inf: 0.9}``, ``{energy_tol: 1.0e-3}`` (``null`` turns the
+    energy check off), ``{solver: dopri8, max_steps: 100000}``; unknown options are errors."""
 
 
 RunSpec = Annotated[
@@ -550,18 +796,33 @@ class ModelFile(Spec):
     """A model file: a mechanism in one unit system, and named runs of analyses on it."""
 
     mixdyn: Literal[1] = FORMAT_VERSION
+    """Format version of the file: 1."""
     name: Text = "mechanism"
+    """Name of the mechanism (one line). Default ``mechanism``."""
     description: Annotated[str, AfterValidator(_paragraph)] | None = None
+    """Free text describing the model."""
     units: UnitsSpec = UnitsSpec()
+    """The model's unit system, e.g. ``{length: mm, mass: kg, time: s}``: every number without a
+    unit is in these (angles in rad). Default m, kg, s."""
     gravity: Vec2 = (0.0, 0.0)
+    """Gravitational acceleration ``[gx, gy]`` [length/time**2], e.g. ``[0, -9.81 m/s^2]``.
+    Default ``[0, 0]``."""
     parameters: dict[str, Scalar] = Field(default_factory=dict)
+    """Named constants usable in expressions and quantities, e.g. ``{L: 120 mm, F0: 10 N}``."""
     ground: GroundSpec = GroundSpec()
+    """The fixed frame and its named points."""
     bodies: list[BodySpec] = Field(min_length=1)
+    """The rigid bodies (at least one)."""
     joints: list[JointSpec] = Field(default_factory=list)
+    """Joints: ``revolute``, ``weld``, ``translational``, ``pin_in_slot``, ``distance``."""
     drivers: list[DriverSpec] = Field(default_factory=list)
+    """Drivers prescribing motions: ``coordinate``, ``point``, ``relative_angle``, ``distance``."""
     forces: list[ForceSpec] = Field(default_factory=list)
+    """Force elements: ``point_force``, ``torque``, ``spring_damper``, ``rotary_spring_damper``."""
     assembly: AssemblySpec = AssemblySpec()
+    """How the starting pose is closed: ``{hold: [crank.phi]}``."""
     runs: list[RunSpec] = Field(default_factory=list)
+    """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``."""
 
     def __eq__(self, other) -> bool:
         # Equal descriptions, whatever file (and lines) they were read from.
