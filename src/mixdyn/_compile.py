@@ -350,9 +350,9 @@ class _CachedJit:
                 return program
         try:
             program = _read(path)
-            if program is not None:
+            if program is not False:
                 stats["loaded"] += 1
-                return program
+            return program
         except FileNotFoundError:
             pass
         except Exception:  # a damaged entry: export it again
