@@ -7,9 +7,17 @@ Compiled programs (traced and compiled) are kept between processes in a cache fo
 (``$MIXDYN_CACHE_DIR``, else ``~/.cache/mixdyn/jax``), so a second process does not trace or
 compile them again: ``MIXDYN_NO_CACHE=1`` (read on import) or :func:`set_cache` turns that
 off (see :mod:`mixdyn._compile`).
+
+On import, mixdyn turns off two XLA CPU features that have hung compiled loops (multi-threaded
+Eigen, the concurrency-optimized scheduler) unless ``$XLA_FLAGS`` names them: see
+:mod:`mixdyn._xla`.
 """
 
-import jax as _jax
+from . import _xla
+
+_xla.apply()
+
+import jax as _jax  # noqa: E402
 
 _jax.config.update("jax_enable_x64", True)
 

@@ -1,0 +1,54 @@
+"""mixdyn's XLA CPU flags (``mixdyn._xla``): added on import where the user named none,
+the user's own values kept, nothing changed once JAX's backend has started."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from mixdyn._xla import KEEP_ENV, SAFE_FLAGS
+
+SHOW = "import os, json; {pre}import mixdyn; print(json.dumps(os.environ.get('XLA_FLAGS')))"
+
+
+def _flags_after_import(env_flags: str | None, pre: str = "", keep: bool = False):
+    env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", KEEP_ENV)}
+    if env_flags is not None:
+        env["XLA_FLAGS"] = env_flags
+    if keep:
+        env[KEEP_ENV] = "1"
+    out = subprocess.run(
+        [sys.executable, "-c", SHOW.format(pre=pre)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _parse(flags: str | None) -> dict[str, str]:
+    return dict(tok.split("=", 1) for tok in (flags or "").split())
+
+
+@pytest.mark.timeout(300)
+def test_flags_are_added_and_the_users_are_kept():
+    assert _parse(_flags_after_import(None)) == SAFE_FLAGS
+    mine = "--xla_cpu_multi_thread_eigen=true --xla_dump_to=/tmp/nowhere"
+    got = _parse(_flags_after_import(mine))
+    assert got["--xla_cpu_multi_thread_eigen"] == "true"
+    assert got["--xla_dump_to"] == "/tmp/nowhere"
+    assert got["--xla_cpu_enable_concurrency_optimized_scheduler"] == "false"
+    assert _flags_after_import(mine, keep=True) == mine
+    assert _flags_after_import(None, keep=True) is None
+
+
+@pytest.mark.timeout(300)
+def test_nothing_is_added_once_jax_has_started():
+    started = "import jax.numpy as jnp; jnp.ones(2).block_until_ready(); "
+    assert _flags_after_import(None, pre=started) is None
