@@ -317,8 +317,8 @@ def test_a_model_file_run_makes_the_same_object(kind, lines, expected, monkeypat
         run += "    unknown: [tq]\n    prescribed:\n      - {coordinate: rod.phi, law: 0.5*t}\n"
     seen = {}
 
-    def simulate(kind, problem, ts, q0, qd0, options, n_drivers, progress, energy_tol, *rest):
-        seen.update(options=options, energy_tol=energy_tol)
+    def simulate(case, progress=None):
+        seen.update(options=case.options, energy_tol=case.energy_tol)
         raise _CapturedError
 
     monkeypatch.setattr(importlib.import_module(f"mixdyn.analysis.{kind}"), "simulate", simulate)

@@ -9,6 +9,7 @@ from .kinematic import kinematic
 from .methods import Baumgarte, GeneralizedAlpha, IntegratorOptions, Partitioning, Projection
 from .mixed import check_mixed, mixed, prescribe
 from .result import Result
+from .sweep import Sweep, grid, sweep
 
 __all__ = [
     "INTEGRATORS",
@@ -20,12 +21,15 @@ __all__ = [
     "Partitioning",
     "Projection",
     "Result",
+    "Sweep",
     "assemble",
     "check_mixed",
     "degrees_of_freedom",
     "forward",
+    "grid",
     "inverse",
     "kinematic",
     "mixed",
     "prescribe",
+    "sweep",
 ]

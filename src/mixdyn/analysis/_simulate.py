@@ -3,6 +3,7 @@ integrator call, failures turned into named errors, and results in physical term
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 
 import jax
@@ -275,36 +276,61 @@ def _integrator(method: str):
     return cached_jit(INTEGRATORS[method])
 
 
-def simulate(
-    kind: str,
-    problem: Problem,
-    ts,
-    q0,
-    qd0,
-    options: IntegratorOptions,
-    n_drivers: int,
-    progress=None,
-    energy_tol: float | str | None = ENERGY_TOL,
-    recorded: dict | None = None,
-) -> Result:
-    """Integrate ``problem`` from the consistent state ``(q0, qd0)`` and build the result.
+@dataclasses.dataclass(frozen=True)
+class Case:
+    """One dynamic run, set up (consistent start, constraint set, checked options) and not
+    yet integrated: what :func:`integrate` and :func:`finish` need, so that a sweep
+    (:mod:`.sweep`) can integrate many cases as one program and finish each alike.
 
-    ``options`` are the integrator's (its method and options, checked by
-    :func:`run_options`); ``recorded`` the options the result records (default:
-    :meth:`~.methods.IntegratorOptions.recorded`). A run whose energy balance breaks by more
-    than ``energy_tol`` of its energy scale fails (:func:`check_energy_balance`).
+    Attributes:
+        kind: ``"forward"`` or ``"mixed"``.
+        problem: the equations of motion.
+        ts: (N,) output times [time].
+        q0, qd0: (nq,) consistent start [model units].
+        options: the integrator's options (checked by :func:`run_options`).
+        n_drivers: the model's own drivers (the first rows of the drivers).
+        energy_tol: the run's energy tolerance (see :func:`energy_tolerance`).
+        recorded: the options the result records (default: ``options.recorded()``).
+        stats: what the analysis adds to the result's ``stats``.
     """
-    method = options.method
-    integrator = _integrator(method)
+
+    kind: str
+    problem: Problem
+    ts: np.ndarray
+    q0: jax.Array
+    qd0: jax.Array
+    options: IntegratorOptions
+    n_drivers: int
+    energy_tol: float | str | None = ENERGY_TOL
+    recorded: dict | None = None
+    stats: dict = dataclasses.field(default_factory=dict)
+
+
+def integrate(case: Case, progress=None):
+    """The trajectory of ``case`` (an :class:`~.integrators.Trajectory`); ``progress``: an
+    optional ``f(t)`` called at each output time."""
+    integrator = _integrator(case.options.method)
     # A progress callback is passed as a key into a registry: one program for every callback.
     with progress_hook(progress) as cb:
-        traj = integrator(
-            problem, np.asarray(ts, dtype=np.float64), q0, qd0, options.as_argument(), progress=cb
+        return integrator(
+            case.problem,
+            np.asarray(case.ts, dtype=np.float64),
+            case.q0,
+            case.qd0,
+            case.options.as_argument(),
+            progress=cb,
         )
+
+
+def finish(case: Case, traj) -> Result:
+    """The result of ``case`` from its trajectory ``traj``, in physical terms; a failed or
+    unbalanced run raises its named error (:class:`~mixdyn.errors.NumericalError`)."""
+    problem, ts, options = case.problem, case.ts, case.options
+    method = options.method
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)
     Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
-    qdd, _, ratio, cols = _post(problem, np.asarray(ts, dtype=np.float64), Q, QD, n_drivers)
+    qdd, _, ratio, cols = _post(problem, np.asarray(ts, dtype=np.float64), Q, QD, case.n_drivers)
     extra = {k: np.asarray(v) for k, v in cols.items()}
     extra["work.nonconservative"] = W[:, 0]
     extra["work.constraints"] = W[:, 1]
@@ -314,11 +340,11 @@ def simulate(
         raise SingularityError(
             "accelerations are not finite: singular equations of motion", float(ts[k])
         )
-    tol = energy_tolerance(energy_tol, options)
+    tol = energy_tolerance(case.energy_tol, options)
     balance = check_energy_balance(problem, ts, Q, extra, ratio, method, tol)
     stats = {
         "method": method,
-        "options": dict(options.recorded() if recorded is None else recorded),
+        "options": dict(options.recorded() if case.recorded is None else case.recorded),
         "steps": int(traj.steps),
         "rejected_steps": int(traj.rejected),
         "newton_iterations": int(traj.newton),
@@ -330,17 +356,25 @@ def simulate(
         "unknown_forces": problem.unknown,
         "linear_solver": "sparse" if problem.sparse else "dense",
     }
+    stats.update(case.stats)
     return Result(
-        kind=kind,
+        kind=case.kind,
         model=problem.model,
         t=ts,
         q=Q,
         qd=QD,
         qdd=np.asarray(qdd),
         extra=extra,
-        kinds=post_kinds(problem, n_drivers),
+        kinds=post_kinds(problem, case.n_drivers),
         stats=stats,
     )
 
 
-__all__ = ["output_times", "require_masses", "simulate"]
+def simulate(case: Case, progress=None) -> Result:
+    """Integrate ``case`` from its consistent start and build the result (``progress``: an
+    optional ``f(t)`` called at each output time). A run whose energy balance breaks by more
+    than its energy tolerance fails (:func:`check_energy_balance`)."""
+    return finish(case, integrate(case, progress))
+
+
+__all__ = ["Case", "finish", "integrate", "output_times", "require_masses", "simulate"]

@@ -11,6 +11,7 @@ from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
+    Case,
     output_times,
     require_masses,
     run_options,
@@ -90,6 +91,42 @@ def forward(
         energies (``energy.kinetic``, ``energy.potential``, ``energy.total``), accumulated
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
     """
+    case = forward_case(
+        model,
+        t,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        dt=dt,
+        q0=q0,
+        qd0=qd0,
+        hold=hold,
+        linear_solver=linear_solver,
+        energy_tol=energy_tol,
+        prepared=prepared,
+        **options,
+    )
+    return simulate(case, progress)
+
+
+def forward_case(
+    model: Model,
+    t,
+    *,
+    method: str | IntegratorOptions = "projection",
+    rtol: float | None = None,
+    atol: float | None = None,
+    dt: float | None = None,
+    q0=None,
+    qd0=None,
+    hold=(),
+    linear_solver: str = "auto",
+    energy_tol: float | str | None = ENERGY_TOL,
+    prepared: Prepared | None = None,
+    **options,
+) -> Case:
+    """The set-up of a forward run (:func:`forward`'s arguments but ``progress``): its
+    checked options, consistent start and equations, not yet integrated."""
     ts = output_times(t)
     opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
     require_masses(model)
@@ -111,7 +148,7 @@ def forward(
     # The partitioning integrator needs independent rows; the others solve redundant
     # constraints in the least-squares sense (robust where the redundancy moves).
     problem = Problem(model, prep.constraints(opts.method == "partitioning"))
-    res = simulate(
+    return Case(
         "forward",
         problem,
         ts,
@@ -119,9 +156,7 @@ def forward(
         prep.qd,
         opts,
         len(model.drivers),
-        progress,
         energy_tol,
         recorded,
+        {"redundant_equations": prep.report.redundant},
     )
-    res.stats["redundant_equations"] = prep.report.redundant
-    return res

@@ -33,6 +33,7 @@ from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (
     ENERGY_TOL,
+    Case,
     output_times,
     require_masses,
     run_options,
@@ -427,6 +428,50 @@ def mixed(
         ModelError: ``linear_solver="sparse"`` for a problem the sparse path cannot solve
             (see above), or a bad option.
     """
+    case = mixed_case(
+        model,
+        t,
+        prescribed=prescribed,
+        unknown=unknown,
+        solver=solver,
+        independent=independent,
+        method=method,
+        rtol=rtol,
+        atol=atol,
+        dt=dt,
+        q0=q0,
+        qd0=qd0,
+        hold=hold,
+        linear_solver=linear_solver,
+        energy_tol=energy_tol,
+        prepared=prepared,
+        **options,
+    )
+    return simulate(case, progress)
+
+
+def mixed_case(
+    model: Model,
+    t,
+    *,
+    prescribed,
+    unknown,
+    solver: str = "augmented",
+    independent=None,
+    method: str | IntegratorOptions = "projection",
+    rtol: float | None = None,
+    atol: float | None = None,
+    dt: float | None = None,
+    q0=None,
+    qd0=None,
+    hold=(),
+    linear_solver: str = "auto",
+    energy_tol: float | str | None = ENERGY_TOL,
+    prepared: Prepared | None = None,
+    **options,
+) -> Case:
+    """The set-up of a mixed run (:func:`mixed`'s arguments but ``progress``): its checked
+    options, solvability, consistent start and equations, not yet integrated."""
     ts = output_times(t)
     opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
     problem, q, qd, prescribed = _setup(
@@ -443,13 +488,10 @@ def mixed(
         linear_solver,
         prepared,
     )
-    res = simulate(
-        "mixed", problem, ts, q, qd, opts, len(model.drivers), progress, energy_tol, recorded
-    )
-    res.stats.update(
+    stats = dict(
         solver=solver,
         independent=tuple(independent or ()),
         prescribed=tuple(d.name for d in prescribed),
         collocated=bool(problem.collocated),
     )
-    return res
+    return Case("mixed", problem, ts, q, qd, opts, len(model.drivers), energy_tol, recorded, stats)

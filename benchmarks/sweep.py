@@ -1,0 +1,79 @@
+"""Sweeps against single runs: the paper's model (forward, 2 s, 201 outputs, rtol 1e-8) over
+its slider's mass and F1's amplitude, ``M`` members.
+
+Compares, in one process and after a warm-up of each: ``M`` warm single ``md.forward`` runs
+(the peer: what a user writes without a sweep) against ``md.sweep`` member by member (the
+CPU default: the single run's program from a thread per core) and in one vectorized program
+(``batch_size`` = 1, 8, M). Prints milliseconds per member and the ratio to the single runs.
+
+Run: ``python benchmarks/sweep.py [M] [--repeat 3]``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
+
+import mixdyn as md
+from fixtures import paper_mechanism
+from mixdyn.analysis.sweep import vary_models
+
+
+def model():
+    forces = [
+        md.Torque("T2", "crank", law=500.0),
+        md.Torque("T3", "coupler", law=-500.0),
+        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
+    ]
+    return paper_mechanism(forces=forces)
+
+
+def best(fn, repeat: int) -> float:
+    fn()  # warm-up: traced, compiled or loaded
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return min(times)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("members", nargs="?", type=int, default=64)
+    ap.add_argument("--repeat", type=int, default=3)
+    a = ap.parse_args()
+    m, ts = model(), np.linspace(0.0, 2.0, 201)
+    vary = {
+        "slider.mass": np.linspace(0.005, 0.02, a.members),
+        "F1.law.amplitude": np.linspace(5.0, 20.0, a.members),
+    }
+    members = vary_models(m, vary)
+    opts = dict(rtol=1e-8)
+    single = best(lambda: [md.forward(x, ts, **opts) for x in members], a.repeat)
+    rows = [("single runs (peer)", single)]
+    rows.append(
+        ("sweep, member by member", best(lambda: md.sweep(m, ts, vary=vary, **opts), a.repeat))
+    )
+    for bs in sorted({1, 8, a.members}):
+        rows.append(
+            (
+                f"sweep, one program, batch_size {bs}",
+                best(lambda bs=bs: md.sweep(m, ts, vary=vary, batch_size=bs, **opts), a.repeat),
+            )
+        )
+    print(f"{a.members} members, {os.cpu_count()} cores, best of {a.repeat}")
+    print("| way | ms per member | ratio to single runs |")
+    print("|---|---|---|")
+    for name, s in rows:
+        print(f"| {name} | {1e3 * s / a.members:.1f} | {s / single:.2f} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,374 @@
+"""Sweeps: one dynamic analysis over many variants of a mechanism, compiled once.
+
+Each member is set up like a single run (its options checked, its start made consistent, its
+mobility analysed: :func:`~.forward.forward_case`, :func:`~.mixed.mixed_case`); all members
+share one structure, hence one compiled program. On a CPU the members are integrated one by
+one by the single run's program, from a thread per core (XLA runs without the GIL); with a
+``batch_size`` (the default on an accelerator) the members' equations are stacked and one
+program integrates the whole batch (``jax.lax.map`` over chunks vectorized by ``vmap``).
+Each member is finished like a single run: a failure or a broken energy balance is reported
+by member index and cause (:attr:`Sweep.errors`) without losing the others.
+
+Members differ in numbers only: masses, inertias, law and force parameters, start guesses
+(any float leaf of the model, named by a path such as ``"slider.mass"`` or
+``"F1.law.amplitude"``), or whole models built by the user with the same structure.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+import os
+import time
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._compile import cached_jit
+from ..errors import MixdynError, ModelError
+from ..model import Model
+from ._simulate import Case, finish, integrate
+from .forward import forward_case
+from .integrators import INTEGRATORS
+from .mixed import mixed_case
+from .result import Result
+
+#: The analyses a sweep runs, by name: their set-up functions.
+ANALYSES: dict[str, Callable[..., Case]] = {"forward": forward_case, "mixed": mixed_case}
+
+#: Fields that hold geometry bound from body points: a number there would disagree with the
+#: bodies' points; vary the points by building the member models instead (``models=``).
+_BOUND = frozenset({"si", "sj", "s", "u", "points", "vectors"})
+
+
+def grid(**axes: Sequence[float]) -> dict[str, np.ndarray]:
+    """Every combination of the values of ``axes`` (path -> values), as the flat columns of
+    a ``vary=`` mapping (the first axis varies slowest), e.g.
+    ``md.grid(**{"slider.mass": [1, 2], "F1.law.a": [5, 10, 20]})`` gives 6 members."""
+    names = list(axes)
+    combos = list(itertools.product(*(np.asarray(axes[n], dtype=float) for n in names)))
+    return {n: np.asarray([c[k] for c in combos]) for k, n in enumerate(names)}
+
+
+def _locate(model: Model, head: str):
+    """A function ``m -> the body or element called head`` in a model of this structure."""
+    for k, b in enumerate(model.bodies):
+        if b.name == head:
+            return lambda m, k=k: m.bodies[k]
+    for group in ("joints", "drivers", "forces"):
+        for k, e in enumerate(getattr(model, group)):
+            if e.name == head:
+                return lambda m, g=group, k=k: getattr(m, g)[k]
+    known = [b.name for b in model.bodies]
+    known += [e.name for e in (*model.joints, *model.drivers, *model.forces)]
+    raise ModelError(
+        f"no body or element {head!r} to vary; known: {', '.join(known)}", f"vary {head!r}"
+    )
+
+
+def _leaf_getter(model: Model, path: str):
+    """``(m -> the array leaf at path, its shape)`` for a path ``"name.field[.field...]"``."""
+    head, _, rest = path.partition(".")
+    if not rest:
+        raise ModelError(
+            "a varied quantity is 'name.field' (a body's or element's field, e.g. "
+            "'slider.mass', 'F1.law.a')",
+            f"vary {path!r}",
+        )
+    locate = _locate(model, head)
+    obj = locate(model)
+    fields = rest.split(".")
+    for f in fields:
+        names = (
+            {x.name: x for x in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else {}
+        )
+        if f in _BOUND:
+            raise ModelError(
+                f"{f!r} is geometry bound from the bodies' points; build the member models "
+                "with the points changed and pass them as models=[...]",
+                f"vary {path!r}",
+            )
+        if f not in names:
+            raise ModelError(
+                f"{type(obj).__name__} {getattr(obj, 'name', head)!r} has no field {f!r}; its "
+                f"fields: {', '.join(sorted(n for n in names if n != 'name'))}",
+                f"vary {path!r}",
+            )
+        if names[f].metadata.get("static", False):
+            raise ModelError(
+                f"field {f!r} is part of the structure (it decides the equations), not a "
+                "number; build the member models instead (models=[...])",
+                f"vary {path!r}",
+            )
+        obj = getattr(obj, f)
+    if not (eqx.is_array(obj) and jnp.issubdtype(jnp.asarray(obj).dtype, jnp.floating)):
+        raise ModelError(
+            f"{path!r} is not a number of the model ({type(obj).__name__}); name a numeric field",
+            f"vary {path!r}",
+        )
+
+    def get(m):
+        x = locate(m)
+        for f in fields:
+            x = getattr(x, f)
+        return x
+
+    return get, tuple(np.shape(obj))
+
+
+def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
+    """The member models of ``vary`` (path -> (B,) or (B, ...) values, one row per member):
+    ``model`` with the named numbers replaced, member by member."""
+    if not vary:
+        raise ModelError("nothing to vary: give vary={'body.mass': [...], ...}", "vary")
+    getters, values, count = [], [], None
+    for path, vals in vary.items():
+        get, shape = _leaf_getter(model, path)
+        v = np.asarray(vals, dtype=float)
+        if v.ndim == 0 or v.shape[1:] != shape:
+            raise ModelError(
+                f"values of shape {v.shape}: one row of shape {shape} per member expected",
+                f"vary {path!r}",
+            )
+        if not np.all(np.isfinite(v)):
+            k = int(np.argmax(~np.isfinite(v.reshape(len(v), -1)).all(axis=1)))
+            raise ModelError(f"member {k}: value {v[k]} is not finite", f"vary {path!r}")
+        if count is not None and len(v) != count:
+            raise ModelError(
+                f"{len(v)} values where the first varied quantity has {count}; give one value "
+                "per member for each (md.grid(...) makes combinations)",
+                f"vary {path!r}",
+            )
+        count = len(v)
+        getters.append(get)
+        values.append(v)
+    members = []
+    for i in range(count):
+        m = model
+        for get, v in zip(getters, values, strict=True):
+            m = eqx.tree_at(get, m, jnp.asarray(v[i]))
+        members.append(m)
+    return members
+
+
+def _integrate_batch(method: str, batch_size: int, problems, ts, q0, qd0, options):
+    """The trajectories of a batch of cases of one structure (leading axis: the member)."""
+    integrate_one = INTEGRATORS[method]
+
+    def one(x):
+        p, a, b = x
+        return integrate_one(p, ts, a, b, options, progress=None)
+
+    return jax.lax.map(one, (problems, q0, qd0), batch_size=batch_size)
+
+
+_integrate_batch_jit = cached_jit(_integrate_batch)
+
+
+@functools.cache
+def _default_batch_size() -> int | None:
+    """None on a CPU: member by member, each by the single run's program, from a thread per
+    core (measured on the paper's model: 17 ms a member so, 55-66 ms a member in one
+    program of ``lax.map`` or ``vmap``); 1024 on an accelerator."""
+    return None if jax.default_backend() == "cpu" else 1024
+
+
+@dataclasses.dataclass
+class Sweep:
+    """The members of a sweep, in order.
+
+    Attributes:
+        results: per member its :class:`~mixdyn.Result`, or None where it failed.
+        errors: member index -> the named error of a failed member.
+        parameters: member index -> the varied values (path -> value), empty for ``models=``.
+        seconds: wall time of the set-up, the batched integration and the finishing [s].
+    """
+
+    results: list[Result | None]
+    errors: dict[int, MixdynError]
+    parameters: list[dict[str, float | list]]
+    seconds: dict[str, float]
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    def __getitem__(self, i: int) -> Result:
+        """Member ``i``'s result; a failed member raises its error."""
+        if i in self.errors:
+            raise self.errors[i]
+        return self.results[i]
+
+    def table(self, columns: Sequence[str] = ()):
+        """A long-format pandas DataFrame: one row per (member, output time), with the member
+        index, its varied values, ``t`` and the result ``columns`` (default: every column);
+        the units in ``df.attrs["units"]``. Failed members have no rows."""
+        import pandas as pd
+
+        frames, units = [], {}
+        for i, res in enumerate(self.results):
+            if res is None:
+                continue
+            cols = res.columns()
+            if not units:
+                units = res.units()
+            keep = ["t", *columns] if columns else list(cols)
+            for c in keep:
+                if c not in cols:
+                    res[c]  # the error names the columns close to it
+            df = pd.DataFrame({c: cols[c] for c in keep})
+            for k, (name, v) in enumerate(self.parameters[i].items() if self.parameters else ()):
+                df.insert(k, name, v if np.ndim(v) == 0 else str(v))
+            df.insert(0, "member", i)
+            frames.append(df)
+        out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+        out.attrs["units"] = units
+        return out
+
+
+def _finish(case: Case, traj) -> tuple[Result | None, MixdynError | None]:
+    try:
+        return finish(case, traj), None
+    except MixdynError as err:
+        return None, err
+
+
+def _member_by_member(cases: list[Case], threads: int):
+    """Each member integrated by the single run's program (compiled once: the first member
+    runs alone), the others from ``threads`` threads (XLA runs without the GIL)."""
+    first = _finish(cases[0], integrate(cases[0]))
+    if len(cases) == 1:
+        return [first]
+    run = lambda c: _finish(c, integrate(c))  # noqa: E731
+    if threads <= 1:
+        return [first, *map(run, cases[1:])]
+    with ThreadPoolExecutor(threads) as pool:
+        return [first, *pool.map(run, cases[1:])]
+
+
+def _batched(cases: list[Case], batch_size: int):
+    """The members integrated by one program (``batch_size`` at a time vectorized), then
+    finished one by one."""
+    if batch_size < 1:
+        raise ModelError(f"batch_size must be >= 1, got {batch_size}", "batch_size")
+    first = cases[0]
+    stack = lambda *xs: jnp.stack([jnp.asarray(x) for x in xs])  # noqa: E731
+    trajs = _integrate_batch_jit(
+        first.options.method,
+        int(min(batch_size, len(cases))),
+        jax.tree.map(stack, *[c.problem for c in cases]),
+        np.asarray(first.ts, dtype=np.float64),
+        stack(*[c.q0 for c in cases]),
+        stack(*[c.qd0 for c in cases]),
+        first.options.as_argument(),
+    )
+    return [_finish(c, jax.tree.map(lambda x, i=i: x[i], trajs)) for i, c in enumerate(cases)]
+
+
+def sweep(
+    model: Model | None = None,
+    t=None,
+    *,
+    vary: Mapping[str, Sequence] | None = None,
+    models: Sequence[Model] | None = None,
+    analysis: str = "forward",
+    batch_size: int | None = None,
+    threads: int | None = None,
+    **kwargs,
+) -> Sweep:
+    """Run one dynamic analysis over many variants of a mechanism, compiled once.
+
+    Args:
+        model: the nominal mechanism, whose numbers ``vary`` replaces member by member.
+        t: (N,) output times [time], shared by every member.
+        vary: path -> values, one value (or row) per member, e.g.
+            ``{"slider.mass": [1, 2, 3], "F1.law.a": [10, 10, 20]}`` (three members); a path
+            names a body or element and a numeric field (model units), the fields of a law
+            included; :func:`grid` makes every combination of per-axis values.
+        models: instead of ``model`` and ``vary``: the member models themselves, all of one
+            structure (the same bodies, elements and kinds of laws; any numbers).
+        analysis: ``"forward"`` (default) or ``"mixed"``.
+        batch_size: None (default): on a CPU member by member, each by the single run's
+            program (compiled once), from ``threads`` threads; on an accelerator 1024. A
+            number: every member integrated by one program, ``batch_size`` members at a time
+            vectorized (``vmap``) (on a CPU 3-4 times slower a member: measured in
+            ``benchmarks/sweep.py``).
+        threads: threads of the member-by-member path (default: one per core).
+        **kwargs: the analysis' own keywords (``method``, ``rtol``, ``prescribed``,
+            ``unknown``, ``q0``...), the same for every member (no ``progress``).
+
+    Returns:
+        A :class:`Sweep`: per member a :class:`~mixdyn.Result` equal to the single run's, or
+        its named error (``Sweep.errors``: a member's numerical failure does not stop the
+        others).
+
+    Raises:
+        ModelError: a bad path or value (before any computing), members of different
+            structures, or a member whose set-up fails (an input error: named with the
+            member's index).
+    """
+    started = time.perf_counter()
+    if analysis not in ANALYSES:
+        raise ModelError(f"unknown analysis {analysis!r}; a sweep runs: {', '.join(ANALYSES)}")
+    if "progress" in kwargs:
+        raise ModelError("a sweep has no per-time progress callback", "progress")
+    if t is None:
+        raise ModelError("give the output times t", "t")
+    if models is not None:
+        if model is not None or vary is not None:
+            raise ModelError("give either models=[...] or a model with vary=, not both", "models")
+        members, params = list(models), []
+        if not members:
+            raise ModelError("models is empty", "models")
+    else:
+        if model is None:
+            raise ModelError("give a model and vary=, or models=[...]", "model")
+        members = vary_models(model, vary or {})
+        params = [
+            {p: (v[i].item() if np.ndim(v[i]) == 0 else v[i].tolist()) for p, v in _rows(vary)}
+            for i in range(len(members))
+        ]
+    setup = ANALYSES[analysis]
+    cases = []
+    for i, m in enumerate(members):
+        try:
+            cases.append(setup(m, t, **kwargs))
+        except MixdynError as err:
+            err.add_note(f"in member {i} of the sweep{_describe(params, i)}")
+            raise
+    first = cases[0]
+    tree = jax.tree.structure(first.problem)
+    for i, c in enumerate(cases[1:], start=1):
+        if jax.tree.structure(c.problem) != tree or c.options != first.options:
+            raise ModelError(
+                f"member {i} differs from member 0 in structure (its bodies, elements, kinds "
+                "of laws or constraint rows): a sweep varies numbers only",
+                "models",
+            )
+    prepared = time.perf_counter()
+    if batch_size is None and _default_batch_size() is None:
+        outcomes = _member_by_member(cases, threads or os.cpu_count() or 1)
+    else:
+        outcomes = _batched(cases, batch_size or _default_batch_size())
+    results = [r for r, _ in outcomes]
+    errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
+    done = time.perf_counter()
+    seconds = {"setup": prepared - started, "integration and finish": done - prepared}
+    return Sweep(results, errors, params, seconds)
+
+
+def _describe(params, i) -> str:
+    if not params:
+        return ""
+    return " (" + ", ".join(f"{k} = {v}" for k, v in params[i].items()) + ")"
+
+
+def _rows(vary):
+    return [(p, np.asarray(v, dtype=float)) for p, v in vary.items()]
+
+
+__all__ = ["ANALYSES", "Sweep", "grid", "sweep", "vary_models"]

@@ -1,0 +1,144 @@
+"""Sweeps (``md.sweep``): every member equals the single run with its numbers, on both paths
+(member by member from threads; one vectorized program); a failed member is reported by
+index and cause without losing the others; bad input is refused before any computing."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mixdyn as md
+from fixtures import new_traces, paper_mechanism, traced_now
+from mixdyn.analysis.sweep import vary_models
+
+TS = np.linspace(0.0, 1.0, 51)
+OPTS = dict(rtol=1e-8, atol=1e-10)
+#: Columns compared with the single runs: motion, a reaction, the work of the loads.
+COLUMNS = ("slider.x", "crank.phi", "B.Fx", "EF.M", "work.nonconservative")
+
+
+@pytest.fixture(scope="module")
+def paper():
+    """The paper's mechanism under its loads (T2, T3 constant, F1 = 10 sin(pi t / 2))."""
+    forces = [
+        md.Torque("T2", "crank", law=500.0),
+        md.Torque("T3", "coupler", law=-500.0),
+        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
+    ]
+    return paper_mechanism(forces=forces)
+
+
+VARY = md.grid(**{"slider.mass": [0.00786, 0.02], "F1.law.amplitude": [10.0, -25.0]})
+
+
+def _same(a: md.Result, b: md.Result, rel=1e-10):
+    for c in COLUMNS:
+        scale = max(float(np.max(np.abs(b[c]))), 1e-300)
+        assert float(np.max(np.abs(a[c] - b[c]))) <= rel * scale, c
+
+
+def test_grid_is_every_combination():
+    g = md.grid(a=[1, 2], b=[10, 20, 30])
+    assert list(zip(g["a"], g["b"], strict=True)) == [
+        (1, 10),
+        (1, 20),
+        (1, 30),
+        (2, 10),
+        (2, 20),
+        (2, 30),
+    ]
+
+
+@pytest.mark.timeout(600)
+@pytest.mark.parametrize("batch_size", [None, 2], ids=["member-by-member", "vectorized"])
+def test_forward_members_equal_single_runs(paper, batch_size):
+    """Each member, on both paths (the vectorized one under a timeout: a vmapped
+    ``while_loop`` has deadlocked XLA's CPU runtime), equals ``md.forward`` of its model."""
+    sw = md.sweep(paper, TS, vary=VARY, batch_size=batch_size, **OPTS)
+    assert len(sw) == 4 and not sw.errors
+    members = vary_models(paper, VARY)
+    for i, m in enumerate(members):
+        assert float(m.bodies[3].mass) == VARY["slider.mass"][i]
+        _same(sw[i], md.forward(m, TS, **OPTS))
+    # the members differ: the numbers reached the equations
+    assert abs(sw[0]["slider.x"][-1] - sw[3]["slider.x"][-1]) > 1.0
+    table = sw.table(["slider.x"])
+    assert list(table.columns) == ["member", "slider.mass", "F1.law.amplitude", "t", "slider.x"]
+    assert len(table) == 4 * len(TS)
+    assert table.attrs["units"]["slider.x"] == "mm"
+
+
+def test_a_second_sweep_with_other_numbers_traces_nothing(paper):
+    vary = {"T2.law.value": [400.0, 600.0, 700.0]}
+    md.sweep(paper, TS, vary=vary, **OPTS)
+    before = traced_now()
+    sw = md.sweep(paper, TS, vary={"T2.law.value": [450.0, 550.0, 650.0]}, **OPTS)
+    assert new_traces(before) == {}
+    assert not sw.errors
+
+
+def test_mixed_members_equal_single_runs(paper):
+    """The paper's mixed run (F1 unknown, the slider's x prescribed) over the crank's torque:
+    each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2)."""
+    fwd = md.forward(paper, TS, rtol=1e-10, atol=1e-10)
+    kw = dict(
+        prescribed=[md.prescribe(fwd, "slider.x")],
+        unknown=["F1"],
+        solver="partition",
+        independent=["coupler.phi"],
+        rtol=1e-10,
+        atol=1e-10,
+    )
+    vary = {"T2.law.value": [500.0, 520.0]}
+    sw = md.sweep(paper, TS, vary=vary, analysis="mixed", **kw)
+    assert not sw.errors
+    for i, m in enumerate(vary_models(paper, vary)):
+        single = md.mixed(m, TS, **kw)
+        assert np.max(np.abs(sw[i]["F1"] - single["F1"])) <= 1e-10 * 10.0
+    assert np.max(np.abs(sw[0]["F1"] - 10.0 * np.sin(np.pi * TS / 2))) < 1e-5
+    assert np.max(np.abs(sw[1]["F1"] - 10.0 * np.sin(np.pi * TS / 2))) > 1e-3
+
+
+def test_a_failed_member_is_reported_and_the_others_kept(paper):
+    """A member whose run needs more steps than allowed fails by name; the others finish."""
+    vary = {"T2.law.value": [500.0, 50_000.0, 520.0]}
+    sw = md.sweep(paper, TS, vary=vary, max_steps=400, **OPTS)
+    assert set(sw.errors) == {1}
+    assert isinstance(sw.errors[1], md.NumericalError)
+    assert "step limit" in str(sw.errors[1])
+    with pytest.raises(md.NumericalError):
+        sw[1]
+    assert sw.results[0] is not None and sw.results[2] is not None
+    assert sorted(set(sw.table(["slider.x"])["member"])) == [0, 2]
+
+
+@pytest.mark.parametrize(
+    ("vary", "words"),
+    [
+        ({"slider.mas": [1.0]}, "no field 'mas'"),
+        ({"piston.mass": [1.0]}, "no body or element 'piston'"),
+        ({"slider": [1.0]}, "'name.field'"),
+        ({"EF.si": [[0.0, 0.0]]}, "geometry"),
+        ({"EF.axis": [1.0]}, "structure"),
+        ({"slider.mass": [1.0, 2.0], "crank.mass": [1.0]}, "1 values where"),
+        ({"slider.mass": [1.0, np.nan]}, "member 1"),
+        ({"slider.q0": [1.0, 2.0]}, "one row of shape (3,)"),
+        ({}, "nothing to vary"),
+    ],
+)
+def test_bad_variations_are_refused_by_name(paper, vary, words):
+    with pytest.raises(md.ModelError, match=None) as err:
+        md.sweep(paper, TS, vary=vary)
+    assert words in str(err.value)
+
+
+def test_a_member_of_another_structure_is_refused(paper):
+    other = paper_mechanism(forces=[md.Torque("T2", "crank", law=md.Harmonic(1.0, 1.0))])
+    with pytest.raises(md.ModelError, match="member 1 differs"):
+        md.sweep(models=[paper, other], t=TS)
+
+
+def test_a_members_input_error_names_the_member(paper):
+    with pytest.raises(md.ModelError) as err:
+        md.sweep(paper, TS, vary={"slider.mass": [0.01, 0.0]})
+    assert "member 1 of the sweep" in "".join(getattr(err.value, "__notes__", []))
