@@ -3,6 +3,7 @@
 from ._assembly import Assembly, assemble
 from ._structure import DofReport, degrees_of_freedom
 from .forward import forward
+from .gradients import differentiable
 from .integrators import INTEGRATORS
 from .inverse import inverse
 from .kinematic import kinematic
@@ -25,6 +26,7 @@ __all__ = [
     "assemble",
     "check_mixed",
     "degrees_of_freedom",
+    "differentiable",
     "forward",
     "grid",
     "inverse",

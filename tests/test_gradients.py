@@ -1,0 +1,126 @@
+"""Gradients of dynamic runs (``md.differentiable``) against central finite differences of
+the same runs at tight tolerances; the function's value equals ``md.forward``'s; a failed run
+gives NaN, never a finite wrong number; numbers that shape the constraints are refused."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+from fixtures import paper_mechanism
+
+TS = np.linspace(0.0, 0.5, 11)
+PARAMS = ["slider.mass", "crank.inertia", "F1.law.amplitude", "T2.law.value"]
+SLIDER_X = 9  # q index of the slider's x
+
+
+@pytest.fixture(scope="module")
+def paper():
+    forces = [
+        md.Torque("T2", "crank", law=500.0),
+        md.Torque("T3", "coupler", law=-500.0),
+        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
+    ]
+    return paper_mechanism(forces=forces)
+
+
+def _check_gradient(f, th0, rel=1e-6):
+    """``jax.grad`` of the RMS of the slider's x against central differences (step 1e-5 of
+    each number), each entry within ``rel`` of the largest."""
+
+    def objective(th):
+        return jnp.sqrt(jnp.mean(f(th)["q"][:, SLIDER_X] ** 2))
+
+    run = jax.jit(objective)
+    g = np.asarray(jax.jit(jax.grad(objective))(th0))
+    fd = np.zeros_like(g)
+    for k in range(len(th0)):
+        e = np.zeros_like(th0)
+        e[k] = h = 1e-5 * abs(th0[k])
+        fd[k] = (float(run(th0 + e)) - float(run(th0 - e))) / (2 * h)
+    assert np.all(np.abs(g - fd) <= rel * np.abs(fd) + 1e-9 * np.max(np.abs(fd))), (g, fd)
+    assert np.all(np.abs(fd) > 1e-6)  # every number moves the slider
+
+
+@pytest.mark.timeout(600)
+def test_projection_gradient_against_finite_differences(paper):
+    f, th0 = md.differentiable(paper, TS, PARAMS, rtol=1e-12, atol=1e-12)
+    _check_gradient(f, th0)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+@pytest.mark.parametrize(
+    "opts",
+    [dict(method="partitioning", rtol=1e-12, atol=1e-12), dict(method="baumgarte", dt=1e-3)],
+    ids=["partitioning", "baumgarte"],
+)
+def test_other_integrators_gradient_against_finite_differences(paper, opts):
+    f, th0 = md.differentiable(paper, TS, PARAMS, **opts)
+    _check_gradient(f, th0)
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(900)
+def test_mixed_run_gradient_against_finite_differences(paper):
+    """The paper's mixed run (F1 unknown, the slider's x prescribed by a law): the motion of
+    the free coordinate (the crank) as a function of the masses and T2."""
+    drive = md.CoordinateDriver("xs", "slider", "x", law=md.Harmonic(2.0, 3.0, offset=80.0))
+    f, th0 = md.differentiable(
+        paper,
+        TS,
+        ["crank.mass", "coupler.inertia", "T2.law.value"],
+        analysis="mixed",
+        prescribed=[drive],
+        unknown=["F1"],
+        rtol=1e-12,
+        atol=1e-12,
+    )
+    crank = 2  # q index of the crank's phi
+
+    def objective(th):
+        return jnp.sum(f(th)["q"][:, crank] ** 2)
+
+    g = np.asarray(jax.grad(objective)(th0))
+    run = jax.jit(objective)
+    for k in range(len(th0)):
+        e = np.zeros_like(th0)
+        e[k] = h = 1e-5 * abs(th0[k])
+        fd = (float(run(th0 + e)) - float(run(th0 - e))) / (2 * h)
+        assert abs(g[k] - fd) <= 1e-6 * abs(fd), (k, g[k], fd)
+
+
+def test_value_equals_the_forward_run_and_failure_is_nan(paper):
+    f, th0 = md.differentiable(paper, TS, PARAMS, rtol=1e-10, atol=1e-10)
+    ref = md.forward(paper, TS, rtol=1e-10, atol=1e-10)
+    out = f(th0)
+    np.testing.assert_array_equal(np.asarray(out["q"]), ref.q)
+    # a heavier slider moves less: the numbers reach the equations
+    heavier = np.asarray(f(th0 * np.array([10.0, 1.0, 1.0, 1.0]))["q"])[-1, SLIDER_X]
+    assert abs(heavier - ref["slider.x"][-1]) > 1e-3
+    g, _ = md.differentiable(paper, TS, PARAMS, rtol=1e-10, atol=1e-10, max_steps=3)
+    assert np.all(np.isnan(np.asarray(g(th0)["q"])))
+
+
+@pytest.mark.parametrize(
+    ("params", "words"),
+    [
+        (["EF.angle"], "shape the constraints"),
+        (["slider.q0"], "scalar"),
+        ("slider.mass", "list of paths"),
+        (["slider.mas"], "no field 'mas'"),
+    ],
+    ids=["joint", "vector", "string", "typo"],
+)
+def test_bad_params_are_refused(paper, params, words):
+    with pytest.raises(md.ModelError) as err:
+        md.differentiable(paper, TS, params)
+    assert words in str(err.value)
+
+
+def test_generalized_alpha_is_refused(paper):
+    with pytest.raises(md.ModelError, match="generalized-alpha is not differentiable"):
+        md.differentiable(paper, TS, PARAMS, method="generalized-alpha", dt=1e-3)
