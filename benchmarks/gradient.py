@@ -45,6 +45,7 @@ def best(fn, repeat):
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--max-steps", type=int, default=1_000_000)
     a = ap.parse_args()
     forces = [
         md.Torque("T2", "crank", law=500.0),
@@ -52,7 +53,7 @@ def main() -> None:
         md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
     ]
     model = paper_mechanism(forces=forces)
-    f, th0 = md.differentiable(model, np.linspace(0.0, 2.0, 201), PARAMS, rtol=1e-8)
+    f, th0 = md.differentiable(model, np.linspace(0.0, 2.0, 201), PARAMS, rtol=1e-8, max_steps=a.max_steps)
     ix = 3 * 3  # the slider's x
 
     def objective(th):
