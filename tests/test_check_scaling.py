@@ -139,6 +139,7 @@ def test_chain_sparse_equals_dense():
     assert ks == kd
 
 
+@pytest.mark.slow  # a long scaling run (CI runs it)
 def test_redundancy_at_the_end_of_a_long_chain_is_analysed_locally(monkeypatch):
     """One redundant equation at the end of a 400-link chain: the dense QR sees only the rows
     around it. Rank, degrees of freedom and the number of redundant equations are the dense
@@ -217,6 +218,7 @@ def test_model_q0_and_masses_with_numpy():
     assert np.isfinite(float(total))
 
 
+@pytest.mark.slow  # a long scaling run (CI runs it)
 def test_check_of_a_2000_body_chain_is_sparse_and_compiles_a_bounded_number_of_programs(
     tmp_path, monkeypatch
 ):

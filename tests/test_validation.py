@@ -245,6 +245,7 @@ def test_double_fourbar_projection_loose(fourbar_exact):
     assert np.max(np.abs(vel - fourbar_exact[1])) <= 1e-7
 
 
+@pytest.mark.slow  # a long validation run (CI runs it)
 def test_double_fourbar_projection_tsit5_over_10s(fourbar_exact):
     """The same grid with the default Tsit5 at rtol = atol = 1e-10: through the ten singular
     positions on the reduction to 1e-6 (measured ~1e-7)."""
@@ -281,6 +282,7 @@ def test_failure_at_a_singular_position_is_diagnosed():
     assert abs(err.value.time - 2.0 / 3.0) < 1e-2
 
 
+@pytest.mark.slow  # a long validation run (CI runs it)
 def test_double_fourbar_sparse_path_crosses_singular_position(fourbar_exact):
     """The sparse linear-solver path (banded block Cholesky) through the first singular
     position (0-1 s): where its factor loses rank it falls back to a damped SVD, like the
