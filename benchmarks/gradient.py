@@ -53,7 +53,9 @@ def main() -> None:
         md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
     ]
     model = paper_mechanism(forces=forces)
-    f, th0 = md.differentiable(model, np.linspace(0.0, 2.0, 201), PARAMS, rtol=1e-8, max_steps=a.max_steps)
+    f, th0 = md.differentiable(
+        model, np.linspace(0.0, 2.0, 201), PARAMS, rtol=1e-8, max_steps=a.max_steps
+    )
     ix = 3 * 3  # the slider's x
 
     def objective(th):

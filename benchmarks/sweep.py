@@ -6,7 +6,10 @@ Compares, in one process and after a warm-up of each: ``M`` warm single ``md.for
 CPU default: the single run's program from a thread per core) and in one vectorized program
 (``batch_size`` = 1, 8, M). Prints milliseconds per member and the ratio to the single runs.
 
-Run: ``python benchmarks/sweep.py [M] [--repeat 3]``.
+With ``--cluster``: the same sweep on a local Dask cluster of 1 and of 2 worker processes
+(one thread each), and the speed-up of 2 workers over 1.
+
+Run: ``python benchmarks/sweep.py [M] [--repeat 3] [--cluster]``.
 """
 
 from __future__ import annotations
@@ -48,6 +51,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("members", nargs="?", type=int, default=64)
     ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--cluster", action="store_true")
     a = ap.parse_args()
     m, ts = model(), np.linspace(0.0, 2.0, 201)
     vary = {
@@ -68,11 +72,26 @@ def main() -> None:
                 best(lambda bs=bs: md.sweep(m, ts, vary=vary, batch_size=bs, **opts), a.repeat),
             )
         )
+    if a.cluster:
+        from distributed import Client, LocalCluster
+
+        per = {}
+        for n in (1, 2):
+            with (
+                LocalCluster(
+                    n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
+                ) as cl,
+                Client(cl) as c,
+            ):
+                per[n] = best(lambda c=c: md.sweep(m, ts, vary=vary, client=c, **opts), a.repeat)
+                rows.append((f"Dask local cluster, {n} worker(s)", per[n]))
     print(f"{a.members} members, {os.cpu_count()} cores, best of {a.repeat}")
     print("| way | ms per member | ratio to single runs |")
     print("|---|---|---|")
     for name, s in rows:
         print(f"| {name} | {1e3 * s / a.members:.1f} | {s / single:.2f} |")
+    if a.cluster:
+        print(f"2 Dask workers over 1: {per[1] / per[2]:.2f}x")
 
 
 if __name__ == "__main__":

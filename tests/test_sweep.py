@@ -142,3 +142,30 @@ def test_a_members_input_error_names_the_member(paper):
     with pytest.raises(md.ModelError) as err:
         md.sweep(paper, TS, vary={"slider.mass": [0.01, 0.0]})
     assert "member 1 of the sweep" in "".join(getattr(err.value, "__notes__", []))
+
+
+@pytest.mark.slow  # starts two worker processes (20 s here); CI runs it
+@pytest.mark.timeout(600)
+def test_a_dask_cluster_sweep_equals_the_in_process_one(paper):
+    """Two worker processes of a local Dask cluster: every member equals the in-process
+    sweep's; a failed member's error crosses the process boundary whole (class, time); an
+    input error names its member."""
+    distributed = pytest.importorskip("distributed")
+    vary = {"T2.law.value": [500.0, 50_000.0, 520.0, 480.0]}
+    local = md.sweep(paper, TS, vary=vary, max_steps=400, **OPTS)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        sw = md.sweep(paper, TS, vary=vary, max_steps=400, client=client, chunk_size=1, **OPTS)
+        with pytest.raises(md.ModelError) as err:
+            md.sweep(paper, TS, vary={"slider.mass": [0.01, 0.0]}, client=client)
+    assert set(sw.errors) == set(local.errors) == {1}
+    assert type(sw.errors[1]) is type(local.errors[1])
+    assert sw.errors[1].time == local.errors[1].time
+    for i in (0, 2, 3):
+        np.testing.assert_array_equal(sw[i].q, local[i].q)
+        np.testing.assert_array_equal(sw[i]["B.Fx"], local[i]["B.Fx"])
+    assert "member 1 of the sweep" in "".join(getattr(err.value, "__notes__", []))

@@ -22,7 +22,12 @@ class ModelError(MixdynError, ValueError):
 
     def __init__(self, message: str, element: str | None = None):
         self.element = element
+        self.message = message
         super().__init__(f"{element}: {message}" if element else message)
+
+    def __reduce__(self):  # pickled whole (a sweep's member errors cross processes)
+        notes = list(getattr(self, "__notes__", []))
+        return type(self), (self.message, self.element), {"__notes__": notes}
 
 
 class DegreesOfFreedomError(ModelError):
@@ -48,9 +53,14 @@ class NumericalError(MixdynError, RuntimeError):
     def __init__(self, message: str, time: float | None = None, elements=()):
         self.time = time
         self.elements = tuple(elements)
+        self.message = message
         where = f"at t = {time:.6g}: " if time is not None else ""
         involved = f" (involved: {', '.join(self.elements)})" if self.elements else ""
         super().__init__(f"{where}{message}{involved}")
+
+    def __reduce__(self):  # pickled whole (a sweep's member errors cross processes)
+        notes = list(getattr(self, "__notes__", []))
+        return type(self), (self.message, self.time, self.elements), {"__notes__": notes}
 
 
 class AssemblyError(NumericalError):

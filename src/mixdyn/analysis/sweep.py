@@ -269,6 +269,36 @@ def _batched(cases: list[Case], batch_size: int):
     return [_finish(c, jax.tree.map(lambda x, i=i: x[i], trajs)) for i, c in enumerate(cases)]
 
 
+def _run_chunk(members: list[Model], t, analysis: str, kwargs: dict, first: int):
+    """On a worker: set up and run ``members`` (the sweep's members ``first``...) member by
+    member in one thread; an input error names its member."""
+    cases = []
+    for i, m in enumerate(members):
+        try:
+            cases.append(ANALYSES[analysis](m, t, **kwargs))
+        except MixdynError as err:
+            err.add_note(f"in member {first + i} of the sweep")
+            raise
+    return _member_by_member(cases, 1)
+
+
+def _on_cluster(client, members, t, analysis, kwargs, chunk_size):
+    """The members run on a Dask ``client``'s workers, ``chunk_size`` at a time (default:
+    four chunks per worker thread), gathered in order."""
+    if chunk_size is None:
+        slots = sum(client.nthreads().values()) or 1
+        chunk_size = max(1, -(-len(members) // (4 * slots)))
+    starts = range(0, len(members), chunk_size)
+    futures = [
+        client.submit(_run_chunk, members[s : s + chunk_size], t, analysis, kwargs, s, pure=False)
+        for s in starts
+    ]
+    out = []
+    for chunk in client.gather(futures):
+        out.extend(chunk)
+    return out
+
+
 def sweep(
     model: Model | None = None,
     t=None,
@@ -278,6 +308,8 @@ def sweep(
     analysis: str = "forward",
     batch_size: int | None = None,
     threads: int | None = None,
+    client=None,
+    chunk_size: int | None = None,
     **kwargs,
 ) -> Sweep:
     """Run one dynamic analysis over many variants of a mechanism, compiled once.
@@ -298,6 +330,13 @@ def sweep(
             vectorized (``vmap``) (on a CPU 3-4 times slower a member: measured in
             ``benchmarks/sweep.py``).
         threads: threads of the member-by-member path (default: one per core).
+        client: a Dask ``distributed.Client``: the members run on its workers (each sets up
+            and runs its chunk member by member; a local cluster,
+            ``Client(LocalCluster(n_workers=2, threads_per_worker=1))``, or a scheduler's
+            address for a real one). Results come back in order; a member's input error is
+            raised with its index.
+        chunk_size: members per task on the cluster (default: four tasks per worker
+            thread).
         **kwargs: the analysis' own keywords (``method``, ``rtol``, ``prescribed``,
             ``unknown``, ``q0``...), the same for every member (no ``progress``).
 
@@ -332,6 +371,11 @@ def sweep(
             {p: (v[i].item() if np.ndim(v[i]) == 0 else v[i].tolist()) for p, v in _rows(vary)}
             for i in range(len(members))
         ]
+    if client is not None:
+        outcomes = _on_cluster(client, members, t, analysis, kwargs, chunk_size)
+        results = [r for r, _ in outcomes]
+        errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
+        return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
     setup = ANALYSES[analysis]
     cases = []
     for i, m in enumerate(members):
