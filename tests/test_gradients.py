@@ -51,6 +51,26 @@ def test_projection_gradient_against_finite_differences(paper):
     _check_gradient(f, th0)
 
 
+@pytest.mark.timeout(600)
+def test_forward_mode_jacobian_against_finite_differences(paper):
+    """``derivatives="forward"``: ``jax.jacfwd`` of the slider's whole motion (51 outputs)
+    with respect to four numbers, column by column against central differences."""
+    f, th0 = md.differentiable(paper, TS, PARAMS, rtol=1e-12, atol=1e-12, derivatives="forward")
+
+    def motion(th):
+        return f(th)["q"][:, SLIDER_X]
+
+    J = np.asarray(jax.jit(jax.jacfwd(motion))(th0))
+    run = jax.jit(motion)
+    for k in range(len(th0)):
+        e = np.zeros_like(th0)
+        e[k] = h = 1e-5 * abs(th0[k])
+        fd = (np.asarray(run(th0 + e)) - np.asarray(run(th0 - e))) / (2 * h)
+        assert np.max(np.abs(J[:, k] - fd)) <= 1e-6 * np.max(np.abs(fd)), k
+    with pytest.raises(ValueError, match="while_loop"):  # no reverse mode in this function
+        jax.grad(lambda th: motion(th)[-1])(th0)
+
+
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 @pytest.mark.parametrize(
@@ -124,3 +144,24 @@ def test_bad_params_are_refused(paper, params, words):
 def test_generalized_alpha_is_refused(paper):
     with pytest.raises(md.ModelError, match="generalized-alpha is not differentiable"):
         md.differentiable(paper, TS, PARAMS, method="generalized-alpha", dt=1e-3)
+
+
+@pytest.mark.slow  # two fits of a 2 s run (about 15 s); CI runs it
+@pytest.mark.timeout(900)
+@pytest.mark.parametrize("seed", [0, 1])
+def test_identification_recovers_the_numbers_within_the_noise(seed):
+    """``examples/identify_slider_crank.py``: masses, inertia and a damper coefficient fitted
+    to a noisy recording lie within 4 standard deviations (from the fit's Jacobian) of the
+    truth, and the reduced chi-square is that of the noise (198 degrees of freedom: 1 +- 0.3)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parents[1] / "examples" / "identify_slider_crank.py"
+    spec = importlib.util.spec_from_file_location("identify_slider_crank", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    est, sd, truth, chi2 = example.identify(seed)
+    np.testing.assert_array_equal(truth, example.TRUE)
+    assert np.all(np.abs(est - truth) <= 4 * sd), (est, sd)
+    assert np.all(sd < 0.02 * truth)  # the recording does identify every number
+    assert 0.7 < chi2 < 1.3

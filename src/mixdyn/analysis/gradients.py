@@ -4,17 +4,21 @@
 :func:`~mixdyn.forward`) and returns ``f(theta) -> {"q", "qd", "w"}``: the motion at the
 output times as a function of the chosen numbers ``theta`` (masses, inertias, the numbers of
 force elements and their laws). ``f`` is traced by JAX like any function: ``jax.grad``,
-``jax.jit`` and ``jax.vmap`` apply.
+``jax.jacfwd``, ``jax.jit`` and ``jax.vmap`` apply.
 
-Derivatives are reverse-mode (``jax.grad``, ``jax.jacrev``, ``jax.vjp``): the projection,
-partitioning and Baumgarte integrators are ``diffrax.diffeqsolve`` loops with diffrax's
-checkpointed adjoint (``RecursiveCheckpointAdjoint``), and their inner Newton iterations have
-a fixed count. Forward mode (``jax.jvp``, ``jax.jacfwd``) is not available through that
-adjoint (a ``custom_vjp``); generalized-alpha (its Newton iteration is a ``while_loop``) is
-refused. The derivative is that of the discrete solution (the step sizes held), which agrees
-with the exact sensitivity to the order of the tolerances (tested against central finite
-differences to 1e-6 at 1e-12). Measured cost (``benchmarks/gradient.py``): a gradient with
-respect to 11 numbers takes about 8.5 times the run.
+Derivatives go through the integrators' ``diffrax.diffeqsolve`` loop (projection,
+partitioning, Baumgarte; their inner Newton iterations have a fixed count), in the mode chosen
+when the function is made:
+
+- ``derivatives="reverse"`` (default): ``jax.grad``, ``jax.jacrev``, ``jax.vjp``, through
+  diffrax's checkpointed adjoint; for a scalar of many numbers (measured,
+  ``benchmarks/gradient.py``: about 8.5 times the run for 11 numbers);
+- ``derivatives="forward"``: ``jax.jvp``, ``jax.jacfwd`` (diffrax's ``ForwardMode``); for
+  many outputs of few numbers (a least-squares fit's Jacobian).
+
+Generalized-alpha (its Newton iteration is a ``while_loop``) is refused. The derivative is that
+of the discrete solution (the step sizes held), which agrees with the exact sensitivity to the
+order of the tolerances (tested against central finite differences to 1e-6 at 1e-12).
 
 A run that fails inside ``f`` (step limit, step collapse, non-finite state) cannot raise
 there: its outputs are NaN, so that no finite wrong number or derivative comes out of it.
@@ -54,6 +58,7 @@ def differentiable(
     params: Sequence[str],
     *,
     analysis: str = "forward",
+    derivatives: str = "reverse",
     **kwargs,
 ) -> tuple[Callable[[jax.Array], dict[str, jax.Array]], np.ndarray]:
     """The run of ``model`` over ``t`` as a function of the numbers named by ``params``.
@@ -66,6 +71,8 @@ def differentiable(
             units. Numbers of joints and drivers (they shape the constraints and the start)
             are refused.
         analysis: ``"forward"`` (default) or ``"mixed"``.
+        derivatives: ``"reverse"`` (default: ``jax.grad``, ``jax.jacrev``) or ``"forward"``
+            (``jax.jacfwd``, ``jax.jvp``).
         **kwargs: the analysis' keywords (``method``, ``rtol``, ``prescribed``...).
 
     Returns:
@@ -75,6 +82,10 @@ def differentiable(
     """
     if analysis not in ANALYSES:
         raise ModelError(f"unknown analysis {analysis!r}; choose from {', '.join(ANALYSES)}")
+    if derivatives not in ("reverse", "forward"):
+        raise ModelError(
+            f"derivatives must be 'reverse' or 'forward', got {derivatives!r}", "derivatives"
+        )
     if isinstance(params, str) or not params:
         raise ModelError("give params as a list of paths, e.g. ['slider.mass']", "params")
     getters, theta0 = [], []
@@ -108,7 +119,9 @@ def differentiable(
         for k, get in enumerate(getters):
             m = eqx.tree_at(get, m, theta[k])
         problem = eqx.tree_at(lambda p: p.model, case.problem, m)
-        traj = integrate_one(problem, ts, case.q0, case.qd0, options, progress=None)
+        traj = integrate_one(
+            problem, ts, case.q0, case.qd0, options, progress=None, derivatives=derivatives
+        )
         ok = traj.status == 0
         return {k: jnp.where(ok, getattr(traj, k), jnp.nan) for k in ("q", "qd", "w")}
 

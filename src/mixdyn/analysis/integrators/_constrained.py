@@ -117,6 +117,9 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
     dt_min: jax.Array
     fixed: bool = eqx.field(static=True)
     ts: jax.Array
+    #: The Runge–Kutta stages' loop, set by diffrax's ``ForwardMode`` adjoint to ``"lax"`` (so
+    #: that ``jax.jvp`` passes it) and handed to the wrapped method; None: its default.
+    scan_kind: str | None = eqx.field(default=None, kw_only=True)
 
     term_structure = diffrax.AbstractTerm
     # Outputs are gathered in the solver state at step ends (:func:`solve`): diffrax builds
@@ -163,10 +166,11 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
         data, worst, outs, k = solver_state
         z0, inner_args = self.reduce(y0, data, t0)
         inner_terms = self.inner_terms(terms)
-        inner = self.solver.init(inner_terms, t0, t1, z0, inner_args)
-        z1, z_err, _, _, _ = self.solver.step(
-            inner_terms, t0, t1, z0, inner_args, inner, made_jump=False
-        )
+        rk = self.solver
+        if self.scan_kind is not None and hasattr(rk, "scan_kind"):
+            rk = eqx.tree_at(lambda s: s.scan_kind, rk, self.scan_kind, is_leaf=lambda x: x is None)
+        inner = rk.init(inner_terms, t0, t1, z0, inner_args)
+        z1, z_err, _, _, _ = rk.step(inner_terms, t0, t1, z0, inner_args, inner, made_jump=False)
         y1, y_err, data1, closed, violation = self.finish(t0, t1, y0, z1, z_err, data)
         finite = jnp.all(jnp.array([jnp.all(jnp.isfinite(a)) for a in jax.tree.leaves(y1)]))
         closed = closed & finite
@@ -319,7 +323,13 @@ def rms_of_first(n: int):
     return norm
 
 
-def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps):
+#: The adjoint of each mode of differentiation through a run.
+ADJOINTS = {"reverse": diffrax.RecursiveCheckpointAdjoint, "forward": diffrax.ForwardMode}
+
+
+def solve(
+    term, solver: ConstrainedSolver, y0, step_controller, *, max_steps, derivatives="reverse"
+):
     """``diffeqsolve`` from the first to the last output time of ``solver.ts``.
 
     The states at the output times are collected by the solver (its state holds them, kept
@@ -346,6 +356,7 @@ def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps):
         stepsize_controller=step_controller,
         max_steps=max_steps,
         throw=False,
+        adjoint=ADJOINTS[derivatives](),
     )
     _, worst, outs, _ = sol.solver_state
     return (

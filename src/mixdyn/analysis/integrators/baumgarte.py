@@ -30,7 +30,9 @@ def _solver_class():
 
 
 @eqx.filter_jit
-def baumgarte(problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None) -> Trajectory:
+def baumgarte(
+    problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None, derivatives="reverse"
+) -> Trajectory:
     """Integrate with fixed-step RK4 and Baumgarte stabilization.
 
     Args:
@@ -41,6 +43,8 @@ def baumgarte(problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None) 
             ``dt`` [time], shortened where needed to land on the output times; ``alpha``,
             ``beta`` [1/time]; ``max_steps``).
         progress: optional callback ``f(t)`` at each output time.
+        derivatives: ``"reverse"`` (default) or ``"forward"``: the mode of differentiation
+            the loop allows (:func:`~mixdyn.differentiable`).
     """
     from . import _constrained as cs
 
@@ -50,6 +54,11 @@ def baumgarte(problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None) 
         ts, rtol=0.0, atol=0.0, norm=None, dt=options.dt, dt_min=None, progress=progress
     )
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
-        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=options.max_steps
+        cs.ode_term(f),
+        step,
+        (q0, qd0, jnp.zeros(2)),
+        ctrl,
+        max_steps=options.max_steps,
+        derivatives=derivatives,
     )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])

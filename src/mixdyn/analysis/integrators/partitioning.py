@@ -133,7 +133,9 @@ def _solver_class():
 
 
 @eqx.filter_jit
-def partitioning(problem: Problem, ts, q0, qd0, options: Partitioning, progress=None) -> Trajectory:
+def partitioning(
+    problem: Problem, ts, q0, qd0, options: Partitioning, progress=None, derivatives="reverse"
+) -> Trajectory:
     """Integrate the independent coordinates; solve the dependent ones by Newton.
 
     Args: as :func:`~.projection.projection` (``options``: a
@@ -169,6 +171,11 @@ def partitioning(problem: Problem, ts, q0, qd0, options: Partitioning, progress=
         progress=progress,
     )
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
-        cs.ode_term(f_full), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=options.max_steps
+        cs.ode_term(f_full),
+        step,
+        (q0, qd0, jnp.zeros(2)),
+        ctrl,
+        max_steps=options.max_steps,
+        derivatives=derivatives,
     )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])

@@ -45,7 +45,9 @@ def _solver_class():
 
 
 @eqx.filter_jit
-def projection(problem: Problem, ts, q0, qd0, options: Projection, progress=None) -> Trajectory:
+def projection(
+    problem: Problem, ts, q0, qd0, options: Projection, progress=None, derivatives="reverse"
+) -> Trajectory:
     """Integrate with an adaptive explicit RK method and project after every step.
 
     Args:
@@ -56,6 +58,8 @@ def projection(problem: Problem, ts, q0, qd0, options: Projection, progress=None
             tolerances, a fixed step ``dt``, the Runge–Kutta ``solver``, ``max_steps``,
             ``first_step``); the tolerances and first step may be arrays.
         progress: optional callback ``f(t)`` at each output time.
+        derivatives: ``"reverse"`` (default) or ``"forward"``: the mode of differentiation
+            the loop allows (:func:`~mixdyn.differentiable`).
     """
     from . import _constrained as cs
 
@@ -83,6 +87,11 @@ def projection(problem: Problem, ts, q0, qd0, options: Projection, progress=None
         progress=progress,
     )
     (q, qd, w), n, nrej, viol, status, t, y_last = cs.solve(
-        cs.ode_term(f), step, (q0, qd0, jnp.zeros(2)), ctrl, max_steps=options.max_steps
+        cs.ode_term(f),
+        step,
+        (q0, qd0, jnp.zeros(2)),
+        ctrl,
+        max_steps=options.max_steps,
+        derivatives=derivatives,
     )
     return Trajectory(q, qd, w, n, nrej, jnp.asarray(0), viol, status, t, y_last[0])
