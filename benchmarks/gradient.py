@@ -22,7 +22,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 
 import mixdyn as md
-from fixtures import paper_mechanism
+from fixtures import paper_under_loads
 
 PARAMS = [
     *(f"{b}.{f}" for b in ("crank", "coupler", "link", "slider") for f in ("mass", "inertia")),
@@ -47,12 +47,7 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=5)
     ap.add_argument("--max-steps", type=int, default=1_000_000)
     a = ap.parse_args()
-    forces = [
-        md.Torque("T2", "crank", law=500.0),
-        md.Torque("T3", "coupler", law=-500.0),
-        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
-    ]
-    model = paper_mechanism(forces=forces)
+    model = paper_under_loads()
     f, th0 = md.differentiable(
         model, np.linspace(0.0, 2.0, 201), PARAMS, rtol=1e-8, max_steps=a.max_steps
     )

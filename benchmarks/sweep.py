@@ -24,17 +24,12 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 
 import mixdyn as md
-from fixtures import paper_mechanism
+from fixtures import paper_under_loads
 from mixdyn.analysis.sweep import vary_models
 
 
 def model():
-    forces = [
-        md.Torque("T2", "crank", law=500.0),
-        md.Torque("T3", "coupler", law=-500.0),
-        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
-    ]
-    return paper_mechanism(forces=forces)
+    return paper_under_loads()
 
 
 def best(fn, repeat: int) -> float:

@@ -262,6 +262,19 @@ def paper_mechanism(*, exact: bool = False, drivers=(), forces=()) -> md.Model:
     )
 
 
+def paper_under_loads() -> md.Model:
+    """:func:`paper_mechanism` under the paper's loads (section 3 of
+    ``shared/paper/README.md``): torques ``T2`` = 500 on the crank and ``T3`` = -500 on the
+    coupler [kg mm^2/s^2], and ``F1`` = 10 sin(pi t / 2) [kg mm/s^2] on the slider along x."""
+    return paper_mechanism(
+        forces=[
+            md.Torque("T2", "crank", law=500.0),
+            md.Torque("T3", "coupler", law=-500.0),
+            md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, math.pi / 2)),
+        ]
+    )
+
+
 def parallelogram_with_extra_link(
     a: float = 0.3,
     L: float = 0.5,

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures import paper_mechanism
+from fixtures import paper_under_loads
 
 TS = np.linspace(0.0, 0.5, 11)
 PARAMS = ["slider.mass", "crank.inertia", "F1.law.amplitude", "T2.law.value"]
@@ -19,12 +19,7 @@ SLIDER_X = 9  # q index of the slider's x
 
 @pytest.fixture(scope="module")
 def paper():
-    forces = [
-        md.Torque("T2", "crank", law=500.0),
-        md.Torque("T3", "coupler", law=-500.0),
-        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
-    ]
-    return paper_mechanism(forces=forces)
+    return paper_under_loads()
 
 
 def _check_gradient(f, th0, rel=1e-6):

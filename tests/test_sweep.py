@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures import new_traces, paper_mechanism, traced_now
+from fixtures import new_traces, paper_mechanism, paper_under_loads, traced_now
 from mixdyn.analysis.sweep import vary_models
 
 TS = np.linspace(0.0, 1.0, 51)
@@ -20,12 +20,7 @@ COLUMNS = ("slider.x", "crank.phi", "B.Fx", "EF.M", "work.nonconservative")
 @pytest.fixture(scope="module")
 def paper():
     """The paper's mechanism under its loads (T2, T3 constant, F1 = 10 sin(pi t / 2))."""
-    forces = [
-        md.Torque("T2", "crank", law=500.0),
-        md.Torque("T3", "coupler", law=-500.0),
-        md.PointForce("F1", "slider", along=(1.0, 0.0), law=md.Harmonic(10.0, np.pi / 2)),
-    ]
-    return paper_mechanism(forces=forces)
+    return paper_under_loads()
 
 
 VARY = md.grid(**{"slider.mass": [0.00786, 0.02], "F1.law.amplitude": [10.0, -25.0]})
