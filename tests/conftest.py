@@ -16,10 +16,28 @@ import tempfile
 os.environ.setdefault("MIXDYN_NO_CACHE", "1")
 
 
-import jax
-import pytest
+def _one_core_per_worker() -> None:
+    """Pin each xdist worker to one core of its own (gw0 -> the first, gw1 -> the second...)
+    before JAX starts its CPU backend, whose thread pool then has one thread.
 
-import mixdyn  # noqa: F401  (enables float64)
+    XLA's CPU runtime runs one of mixdyn's programs on two threads handing work to each other
+    (measured: 60 s of CPU for a 46 s run of the N = 40 four-bar); with two workers, four
+    such threads on two cores slowed two N = 40 runs of the slow set from 21-46 s to past
+    pytest's 900 s limit in CI. Pinned, the same two runs side by side took 34 s and 10 s."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "")
+    if not worker.startswith("gw") or not hasattr(os, "sched_setaffinity"):
+        return
+    cores = sorted(os.sched_getaffinity(0))
+    if len(cores) > 1:
+        os.sched_setaffinity(0, {cores[int(worker[2:]) % len(cores)]})
+
+
+_one_core_per_worker()
+
+import jax  # noqa: E402
+import pytest  # noqa: E402
+
+import mixdyn  # noqa: F401, E402  (enables float64)
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 
