@@ -8,9 +8,9 @@ Compiled programs (traced and compiled) are kept between processes in a cache fo
 compile them again: ``MIXDYN_NO_CACHE=1`` (read on import) or :func:`set_cache` turns that
 off (see :mod:`mixdyn._compile`).
 
-On import, mixdyn turns off two XLA CPU features that have hung compiled loops (multi-threaded
-Eigen, the concurrency-optimized scheduler) unless ``$XLA_FLAGS`` names them: see
-:mod:`mixdyn._xla`.
+On import, mixdyn turns off two XLA CPU features (multi-threaded Eigen, which buys its small
+matrices nothing, and the concurrency-optimized scheduler, which hung a vmapped loop) unless
+``$XLA_FLAGS`` names them: see :mod:`mixdyn._xla`.
 """
 
 from . import _xla

@@ -1,12 +1,15 @@
-"""XLA CPU settings that keep mixdyn's compiled loops from hanging.
+"""XLA CPU settings for mixdyn's compiled loops.
 
-XLA's CPU runtime has wedged (a deadlock: the process waits forever, using no CPU) on
-mixdyn's programs and on others' (a hang of 15 minutes in CI on the 243-coordinate N-four-bar
-in two processes at once; PyAutoFit issues 1528/1530: their hangs stopped with
-``--xla_cpu_multi_thread_eigen=false`` alone; a vmapped ``while_loop`` here stopped with the
-concurrency-optimized scheduler off). mixdyn's matrices are small (a few hundred rows at
-most), so Eigen's intra-op thread pool buys nothing: measured on the N = 40 four-bar
-(Dopri8, 1e-9), 12-16 s with one thread against 15-21 s with the pool.
+Two XLA CPU features are turned off: the concurrency-optimized scheduler (a vmapped
+``while_loop`` of mixdyn deadlocked with it) and multi-threaded Eigen (others' programs
+wedged in its thread pool, PyAutoFit issues 1528/1530; for mixdyn's small matrices it buys
+nothing: the N = 40 four-bar, Dopri8 at 1e-9, took 12-16 s without it against 15-21 s with it).
+
+What they do not change: XLA's CPU runtime still runs one of mixdyn's programs on two threads
+(its execution thread and one of its pool), handing work to each other; two such processes
+on two cores (pytest's two workers) slowed two N = 40 runs from 21-46 s to past 900 s. The test
+suite pins each worker to a core of its own (``tests/conftest.py``); a user running several
+mixdyn processes at once on few cores may do the same (``taskset -c``).
 
 :func:`apply` adds these flags to ``$XLA_FLAGS`` on import of mixdyn, before JAX starts its
 CPU backend. A flag the user names in ``$XLA_FLAGS`` (either value) is left as the user set
