@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures import new_traces, paper_mechanism, paper_under_loads, traced_now
+from fixtures import new_traces, paper_mechanism, paper_under_loads, slider_crank, traced_now
 from mixdyn.analysis.sweep import vary_models
 
 TS = np.linspace(0.0, 1.0, 51)
@@ -164,3 +164,52 @@ def test_a_dask_cluster_sweep_equals_the_in_process_one(paper):
         np.testing.assert_array_equal(sw[i].q, local[i].q)
         np.testing.assert_array_equal(sw[i]["B.Fx"], local[i]["B.Fx"])
     assert "member 1 of the sweep" in "".join(getattr(err.value, "__notes__", []))
+
+
+def test_kinematic_and_inverse_members_equal_single_runs():
+    """Any analysis sweeps: a kinematic sweep over the crank's law (rows of coefficients) and
+    an inverse sweep over the masses, each member equal to its single run; ``on_member``
+    sees every member once."""
+    model = slider_crank()
+    t = np.linspace(0.0, 1.0, 21)
+    laws = {"motor.law.coeffs": [[0.0, 2.0], [0.3, 5.0], [1.0, -3.0]]}
+    seen = []
+    kin = md.sweep(model, t, vary=laws, analysis="kinematic", on_member=seen.append)
+    assert sorted(seen) == [0, 1, 2] and not kin.errors
+    for i, m in enumerate(vary_models(model, laws)):
+        single = md.kinematic(m, t)
+        np.testing.assert_allclose(kin[i].q, single.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(kin[i].qdd, single.qdd, rtol=1e-10, atol=1e-12)
+    masses = md.grid(**{"rod.mass": [0.5, 2.0], "slider.mass": [1.0, 4.0]})
+    inv = md.sweep(model, t, vary=masses, analysis="inverse")
+    efforts = []
+    for i, m in enumerate(vary_models(model, masses)):
+        single = md.inverse(m, t)
+        for c in ("motor", "B.Fx", "slide.Fy"):
+            scale = float(np.max(np.abs(single[c])))
+            assert float(np.max(np.abs(inv[i][c] - single[c]))) <= 1e-10 * scale, c
+        efforts.append(float(np.max(np.abs(single["motor"]))))
+    assert len(set(efforts)) == 4  # the masses do change the motor torque
+    with pytest.raises(md.ModelError, match="member by member"):
+        md.sweep(model, t, vary=masses, analysis="inverse", batch_size=4)
+
+
+def test_latin_hypercube_samples_each_stratum_once():
+    """Each range cut into n strata gets exactly one sample per stratum; the seed fixes the
+    members; the pairing of strata differs between paths."""
+    n = 50
+    a = md.latin_hypercube(n, seed=3, **{"slider.mass": (0.005, 0.02), "F1.law.amplitude": (5, 15)})
+    for name, (lo, hi) in {"slider.mass": (0.005, 0.02), "F1.law.amplitude": (5, 15)}.items():
+        v = a[name]
+        assert v.shape == (n,) and np.all((v >= lo) & (v < hi))
+        assert sorted(np.floor((v - lo) / (hi - lo) * n).astype(int)) == list(range(n))
+    b = md.latin_hypercube(n, seed=3, **{"slider.mass": (0.005, 0.02), "F1.law.amplitude": (5, 15)})
+    c = md.latin_hypercube(n, seed=4, **{"slider.mass": (0.005, 0.02), "F1.law.amplitude": (5, 15)})
+    np.testing.assert_array_equal(a["slider.mass"], b["slider.mass"])
+    assert not np.array_equal(a["slider.mass"], c["slider.mass"])
+    rank = lambda x: np.argsort(np.argsort(x))  # noqa: E731
+    assert not np.array_equal(rank(a["slider.mass"]), rank(a["F1.law.amplitude"]))
+    with pytest.raises(md.ModelError, match="low < high"):
+        md.latin_hypercube(4, **{"slider.mass": (1.0, 1.0)})
+    with pytest.raises(md.ModelError, match="whole number"):
+        md.latin_hypercube(0, **{"slider.mass": (1.0, 2.0)})

@@ -10,7 +10,7 @@ from .kinematic import kinematic
 from .methods import Baumgarte, GeneralizedAlpha, IntegratorOptions, Partitioning, Projection
 from .mixed import check_mixed, mixed, prescribe
 from .result import Result
-from .sweep import Sweep, grid, sweep
+from .sweep import Sweep, grid, latin_hypercube, sweep
 
 __all__ = [
     "INTEGRATORS",
@@ -31,6 +31,7 @@ __all__ = [
     "grid",
     "inverse",
     "kinematic",
+    "latin_hypercube",
     "mixed",
     "prescribe",
     "sweep",

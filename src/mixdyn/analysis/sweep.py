@@ -1,13 +1,17 @@
-"""Sweeps: one dynamic analysis over many variants of a mechanism, compiled once.
+"""Sweeps: one analysis over many variants of a mechanism, compiled once.
 
-Each member is set up like a single run (its options checked, its start made consistent, its
-mobility analysed: :func:`~.forward.forward_case`, :func:`~.mixed.mixed_case`); all members
-share one structure, hence one compiled program. On a CPU the members are integrated one by
-one by the single run's program, from a thread per core (XLA runs without the GIL); with a
-``batch_size`` (the default on an accelerator) the members' equations are stacked and one
-program integrates the whole batch (``jax.lax.map`` over chunks vectorized by ``vmap``).
-Each member is finished like a single run: a failure or a broken energy balance is reported
-by member index and cause (:attr:`Sweep.errors`) without losing the others.
+Each member of a dynamic sweep (forward, mixed) is set up like a single run (its options
+checked, its start made consistent, its mobility analysed: :func:`~.forward.forward_case`,
+:func:`~.mixed.mixed_case`); all members share one structure, hence one compiled program.
+On a CPU the members are integrated one by one by the single run's program, from a thread
+per core (XLA runs without the GIL); with a ``batch_size`` (the default on an accelerator)
+the members' equations are stacked and one program integrates the whole batch
+(``jax.lax.map`` over chunks vectorized by ``vmap``). Each member is finished like a single
+run: a failure or a broken energy balance is reported by member index and cause
+(:attr:`Sweep.errors`) without losing the others.
+
+A kinematic or inverse sweep runs the single analysis member by member (its programs are
+compiled for the first member and reused), from a thread per core.
 
 Members differ in numbers only: masses, inertias, law and force parameters, start guesses
 (any float leaf of the model, named by a path such as ``"slider.mass"`` or
@@ -35,11 +39,15 @@ from ..model import Model
 from ._simulate import Case, finish, integrate
 from .forward import forward_case
 from .integrators import INTEGRATORS
+from .inverse import inverse
+from .kinematic import kinematic
 from .mixed import mixed_case
 from .result import Result
 
-#: The analyses a sweep runs, by name: their set-up functions.
+#: The dynamic analyses a sweep runs, by name: their set-up functions.
 ANALYSES: dict[str, Callable[..., Case]] = {"forward": forward_case, "mixed": mixed_case}
+#: The analyses a sweep runs member by member, by name.
+MEMBERWISE: dict[str, Callable[..., Result]] = {"kinematic": kinematic, "inverse": inverse}
 
 #: Fields that hold geometry bound from body points: a number there would disagree with the
 #: bodies' points; vary the points by building the member models instead (``models=``).
@@ -53,6 +61,28 @@ def grid(**axes: Sequence[float]) -> dict[str, np.ndarray]:
     names = list(axes)
     combos = list(itertools.product(*(np.asarray(axes[n], dtype=float) for n in names)))
     return {n: np.asarray([c[k] for c in combos]) for k, n in enumerate(names)}
+
+
+def latin_hypercube(samples: int, seed: int = 0, **ranges: Sequence[float]) -> dict:
+    """``samples`` members spread over the box ``ranges`` (path -> ``(low, high)``) by Latin
+    hypercube sampling: each range cut into ``samples`` equal strata, each stratum sampled once
+    (uniformly within it) per path, the strata of different paths paired at random
+    (``numpy.random.default_rng(seed)``: the same seed, the same members). Returns the flat
+    columns of a ``vary=`` mapping, e.g. ``md.latin_hypercube(100, **{"slider.mass": (1, 2)})``.
+    """
+    if int(samples) != samples or samples < 1:
+        raise ModelError(f"samples must be a whole number >= 1, got {samples!r}", "samples")
+    if not ranges:
+        raise ModelError("give at least one range: path=(low, high)", "ranges")
+    rng = np.random.default_rng(seed)
+    out = {}
+    for name, bounds in ranges.items():
+        lo, hi = (float(v) for v in np.asarray(bounds, dtype=float).reshape(-1))
+        if not (np.isfinite(lo) and np.isfinite(hi) and hi > lo):
+            raise ModelError(f"a range (low, high) with low < high, got {bounds!r}", name)
+        strata = rng.permutation(int(samples)) + rng.uniform(size=int(samples))
+        out[name] = lo + (hi - lo) * strata / samples
+    return out
 
 
 def _locate(model: Model, head: str):
@@ -230,27 +260,38 @@ class Sweep:
         return out
 
 
-def _finish(case: Case, traj) -> tuple[Result | None, MixdynError | None]:
+Outcome = tuple[Result | None, MixdynError | None]
+
+
+def _finish(case: Case, traj) -> Outcome:
     try:
         return finish(case, traj), None
     except MixdynError as err:
         return None, err
 
 
-def _member_by_member(cases: list[Case], threads: int):
-    """Each member integrated by the single run's program (compiled once: the first member
-    runs alone), the others from ``threads`` threads (XLA runs without the GIL)."""
-    first = _finish(cases[0], integrate(cases[0]))
-    if len(cases) == 1:
-        return [first]
-    run = lambda c: _finish(c, integrate(c))  # noqa: E731
-    if threads <= 1:
-        return [first, *map(run, cases[1:])]
+def _in_threads(work: Callable[[int], Outcome], indices: list[int], threads: int, on_member):
+    """``work(i)`` for each index, the first alone (it compiles the programs the others
+    reuse), the others from ``threads`` threads (XLA runs without the GIL); ``on_member(i)``
+    after each."""
+
+    def run(i):
+        out = work(i)
+        if on_member is not None:
+            on_member(i)
+        return out
+
+    if not indices:
+        return []
+    first = run(indices[0])
+    rest = indices[1:]
+    if threads <= 1 or len(rest) <= 1:
+        return [first, *map(run, rest)]
     with ThreadPoolExecutor(threads) as pool:
-        return [first, *pool.map(run, cases[1:])]
+        return [first, *pool.map(run, rest)]
 
 
-def _batched(cases: list[Case], batch_size: int):
+def _batched(cases: list[Case], batch_size: int) -> list[Outcome]:
     """The members integrated by one program (``batch_size`` at a time vectorized), then
     finished one by one."""
     if batch_size < 1:
@@ -269,17 +310,98 @@ def _batched(cases: list[Case], batch_size: int):
     return [_finish(c, jax.tree.map(lambda x, i=i: x[i], trajs)) for i, c in enumerate(cases)]
 
 
+def _input_error(err: ModelError, i: int, describe: str) -> ModelError:
+    err.add_note(f"in member {i} of the sweep{describe}")
+    return err
+
+
+def run_members(
+    members: Sequence[Model],
+    t,
+    analysis: str,
+    kwargs_of: Callable[[int], dict],
+    *,
+    batch_size: int | None = None,
+    threads: int | None = None,
+    on_member: Callable[[int], None] | None = None,
+    describe: Callable[[int], str] = lambda i: "",
+) -> list[Outcome]:
+    """Each member's ``(Result, None)`` or ``(None, its numerical error)``, in order.
+
+    Args:
+        members: the member models, of one structure.
+        t: (N,) output times [time].
+        analysis: a key of :data:`ANALYSES` or :data:`MEMBERWISE`.
+        kwargs_of: member index -> the analysis' keywords for it.
+        batch_size, threads: as in :func:`sweep`.
+        on_member: called with a member's index when it is done (from any thread).
+        describe: member index -> words naming it in an error (its varied values).
+
+    Raises:
+        ModelError: a member's input error (named with its index), or members of different
+            structures.
+    """
+    threads = threads or os.cpu_count() or 1
+    if analysis in MEMBERWISE:
+        run = MEMBERWISE[analysis]
+
+        def whole(i: int) -> Outcome:
+            try:
+                return run(members[i], t, **kwargs_of(i)), None
+            except ModelError as err:
+                raise _input_error(err, i, describe(i)) from None
+            except MixdynError as err:
+                return None, err
+
+        if batch_size is not None:
+            raise ModelError(
+                f"a {analysis} sweep runs member by member: no batch_size", "batch_size"
+            )
+        return _in_threads(whole, list(range(len(members))), threads, on_member)
+
+    setup = ANALYSES[analysis]
+    cases: dict[int, Case] = {}
+    outcomes: dict[int, Outcome] = {}
+    for i, m in enumerate(members):
+        try:
+            cases[i] = setup(m, t, **kwargs_of(i))
+        except ModelError as err:
+            raise _input_error(err, i, describe(i)) from None
+        except MixdynError as err:  # a start that cannot be made: this member fails
+            outcomes[i] = (None, err)
+            if on_member is not None:
+                on_member(i)
+    if cases:
+        k0 = next(iter(cases))
+        first = cases[k0]
+        tree = jax.tree.structure(first.problem)
+        for i, c in cases.items():
+            if jax.tree.structure(c.problem) != tree or c.options != first.options:
+                raise ModelError(
+                    f"member {i} differs from member {k0} in structure (its bodies, elements, "
+                    "kinds of laws or constraint rows): a sweep varies numbers only",
+                    "models",
+                )
+        order = list(cases)
+        if batch_size is None and _default_batch_size() is None:
+            done = _in_threads(
+                lambda i: _finish(cases[i], integrate(cases[i])), order, threads, on_member
+            )
+        else:
+            done = _batched([cases[i] for i in order], batch_size or _default_batch_size())
+            if on_member is not None:
+                for i in order:
+                    on_member(i)
+        outcomes.update(zip(order, done, strict=True))
+    return [outcomes[i] for i in range(len(members))]
+
+
 def _run_chunk(members: list[Model], t, analysis: str, kwargs: dict, first: int):
     """On a worker: set up and run ``members`` (the sweep's members ``first``...) member by
     member in one thread; an input error names its member."""
-    cases = []
-    for i, m in enumerate(members):
-        try:
-            cases.append(ANALYSES[analysis](m, t, **kwargs))
-        except MixdynError as err:
-            err.add_note(f"in member {first + i} of the sweep")
-            raise
-    return _member_by_member(cases, 1)
+    return run_members(
+        members, t, analysis, lambda i: kwargs, threads=1, describe=lambda i: f" ({first + i})"
+    )
 
 
 def _on_cluster(client, members, t, analysis, kwargs, chunk_size):
@@ -310,9 +432,10 @@ def sweep(
     threads: int | None = None,
     client=None,
     chunk_size: int | None = None,
+    on_member: Callable[[int], None] | None = None,
     **kwargs,
 ) -> Sweep:
-    """Run one dynamic analysis over many variants of a mechanism, compiled once.
+    """Run one analysis over many variants of a mechanism, compiled once.
 
     Args:
         model: the nominal mechanism, whose numbers ``vary`` replaces member by member.
@@ -320,15 +443,16 @@ def sweep(
         vary: path -> values, one value (or row) per member, e.g.
             ``{"slider.mass": [1, 2, 3], "F1.law.a": [10, 10, 20]}`` (three members); a path
             names a body or element and a numeric field (model units), the fields of a law
-            included; :func:`grid` makes every combination of per-axis values.
+            included; :func:`grid` makes every combination of per-axis values,
+            :func:`latin_hypercube` a random spread over a box.
         models: instead of ``model`` and ``vary``: the member models themselves, all of one
             structure (the same bodies, elements and kinds of laws; any numbers).
-        analysis: ``"forward"`` (default) or ``"mixed"``.
+        analysis: ``"forward"`` (default), ``"mixed"``, ``"kinematic"`` or ``"inverse"``.
         batch_size: None (default): on a CPU member by member, each by the single run's
             program (compiled once), from ``threads`` threads; on an accelerator 1024. A
-            number: every member integrated by one program, ``batch_size`` members at a time
-            vectorized (``vmap``) (on a CPU 3-4 times slower a member: measured in
-            ``benchmarks/sweep.py``).
+            number (forward and mixed sweeps): every member integrated by one program,
+            ``batch_size`` members at a time vectorized (``vmap``) (on a CPU 3-4 times slower
+            a member: measured in ``benchmarks/sweep.py``).
         threads: threads of the member-by-member path (default: one per core).
         client: a Dask ``distributed.Client``: the members run on its workers (each sets up
             and runs its chunk member by member; a local cluster,
@@ -337,24 +461,26 @@ def sweep(
             raised with its index.
         chunk_size: members per task on the cluster (default: four tasks per worker
             thread).
+        on_member: called with a member's index as it is done (from the sweep's threads), e.g.
+            to advance a progress bar; not called on a cluster.
         **kwargs: the analysis' own keywords (``method``, ``rtol``, ``prescribed``,
             ``unknown``, ``q0``...), the same for every member (no ``progress``).
 
     Returns:
         A :class:`Sweep`: per member a :class:`~mixdyn.Result` equal to the single run's, or
-        its named error (``Sweep.errors``: a member's numerical failure does not stop the
-        others).
+        its named error (``Sweep.errors``: a member's numerical failure, its start that cannot
+        be assembled included, does not stop the others).
 
     Raises:
         ModelError: a bad path or value (before any computing), members of different
-            structures, or a member whose set-up fails (an input error: named with the
-            member's index).
+            structures, or a member's input error (named with the member's index).
     """
     started = time.perf_counter()
-    if analysis not in ANALYSES:
-        raise ModelError(f"unknown analysis {analysis!r}; a sweep runs: {', '.join(ANALYSES)}")
+    if analysis not in ANALYSES and analysis not in MEMBERWISE:
+        known = ", ".join([*ANALYSES, *MEMBERWISE])
+        raise ModelError(f"unknown analysis {analysis!r}; a sweep runs: {known}", "analysis")
     if "progress" in kwargs:
-        raise ModelError("a sweep has no per-time progress callback", "progress")
+        raise ModelError("a sweep has no per-time progress callback (see on_member)", "progress")
     if t is None:
         raise ModelError("give the output times t", "t")
     if models is not None:
@@ -372,37 +498,25 @@ def sweep(
             for i in range(len(members))
         ]
     if client is not None:
+        if analysis in MEMBERWISE:
+            raise ModelError(f"a {analysis} sweep runs in this process: no client", "client")
         outcomes = _on_cluster(client, members, t, analysis, kwargs, chunk_size)
         results = [r for r, _ in outcomes]
         errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
         return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
-    setup = ANALYSES[analysis]
-    cases = []
-    for i, m in enumerate(members):
-        try:
-            cases.append(setup(m, t, **kwargs))
-        except MixdynError as err:
-            err.add_note(f"in member {i} of the sweep{_describe(params, i)}")
-            raise
-    first = cases[0]
-    tree = jax.tree.structure(first.problem)
-    for i, c in enumerate(cases[1:], start=1):
-        if jax.tree.structure(c.problem) != tree or c.options != first.options:
-            raise ModelError(
-                f"member {i} differs from member 0 in structure (its bodies, elements, kinds "
-                "of laws or constraint rows): a sweep varies numbers only",
-                "models",
-            )
-    prepared = time.perf_counter()
-    if batch_size is None and _default_batch_size() is None:
-        outcomes = _member_by_member(cases, threads or os.cpu_count() or 1)
-    else:
-        outcomes = _batched(cases, batch_size or _default_batch_size())
+    outcomes = run_members(
+        members,
+        t,
+        analysis,
+        lambda i: kwargs,
+        batch_size=batch_size,
+        threads=threads,
+        on_member=on_member,
+        describe=lambda i: _describe(params, i),
+    )
     results = [r for r, _ in outcomes]
     errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
-    done = time.perf_counter()
-    seconds = {"setup": prepared - started, "integration and finish": done - prepared}
-    return Sweep(results, errors, params, seconds)
+    return Sweep(results, errors, params, {"total": time.perf_counter() - started})
 
 
 def _describe(params, i) -> str:
@@ -415,4 +529,13 @@ def _rows(vary):
     return [(p, np.asarray(v, dtype=float)) for p, v in vary.items()]
 
 
-__all__ = ["ANALYSES", "Sweep", "grid", "sweep", "vary_models"]
+__all__ = [
+    "ANALYSES",
+    "MEMBERWISE",
+    "Sweep",
+    "grid",
+    "latin_hypercube",
+    "run_members",
+    "sweep",
+    "vary_models",
+]
