@@ -52,6 +52,11 @@ PROPERTIES = {
     "RevoluteSpec": "name point_i point_j type",
     "RotarySpringDamperSpec": "actuator body_i body_j damping free_angle name stiffness type",
     "SplineArgs": "kind t unit y",
+    # the sweep run kind (issue 15)
+    "SummarySpec": "column name reduce",
+    "SweepPlotSpec": "band by file title x y",
+    "SweepRunSpec": "batch_size kind name outputs plots run samples sampling seed summaries vary",
+    "VarySpec": "n span values",
     "SplineSpec": "spline",
     "SpringDamperSpec": "actuator damping free_length name point_i point_j stiffness type",
     "TimeSpec": "n span step values",
@@ -64,8 +69,9 @@ PROPERTIES = {
 # SHA-256 of ModelFile.model_json_schema() without its descriptions (canonical JSON), taken
 # before the descriptions were added (pydantic 2.14): any change of a type, default, bound,
 # required key or discriminator changes it. If a pydantic upgrade alone changes the form of
-# the schema, check the difference and record the new value.
-STRIPPED_SHA256 = "5eb7d42b394b21b1774b7a2601f392821fea93c1248ad8efb6c99612d9934f95"
+# the schema, check the difference and record the new value. Recorded again when the sweep
+# run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added.
+STRIPPED_SHA256 = "8955eb59aee17efa8940c0fca4b5ae8c2167e9290836365a87647190846306bb"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

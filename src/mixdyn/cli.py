@@ -208,10 +208,13 @@ def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
     for plan in plans:
         folder = out / plan.name
         check_output(folder, "--out", folder=True)
-        names = ["results.csv", "meta.json"]
+        if plan.spec.kind == "sweep":
+            names = ["members.csv", "table.csv", "meta.json"]
+        else:
+            names = ["results.csv", "meta.json"]
         if figures:
             names += [p.file for p in plan.spec.plots]
-            if plan.spec.animation is not None:
+            if getattr(plan.spec, "animation", None) is not None:
                 names.append(plan.spec.animation.file)
         for name in names:
             check_output(folder / name, "--out")
@@ -263,6 +266,13 @@ def check(file: FileArg):
                 runner.check_masses(plan)
             rep = runner.mobility(plan)
             runner.check_solvable(plan)
+            if r.kind == "sweep":
+                how = "grid" if r.sampling == "grid" else f"Latin hypercube, seed {r.seed}"
+                _say(
+                    f"run [bold]{_esc(r.name)}[/bold] (sweep of {_esc(r.run)}): "
+                    f"{plan.members} members ({how}) over {_esc(', '.join(r.vary))}"
+                )
+                continue
             extra = ""
             if isinstance(r, s.MixedRunSpec):
                 extra = f", unknown {', '.join(r.unknown)}, solver {r.solver}"
@@ -354,7 +364,9 @@ def _run(file, runs, out, parquet, figures, progress):
             )
         plans = runner.order(runs or None)
         _check_run_outputs(out, plans, figures)
-        drawing = figures and any(p.spec.plots or p.spec.animation is not None for p in plans)
+        drawing = figures and any(
+            p.spec.plots or getattr(p.spec, "animation", None) is not None for p in plans
+        )
         painter = _Painter() if drawing else None  # its imports overlap the checks
         try:
             for plan in plans:  # fail fast on ill-posed runs, before any long computation
@@ -369,18 +381,33 @@ def _run(file, runs, out, parquet, figures, progress):
             mode = "runs" if sys.stderr.isatty() else "off"
         else:
             mode = "steps" if progress else "off"
-        written = _execute(runner, plans, out, parquet, figures, painter, mode, file)
+        failed: list = []  # sweeps with failed members
+        written = _execute(runner, plans, out, parquet, figures, painter, mode, file, failed)
         _say(f"wrote {len(written)} file(s) under {_esc(out)}")
+        if failed:
+            plan, res = failed[0]
+            errors = res.sweep.errors
+            i = min(errors)
+            e = errors[i]
+            at = f" at t = {e.time:g}" if getattr(e, "time", None) is not None else ""
+            _fail(
+                EXIT_NUMERICAL,
+                f"{file}: run {plan.name!r}: {len(errors)} of {plan.members} members failed "
+                f"(first: member {i}, {plan.describe(i)}{at}: {type(e).__name__}: "
+                f"{getattr(e, 'message', None) or e}); the others are written, each member's "
+                f"outcome in {pathlib.Path(out) / plan.name / 'members.csv'}",
+            )
 
 
-def _execute(runner, plans, out, parquet, figures, painter, mode, file):
+def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=None):
     """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
     ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
 
     The figures and animations are drawn by ``painter`` (None: no figures), a worker process
     that draws while the next runs compute (:class:`_Painter`: matplotlib is imported there
     while the runs are checked, on another core); a failure there is raised here as if drawn
-    in turn. The painter is closed on return."""
+    in turn. The painter is closed on return. A sweep with failed members is appended to
+    ``failed`` as ``(plan, result)``."""
     from rich.console import Console
     from rich.progress import (
         BarColumn,
@@ -394,6 +421,29 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file):
     from .io.results import run_settings, write_result
 
     written = []
+
+    def _sweep_done(runner, plan, result, seconds, folder, painter):
+        from .io.results import write_sweep
+
+        files = write_sweep(
+            result,
+            folder,
+            parquet=parquet,
+            settings=run_settings(plan.spec),
+            extra={
+                "file": str(file),
+                "run": plan.name,
+                "wall_time_s": round(seconds, 3),
+                "figures": [p.file for p in plan.spec.plots] if figures else [],
+                "base_settings": run_settings(plan.base.spec),
+            },
+        )
+        if painter is not None:
+            _sweep_figures(plan, result, folder, painter)
+        if result.sweep.errors and failed is not None:
+            failed.append((plan, result))
+        return files
+
     console = Console(stderr=True)
     if mode == "steps" and not console.is_terminal:
         mode = "log"  # no bar off a terminal: a plain line every few seconds instead
@@ -411,13 +461,20 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file):
             tasks = {}
             for plan in plans:
                 span = float(plan.times[-1] - plan.times[0]) or 1.0
-                tasks[plan.name] = bar.add_task(
-                    f"{plan.name} ({plan.spec.kind})",
-                    total=span if mode == "steps" else None,
-                    start=False,
-                )
+                if plan.spec.kind == "sweep":  # a bar of members, on a terminal
+                    total = plan.members
+                    label = f"{plan.name} (sweep of {plan.base.name}: {total} members)"
+                else:
+                    total = span if mode == "steps" else None
+                    label = f"{plan.name} ({plan.spec.kind})"
+                tasks[plan.name] = bar.add_task(label, total=total, start=False)
 
             def hook(plan):
+                if plan.spec.kind == "sweep":
+                    if mode == "log":
+                        return _members_log(plan)
+                    task = tasks[plan.name]
+                    return lambda i: bar.advance(task)
                 if mode not in ("steps", "log") or plan.spec.kind in ("kinematic", "inverse"):
                     return None
                 if mode == "log":
@@ -433,6 +490,15 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file):
                 total = bar.tasks[tasks[plan.name]].total or 1.0
                 bar.update(tasks[plan.name], total=total, completed=total)
                 folder = pathlib.Path(out) / plan.name
+                if plan.spec.kind == "sweep":
+                    written.extend(_sweep_done(runner, plan, result, seconds, folder, painter))
+                    console.print(
+                        f"{plan.name}: sweep of {plan.base.name}, {plan.members} members "
+                        f"({len(result.sweep.errors)} failed), {seconds:.2f} s -> {folder}",
+                        highlight=False,
+                        soft_wrap=True,
+                    )
+                    return
                 figs = [p.file for p in plan.spec.plots] if figures else []
                 anim = []
                 if figures and plan.spec.animation is not None:
@@ -582,9 +648,15 @@ class _Painter:
 
 
 def _draw_here(kind: str, args, kwargs) -> pathlib.Path:
-    from .viz import _draw, plot_columns
+    from .viz import _draw, plot_columns, sweep_plots
 
-    return {"plot": plot_columns, "movie": _draw.movie}[kind](*args, **kwargs)
+    do = {
+        "plot": plot_columns,
+        "movie": _draw.movie,
+        "against": sweep_plots.plot_against,
+        "band": sweep_plots.plot_band,
+    }
+    return do[kind](*args, **kwargs)
 
 
 #: Seconds between two progress lines when stderr is not a terminal.
@@ -613,6 +685,74 @@ def _progress_log(plan, every: float = PROGRESS_LOG_EVERY):
         sys.stderr.flush()
 
     return at
+
+
+def _members_log(plan, every: float = PROGRESS_LOG_EVERY):
+    """A per-member progress callback writing a plain line on stderr at most every
+    ``every`` seconds: the sweep, the members done and the time elapsed."""
+    import threading
+
+    start = time.monotonic()
+    state = {"last": start, "done": 0}
+    lock = threading.Lock()
+
+    def at(i):
+        with lock:
+            state["done"] += 1
+            now = time.monotonic()
+            if now - state["last"] < every and state["done"] < plan.members:
+                return
+            state["last"] = now
+            sys.stderr.write(
+                clean(f"{plan.name}: {state['done']} of {plan.members} members, ")
+                + f"{now - start:.0f} s\n"
+            )
+            sys.stderr.flush()
+
+    return at
+
+
+def _sweep_figures(plan, result, folder, painter: _Painter) -> None:
+    """Hand a sweep's plots to ``painter``: a summary against a swept quantity, or a band."""
+    import numpy as np
+
+    from .viz.plots import result_columns
+
+    units = dict(result.units)
+    model = next((r.model for r in result.sweep.results if r is not None), None)
+    for name in plan.values:  # a swept body number has the unit of its kind
+        kind = {"mass": "mass", "inertia": "inertia"}.get(name.rsplit(".", 1)[-1])
+        if kind and model is not None:
+            units[name] = model.units.unit(kind)
+    for p in plan.spec.plots:
+        if p.band is not None:
+            ok = [r for r in result.sweep.results if r is not None]
+            if not ok:
+                continue
+            rows = [np.asarray(result_columns(r, [p.band])[0][p.band]) for r in ok]
+            units["t"] = ok[0].units()["t"]
+            painter.draw(
+                "band",
+                np.asarray(plan.times),
+                np.stack(rows),
+                folder / p.file,
+                name=p.band,
+                units=units,
+                title=p.title,
+            )
+            continue
+        painter.draw(
+            "against",
+            plan.values[p.x],
+            result.summaries[p.y],
+            folder / p.file,
+            names=(p.x, p.y),
+            by=None if p.by is None else plan.values[p.by],
+            by_name=p.by or "",
+            units=units,
+            title=p.title,
+            scatter=plan.spec.sampling == "latin_hypercube",
+        )
 
 
 def _figures(runner, plan, result, folder, painter: _Painter) -> None:
@@ -777,6 +917,13 @@ def animate(
         _require_size(spec, file)
         runner = Runner(spec)
         plan = runner.order([run_name])[-1]
+        if plan.spec.kind == "sweep":
+            raise FileError(
+                f"run {run_name!r} is a sweep: its members have no single motion to animate",
+                "--run",
+                file=str(file),
+                hint=f"animate the run it sweeps, {plan.spec.run!r}",
+            )
         a = plan.spec.animation
         fps = fps or (a.fps if a else 20)
         frames = frames or (a.frames if a else 80)

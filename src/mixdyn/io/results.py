@@ -137,6 +137,79 @@ def _refuse_non_finite(table: np.ndarray, names: list[str]) -> None:
     )
 
 
+MEMBERS_CSV = "members.csv"
+TABLE_CSV = "table.csv"
+TABLE_PARQUET = "table.parquet"
+
+
+def write_sweep(
+    sweep,
+    folder,
+    *,
+    parquet: bool = False,
+    settings: dict | None = None,
+    extra: dict | None = None,
+) -> list[pathlib.Path]:
+    """Write a sweep run's result (:class:`mixdyn.io.sweeps.FileSweep`) to ``folder``:
+    ``members.csv`` (a row per member: index, varied values, status, error, summaries),
+    ``table.csv`` (and ``table.parquet``: a row per member and output time) and
+    ``meta.json`` (units, settings, counts, timings).
+
+    Returns:
+        The files written.
+    """
+    from .. import __version__
+
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    members = sweep.members()
+    path = folder / MEMBERS_CSV
+    tmp = path.with_suffix(".csv.tmp")
+    members.to_csv(tmp, index=False, float_format="%.17g")
+    os.replace(tmp, path)
+    written.append(path)
+    table = sweep.table()
+    path = folder / TABLE_CSV
+    tmp = path.with_suffix(".csv.tmp")
+    table.to_csv(tmp, index=False, float_format="%.17g")
+    os.replace(tmp, path)
+    written.append(path)
+    if parquet:
+        path = folder / TABLE_PARQUET
+        table.to_parquet(path, index=False)
+        written.append(path)
+    model = next((r.model for r in sweep.sweep.results if r is not None), None)
+    meta = {
+        "mixdyn_version": __version__,
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "kind": "sweep",
+        "swept_run": sweep.plan.base.name,
+        "members": sweep.plan.members,
+        "failed": len(sweep.sweep.errors),
+        "varied": list(sweep.plan.values),
+        "unit_system": None
+        if model is None
+        else {
+            "length": model.units.length,
+            "mass": model.units.mass,
+            "time": model.units.time,
+            "angle": "rad",
+        },
+        "units": dict(sweep.units),
+        "rows": len(table),
+        "seconds": sweep.seconds,
+        "settings": jsonable(settings or {}),
+    }
+    meta.update(jsonable(extra or {}))
+    path = folder / META_JSON
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(jsonable(meta), indent=2) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    written.append(path)
+    return written
+
+
 def read_result(path):
     """Read results written by :func:`write_result`.
 
@@ -175,4 +248,15 @@ def run_settings(spec) -> dict:
     return data
 
 
-__all__ = ["META_JSON", "RESULTS_CSV", "RESULTS_PARQUET", "jsonable", "read_result", "write_result"]
+__all__ = [
+    "MEMBERS_CSV",
+    "META_JSON",
+    "RESULTS_CSV",
+    "RESULTS_PARQUET",
+    "TABLE_CSV",
+    "TABLE_PARQUET",
+    "jsonable",
+    "read_result",
+    "write_result",
+    "write_sweep",
+]

@@ -34,6 +34,13 @@ from .load import Builder
 
 #: Suffixes of the per-body columns of a result.
 BODY_COLUMNS = ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")
+#: The analyses of the runs, by kind.
+ANALYSES = {
+    "kinematic": an.kinematic,
+    "inverse": an.inverse,
+    "forward": an.forward,
+    "mixed": an.mixed,
+}
 #: Column prefixes present in dynamic results besides bodies, joints and drivers.
 OTHER_PREFIXES = ("energy", "work", "constraint")
 
@@ -75,9 +82,38 @@ class Runner:
         self.spec = spec
         self.b = Builder(spec)
         self.model = model if model is not None else self.b.model()
-        self.plans = {r.name: self._plan(i, r) for i, r in enumerate(spec.runs)}
+        from . import sweeps
+
+        self.plans = {}  # the sweeps last: they take their settings from the runs they sweep
+        for i, r in enumerate(spec.runs):
+            if not isinstance(r, s.SweepRunSpec):
+                self.plans[r.name] = self._plan(i, r)
+        for i, r in enumerate(spec.runs):
+            if isinstance(r, s.SweepRunSpec):
+                self.plans[r.name] = sweeps.plan(self, i, r)
+        self.plans = {r.name: self.plans[r.name] for r in spec.runs}
         self._check_cycles()
         settings.check_replays(self)
+
+    @classmethod
+    def member(cls, spec: s.ModelFile, model: m.Model, run: str, like: Runner | None = None):
+        """A runner of one run of ``spec`` (a sweep's member: ``spec`` with its parameters
+        changed) on ``model``, its other runs not planned or checked; ``like``: a runner of
+        the same ``spec`` whose builder and plan it shares."""
+        self = cls.__new__(cls)
+        self.spec = spec
+        self.model = model
+        if like is not None:
+            self.b, self.plans = like.b, {run: like.plans[run]}
+            return self
+        self.b = Builder(spec)
+        index = next(i for i, r in enumerate(spec.runs) if r.name == run)
+        self.plans = {run: self._plan(index, spec.runs[index])}
+        return self
+
+    def base(self, plan: Plan) -> Plan:
+        """The run a sweep sweeps (``plan`` itself for the other kinds)."""
+        return self.plans[plan.spec.run] if plan.spec.kind == "sweep" else plan
 
     # ----------------------------------------------------------------- checking
     def fail(self, path, problem, hint=""):
@@ -151,6 +187,12 @@ class Runner:
                         (*pp, "from_run"),
                         f"unknown run {p.from_run!r}",
                         f"runs: {', '.join(x.name for x in self.spec.runs)}",
+                    )
+                if src.kind == "sweep":
+                    self.fail(
+                        (*pp, "from_run"),
+                        f"run {p.from_run!r} is a sweep, with a motion per member",
+                        "replay a single run",
                     )
                 depends.append(p.from_run)
             else:
@@ -401,6 +443,7 @@ class Runner:
             FileError: a kinematic or inverse run is not fully driven, a dynamic run is
                 over-driven, or a mixed run fails a check of :meth:`check_solvable`.
         """
+        plan = self.base(plan)  # a sweep: the run it sweeps, at its nominal numbers
         r = plan.spec
         mixed = isinstance(r, s.MixedRunSpec)
         report = None
@@ -648,6 +691,7 @@ class Runner:
         Raises:
             FileError: the run cannot be solved, with the reason.
         """
+        plan = self.base(plan)
         r = plan.spec
         if not isinstance(r, s.MixedRunSpec):
             return
@@ -751,6 +795,7 @@ class Runner:
 
     def check_masses(self, plan: Plan) -> None:
         """A dynamic run needs every body's mass and inertia > 0."""
+        plan = self.base(plan)
         if plan.spec.kind == "kinematic":
             return
         for i, body in enumerate(self.model.bodies):
@@ -788,7 +833,41 @@ class Runner:
 
     # ----------------------------------------------------------------- executing
     def execute_one(self, plan: Plan, results: dict, progress: Callable | None = None):
-        """Run one plan (its dependencies' results in ``results``) and return its Result."""
+        """Run one plan (its dependencies' results in ``results``) and return its Result (a
+        sweep's: its :class:`~mixdyn.io.sweeps.FileSweep`; ``progress`` then gets member
+        indices)."""
+        from . import sweeps
+
+        if isinstance(plan, sweeps.SweepPlan):
+            return sweeps.execute(self, plan, progress)
+        try:
+            try:
+                analysis, model, kwargs = self.call(plan, results)
+                if progress is not None and analysis in ("forward", "mixed"):
+                    kwargs["progress"] = progress
+                return ANALYSES[analysis](model, plan.times, **kwargs)
+            except TypeError as e:
+                if "unexpected keyword argument" in str(e):
+                    self.fail((*plan.path, "options"), f"unknown option ({e})", "remove the option")
+                raise
+        except FileError:
+            raise
+        except ModelError as e:
+            self._model_error(plan, e)
+        except NumericalError as e:
+            e.run = plan.name
+            e.file = self.b.file
+            raise
+
+    def call(self, plan: Plan, results: dict, *, checked: bool = True) -> tuple[str, m.Model, dict]:
+        """What a run computes: ``(analysis, model, keywords)``, the analysis a key of
+        :data:`ANALYSES` called as ``ANALYSES[analysis](model, plan.times, **keywords)``.
+
+        Args:
+            plan: the run.
+            results: the results of the runs it replays (``from_run``).
+            checked: start from the set-up the checks made (:meth:`mobility`), if any.
+        """
         r = plan.spec
         drivers = []
         for k, p in enumerate(r.prescribed):
@@ -811,60 +890,39 @@ class Runner:
         mixed = isinstance(r, s.MixedRunSpec)
         # The set-up the check made (mobility), if any: the run starts from it, not assembled
         # and analysed again.
-        args, prep = self._prepared.get(plan.name, (None, None))
+        args, prep = self._prepared.get(plan.name, (None, None)) if checked else (None, None)
         model = prep.model if prep is not None else self.run_model(plan, () if mixed else drivers)
-        ts = plan.times
         opts = dict(getattr(r, "options", {}) or {})
         opts.pop("linear_solver", None)
         dt = None
         if getattr(r, "dt", None) is not None:
             dt = self.b.scalar(r.dt, "time", (*plan.path, "dt"))
-        try:
-            try:
-                if args is None:
-                    args = self._start_args(plan, model)
-                if r.kind in ("kinematic", "inverse"):
-                    if r.kind == "kinematic":
-                        kw = {"max_iter": r.max_iter}
-                        if r.tol is not None:
-                            kw["tol"] = r.tol
-                        return an.kinematic(model, ts, prepared=prep, **args, **kw)
-                    opts.pop("assemble_first", None)
-                    return an.inverse(model, ts, prepared=prep, **args, **opts)
-                common = dict(
-                    method=r.method,
-                    rtol=r.rtol,
-                    atol=r.atol,
-                    dt=dt,
-                    **args,
-                    prepared=prep,
-                    **opts,
-                )
-                if progress is not None:
-                    common["progress"] = progress
-                if r.kind == "forward":
-                    return an.forward(model, ts, **common)
-                return an.mixed(
-                    model,
-                    ts,
-                    prescribed=drivers,
-                    unknown=list(r.unknown),
-                    solver=r.solver,
-                    independent=None if r.independent is None else list(r.independent),
-                    **common,
-                )
-            except TypeError as e:
-                if "unexpected keyword argument" in str(e):
-                    self.fail((*plan.path, "options"), f"unknown option ({e})", "remove the option")
-                raise
-        except FileError:
-            raise
-        except ModelError as e:
-            self._model_error(plan, e)
-        except NumericalError as e:
-            e.run = plan.name
-            e.file = self.b.file
-            raise
+        if args is None:
+            args = self._start_args(plan, model)
+        if r.kind == "kinematic":
+            kw = {"max_iter": r.max_iter}
+            if r.tol is not None:
+                kw["tol"] = r.tol
+            return "kinematic", model, dict(prepared=prep, **args, **kw)
+        if r.kind == "inverse":
+            opts.pop("assemble_first", None)
+            return "inverse", model, dict(prepared=prep, **args, **opts)
+        common = dict(
+            method=r.method, rtol=r.rtol, atol=r.atol, dt=dt, **args, prepared=prep, **opts
+        )
+        if r.kind == "forward":
+            return "forward", model, common
+        return (
+            "mixed",
+            model,
+            dict(
+                prescribed=drivers,
+                unknown=list(r.unknown),
+                solver=r.solver,
+                independent=None if r.independent is None else list(r.independent),
+                **common,
+            ),
+        )
 
     def execute(
         self,

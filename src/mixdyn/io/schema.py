@@ -786,8 +786,126 @@ class MixedRunSpec(_RunSpec):
     energy check off), ``{solver: dopri8, max_steps: 100000}``; unknown options are errors."""
 
 
+class VarySpec(Spec):
+    """The values a swept quantity takes: ``values``, or a ``span`` with ``n`` evenly spaced
+    values (a grid), or a ``span`` alone (``sampling: latin_hypercube``)."""
+
+    values: list[Scalar] | None = Field(default=None, min_length=1)
+    """Explicit values, e.g. ``[5 N, 10 N, 20 N]`` (numbers: model units)."""
+    span: tuple[Scalar, Scalar] | None = None
+    """Lowest and highest value ``[low, high]``, e.g. ``[5, 15]``."""
+    n: int | None = Field(default=None, ge=1, le=1_000_000)
+    """Number of evenly spaced values over ``span``, both ends included (grid sampling)."""
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        if self.values is not None and (self.span is not None or self.n is not None):
+            raise ValueError("give 'values' alone, or 'span' (with 'n' for a grid)")
+        if self.values is None and self.span is None:
+            raise ValueError("give 'values', or 'span' (with 'n' for a grid)")
+        return self
+
+
+SUMMARY_REDUCTIONS = ("max", "min", "absmax", "mean", "rms", "first", "last", "range")
+
+
+class SummarySpec(Spec):
+    """A number per member made from a result column over time, e.g. the peak of a
+    reaction: ``{name: x_peak, column: slider.x, reduce: max}``."""
+
+    name: Name
+    """Name of the summary (its column in ``members.csv``; usable in plots)."""
+    column: str
+    """The result column it reduces, e.g. ``slider.x``, ``A.Fx``, ``F1``."""
+    reduce: Literal["max", "min", "absmax", "mean", "rms", "first", "last", "range"] = "absmax"
+    """How: ``max``, ``min``, ``absmax`` (default: the largest magnitude), ``mean``, ``rms``
+    (over the output times), ``first``, ``last``, ``range`` (max - min)."""
+
+
+class SweepPlotSpec(Spec):
+    """A figure of a sweep: a summary against a swept quantity (``x``, ``y``, optional
+    ``by``: one curve per value), or the band of a column's time histories (``band``)."""
+
+    file: PlotFile
+    """Figure file relative to the run's output folder: ``.png``, ``.svg`` or ``.pdf``."""
+    x: str | None = None
+    """A swept quantity on the x axis (a name in ``vary``)."""
+    y: Name | None = None
+    """A summary on the y axis (a name in ``summaries``)."""
+    by: str | None = None
+    """Another swept quantity: one curve per value of it (at most 8 drawn, evenly picked);
+    with Latin hypercube sampling, the points' colour."""
+    band: str | None = None
+    """A result column: its time histories over the members drawn as a band (the range, the
+    10-90 % band and the median), instead of ``x``/``y``."""
+    title: Text | None = None
+    """Figure title (default: none)."""
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        against = self.x is not None or self.y is not None
+        if self.band is not None and (against or self.by is not None):
+            raise ValueError("give either 'band' or 'x' and 'y' (with an optional 'by')")
+        if self.band is None and (self.x is None or self.y is None):
+            raise ValueError("give 'x' (a swept quantity) and 'y' (a summary), or 'band'")
+        return self
+
+
+class SweepRunSpec(Spec):
+    """Another run repeated over many values of some numbers (``mixdyn.sweep``)."""
+
+    kind: Literal["sweep"]
+    """Run kind: ``sweep``."""
+    name: Name
+    """Unique name of the run (its output folder's name)."""
+    run: Name
+    """The run swept: its analysis, output times, solver settings, start and prescribed
+    motions (laws, not ``from_run``) are every member's."""
+    vary: dict[str, VarySpec] = Field(min_length=1)
+    """What changes, by name: a file parameter (``F0``) or a number of a body or element
+    (``slider.mass``, ``F1.law.amplitude``; numbers in model units), each with its values:
+    ``{F0: {span: [5, 15], n: 40}, m5: {values: [0.005, 0.01]}}``."""
+    sampling: Literal["grid", "latin_hypercube"] = "grid"
+    """``grid`` (default: every combination of the values) or ``latin_hypercube`` (``samples``
+    members spread over the spans)."""
+    samples: int | None = Field(default=None, ge=1, le=1_000_000)
+    """Number of members of a Latin hypercube sampling."""
+    seed: int = Field(default=0, ge=0)
+    """Seed of the Latin hypercube sampling (the same seed, the same members). Default 0."""
+    summaries: list[SummarySpec] = Field(default_factory=list)
+    """Numbers per member, written to ``members.csv``, e.g. ``{name: x_peak, column:
+    slider.x, reduce: max}``."""
+    outputs: list[str] | None = None
+    """Result columns of every member written to ``table.csv`` in long format (one row per
+    member and output time); default: the columns the summaries and bands use."""
+    batch_size: int | None = Field(default=None, ge=1)
+    """Members integrated by one vectorized program at a time (default: member by member on
+    a CPU, 1024 on an accelerator)."""
+    plots: list[SweepPlotSpec] = Field(default_factory=list)
+    """Figures of the sweep: ``{file, x, y, by}`` or ``{file, band}``."""
+
+    @model_validator(mode="after")
+    def _sampling(self):
+        if self.sampling == "latin_hypercube":
+            if self.samples is None:
+                raise ValueError("latin_hypercube sampling needs 'samples' (how many members)")
+            bad = [k for k, v in self.vary.items() if v.span is None or v.n is not None]
+            if bad:
+                raise ValueError(
+                    f"latin_hypercube sampling takes a 'span' alone for each swept quantity "
+                    f"(not {', '.join(bad)})"
+                )
+        else:
+            if self.samples is not None:
+                raise ValueError("'samples' is for latin_hypercube sampling; a grid has none")
+            bad = [k for k, v in self.vary.items() if v.values is None and v.n is None]
+            if bad:
+                raise ValueError(f"a grid needs 'values' or 'span' with 'n' for {', '.join(bad)}")
+        return self
+
+
 RunSpec = Annotated[
-    KinematicRunSpec | ForwardRunSpec | InverseRunSpec | MixedRunSpec,
+    KinematicRunSpec | ForwardRunSpec | InverseRunSpec | MixedRunSpec | SweepRunSpec,
     Field(discriminator="kind"),
 ]
 
@@ -822,7 +940,8 @@ class ModelFile(Spec):
     assembly: AssemblySpec = AssemblySpec()
     """How the starting pose is closed: ``{hold: [crank.phi]}``."""
     runs: list[RunSpec] = Field(default_factory=list)
-    """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``."""
+    """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``, and ``sweep`` (another
+    run over many values of some numbers)."""
 
     def __eq__(self, other) -> bool:
         # Equal descriptions, whatever file (and lines) they were read from.

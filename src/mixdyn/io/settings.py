@@ -195,7 +195,7 @@ def check_laws(runner: Runner, plan: Plan) -> None:
 def check_replays(runner: Runner) -> None:
     """A motion replayed ``from_run`` covers the replaying run's time span."""
     for plan in runner.plans.values():
-        for k, p in enumerate(plan.spec.prescribed):
+        for k, p in enumerate(getattr(plan.spec, "prescribed", ())):
             if p.from_run is None or p.from_run not in runner.plans:
                 continue
             src = runner.plans[p.from_run].times

@@ -3,7 +3,8 @@
 Run as a script (``python .../mixdyn/viz/_worker.py``): it imports neither mixdyn nor JAX,
 only NumPy, matplotlib and Pillow, and loads :mod:`mixdyn.viz.plots` and
 :mod:`mixdyn.viz._draw` by their paths. Each line on standard input names a file holding a
-pickled task ``(kind, args, kwargs)`` (``kind``: ``"plot"`` or ``"movie"``); for each it
+pickled task ``(kind, args, kwargs)`` (``kind``: ``"plot"``, ``"movie"``, ``"against"`` or
+``"band"``); for each it
 writes one line on standard output, the hex of a pickled ``("ok", path)`` or
 ``("error", exception)``. An empty line or the end of the input ends it.
 """
@@ -26,11 +27,16 @@ def _load(name: str):
 
 
 def main() -> None:
-    plots, draw = _load("plots"), _load("_draw")
+    plots, draw, sweeps = _load("plots"), _load("_draw"), _load("sweep_plots")
     from matplotlib.figure import Figure
 
     Figure()  # matplotlib reads its settings and fonts once, before the first task
-    do = {"plot": plots.plot_columns, "movie": draw.movie}
+    do = {
+        "plot": plots.plot_columns,
+        "movie": draw.movie,
+        "against": sweeps.plot_against,
+        "band": sweeps.plot_band,
+    }
     for line in sys.stdin:
         name = line.strip()
         if not name:

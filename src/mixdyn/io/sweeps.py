@@ -1,0 +1,349 @@
+"""Sweep runs of a model file: another run repeated over many values of some numbers.
+
+A sweep run names the run it sweeps (``run:``), what changes (``vary:``: file parameters, or
+numbers of bodies and elements such as ``slider.mass``), how members are sampled (``grid``:
+every combination; ``latin_hypercube``: ``samples`` members spread over the spans), numbers per
+member (``summaries:``) and its figures. Member ``i`` is the swept run of the file with member
+``i``'s numbers: the model built again from the file with its parameters (so every quantity
+written with a parameter follows it: laws, masses, points, start values), the numbers of
+bodies and elements replaced, set up exactly as the single run would be; the members run as
+one :func:`mixdyn.analysis.sweep.run_members` (one compiled program for all).
+
+Example (``examples/antonya_sweep.yaml``)::
+
+    - name: sweep
+      kind: sweep
+      run: forward
+      vary:
+        F0: {span: [5, 15], n: 40}
+        m5: {span: [0.004, 0.012], n: 25}
+      summaries:
+        - {name: x_peak, column: slider.x, reduce: max}
+      plots:
+        - {file: peak.png, x: F0, y: x_peak, by: m5}
+        - {file: band.png, band: slider.x}
+
+``mixdyn run`` writes, per sweep, ``members.csv`` (a row per member: index, varied values,
+``status`` ``ok`` or the error's class, the error, the summaries), ``table.csv`` (long
+format: a row per member and output time with the ``outputs`` columns), the plots and
+``meta.json`` (units, settings, timings). Values are in the model's units.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+
+import numpy as np
+
+from ..analysis.sweep import Sweep, _leaf_getter, grid, latin_hypercube, run_members
+from ..errors import MixdynError, ModelError
+from . import schema as s
+from ._errors import FileError
+from .load import Builder
+from .runs import Plan, Runner
+
+#: Units of the numbers of bodies a sweep may vary (other numbers: model units).
+FIELD_KINDS = {"mass": "mass", "inertia": "inertia"}
+#: Most members a sweep may have.
+MAX_MEMBERS = 1_000_000
+
+
+@dataclasses.dataclass(frozen=True)
+class SweepPlan(Plan):
+    """A checked sweep run.
+
+    Attributes:
+        base: the plan of the run swept.
+        values: varied name -> (M,) its value for each member [model units].
+    """
+
+    base: Plan | None = None
+    values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+
+    @property
+    def spec_outputs(self) -> list[str]:
+        """The columns of the long table (:func:`outputs_of`)."""
+        return outputs_of(self.spec)
+
+    @property
+    def members(self) -> int:
+        return len(next(iter(self.values.values())))
+
+    def describe(self, i: int) -> str:
+        """Member ``i``'s values in words."""
+        return ", ".join(f"{k} = {v[i]:.6g}" for k, v in self.values.items())
+
+
+@dataclasses.dataclass
+class FileSweep:
+    """The result of a sweep run.
+
+    Attributes:
+        plan: the sweep's plan.
+        sweep: the members' results and errors (:class:`mixdyn.Sweep`).
+        summaries: summary name -> (M,) its value per member (NaN for a failed member).
+        units: unit of each summary and output column (model units, pint spelling).
+        seconds: wall time of building the members and of running them [s].
+    """
+
+    plan: SweepPlan
+    sweep: Sweep
+    summaries: dict[str, np.ndarray]
+    units: dict[str, str]
+    seconds: dict[str, float]
+
+    @property
+    def kind(self) -> str:
+        return "sweep"
+
+    def members(self):
+        """A pandas DataFrame, a row per member: ``member``, the varied values, ``status``
+        (``ok`` or the error's class), ``error`` (its message), ``t_error`` (the time it
+        failed at, if known) and the summaries."""
+        import pandas as pd
+
+        n = self.plan.members
+        data = {"member": np.arange(n)}
+        data.update({k: np.asarray(v) for k, v in self.plan.values.items()})
+        errors = self.sweep.errors
+        data["status"] = [type(errors[i]).__name__ if i in errors else "ok" for i in range(n)]
+        data["error"] = [_message(errors[i]) if i in errors else "" for i in range(n)]
+        data["t_error"] = [_error_time(errors.get(i)) for i in range(n)]
+        data.update(self.summaries)
+        return pd.DataFrame(data)
+
+    def table(self):
+        """The long table: a row per member and output time, with the member index, its
+        varied values, ``t`` and the ``outputs`` columns (failed members have no rows)."""
+        import pandas as pd
+
+        frames = []
+        for i, res in enumerate(self.sweep.results):
+            if res is None:
+                continue
+            cols = _columns(res, self.plan.spec_outputs)
+            df = pd.DataFrame(cols)
+            for k, (name, v) in enumerate(self.plan.values.items()):
+                df.insert(k, name, float(v[i]))
+            df.insert(0, "member", i)
+            frames.append(df)
+        return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+
+
+def _message(err: MixdynError) -> str:
+    return " ".join(str(getattr(err, "message", None) or err).split())
+
+
+def _error_time(err) -> float:
+    t = getattr(err, "time", None)
+    return float(t) if t is not None else float("nan")
+
+
+def _columns(result, names) -> dict[str, np.ndarray]:
+    from ..viz.plots import result_columns
+
+    cols, _ = result_columns(result, list(names))
+    return cols
+
+
+# --------------------------------------------------------------------------- planning
+def outputs_of(r: s.SweepRunSpec) -> list[str]:
+    """The columns of the long table: ``outputs``, or the summaries' and bands' columns."""
+    if r.outputs is not None:
+        return list(dict.fromkeys(r.outputs))
+    cols = [x.column for x in r.summaries] + [p.band for p in r.plots if p.band is not None]
+    return list(dict.fromkeys(cols))
+
+
+def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
+    """Check a sweep run against the file and its model; its members' values made."""
+    path = ("runs", index)
+    kinds = {x.name: x.kind for x in runner.spec.runs}
+    if kinds.get(r.run) == "sweep":
+        runner.fail((*path, "run"), f"run {r.run!r} is a sweep", "sweep a run that is not one")
+    if r.run not in runner.plans:
+        known = ", ".join(n for n, k in kinds.items() if k != "sweep") or "(none)"
+        runner.fail((*path, "run"), f"unknown run {r.run!r}", f"runs that can be swept: {known}")
+    base = runner.plans[r.run]
+    if any(p.from_run is not None for p in base.spec.prescribed):
+        runner.fail(
+            (*path, "run"),
+            f"run {r.run!r} replays another run's motion (from_run), which the members "
+            "would not share",
+            "sweep a run whose prescribed motions are laws",
+        )
+    axes, spans = {}, {}
+    for name, v in r.vary.items():
+        vpath = (*path, "vary", name)
+        kind = _check_name(runner, name, vpath)
+        if v.values is not None:
+            vals = [runner.b.scalar(x, kind, (*vpath, "values", k)) for k, x in enumerate(v.values)]
+            axes[name] = np.asarray(vals, dtype=float)
+            continue
+        lo = runner.b.scalar(v.span[0], kind, (*vpath, "span", 0))
+        hi = runner.b.scalar(v.span[1], kind, (*vpath, "span", 1))
+        if not hi > lo:
+            runner.fail((*vpath, "span"), f"the span [{lo:g}, {hi:g}] is empty", "give [low, high]")
+        spans[name] = (lo, hi)
+        if v.n is not None:
+            axes[name] = np.linspace(lo, hi, v.n)
+    if r.sampling == "latin_hypercube":
+        values = latin_hypercube(r.samples, r.seed, **spans)
+    else:
+        count = int(np.prod([len(a) for a in axes.values()], dtype=float))
+        if count > MAX_MEMBERS:
+            runner.fail((*path, "vary"), f"{count} members are too many", "sample fewer values")
+        values = grid(**axes)
+    names = set(r.vary)
+    taken = {"member", "status", "error", "t_error", "t"}
+    seen: set[str] = set()
+    for k, x in enumerate(r.summaries):
+        sp = (*path, "summaries", k)
+        if x.name in names or x.name in taken or x.name in seen:
+            runner.fail((*sp, "name"), f"the name {x.name!r} is taken", "rename the summary")
+        seen.add(x.name)
+        runner._check_column(x.column, base.spec, (*sp, "column"))
+    for k, col in enumerate(r.outputs or ()):
+        runner._check_column(col, base.spec, (*path, "outputs", k))
+    for k, p in enumerate(r.plots):
+        pp = (*path, "plots", k)
+        if p.band is not None:
+            runner._check_column(p.band, base.spec, (*pp, "band"))
+            continue
+        for key in ("x", "by"):
+            v = getattr(p, key)
+            if v is not None and v not in names:
+                runner.fail((*pp, key), f"{v!r} is not swept", f"swept: {', '.join(r.vary)}")
+        if p.by is not None and p.by == p.x:
+            runner.fail((*pp, "by"), "'by' repeats 'x'", "name another swept quantity")
+        if p.y not in seen:
+            known = ", ".join(seen) or "(none: add summaries)"
+            runner.fail((*pp, "y"), f"{p.y!r} is not a summary", f"summaries: {known}")
+    return SweepPlan(r, index, base.times, (), base=base, values=values)
+
+
+def _check_name(runner: Runner, name: str, path) -> str | None:
+    """The kind of quantity of a varied name (None: model units of any kind), checked."""
+    if "." not in name:
+        if name not in runner.b.parameters:
+            known = ", ".join(runner.b.parameters) or "(the file has none)"
+            runner.fail(
+                path,
+                f"no parameter {name!r}",
+                f"parameters: {known}; a number of a body or element is named like 'slider.mass'",
+            )
+        return None
+    try:
+        _, shape = _leaf_getter(runner.model, name)
+    except ModelError as e:
+        runner.fail(path, str(e.args[0]), "name a number, e.g. slider.mass, or a file parameter")
+    if shape != ():
+        runner.fail(
+            path,
+            f"{name!r} holds {int(np.prod(shape))} numbers, not one",
+            "put the number in a file parameter and vary the parameter",
+        )
+    return FIELD_KINDS.get(name.rsplit(".", 1)[1])
+
+
+# --------------------------------------------------------------------------- executing
+def _member_runner(runner: Runner, plan: SweepPlan, i: int) -> Runner:
+    """The runner of member ``i``: the file with its parameters, its model's numbers."""
+    import equinox as eqx
+    import jax.numpy as jnp
+
+    params = {k: float(v[i]) for k, v in plan.values.items() if "." not in k}
+    spec = runner.spec
+    if params:
+        spec = spec.model_copy(update={"parameters": {**spec.parameters, **params}})
+        model = Builder(spec).model()
+    else:
+        model = runner.model
+    for k, v in plan.values.items():
+        if "." in k:
+            get, _ = _leaf_getter(model, k)
+            model = eqx.tree_at(get, model, jnp.asarray(float(v[i])))
+    if not params:
+        return Runner.member(spec, model, plan.base.name, like=runner)
+    return Runner.member(spec, model, plan.base.name)
+
+
+def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | None = None):
+    """Run every member of a sweep; ``progress(i)`` as member ``i`` is done."""
+    r: s.SweepRunSpec = plan.spec
+    started = time.perf_counter()
+    models, kwargs, analysis = [], [], None
+    for i in range(plan.members):
+        try:
+            member = _member_runner(runner, plan, i)
+            analysis, model, kw = member.call(member.plans[plan.base.name], {}, checked=False)
+        except (FileError, ModelError) as e:
+            runner.fail(
+                (*plan.path, "vary"),
+                f"member {i} ({plan.describe(i)}) cannot be built: {_message(e)}",
+                "narrow the swept values",
+            )
+        models.append(model)
+        kwargs.append(kw)
+    built = time.perf_counter()
+    try:
+        outcomes = run_members(
+            models,
+            plan.times,
+            analysis,
+            lambda i: kwargs[i],
+            batch_size=r.batch_size,
+            on_member=progress,
+            describe=lambda i: f" ({plan.describe(i)})",
+        )
+    except ModelError as e:
+        notes = " ".join(getattr(e, "__notes__", []))
+        runner.fail((*plan.path, "vary"), f"{_message(e)} {notes}".strip(), "narrow the values")
+    done = time.perf_counter()
+    results = [res for res, _ in outcomes]
+    errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
+    params = [{k: float(v[i]) for k, v in plan.values.items()} for i in range(plan.members)]
+    sweep = Sweep(results, errors, params, {"total": done - built})
+    summaries, units = _summaries(runner, plan, results)
+    return FileSweep(plan, sweep, summaries, units, {"build": built - started, "run": done - built})
+
+
+_REDUCE = {
+    "max": np.max,
+    "min": np.min,
+    "absmax": lambda y: np.max(np.abs(y)),
+    "mean": np.mean,
+    "rms": lambda y: np.sqrt(np.mean(np.square(y))),
+    "first": lambda y: y[0],
+    "last": lambda y: y[-1],
+    "range": np.ptp,
+}
+
+
+def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
+    from ..viz.plots import result_columns
+
+    r: s.SweepRunSpec = plan.spec
+    ok = next((res for res in results if res is not None), None)
+    units: dict[str, str] = {}
+    if ok is not None:
+        wanted = [x.column for x in r.summaries] + plan.spec_outputs
+        try:
+            _, units = result_columns(ok, wanted)
+        except KeyError as e:
+            runner.fail((*plan.path, "summaries"), str(e.args[0]), "fix the column name")
+    out = {}
+    for x in r.summaries:
+        vals = np.full(len(results), np.nan)
+        for i, res in enumerate(results):
+            if res is not None:
+                y = np.asarray(result_columns(res, [x.column])[0][x.column])
+                vals[i] = float(_REDUCE[x.reduce](y))
+        out[x.name] = vals
+        units[x.name] = units.get(x.column, "")
+    return out, units
+
+
+__all__ = ["FileSweep", "SweepPlan", "execute", "outputs_of", "plan"]
