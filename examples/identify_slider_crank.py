@@ -3,11 +3,11 @@ coefficient of a slider–crank, recovered from a noisy recorded motion (SI unit
 
 The "recording" is a forward run at the true numbers (a harmonic motor torque on the crank, a
 spring–damper pulling the slider towards the ground point P) with Gaussian noise on the
-slider's x (0.1 mm) and the crank angle (1 mrad) at 101 times over 2 s. The fit is a weighted
-least-squares problem (scipy's ``least_squares``) whose Jacobian comes from forward-mode
-differentiation of the run (``md.differentiable(..., derivatives="forward")``, ``jax.jacfwd``).
-The standard deviations come from the Jacobian at the optimum (``(J^T J)^-1`` of the weighted
-residuals); each estimate is printed with its distance from the truth in those deviations.
+slider's x (0.1 mm) and the crank angle (1 mrad) at 101 times over 2 s. ``md.fit`` solves the
+weighted least-squares problem (scipy's ``least_squares``) with the Jacobian from forward-mode
+differentiation of the run (``jax.jacfwd`` through the integrator). The standard deviations
+come from the Jacobian at the optimum (``(J^T J)^-1`` of the weighted residuals); each estimate
+is printed with its distance from the truth in those deviations.
 
 Run: ``python examples/identify_slider_crank.py [--seed 0]``.
 """
@@ -16,10 +16,7 @@ from __future__ import annotations
 
 import argparse
 
-import jax
-import jax.numpy as jnp
 import numpy as np
-from scipy.optimize import least_squares
 
 import mixdyn as md
 
@@ -69,43 +66,27 @@ def build_model() -> md.Model:
 
 
 def identify(seed: int = 0, start=(1.3, 0.7, 1.4, 0.6)):
-    """Record, then fit from ``TRUE * start``. Returns ``(estimate, deviations, truth,
-    reduced chi-square)``, each (4,) but the last."""
+    """Record, then fit from ``TRUE * start`` (:func:`mixdyn.fit`). Returns ``(estimate,
+    deviations, truth, reduced chi-square)``, each (4,) but the last."""
     t = np.linspace(0.0, 2.0, 101)
-    f, truth = md.differentiable(
-        build_model(), t, PARAMS, rtol=1e-10, atol=1e-12, derivatives="forward"
-    )
-    q = np.asarray(f(truth)["q"])
+    model = build_model()
+    opts = dict(rtol=1e-10, atol=1e-12)
+    truth = np.asarray(md.forward(model, t, **opts).q)
     rng = np.random.default_rng(seed)
-    measured = np.stack(
-        [
-            q[:, k] + s * rng.standard_normal(len(t))
-            for k, s in zip((SLIDER_X, CRANK_PHI), NOISE, strict=True)
-        ]
+    measured = {
+        name: truth[:, k] + s * rng.standard_normal(len(t))
+        for name, k, s in zip(("slider.x", "crank.phi"), (SLIDER_X, CRANK_PHI), NOISE, strict=True)
+    }
+    result = md.fit(
+        model,
+        t,
+        measured,
+        PARAMS,
+        noise=dict(zip(measured, NOISE, strict=True)),
+        start=TRUE * np.asarray(start),
+        **opts,
     )
-
-    def residuals(theta):
-        q = f(theta)["q"]
-        return jnp.concatenate(
-            [
-                (q[:, k] - measured[i]) / s
-                for i, (k, s) in enumerate(zip((SLIDER_X, CRANK_PHI), NOISE, strict=True))
-            ]
-        )
-
-    res, jac = jax.jit(residuals), jax.jit(jax.jacfwd(residuals))
-    fit = least_squares(
-        lambda th: np.asarray(res(th)),
-        truth * np.asarray(start),
-        jac=lambda th: np.asarray(jac(th)),
-        x_scale="jac",
-    )
-    if not fit.success or not np.all(np.isfinite(fit.x)):
-        raise SystemExit(f"the fit did not converge: {fit.message}")
-    J = np.asarray(jac(fit.x))
-    deviations = np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
-    chi2 = 2 * fit.cost / (J.shape[0] - J.shape[1])
-    return fit.x, deviations, truth, chi2
+    return result.values, result.deviations, TRUE, result.chi2
 
 
 def main() -> None:

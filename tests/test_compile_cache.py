@@ -213,6 +213,7 @@ def _run(script: pathlib.Path, env: dict, *args) -> dict:
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 @pytest.mark.timeout(900)
 def test_a_second_process_traces_nothing(tmp_path):
     """A first process exports the programs of the paper's mechanism; a second one, with

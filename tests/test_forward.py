@@ -196,7 +196,11 @@ def generalized_alpha_oscillator(m, k, c, free_length, x0, h, steps, rho_inf):
     return np.array(xs)
 
 
-@pytest.mark.parametrize("k", [1e7, 2.8e6], ids=["diverging", "contracting-slowly"])
+@pytest.mark.parametrize(
+    "k",
+    [pytest.param(1e7, marks=pytest.mark.slow), 2.8e6],  # slow: a long run; CI runs it
+    ids=["diverging", "contracting-slowly"],
+)
 def test_generalized_alpha_stiff_spring_falls_back_to_full_newton(k):
     """A stiff spring (and a 200 N s/m damper) on a 1 kg slider at dt = 1 ms: 1e7 N/m (period
     2 ms), ``beta' k / m = 2.5``, and 2.8e6 N/m, ``beta' k / m = 0.7``. The modified Newton

@@ -46,6 +46,7 @@ def test_projection_gradient_against_finite_differences(paper):
     _check_gradient(f, th0)
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 @pytest.mark.timeout(600)
 def test_forward_mode_jacobian_against_finite_differences(paper):
     """``derivatives="forward"``: ``jax.jacfwd`` of the slider's whole motion (51 outputs)

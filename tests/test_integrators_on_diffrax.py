@@ -20,6 +20,7 @@ from mixdyn.analysis.methods import OPTIONS
 from mixdyn.errors import NumericalError
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_outputs_land_on_every_output_time_without_slivers():
     """A five-pendulum chain, 2 s, 201 outputs: diffrax's PID controller clipped to the output
     times left a sliver of a step before t = 0.98 and ended the run below its minimum step;

@@ -128,6 +128,7 @@ def test_energy_balance_of_recovered_force(mixed_runs):
 
 
 # --------------------------------------------------------------------------------- inverse
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_inverse_efforts_reproduce_motion_in_forward():
     """Efforts from an inverse run, applied as known forces in a forward run, reproduce the
     prescribed motion (crank angle) to <= 1e-7."""

@@ -383,6 +383,7 @@ def paper_forward():
     return model, ts, fw
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_collocated_mixed_round_trip_agrees(paper_forward):
     """The paper's round trip (F1 unknown, the slider's x prescribed: a force along the
     coordinate it prescribes, so the system is symmetric) on the sparse path."""
@@ -445,6 +446,7 @@ def test_collocated_torque_with_either_sign():
     _agree_columns(runs["relative", "sparse"], runs["relative", "dense"])
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_non_collocated_mixed_on_the_sparse_path():
     """Slider prescribed, crank torque unknown: ``G != C^T``. The sparse path solves it by a
     rank-1 Woodbury update of the symmetric Schur complement: the torque, motion and reactions

@@ -2,6 +2,7 @@
 
 from ._assembly import Assembly, assemble
 from ._structure import DofReport, degrees_of_freedom
+from .fit import Fit, fit
 from .forward import forward
 from .gradients import differentiable
 from .integrators import INTEGRATORS
@@ -17,6 +18,7 @@ __all__ = [
     "Assembly",
     "Baumgarte",
     "DofReport",
+    "Fit",
     "GeneralizedAlpha",
     "IntegratorOptions",
     "Partitioning",
@@ -27,6 +29,7 @@ __all__ = [
     "check_mixed",
     "degrees_of_freedom",
     "differentiable",
+    "fit",
     "forward",
     "grid",
     "inverse",
