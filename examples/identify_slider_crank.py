@@ -9,7 +9,9 @@ differentiation of the run (``jax.jacfwd`` through the integrator). The standard
 come from the Jacobian at the optimum (``(J^T J)^-1`` of the weighted residuals); each estimate
 is printed with its distance from the truth in those deviations.
 
-Run: ``python examples/identify_slider_crank.py [--seed 0]``.
+Run: ``python examples/identify_slider_crank.py [--seed 0]``; ``--write FILE.csv`` writes the
+recording instead (``examples/data/slider_crank_recording.csv``: seed 0, read by
+``examples/identify_slider_crank.yaml``).
 """
 
 from __future__ import annotations
@@ -65,18 +67,25 @@ def build_model() -> md.Model:
     )
 
 
-def identify(seed: int = 0, start=(1.3, 0.7, 1.4, 0.6)):
-    """Record, then fit from ``TRUE * start`` (:func:`mixdyn.fit`). Returns ``(estimate,
-    deviations, truth, reduced chi-square)``, each (4,) but the last."""
+def record(seed: int = 0):
+    """The "recording": ``(t, {"slider.x": (101,), "crank.phi": (101,)})``, the true run
+    with noise (:data:`NOISE`) drawn from ``numpy.random.default_rng(seed)``."""
     t = np.linspace(0.0, 2.0, 101)
-    model = build_model()
-    opts = dict(rtol=1e-10, atol=1e-12)
-    truth = np.asarray(md.forward(model, t, **opts).q)
+    truth = np.asarray(md.forward(build_model(), t, rtol=1e-10, atol=1e-12).q)
     rng = np.random.default_rng(seed)
     measured = {
         name: truth[:, k] + s * rng.standard_normal(len(t))
         for name, k, s in zip(("slider.x", "crank.phi"), (SLIDER_X, CRANK_PHI), NOISE, strict=True)
     }
+    return t, measured
+
+
+def identify(seed: int = 0, start=(1.3, 0.7, 1.4, 0.6)):
+    """Record, then fit from ``TRUE * start`` (:func:`mixdyn.fit`). Returns ``(estimate,
+    deviations, truth, reduced chi-square)``, each (4,) but the last."""
+    t, measured = record(seed)
+    model = build_model()
+    opts = dict(rtol=1e-10, atol=1e-12)
     result = md.fit(
         model,
         t,
@@ -92,7 +101,16 @@ def identify(seed: int = 0, start=(1.3, 0.7, 1.4, 0.6)):
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seed", type=int, default=0)
-    seed = ap.parse_args().seed
+    ap.add_argument("--write", metavar="CSV", help="write the recording to CSV and stop")
+    a = ap.parse_args()
+    seed = a.seed
+    if a.write:
+        t, measured = record(seed)
+        with open(a.write, "w", encoding="utf-8") as f:
+            f.write("t,x,phi\n")
+            for row in zip(t, measured["slider.x"], measured["crank.phi"], strict=True):
+                f.write(",".join(f"{v:.17g}" for v in row) + "\n")
+        return
     est, sd, truth, chi2 = identify(seed)
     print(f"{'number':16} {'true':>10} {'estimate':>12} {'std. dev.':>10} {'off by':>8}")
     for name, x0, x, s in zip(PARAMS, truth, est, sd, strict=True):

@@ -34,6 +34,7 @@ def recorded(example):
     return model, md.forward(model, T, **OPTS)
 
 
+@pytest.mark.slow  # the file run of test_identify_files.py does the same through md.fit
 def test_a_damper_is_recovered_from_noise_free_velocities(recorded):
     model, rec = recorded
     fit = md.fit(

@@ -212,7 +212,7 @@ def test_a_sweep_is_not_replayed_nor_swept_nor_animated(tmp_path):
       - {coordinate: slider.x, from_run: sweep}
 """
     res = CliRunner().invoke(app, ["check", str(_file(tmp_path, MODEL + BASE + SWEEP + mixed))])
-    assert res.exit_code == 2 and "is a sweep, with a motion per member" in res.output
+    assert res.exit_code == 2 and "is a sweep run, with a motion per member" in res.output
     path = _file(tmp_path, MODEL + BASE + SWEEP)
     res = CliRunner().invoke(app, ["animate", str(path), "--run", "sweep", "-o", "x.gif"])
     assert res.exit_code == 2 and "no single motion" in res.output

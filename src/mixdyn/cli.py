@@ -210,10 +210,12 @@ def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
         check_output(folder, "--out", folder=True)
         if plan.spec.kind == "sweep":
             names = ["members.csv", "table.csv", "meta.json"]
+        elif plan.spec.kind == "identify":
+            names = ["fit.csv", "results.csv", "meta.json"] + (["fit.png"] if figures else [])
         else:
             names = ["results.csv", "meta.json"]
         if figures:
-            names += [p.file for p in plan.spec.plots]
+            names += [p.file for p in getattr(plan.spec, "plots", ())]
             if getattr(plan.spec, "animation", None) is not None:
                 names.append(plan.spec.animation.file)
         for name in names:
@@ -266,6 +268,13 @@ def check(file: FileArg):
                 runner.check_masses(plan)
             rep = runner.mobility(plan)
             runner.check_solvable(plan)
+            if r.kind == "identify":
+                _say(
+                    f"run [bold]{_esc(r.name)}[/bold] (identify with {_esc(r.run)}): "
+                    f"{_esc(', '.join(r.fit))} from {len(plan.times)} times of "
+                    f"{_esc(', '.join(plan.measured))}"
+                )
+                continue
             if r.kind == "sweep":
                 how = "grid" if r.sampling == "grid" else f"Latin hypercube, seed {r.seed}"
                 _say(
@@ -365,7 +374,10 @@ def _run(file, runs, out, parquet, figures, progress):
         plans = runner.order(runs or None)
         _check_run_outputs(out, plans, figures)
         drawing = figures and any(
-            p.spec.plots or getattr(p.spec, "animation", None) is not None for p in plans
+            getattr(p.spec, "plots", None)
+            or getattr(p.spec, "animation", None) is not None
+            or p.spec.kind == "identify"
+            for p in plans
         )
         painter = _Painter() if drawing else None  # its imports overlap the checks
         try:
@@ -422,6 +434,53 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
 
     written = []
 
+    def _fit_done(plan, result, seconds, folder, painter):
+        import numpy as np
+
+        f = result.fit
+        extra = {
+            "file": str(file),
+            "run": plan.name,
+            "kind": "identify",
+            "wall_time_s": round(seconds, 3),
+            "fit": {
+                "parameters": list(f.params),
+                "estimate": f.values,
+                "std_dev": f.deviations,
+                "start": f.start,
+                "chi2_reduced": f.chi2,
+                "evaluations": f.evaluations,
+                "message": f.message,
+                "noise": plan.noise,
+            },
+            "figures": ["fit.png"] if painter is not None else [],
+        }
+        files = write_result(
+            result.result,
+            folder,
+            parquet=parquet,
+            settings=run_settings(plan.base.spec),
+            extra=extra,
+        )
+        table = f.table()
+        path = folder / "fit.csv"
+        table.to_csv(path, index=False, float_format="%.17g")
+        files.append(path)
+        if painter is not None:
+            from .viz.plots import result_columns
+
+            cols, units = result_columns(result.result, list(plan.measured))
+            painter.draw(
+                "fit",
+                np.asarray(plan.times),
+                {k: np.asarray(v) for k, v in plan.measured.items()},
+                {k: np.asarray(cols[k]) for k in plan.measured},
+                folder / "fit.png",
+                units=units,
+                title=f"{plan.name}: measured and fitted ({', '.join(f.params)})",
+            )
+        return files
+
     def _sweep_done(runner, plan, result, seconds, folder, painter):
         from .io.results import write_sweep
 
@@ -464,6 +523,8 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                 if plan.spec.kind == "sweep":  # a bar of members, on a terminal
                     total = plan.members
                     label = f"{plan.name} (sweep of {plan.base.name}: {total} members)"
+                elif plan.spec.kind == "identify":
+                    total, label = None, f"{plan.name} (identify with {plan.base.name})"
                 else:
                     total = span if mode == "steps" else None
                     label = f"{plan.name} ({plan.spec.kind})"
@@ -475,7 +536,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                         return _members_log(plan)
                     task = tasks[plan.name]
                     return lambda i: bar.advance(task)
-                if mode not in ("steps", "log") or plan.spec.kind in ("kinematic", "inverse"):
+                if mode not in ("steps", "log") or plan.spec.kind not in ("forward", "mixed"):
                     return None
                 if mode == "log":
                     return _progress_log(plan)
@@ -495,6 +556,16 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                     console.print(
                         f"{plan.name}: sweep of {plan.base.name}, {plan.members} members "
                         f"({len(result.sweep.errors)} failed), {seconds:.2f} s -> {folder}",
+                        highlight=False,
+                        soft_wrap=True,
+                    )
+                    return
+                if plan.spec.kind == "identify":
+                    written.extend(_fit_done(plan, result, seconds, folder, painter))
+                    f = result.fit
+                    console.print(
+                        f"{plan.name}: identify, {len(f.params)} number(s), chi-square "
+                        f"{f.chi2:.3g}, {f.evaluations} runs, {seconds:.2f} s -> {folder}",
                         highlight=False,
                         soft_wrap=True,
                     )
@@ -655,6 +726,7 @@ def _draw_here(kind: str, args, kwargs) -> pathlib.Path:
         "movie": _draw.movie,
         "against": sweep_plots.plot_against,
         "band": sweep_plots.plot_band,
+        "fit": sweep_plots.plot_fit,
     }
     return do[kind](*args, **kwargs)
 
@@ -974,6 +1046,7 @@ def animate(
                     runner.check_masses(p)
                 runner.mobility(p)
             res = runner.execute([run_name])[run_name]
+            res = getattr(res, "result", res)  # an identify run: the run at the estimate
             t, q = res.t, res.q
         for target in targets:
             write_animation(

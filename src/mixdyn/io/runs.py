@@ -41,6 +41,8 @@ ANALYSES = {
     "forward": an.forward,
     "mixed": an.mixed,
 }
+#: Run kinds that repeat another run (``run:``): a sweep, an identification.
+STUDIES = ("sweep", "identify")
 #: Column prefixes present in dynamic results besides bodies, joints and drivers.
 OTHER_PREFIXES = ("energy", "work", "constraint")
 
@@ -82,15 +84,16 @@ class Runner:
         self.spec = spec
         self.b = Builder(spec)
         self.model = model if model is not None else self.b.model()
-        from . import sweeps
+        from . import identify, sweeps
 
-        self.plans = {}  # the sweeps last: they take their settings from the runs they sweep
+        studies = {"sweep": sweeps.plan, "identify": identify.plan}
+        self.plans = {}  # sweeps and fits last: they take their settings from other runs
         for i, r in enumerate(spec.runs):
-            if not isinstance(r, s.SweepRunSpec):
+            if r.kind not in studies:
                 self.plans[r.name] = self._plan(i, r)
         for i, r in enumerate(spec.runs):
-            if isinstance(r, s.SweepRunSpec):
-                self.plans[r.name] = sweeps.plan(self, i, r)
+            if r.kind in studies:
+                self.plans[r.name] = studies[r.kind](self, i, r)
         self.plans = {r.name: self.plans[r.name] for r in spec.runs}
         self._check_cycles()
         settings.check_replays(self)
@@ -112,8 +115,8 @@ class Runner:
         return self
 
     def base(self, plan: Plan) -> Plan:
-        """The run a sweep sweeps (``plan`` itself for the other kinds)."""
-        return self.plans[plan.spec.run] if plan.spec.kind == "sweep" else plan
+        """The run a sweep sweeps or a fit uses (``plan`` itself for the other kinds)."""
+        return self.plans[plan.spec.run] if plan.spec.kind in STUDIES else plan
 
     # ----------------------------------------------------------------- checking
     def fail(self, path, problem, hint=""):
@@ -188,11 +191,13 @@ class Runner:
                         f"unknown run {p.from_run!r}",
                         f"runs: {', '.join(x.name for x in self.spec.runs)}",
                     )
-                if src.kind == "sweep":
+                if src.kind in STUDIES:
                     self.fail(
                         (*pp, "from_run"),
-                        f"run {p.from_run!r} is a sweep, with a motion per member",
-                        "replay a single run",
+                        f"run {p.from_run!r} is "
+                        + ("a sweep run, with a motion per member" if src.kind == "sweep" else "")
+                        + ("an identify run" if src.kind == "identify" else ""),
+                        "replay a forward, inverse, kinematic or mixed run",
                     )
                 depends.append(p.from_run)
             else:
@@ -836,11 +841,13 @@ class Runner:
         """Run one plan (its dependencies' results in ``results``) and return its Result (a
         sweep's: its :class:`~mixdyn.io.sweeps.FileSweep`; ``progress`` then gets member
         indices)."""
-        from . import sweeps
+        from . import identify, sweeps
 
         if isinstance(plan, sweeps.SweepPlan):
             return sweeps.execute(self, plan, progress)
         try:
+            if isinstance(plan, identify.IdentifyPlan):
+                return identify.execute(self, plan)
             try:
                 analysis, model, kwargs = self.call(plan, results)
                 if progress is not None and analysis in ("forward", "mixed"):

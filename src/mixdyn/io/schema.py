@@ -115,7 +115,18 @@ Ref = Annotated[str, AfterValidator(_ref)]
 Vec2 = tuple[Scalar, Scalar]
 """Two scalars ``[x, y]``."""
 
+
+def _data_file(v: str) -> str:
+    p = v.replace("\\", "/")
+    if not p or p.startswith("/") or ".." in p.split("/") or ":" in p:
+        raise ValueError(f"{v!r} must be a file name relative to the model file's folder (no '..')")
+    if not p.lower().endswith(".csv"):
+        raise ValueError(f"{v!r}: measured data is read from a .csv file")
+    return v
+
+
 RelativeFile = Annotated[str, AfterValidator(_relative_file)]
+DataFile = Annotated[str, AfterValidator(_data_file)]
 PlotFile = Annotated[RelativeFile, AfterValidator(_suffixed(PLOT_SUFFIXES, "plot"))]
 AnimationFile = Annotated[RelativeFile, AfterValidator(_suffixed(ANIMATION_SUFFIXES, "animation"))]
 Text = Annotated[str, AfterValidator(_text)]
@@ -904,8 +915,58 @@ class SweepRunSpec(Spec):
         return self
 
 
+class MeasuredSpec(Spec):
+    """A measured column: which result column it measures, where it is in the data file and
+    how noisy it is."""
+
+    column: Ref
+    """The result column measured: a body coordinate (``slider.x``, ``crank.phi``) or
+    velocity (``slider.vx``, ``crank.omega``)."""
+    data: str
+    """Its column in the data file (values in model units)."""
+    noise: Scalar
+    """Standard deviation of the measurement, e.g. ``0.1 mm``, ``1 mrad`` (the residuals'
+    weight)."""
+
+
+class FitSpec(Spec):
+    """A number to fit: where it starts and its bounds."""
+
+    start: Scalar | None = None
+    """First guess (default: the model's value)."""
+    bounds: tuple[Scalar, Scalar] | None = None
+    """``[low, high]`` the fit stays within (default: unbounded)."""
+
+
+class IdentifyRunSpec(Spec):
+    """Numbers of the model fitted to a measured motion (``mixdyn.fit``)."""
+
+    kind: Literal["identify"]
+    """Run kind: ``identify``."""
+    name: Name
+    """Unique name of the run (its output folder's name)."""
+    run: Name
+    """The forward or mixed run whose settings (solver, tolerances, start) the fit uses; its
+    output times are the data's times."""
+    data: DataFile
+    """The measurements: a CSV file (relative to the model file) with a column ``t`` [model
+    time unit], increasing, and the measured columns."""
+    measured: list[MeasuredSpec] = Field(min_length=1)
+    """The measured columns: ``{column: slider.x, data: x, noise: 0.1 mm}``."""
+    fit: dict[str, FitSpec] = Field(min_length=1)
+    """The numbers to fit, by path (``slider.mass``, ``damper.damping``: numbers of bodies and
+    force elements, model units): ``{slider.mass: {start: 1.3, bounds: [0.1, 10]}}``."""
+    max_evaluations: int = Field(default=200, ge=1, le=100_000)
+    """Runs the fit may make at most. Default 200."""
+
+
 RunSpec = Annotated[
-    KinematicRunSpec | ForwardRunSpec | InverseRunSpec | MixedRunSpec | SweepRunSpec,
+    KinematicRunSpec
+    | ForwardRunSpec
+    | InverseRunSpec
+    | MixedRunSpec
+    | SweepRunSpec
+    | IdentifyRunSpec,
     Field(discriminator="kind"),
 ]
 
@@ -940,8 +1001,8 @@ class ModelFile(Spec):
     assembly: AssemblySpec = AssemblySpec()
     """How the starting pose is closed: ``{hold: [crank.phi]}``."""
     runs: list[RunSpec] = Field(default_factory=list)
-    """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``, and ``sweep`` (another
-    run over many values of some numbers)."""
+    """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``, ``sweep`` (another
+    run over many values of some numbers) and ``identify`` (numbers fitted to measurements)."""
 
     def __eq__(self, other) -> bool:
         # Equal descriptions, whatever file (and lines) they were read from.

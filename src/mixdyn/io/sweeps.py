@@ -161,8 +161,12 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
     """Check a sweep run against the file and its model; its members' values made."""
     path = ("runs", index)
     kinds = {x.name: x.kind for x in runner.spec.runs}
-    if kinds.get(r.run) == "sweep":
-        runner.fail((*path, "run"), f"run {r.run!r} is a sweep", "sweep a run that is not one")
+    if kinds.get(r.run) in ("sweep", "identify"):
+        runner.fail(
+            (*path, "run"),
+            f"run {r.run!r} is a {kinds[r.run]}",
+            "sweep a kinematic, forward, inverse or mixed run",
+        )
     if r.run not in runner.plans:
         known = ", ".join(n for n, k in kinds.items() if k != "sweep") or "(none)"
         runner.fail((*path, "run"), f"unknown run {r.run!r}", f"runs that can be swept: {known}")

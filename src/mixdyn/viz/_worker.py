@@ -36,6 +36,7 @@ def main() -> None:
         "movie": draw.movie,
         "against": sweeps.plot_against,
         "band": sweeps.plot_band,
+        "fit": sweeps.plot_fit,
     }
     for line in sys.stdin:
         name = line.strip()

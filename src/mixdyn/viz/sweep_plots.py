@@ -1,5 +1,6 @@
-"""Figures of sweeps: a per-member number against a swept quantity, and a band of time
-histories over the members (PNG, SVG or PDF), without pyplot's global state.
+"""Figures of sweeps and fits: a per-member number against a swept quantity, a band of time
+histories over the members, measurements against a fitted motion (PNG, SVG or PDF), without
+pyplot's global state.
 
 Loaded by the figure worker by its path (:mod:`mixdyn.viz._worker`): NumPy and matplotlib only.
 """
@@ -139,4 +140,48 @@ def plot_band(
     return path
 
 
-__all__ = ["MAX_CURVES", "plot_against", "plot_band"]
+def plot_fit(
+    t: np.ndarray,
+    measured: dict[str, np.ndarray],
+    fitted: dict[str, np.ndarray],
+    path,
+    *,
+    units: dict[str, str] | None = None,
+    title: str | None = None,
+    dpi: int = 120,
+) -> pathlib.Path:
+    """Each measured column (points) against the fitted run's (a line), a panel each, with
+    the residuals below, written to ``path``.
+
+    Args:
+        t: (N,) the measurement times.
+        measured, fitted: column -> (N,) values.
+        path: ``.png``, ``.svg`` or ``.pdf``.
+        units: unit of ``t`` and of each column.
+        title: the figure's title.
+    """
+    units = units or {}
+    names = list(measured)
+    path, fig = _figure(path, (7.0, 2.6 * len(names) + 0.6))
+    axes = fig.subplots(len(names), 2, squeeze=False, width_ratios=(3, 1))
+    for row, name in zip(axes, names, strict=True):
+        y, f = np.asarray(measured[name]), np.asarray(fitted[name])
+        row[0].plot(t, y, ".", ms=3, color="0.35", label="measured")
+        row[0].plot(t, f, "-", lw=1.8, color="tab:blue", label="fitted")
+        row[0].set_ylabel(_label(name, units.get(name, "")))
+        row[0].grid(True, alpha=0.35)
+        row[0].legend(fontsize="small", loc="best")
+        row[1].plot(t, y - f, ".", ms=3, color="tab:red")
+        row[1].axhline(0.0, color="k", lw=0.8)
+        row[1].set_title("residual", fontsize="small")
+        row[1].grid(True, alpha=0.35)
+    for ax in axes[-1]:
+        ax.set_xlabel(_label("t", units.get("t", "")))
+    if title:
+        fig.suptitle(title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    return path
+
+
+__all__ = ["MAX_CURVES", "plot_against", "plot_band", "plot_fit"]
