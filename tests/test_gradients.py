@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures import paper_under_loads
+from fixtures import paper_under_loads, slider_crank
 
 TS = np.linspace(0.0, 0.5, 11)
 PARAMS = ["slider.mass", "crank.inertia", "F1.law.amplitude", "T2.law.value"]
@@ -135,6 +135,49 @@ def test_bad_params_are_refused(paper, params, words):
     with pytest.raises(md.ModelError) as err:
         md.differentiable(paper, TS, params)
     assert words in str(err.value)
+
+
+def test_inverse_reactions_are_differentiable_and_newton_says_how():
+    """An inverse run's reactions and efforts as functions of the masses and inertias: the
+    values are md.inverse's; the sum of the ground joints' forces on the bodies is
+    ``sum_i m_i a_i`` (no applied forces), so its derivative with respect to ``m_i`` is body
+    i's acceleration and with respect to an inertia 0 (forward mode, exact to rounding); the
+    reverse-mode gradient of the RMS motor torque agrees with central differences."""
+    model = slider_crank(omega=3.0)
+    t = np.linspace(0.0, 1.5, 31)
+    params = ["crank.mass", "rod.mass", "slider.mass", "rod.inertia"]
+    f, th0 = md.differentiable(model, t, params, analysis="inverse")
+    ref = md.inverse(model, t)
+    out = f(th0)
+    for c in ("O.Fx", "A.Fy", "slide.M", "motor"):
+        np.testing.assert_allclose(
+            np.asarray(out[c]), ref[c], rtol=0, atol=1e-12 * np.max(np.abs(ref[c]))
+        )
+
+    def ground_force(th):
+        o = f(th)
+        return jnp.stack([o["O.Fx"] + o["slide.Fx"], o["O.Fy"] + o["slide.Fy"]], -1)
+
+    J = np.asarray(jax.jacfwd(ground_force)(th0))  # (N, 2, P)
+    for k, body in enumerate(("crank", "rod", "slider")):
+        a = np.stack([ref[f"{body}.ax"], ref[f"{body}.ay"]], -1)
+        np.testing.assert_allclose(J[..., k], a, rtol=0, atol=1e-10 * np.max(np.abs(a)))
+    assert np.max(np.abs(J[..., 3])) <= 1e-12
+
+    def rms_torque(th):
+        return jnp.sqrt(jnp.mean(f(th)["motor"] ** 2))
+
+    g = np.asarray(jax.grad(rms_torque)(th0))
+    fd = np.zeros_like(g)
+    for k in range(len(th0)):
+        e = np.zeros_like(th0)
+        e[k] = h = 1e-6 * th0[k]
+        fd[k] = (float(rms_torque(th0 + e)) - float(rms_torque(th0 - e))) / (2 * h)
+    # the crank turns at a constant speed about a fixed pivot: its mass needs no torque
+    assert abs(g[0]) <= 1e-12 and np.all(np.abs(fd[1:]) > 1e-3)
+    assert np.all(np.abs(g - fd) <= 1e-7 * np.abs(fd) + 1e-9 * np.max(np.abs(fd))), (g, fd)
+    with pytest.raises(md.ModelError, match="depends on no number"):
+        md.differentiable(model, t, params, analysis="kinematic")
 
 
 def test_generalized_alpha_is_refused(paper):

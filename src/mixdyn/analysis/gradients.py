@@ -16,6 +16,12 @@ when the function is made:
 - ``derivatives="forward"``: ``jax.jvp``, ``jax.jacfwd`` (diffrax's ``ForwardMode``); for
   many outputs of few numbers (a least-squares fit's Jacobian).
 
+An inverse run (``analysis="inverse"``) is differentiable too: its motion comes from the
+drivers alone (the kinematic analysis, made once: the numbers of bodies and forces do not move
+it), and ``f(theta)`` gives the reactions and driver efforts of that motion as functions of
+the numbers (the multipliers' solve, per output time, traced). A kinematic run depends on no
+number of a body or force: refused.
+
 Generalized-alpha (its Newton iteration is a ``while_loop``) is refused. The derivative is that
 of the discrete solution (the step sizes held), which agrees with the exact sensitivity to the
 order of the tolerances (tested against central finite differences to 1e-6 at 1e-12).
@@ -40,7 +46,7 @@ from .integrators import INTEGRATORS
 from .mixed import mixed_case
 from .sweep import _leaf_getter
 
-#: The analyses :func:`differentiable` sets up.
+#: The dynamic analyses :func:`differentiable` sets up (and ``"inverse"``).
 ANALYSES = {"forward": forward_case, "mixed": mixed_case}
 
 
@@ -70,7 +76,7 @@ def differentiable(
             ``"crank.inertia"``, ``"F1.law.amplitude"``, ``"spring.stiffness"``), model
             units. Numbers of joints and drivers (they shape the constraints and the start)
             are refused.
-        analysis: ``"forward"`` (default) or ``"mixed"``.
+        analysis: ``"forward"`` (default), ``"mixed"`` or ``"inverse"``.
         derivatives: ``"reverse"`` (default: ``jax.grad``, ``jax.jacrev``) or ``"forward"``
             (``jax.jacfwd``, ``jax.jvp``).
         **kwargs: the analysis' keywords (``method``, ``rtol``, ``prescribed``...).
@@ -78,10 +84,21 @@ def differentiable(
     Returns:
         ``(f, theta0)``: ``f(theta)`` with ``theta`` (P,) gives ``{"q": (N, nq), "qd": (N, nq),
         "w": (N, 2)}`` (positions, velocities and accumulated works at the output times,
-        model units; NaN if the run failed); ``theta0`` (P,) the nominal numbers.
+        model units; NaN if the run failed); for ``"inverse"`` ``{"q", "qd", "qdd"}`` (the
+        prescribed motion) and every reaction and driver-effort column by name, each (N,)
+        (``"B.Fx"``, ``"motor"``, as in :func:`~mixdyn.inverse`'s result); ``theta0`` (P,)
+        the nominal numbers.
     """
-    if analysis not in ANALYSES:
-        raise ModelError(f"unknown analysis {analysis!r}; choose from {', '.join(ANALYSES)}")
+    if analysis == "kinematic":
+        raise ModelError(
+            "a kinematic run depends on no number of a body or force (only on the geometry "
+            "and the drivers): nothing to differentiate; use analysis='inverse' for efforts "
+            "and reactions",
+            "analysis",
+        )
+    if analysis not in (*ANALYSES, "inverse"):
+        known = ", ".join([*ANALYSES, "inverse"])
+        raise ModelError(f"unknown analysis {analysis!r}; choose from {known}")
     if derivatives not in ("reverse", "forward"):
         raise ModelError(
             f"derivatives must be 'reverse' or 'forward', got {derivatives!r}", "derivatives"
@@ -102,6 +119,8 @@ def differentiable(
             raise ModelError(f"a scalar number is needed, this one has shape {shape}", path)
         getters.append(get)
         theta0.append(float(get(model)))
+    if analysis == "inverse":
+        return _inverse(model, t, getters, kwargs), np.asarray(theta0)
     case = ANALYSES[analysis](model, t, **kwargs)
     if case.options.method == "generalized-alpha":
         raise ModelError(
@@ -126,6 +145,44 @@ def differentiable(
         return {k: jnp.where(ok, getattr(traj, k), jnp.nan) for k in ("q", "qd", "w")}
 
     return f, np.asarray(theta0)
+
+
+def _inverse(model: Model, t, getters, kwargs):
+    """``theta -> columns`` of an inverse run: the kinematics made once, the multipliers'
+    solve traced (see the module's documentation)."""
+    from ._prepare import prepare_kinematic
+    from ._problem import Problem
+    from ._reactions import driver_efforts, reaction_columns
+    from ._simulate import _post_arrays, output_times, require_masses
+    from .kinematic import run_kinematic
+
+    ts = output_times(t)
+    require_masses(model)
+    kw = dict(kwargs)
+    args = {k: kw.pop(k) for k in ("q0", "hold", "linear_solver") if k in kw}
+    assemble_first = kw.pop("assemble_first", True)
+    prep = prepare_kinematic(model, float(ts[0]), assemble_first=assemble_first, **args)
+    kin = run_kinematic(prep, ts, **kw)
+    problem = Problem(model, prep.constraints())
+    Q, QD, QDD = (jnp.asarray(a) for a in (kin.q, kin.qd, kin.qdd))
+    tj = jnp.asarray(ts)
+    n_drivers = len(model.drivers)
+
+    def f(theta):
+        theta = jnp.asarray(theta, dtype=jnp.float64)
+        m = problem.model
+        for k, get in enumerate(getters):
+            m = eqx.tree_at(get, m, theta[k])
+        p = eqx.tree_at(lambda p: p.model, problem, m)
+        _, mu, _, R, powers, _, _ = _post_arrays(p, tj, Q, QD)
+        out = {"q": Q, "qd": QD, "qdd": QDD}
+        out.update(reaction_columns(p.c, R))
+        out.update(
+            {k: v for k, v in driver_efforts(p.c, mu, powers, n_drivers).items() if "." not in k}
+        )
+        return out
+
+    return f
 
 
 __all__ = ["differentiable"]
