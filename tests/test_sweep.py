@@ -154,9 +154,20 @@ def test_a_dask_cluster_sweep_equals_the_in_process_one(paper):
         ) as cluster,
         distributed.Client(cluster) as client,
     ):
-        sw = md.sweep(paper, TS, vary=vary, max_steps=400, client=client, chunk_size=1, **OPTS)
+        seen = []
+        sw = md.sweep(
+            paper,
+            TS,
+            vary=vary,
+            max_steps=400,
+            client=client,
+            chunk_size=1,
+            on_member=seen.append,
+            **OPTS,
+        )
         with pytest.raises(md.ModelError) as err:
             md.sweep(paper, TS, vary={"slider.mass": [0.01, 0.0]}, client=client)
+    assert sorted(seen) == [0, 1, 2, 3]  # progress from the cluster, a member each
     assert set(sw.errors) == set(local.errors) == {1}
     assert type(sw.errors[1]) is type(local.errors[1])
     assert sw.errors[1].time == local.errors[1].time

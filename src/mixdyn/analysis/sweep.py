@@ -325,6 +325,7 @@ def run_members(
     threads: int | None = None,
     on_member: Callable[[int], None] | None = None,
     describe: Callable[[int], str] = lambda i: "",
+    offset: int = 0,
 ) -> list[Outcome]:
     """Each member's ``(Result, None)`` or ``(None, its numerical error)``, in order.
 
@@ -336,6 +337,7 @@ def run_members(
         batch_size, threads: as in :func:`sweep`.
         on_member: called with a member's index when it is done (from any thread).
         describe: member index -> words naming it in an error (its varied values).
+        offset: the sweep's index of ``members[0]`` (a chunk of a larger sweep), for errors.
 
     Raises:
         ModelError: a member's input error (named with its index), or members of different
@@ -349,7 +351,7 @@ def run_members(
             try:
                 return run(members[i], t, **kwargs_of(i)), None
             except ModelError as err:
-                raise _input_error(err, i, describe(i)) from None
+                raise _input_error(err, offset + i, describe(i)) from None
             except MixdynError as err:
                 return None, err
 
@@ -366,7 +368,7 @@ def run_members(
         try:
             cases[i] = setup(m, t, **kwargs_of(i))
         except ModelError as err:
-            raise _input_error(err, i, describe(i)) from None
+            raise _input_error(err, offset + i, describe(i)) from None
         except MixdynError as err:  # a start that cannot be made: this member fails
             outcomes[i] = (None, err)
             if on_member is not None:
@@ -399,14 +401,13 @@ def run_members(
 def _run_chunk(members: list[Model], t, analysis: str, kwargs: dict, first: int):
     """On a worker: set up and run ``members`` (the sweep's members ``first``...) member by
     member in one thread; an input error names its member."""
-    return run_members(
-        members, t, analysis, lambda i: kwargs, threads=1, describe=lambda i: f" ({first + i})"
-    )
+    return run_members(members, t, analysis, lambda i: kwargs, threads=1, offset=first)
 
 
-def _on_cluster(client, members, t, analysis, kwargs, chunk_size):
+def _on_cluster(client, members, t, analysis, kwargs, chunk_size, on_member=None):
     """The members run on a Dask ``client``'s workers, ``chunk_size`` at a time (default:
-    four chunks per worker thread), gathered in order."""
+    four chunks per worker thread), gathered in order; ``on_member(i)`` for each member of a
+    chunk as the chunk comes back."""
     if chunk_size is None:
         slots = sum(client.nthreads().values()) or 1
         chunk_size = max(1, -(-len(members) // (4 * slots)))
@@ -415,6 +416,14 @@ def _on_cluster(client, members, t, analysis, kwargs, chunk_size):
         client.submit(_run_chunk, members[s : s + chunk_size], t, analysis, kwargs, s, pure=False)
         for s in starts
     ]
+    if on_member is not None:
+        from distributed import as_completed
+
+        first = {f.key: s for f, s in zip(futures, starts, strict=True)}
+        for done in as_completed(futures):
+            s = first[done.key]
+            for i in range(s, min(s + chunk_size, len(members))):
+                on_member(i)
     out = []
     for chunk in client.gather(futures):
         out.extend(chunk)
@@ -461,8 +470,9 @@ def sweep(
             raised with its index.
         chunk_size: members per task on the cluster (default: four tasks per worker
             thread).
-        on_member: called with a member's index as it is done (from the sweep's threads), e.g.
-            to advance a progress bar; not called on a cluster.
+        on_member: called with a member's index as it is done (from the sweep's threads; on
+            a cluster, for each member of a chunk as the chunk comes back), e.g. to advance a
+            progress bar.
         **kwargs: the analysis' own keywords (``method``, ``rtol``, ``prescribed``,
             ``unknown``, ``q0``...), the same for every member (no ``progress``).
 
@@ -500,7 +510,7 @@ def sweep(
     if client is not None:
         if analysis in MEMBERWISE:
             raise ModelError(f"a {analysis} sweep runs in this process: no client", "client")
-        outcomes = _on_cluster(client, members, t, analysis, kwargs, chunk_size)
+        outcomes = _on_cluster(client, members, t, analysis, kwargs, chunk_size, on_member)
         results = [r for r, _ in outcomes]
         errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
         return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
