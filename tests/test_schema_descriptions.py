@@ -57,6 +57,13 @@ PROPERTIES = {
     "SweepPlotSpec": "band by file title x y",
     "SweepRunSpec": "batch_size kind name outputs plots run samples sampling seed summaries vary",
     "VarySpec": "n span values",
+    # the identify and optimize run kinds (issue 15)
+    "DesignVariableSpec": "bounds start",
+    "FitSpec": "bounds start",
+    "IdentifyRunSpec": "data fit kind max_evaluations measured name run",
+    "MeasuredSpec": "column data noise",
+    "ObjectiveSpec": "column reduce",
+    "OptimizeRunSpec": "kind max_iterations name objective run sense vary",
     "SplineSpec": "spline",
     "SpringDamperSpec": "actuator damping free_length name point_i point_j stiffness type",
     "TimeSpec": "n span step values",
@@ -70,8 +77,9 @@ PROPERTIES = {
 # before the descriptions were added (pydantic 2.14): any change of a type, default, bound,
 # required key or discriminator changes it. If a pydantic upgrade alone changes the form of
 # the schema, check the difference and record the new value. Recorded again when the sweep
-# run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added.
-STRIPPED_SHA256 = "8955eb59aee17efa8940c0fca4b5ae8c2167e9290836365a87647190846306bb"
+# run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
+# and optimize kinds.
+STRIPPED_SHA256 = "2f822a86ea2263253218640aae9bcb4f60537926ead24ecf746a4c12b9a7cfe4"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -212,6 +212,9 @@ def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
             names = ["members.csv", "table.csv", "meta.json"]
         elif plan.spec.kind == "identify":
             names = ["fit.csv", "results.csv", "meta.json"] + (["fit.png"] if figures else [])
+        elif plan.spec.kind == "optimize":
+            names = ["optimum.csv", "results.csv", "meta.json"]
+            names += ["optimize.png"] if figures else []
         else:
             names = ["results.csv", "meta.json"]
         if figures:
@@ -268,6 +271,13 @@ def check(file: FileArg):
                 runner.check_masses(plan)
             rep = runner.mobility(plan)
             runner.check_solvable(plan)
+            if r.kind == "optimize":
+                o = r.objective
+                _say(
+                    f"run [bold]{_esc(r.name)}[/bold] (optimize with {_esc(r.run)}): "
+                    f"{r.sense} the {o.reduce} of {_esc(o.column)} over {_esc(', '.join(r.vary))}"
+                )
+                continue
             if r.kind == "identify":
                 _say(
                     f"run [bold]{_esc(r.name)}[/bold] (identify with {_esc(r.run)}): "
@@ -376,7 +386,7 @@ def _run(file, runs, out, parquet, figures, progress):
         drawing = figures and any(
             getattr(p.spec, "plots", None)
             or getattr(p.spec, "animation", None) is not None
-            or p.spec.kind == "identify"
+            or p.spec.kind in ("identify", "optimize")
             for p in plans
         )
         painter = _Painter() if drawing else None  # its imports overlap the checks
@@ -433,6 +443,62 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
     from .io.results import run_settings, write_result
 
     written = []
+
+    def _optimum_done(plan, result, seconds, folder, painter):
+        import numpy as np
+
+        o, r = result.optimum, plan.spec
+        extra = {
+            "file": str(file),
+            "run": plan.name,
+            "kind": "optimize",
+            "wall_time_s": round(seconds, 3),
+            "optimize": {
+                "objective": r.objective.model_dump(),
+                "sense": r.sense,
+                "parameters": list(o.params),
+                "optimum": o.values,
+                "start": o.start,
+                "bounds": o.bounds,
+                "gradient": o.gradient,
+                "objective_start": o.objective_start,
+                "objective_optimum": o.objective,
+                "history": o.history,
+                "iterations": o.iterations,
+                "evaluations": o.evaluations,
+                "message": o.message,
+            },
+            "figures": ["optimize.png"] if painter is not None else [],
+        }
+        files = write_result(
+            result.result,
+            folder,
+            parquet=parquet,
+            settings=run_settings(plan.base.spec),
+            extra=extra,
+        )
+        path = folder / "optimum.csv"
+        o.table().to_csv(path, index=False, float_format="%.17g")
+        files.append(path)
+        if painter is not None:
+            from .viz.plots import result_columns
+
+            col = r.objective.column
+            first, units = result_columns(result.first, [col])
+            best, _ = result_columns(result.result, [col])
+            painter.draw(
+                "optimum",
+                np.asarray(o.history),
+                np.asarray(plan.times),
+                np.asarray(first[col]),
+                np.asarray(best[col]),
+                folder / "optimize.png",
+                column=col,
+                reduce=r.objective.reduce,
+                units=units,
+                title=f"{plan.name}: {r.sense} the {r.objective.reduce} of {col}",
+            )
+        return files
 
     def _fit_done(plan, result, seconds, folder, painter):
         import numpy as np
@@ -523,8 +589,8 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                 if plan.spec.kind == "sweep":  # a bar of members, on a terminal
                     total = plan.members
                     label = f"{plan.name} (sweep of {plan.base.name}: {total} members)"
-                elif plan.spec.kind == "identify":
-                    total, label = None, f"{plan.name} (identify with {plan.base.name})"
+                elif plan.spec.kind in ("identify", "optimize"):
+                    total, label = None, f"{plan.name} ({plan.spec.kind} with {plan.base.name})"
                 else:
                     total = span if mode == "steps" else None
                     label = f"{plan.name} ({plan.spec.kind})"
@@ -556,6 +622,18 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                     console.print(
                         f"{plan.name}: sweep of {plan.base.name}, {plan.members} members "
                         f"({len(result.sweep.errors)} failed), {seconds:.2f} s -> {folder}",
+                        highlight=False,
+                        soft_wrap=True,
+                    )
+                    return
+                if plan.spec.kind == "optimize":
+                    written.extend(_optimum_done(plan, result, seconds, folder, painter))
+                    o = result.optimum
+                    console.print(
+                        f"{plan.name}: optimize, {plan.spec.objective.reduce} of "
+                        f"{plan.spec.objective.column} {o.objective_start:.6g} -> "
+                        f"{o.objective:.6g} in {o.iterations} iterations, {seconds:.2f} s -> "
+                        f"{folder}",
                         highlight=False,
                         soft_wrap=True,
                     )
@@ -727,6 +805,7 @@ def _draw_here(kind: str, args, kwargs) -> pathlib.Path:
         "against": sweep_plots.plot_against,
         "band": sweep_plots.plot_band,
         "fit": sweep_plots.plot_fit,
+        "optimum": sweep_plots.plot_optimum,
     }
     return do[kind](*args, **kwargs)
 

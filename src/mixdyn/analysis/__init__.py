@@ -10,6 +10,7 @@ from .inverse import inverse
 from .kinematic import kinematic
 from .methods import Baumgarte, GeneralizedAlpha, IntegratorOptions, Partitioning, Projection
 from .mixed import check_mixed, mixed, prescribe
+from .optimize import Optimum, optimize
 from .result import Result
 from .sweep import Sweep, grid, latin_hypercube, sweep
 
@@ -21,6 +22,7 @@ __all__ = [
     "Fit",
     "GeneralizedAlpha",
     "IntegratorOptions",
+    "Optimum",
     "Partitioning",
     "Projection",
     "Result",
@@ -36,6 +38,7 @@ __all__ = [
     "kinematic",
     "latin_hypercube",
     "mixed",
+    "optimize",
     "prescribe",
     "sweep",
 ]

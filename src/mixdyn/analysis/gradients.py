@@ -159,6 +159,7 @@ def _inverse(model: Model, t, getters, kwargs):
     ts = output_times(t)
     require_masses(model)
     kw = dict(kwargs)
+    kw.pop("prepared", None)  # a check's set-up: made again here (the kinematics, once)
     args = {k: kw.pop(k) for k in ("q0", "hold", "linear_solver") if k in kw}
     assemble_first = kw.pop("assemble_first", True)
     prep = prepare_kinematic(model, float(ts[0]), assemble_first=assemble_first, **args)

@@ -432,6 +432,14 @@ class Builder:
             try:
                 return m.Constant(convert(spec, kind, self.units, self.parameters))
             except DimensionError as e:
+                if re.search(r"\bt\b", spec):  # "600 rpm * t": pint read t as a tonne
+                    self.fail(
+                        path,
+                        f"{spec!r} reads as a quantity whose unit has a tonne (t) in it, not as "
+                        "a law of the time t",
+                        "write a law of time in model units (e.g. '20*pi*t'), as "
+                        "{expr: ..., unit: ...}, or as a ramp: {ramp: {rate: 600 rpm}}",
+                    )
                 self.fail(path, f"{spec!r}: {e.problem}", e.hint)
             except QuantityError as e:
                 if looks_like_quantity(spec) or has_unit_tail(spec):

@@ -42,7 +42,7 @@ ANALYSES = {
     "mixed": an.mixed,
 }
 #: Run kinds that repeat another run (``run:``): a sweep, an identification.
-STUDIES = ("sweep", "identify")
+STUDIES = ("sweep", "identify", "optimize")
 #: Column prefixes present in dynamic results besides bodies, joints and drivers.
 OTHER_PREFIXES = ("energy", "work", "constraint")
 
@@ -84,9 +84,9 @@ class Runner:
         self.spec = spec
         self.b = Builder(spec)
         self.model = model if model is not None else self.b.model()
-        from . import identify, sweeps
+        from . import design, identify, sweeps
 
-        studies = {"sweep": sweeps.plan, "identify": identify.plan}
+        studies = {"sweep": sweeps.plan, "identify": identify.plan, "optimize": design.plan}
         self.plans = {}  # sweeps and fits last: they take their settings from other runs
         for i, r in enumerate(spec.runs):
             if r.kind not in studies:
@@ -196,7 +196,8 @@ class Runner:
                         (*pp, "from_run"),
                         f"run {p.from_run!r} is "
                         + ("a sweep run, with a motion per member" if src.kind == "sweep" else "")
-                        + ("an identify run" if src.kind == "identify" else ""),
+                        + ("an identify run" if src.kind == "identify" else "")
+                        + ("an optimize run" if src.kind == "optimize" else ""),
                         "replay a forward, inverse, kinematic or mixed run",
                     )
                 depends.append(p.from_run)
@@ -841,13 +842,15 @@ class Runner:
         """Run one plan (its dependencies' results in ``results``) and return its Result (a
         sweep's: its :class:`~mixdyn.io.sweeps.FileSweep`; ``progress`` then gets member
         indices)."""
-        from . import identify, sweeps
+        from . import design, identify, sweeps
 
         if isinstance(plan, sweeps.SweepPlan):
             return sweeps.execute(self, plan, progress)
         try:
             if isinstance(plan, identify.IdentifyPlan):
                 return identify.execute(self, plan)
+            if isinstance(plan, design.OptimizePlan):
+                return design.execute(self, plan)
             try:
                 analysis, model, kwargs = self.call(plan, results)
                 if progress is not None and analysis in ("forward", "mixed"):

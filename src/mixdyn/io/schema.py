@@ -960,13 +960,56 @@ class IdentifyRunSpec(Spec):
     """Runs the fit may make at most. Default 200."""
 
 
+class ObjectiveSpec(Spec):
+    """A scalar of a run: a result column reduced over the output times."""
+
+    column: str
+    """The column: a body coordinate or velocity (``slider.x``, ``crank.omega``), or in an
+    inverse run a reaction or driver effort (``B.Fx``, ``motor``)."""
+    reduce: Literal["max", "min", "absmax", "mean", "rms", "first", "last", "range"] = "rms"
+    """How: ``rms`` (default), ``max``, ``min``, ``absmax``, ``mean``, ``first``, ``last``,
+    ``range``."""
+
+
+class DesignVariableSpec(Spec):
+    """A number to choose: its bounds and where the search starts."""
+
+    bounds: tuple[Scalar, Scalar]
+    """``[low, high]``, e.g. ``[0 N/mm, 100 N/mm]``."""
+    start: Scalar | None = None
+    """First guess (default: the model's value, moved into the bounds)."""
+
+
+class OptimizeRunSpec(Spec):
+    """Numbers of the model chosen to minimize (or maximize) a scalar of a run
+    (``mixdyn.optimize``)."""
+
+    kind: Literal["optimize"]
+    """Run kind: ``optimize``."""
+    name: Name
+    """Unique name of the run (its output folder's name)."""
+    run: Name
+    """The forward, mixed or inverse run whose result the objective reduces (its times,
+    solver and start)."""
+    objective: ObjectiveSpec
+    """The scalar: ``{column: motor, reduce: rms}``."""
+    sense: Literal["minimize", "maximize"] = "minimize"
+    """``minimize`` (default) or ``maximize`` the objective."""
+    vary: dict[str, DesignVariableSpec] = Field(min_length=1)
+    """The numbers to choose, by path (numbers of bodies and force elements):
+    ``{spring.stiffness: {bounds: [0 N/mm, 100 N/mm]}}``."""
+    max_iterations: int = Field(default=500, ge=1, le=100_000)
+    """Iterations of L-BFGS-B at most. Default 500."""
+
+
 RunSpec = Annotated[
     KinematicRunSpec
     | ForwardRunSpec
     | InverseRunSpec
     | MixedRunSpec
     | SweepRunSpec
-    | IdentifyRunSpec,
+    | IdentifyRunSpec
+    | OptimizeRunSpec,
     Field(discriminator="kind"),
 ]
 
@@ -1002,7 +1045,8 @@ class ModelFile(Spec):
     """How the starting pose is closed: ``{hold: [crank.phi]}``."""
     runs: list[RunSpec] = Field(default_factory=list)
     """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``, ``sweep`` (another
-    run over many values of some numbers) and ``identify`` (numbers fitted to measurements)."""
+    run over many values of some numbers), ``identify`` (numbers fitted to measurements) and
+    ``optimize`` (numbers chosen to minimize a scalar of a run)."""
 
     def __eq__(self, other) -> bool:
         # Equal descriptions, whatever file (and lines) they were read from.

@@ -161,7 +161,7 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
     """Check a sweep run against the file and its model; its members' values made."""
     path = ("runs", index)
     kinds = {x.name: x.kind for x in runner.spec.runs}
-    if kinds.get(r.run) in ("sweep", "identify"):
+    if kinds.get(r.run) in ("sweep", "identify", "optimize"):
         runner.fail(
             (*path, "run"),
             f"run {r.run!r} is a {kinds[r.run]}",

@@ -37,6 +37,7 @@ def main() -> None:
         "against": sweeps.plot_against,
         "band": sweeps.plot_band,
         "fit": sweeps.plot_fit,
+        "optimum": sweeps.plot_optimum,
     }
     for line in sys.stdin:
         name = line.strip()

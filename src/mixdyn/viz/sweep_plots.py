@@ -184,4 +184,39 @@ def plot_fit(
     return path
 
 
-__all__ = ["MAX_CURVES", "plot_against", "plot_band", "plot_fit"]
+def plot_optimum(
+    history: np.ndarray,
+    t: np.ndarray,
+    first: np.ndarray,
+    best: np.ndarray,
+    path,
+    *,
+    column: str,
+    reduce: str,
+    units: dict[str, str] | None = None,
+    title: str | None = None,
+    dpi: int = 120,
+) -> pathlib.Path:
+    """An optimization: the objective per iteration (left) and the objective's column at
+    the start and at the optimum against time (right), written to ``path``."""
+    units = units or {}
+    path, fig = _figure(path, (9.0, 3.8))
+    left, right = fig.subplots(1, 2, width_ratios=(1, 2))
+    left.plot(np.arange(len(history)), history, "o-", ms=3, lw=1.4)
+    left.set_xlabel("iteration")
+    left.set_ylabel(_label(f"{reduce} of {column}", units.get(column, "")))
+    left.grid(True, alpha=0.35)
+    right.plot(t, first, "--", lw=1.4, color="0.4", label="start")
+    right.plot(t, best, "-", lw=1.8, color="tab:blue", label="optimum")
+    right.set_xlabel(_label("t", units.get("t", "")))
+    right.set_ylabel(_label(column, units.get(column, "")))
+    right.grid(True, alpha=0.35)
+    right.legend(fontsize="small", loc="best")
+    if title:
+        fig.suptitle(title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    return path
+
+
+__all__ = ["MAX_CURVES", "plot_against", "plot_band", "plot_fit", "plot_optimum"]
