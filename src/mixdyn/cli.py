@@ -874,7 +874,7 @@ def _sweep_figures(plan, result, folder, painter: _Painter) -> None:
     for name in plan.values:  # a swept body number has the unit of its kind
         kind = {"mass": "mass", "inertia": "inertia"}.get(name.rsplit(".", 1)[-1])
         if kind and model is not None:
-            units[name] = model.units.unit(kind)
+            units[name] = model.units.label(kind)
     for p in plan.spec.plots:
         if p.band is not None:
             ok = [r for r in result.sweep.results if r is not None]

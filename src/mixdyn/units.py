@@ -81,10 +81,66 @@ class UnitSystem:
             text += "/" + ("/".join(den))
         return "" if text == "1" else text
 
+    def label(self, kind: str) -> str:
+        """The unit of a kind of quantity named plainly, for results: a force in ``N``, a
+        torque in ``N*m``, an energy in ``J``, a power in ``W``, with the SI prefix that makes
+        it exactly the system's unit (in mm, kg, s: ``mN``, ``mN*mm``, ``µJ``, ``µW``; a
+        stiffness ``mN/mm``), pint-parsable. Where no prefix is exact (inches, pounds,
+        minutes), :meth:`unit`'s base spelling.
+        """
+        base = self.unit(kind)
+        force = self._prefixed("N", DIMENSIONS["force"])
+        if force is None or kind not in _DERIVED:
+            return base
+        L, T = self.length, self.time
+        if kind == "force":
+            return force
+        if kind in ("energy", "power"):
+            return self._prefixed("J" if kind == "energy" else "W", DIMENSIONS[kind]) or base
+        return _DERIVED[kind].format(F=force, L=L, T=T)
+
+    def _prefixed(self, symbol: str, exps: tuple[int, int, int]) -> str | None:
+        """``symbol`` with the SI prefix equal to this system's unit of ``exps``, or None."""
+        try:
+            scale = 1.0
+            for name, e, kind in zip((self.length, self.mass, self.time), exps, _BASE, strict=True):
+                scale *= _SI_FACTORS[kind][name] ** e
+        except KeyError:
+            return None
+        for prefix, value in _PREFIXES.items():
+            if abs(scale / value - 1.0) < 1e-12:
+                return prefix + symbol
+        return None
+
     def describe(self) -> str:
         """One line naming the system, e.g. ``"length mm, mass kg, time s, angle rad"``."""
         return f"length {self.length}, mass {self.mass}, time {self.time}, angle rad"
 
+
+_BASE = ("length", "mass", "time")
+#: SI value of the common base units (those whose derived units may take an SI prefix).
+_SI_FACTORS = {
+    "length": {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "dm": 1e-1, "km": 1e3, "um": 1e-6,
+               "µm": 1e-6, "nm": 1e-9},
+    "mass": {"kg": 1.0, "g": 1e-3, "mg": 1e-6, "t": 1e3, "tonne": 1e3},
+    "time": {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "second": 1.0},
+}  # fmt: skip
+#: SI prefixes and their values.
+_PREFIXES = {
+    "": 1.0, "k": 1e3, "M": 1e6, "G": 1e9, "T": 1e12, "m": 1e-3, "µ": 1e-6, "n": 1e-9,
+    "p": 1e-12, "c": 1e-2, "d": 1e-1, "da": 1e1, "h": 1e2,
+}  # fmt: skip
+#: Plain spellings of derived units from the force's ({F}), the length ({L}) and time ({T}).
+_DERIVED = {
+    "force": "{F}",
+    "torque": "{F}*{L}",
+    "energy": "",
+    "power": "",
+    "stiffness": "{F}/{L}",
+    "damping": "{F}*{T}/{L}",
+    "rotational_stiffness": "{F}*{L}/rad",
+    "rotational_damping": "{F}*{L}*{T}/rad",
+}
 
 #: Common spellings accepted without asking pint (fast, and no import at start-up).
 _KNOWN = {

@@ -91,13 +91,15 @@ class Result:
         return cols
 
     def units(self) -> dict[str, str]:
-        """The unit of every column (pint spelling, in the model's unit system)."""
+        """The unit of every column, in the model's unit system named plainly (pint spelling:
+        ``N``, ``N*m``, ``W``; in mm, kg, s ``mN``, ``mN*mm``, ``µW``: see
+        :meth:`mixdyn.UnitSystem.label`)."""
         u = self.model.units
-        out = {"t": u.unit("time")}
+        out = {"t": u.label("time")}
         for body in self.model.bodies:
             for suffix, _, _, kind in _BODY_COLUMNS:
-                out[f"{body.name}.{suffix}"] = u.unit(kind)
-        out.update({k: u.unit(v) for k, v in self.kinds.items()})
+                out[f"{body.name}.{suffix}"] = u.label(kind)
+        out.update({k: u.label(v) for k, v in self.kinds.items()})
         return out
 
     def __getitem__(self, name: str) -> np.ndarray:
@@ -128,7 +130,7 @@ class Result:
             ):
                 for k, axis in enumerate("xy"):
                     cols[f"{ref}.{pre}{axis}"] = arr[:, k]
-                    units[f"{ref}.{pre}{axis}"] = self.model.units.unit(kind)
+                    units[f"{ref}.{pre}{axis}"] = self.model.units.label(kind)
         df = pd.DataFrame(cols).set_index("t")
         df.attrs["units"] = units
         df.attrs["kind"] = self.kind

@@ -47,7 +47,7 @@ def result_columns(result, names) -> tuple[dict[str, np.ndarray], dict[str, str]
             if pva is not None:
                 out[name] = pva[which][:, axis]
                 kind = ("length", "velocity", "acceleration")[which]
-                out_units[name] = result.model.units.unit(kind)
+                out_units[name] = result.model.units.label(kind)
                 continue
         result[name]  # raises KeyError naming the column, with close matches
     return out, out_units
