@@ -336,8 +336,9 @@ def run(
         typer.Option("--run", "-r", help="Run only this run (and the runs it needs); repeatable."),
     ] = None,
     out: Annotated[
-        pathlib.Path, typer.Option("--out", "-o", help="Output folder; each run writes OUT/NAME/.")
-    ] = pathlib.Path("results"),
+        pathlib.Path,
+        typer.Option("--out", "-o", help="Output folder; each run writes OUT/NAME/."),
+    ] = pathlib.Path("out"),
     parquet: Annotated[bool, typer.Option("--parquet", help="Also write results.parquet.")] = False,
     figures: Annotated[
         bool,

@@ -43,8 +43,6 @@ ANALYSES = {
 }
 #: Run kinds that repeat another run (``run:``): a sweep, an identification.
 STUDIES = ("sweep", "identify", "optimize")
-#: Column prefixes present in dynamic results besides bodies, joints and drivers.
-OTHER_PREFIXES = ("energy", "work", "constraint")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -288,29 +286,47 @@ class Runner:
                     "remove it from the run's hold",
                 )
 
+    def columns(self, r) -> tuple[list[str], set[str]]:
+        """The columns a run's result has: ``(names, owners of lambda.* columns)`` (the
+        multipliers ``lambda.{row}`` of the joints' and drivers' rows; point columns
+        ``body.P.x`` are checked apart)."""
+        cols = ["t"] + [f"{b}.{s}" for b in self.b.body_names for s in BODY_COLUMNS]
+        if r.kind == "kinematic":
+            return cols, set()
+        for j in self.model.joints:
+            cols += [f"{j.name}.Fx", f"{j.name}.Fy"] + ([f"{j.name}.M"] if j.carries_moment else [])
+        drivers = [d.name for d in self.model.drivers if r.drivers is None or d.name in r.drivers]
+        if r.kind != "mixed":  # a mixed run's prescribed motions are paired with its unknowns
+            drivers += [p.name or f"prescribed {p.coordinate}" for p in r.prescribed]
+        for name in [*drivers, *(getattr(r, "unknown", None) or ())]:
+            cols += [name, f"{name}.power"]
+        cols += ["energy.kinetic", "energy.potential", "energy.total", "constraint.violation"]
+        if r.kind in ("forward", "mixed"):
+            cols += ["work.nonconservative", "work.constraints"]
+        owners = {j.name for j in self.model.joints} | set(drivers)
+        return cols, owners
+
     def _check_column(self, col: str, r, path):
         parts = col.split(".")
-        bodies = set(self.b.body_names)
-        elements = {e.name for e in (*self.model.joints, *self.model.drivers, *self.model.forces)}
-        elements |= {p.name or f"prescribed {p.coordinate}" for p in r.prescribed}
-        ok = (
-            col == "t"
-            or (len(parts) == 2 and parts[0] in bodies and parts[1] in BODY_COLUMNS)
-            or parts[0] in elements
-            or col in elements
-            or parts[0] in OTHER_PREFIXES
-            or col.startswith("prescribed ")
-        )
-        if len(parts) == 3 and parts[0] in bodies:
+        if len(parts) == 3 and parts[0] in self.b.body_index and parts[1] not in BODY_COLUMNS:
             self.b.point(f"{parts[0]}.{parts[1]}", path)
-            ok = parts[2] in ("x", "y", "vx", "vy", "ax", "ay")
-        if not ok:
-            self.fail(
-                path,
-                f"no column {col!r}",
-                "columns are t, body.x/.y/.phi/.vx/.vy/.omega/.ax/.ay/.alpha, body.point.x, "
-                "joint.Fx/.Fy/.M, driver and unknown-force names, energy.*",
-            )
+            if parts[2] in ("x", "y", "vx", "vy", "ax", "ay"):
+                return
+        names, owners = self.columns(r)
+        if col in names:
+            return
+        if col.startswith("lambda.") and any(
+            col == f"lambda.{o}" or col.startswith(f"lambda.{o}.") for o in owners
+        ):
+            return
+        from .._hints import did_you_mean
+
+        what = "a kinematic run has the motion only" if r.kind == "kinematic" else ""
+        self.fail(
+            path,
+            f"no column {col!r} in run {r.name!r}" + (f" ({what})" if what else ""),
+            did_you_mean(col, names) + "; points: body.P.x (.y, .vx, .vy, .ax, .ay)",
+        )
 
     def _check_cycles(self):
         state: dict[str, int] = {}

@@ -1,0 +1,69 @@
+"""The columns a model file may name (plots, summaries, objectives) are exactly those its runs
+produce: ``Runner.columns`` against the executed results of every kind of run, and a column a
+run will not have is refused by ``mixdyn check`` (exit 2) with close matches (issue 14)."""
+
+from __future__ import annotations
+
+import pathlib
+
+import pytest
+from typer.testing import CliRunner
+
+import mixdyn.io as mio
+from mixdyn.cli import app
+
+EXAMPLES = pathlib.Path(__file__).resolve().parent.parent / "examples"
+
+
+def _short(name: str) -> str:
+    """An example with short runs (the column names do not depend on the length)."""
+    text = (EXAMPLES / name).read_text()
+    return text.replace("span: [0, 2], n: 201", "span: [0, 0.2], n: 5").replace("n: 181", "n: 5")
+
+
+@pytest.mark.parametrize("name", ["slider_crank.yaml", "antonya.yaml"])
+def test_the_promised_columns_are_the_results_columns(name):
+    runner = mio.Runner(mio.reads(_short(name)))
+    results = runner.execute()
+    assert {r.kind for r in results.values()} >= (
+        {"kinematic", "inverse"} if "slider" in name else {"forward", "mixed"}
+    )
+    for plan in runner.plans.values():
+        promised, owners = runner.columns(plan.spec)
+        got = list(results[plan.name].columns())
+        lambdas = [c for c in got if c.startswith("lambda.")]
+        assert sorted(promised) == sorted(c for c in got if c not in lambdas), plan.name
+        assert all(any(c.startswith(f"lambda.{o}") for o in owners) for c in lambdas)
+
+
+@pytest.mark.parametrize(
+    ("run", "column", "words"),
+    [
+        ("forward", "A.M", "no column 'A.M'"),  # a revolute joint carries no moment
+        ("forward", "B.Fz", "no column 'B.Fz'"),
+        ("forward", "F1", "no column 'F1'"),  # known only where F1 is unknown (mixed)
+        ("forward", "work.total", "no column"),
+        ("mixed", "F1.powr", "F1.power"),
+    ],
+)
+def test_a_column_the_run_will_not_have_is_refused(tmp_path, run, column, words):
+    text = _short("antonya.yaml")
+    if run == "forward":
+        text = text.replace("columns: [slider.x]", f"columns: [slider.x, {column}]", 1)
+    else:
+        text = text.replace("columns: [F1]", f"columns: [F1, {column}]", 1)
+    path = tmp_path / "bad.yaml"
+    path.write_text(text)
+    res = CliRunner().invoke(app, ["check", str(path)])
+    assert res.exit_code == 2, res.output
+    assert words in res.output and "bad.yaml" in res.output
+
+
+def test_a_kinematic_run_has_the_motion_only(tmp_path):
+    text = _short("slider_crank.yaml")
+    assert "kind: kinematic" in text
+    runner = mio.Runner(mio.reads(text))
+    kin = next(p for p in runner.plans.values() if p.spec.kind == "kinematic")
+    with pytest.raises(mio.FileError, match="a kinematic run has the motion only"):
+        runner._check_column("O.Fx", kin.spec, kin.path)
+    runner._check_column("rod.B.ay", kin.spec, kin.path)  # a point's acceleration: there
