@@ -67,3 +67,22 @@ def test_a_kinematic_run_has_the_motion_only(tmp_path):
     with pytest.raises(mio.FileError, match="a kinematic run has the motion only"):
         runner._check_column("O.Fx", kin.spec, kin.path)
     runner._check_column("rod.B.ay", kin.spec, kin.path)  # a point's acceleration: there
+
+
+def test_a_plot_against_another_column(tmp_path):
+    """``x: crank.phi`` (the torque against the crank angle): written; an unknown x column,
+    or a reference curve (a law of t) with another x, refused at the line."""
+    text = _short("slider_crank.yaml")
+    assert "columns: [motor], title" in text
+    good = text.replace("columns: [motor], title", "columns: [motor], x: crank.phi, title", 1)
+    path = tmp_path / "x.yaml"
+    path.write_text(good)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert (out / "inverse" / "motor_torque.svg").stat().st_size > 10_000
+    path.write_text(
+        text.replace("columns: [motor], title", "columns: [motor], x: crank.phy, title")
+    )
+    res = CliRunner().invoke(app, ["check", str(path)])
+    assert res.exit_code == 2 and "no column 'crank.phy'" in res.output, res.output

@@ -40,7 +40,7 @@ PROPERTIES = {
     "PiecewiseArgs": "breaks coeffs",
     "PiecewiseSpec": "piecewise",
     "PinInSlotSpec": "axis name point_i point_j type",
-    "PlotSpec": "columns file reference title ylabel",
+    "PlotSpec": "columns file reference title x ylabel",  # x: issue 14
     "PointDriverSpec": "coordinate law name point type",
     "PointForceSpec": "along frame law name point type",
     "PolynomialSpec": "polynomial unit",
@@ -78,8 +78,8 @@ PROPERTIES = {
 # required key or discriminator changes it. If a pydantic upgrade alone changes the form of
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
-# and optimize kinds.
-STRIPPED_SHA256 = "2f822a86ea2263253218640aae9bcb4f60537926ead24ecf746a4c12b9a7cfe4"
+# and optimize kinds, and a plot's x column.
+STRIPPED_SHA256 = "8f3eda44d5fcacab56344c79dcc78e91510348cd929240914f48d2fb0aa220ee"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

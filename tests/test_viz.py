@@ -49,6 +49,22 @@ def test_svg_and_bad_suffix(motion, tmp_path):
     assert "crank.omega" not in str(info.value)
 
 
+def test_a_panel_per_unit_and_any_x_column(motion, tmp_path):
+    """An angle, a speed and an acceleration get a panel each (one axis would flatten two of
+    them); columns of one unit share a panel; the x axis may be any column."""
+    names = ["crank.phi", "crank.omega", "slider.ax", "rod.ax"]
+    cols, units = result_columns(motion, [*names, "slider.x"])
+    svg = plot_columns(cols, names, tmp_path / "p.svg", units=units).read_text()
+    assert svg.count('<g id="axes_') == 3  # rad, rad/s, m/s**2
+    one = plot_columns(cols, ["slider.ax", "rod.ax"], tmp_path / "q.svg", units=units)
+    assert one.read_text().count('<g id="axes_') == 1
+    against = plot_columns(cols, ["slider.ax"], tmp_path / "r.png", units=units, x="crank.phi")
+    with Image.open(against) as im:
+        assert len(im.convert("RGB").getcolors(maxcolors=100_000)) > 50
+    with pytest.raises(KeyError):
+        plot_columns(cols, ["slider.ax"], tmp_path / "s.png", x="crank.nope")
+
+
 def test_gif_frames_and_motion(motion, tmp_path):
     path = animate(motion, tmp_path / "a.gif", frames=25, fps=10, trace=["crank.A"], dpi=60)
     with Image.open(path) as gif:

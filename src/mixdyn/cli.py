@@ -916,7 +916,7 @@ def _figures(runner, plan, result, folder, painter: _Painter) -> None:
 
     for k, p in enumerate(plan.spec.plots):
         try:
-            cols, units = result_columns(result, p.columns)
+            cols, units = result_columns(result, [*p.columns, p.x])
         except KeyError as e:
             runner.fail((*plan.path, "plots", k, "columns"), str(e.args[0]), "fix the column name")
         reference = None
@@ -935,6 +935,7 @@ def _figures(runner, plan, result, folder, painter: _Painter) -> None:
             title=p.title,
             ylabel=p.ylabel,
             reference=reference,
+            x=p.x,
         )
     a = plan.spec.animation
     if a is not None:
@@ -984,15 +985,16 @@ def plot(
     ],
     columns: Annotated[
         list[str],
-        typer.Option("--column", "-c", help="A column to plot against t; repeatable."),
+        typer.Option("--column", "-c", help="A column to plot; repeatable (a panel per unit)."),
     ],
+    x: Annotated[str, typer.Option("--x", help="The column on the x axis, e.g. crank.phi.")] = "t",
     output: Annotated[
         pathlib.Path | None,
         typer.Option("--output", "-o", help="The figure (.png, .svg or .pdf)."),
     ] = None,
     title: Annotated[str | None, typer.Option("--title", help="The figure's title.")] = None,
 ):
-    """Plot chosen columns of written results against time, to PNG, SVG or PDF."""
+    """Plot chosen columns of written results against time (or --x), to PNG, SVG or PDF."""
     with _guard(results):
         from ._hints import did_you_mean
         from .io import FileError, read_result
@@ -1004,11 +1006,11 @@ def plot(
             raise FileError(
                 str(e), file=str(results), hint="give a folder written by `mixdyn run`"
             ) from None
-        missing = [c for c in columns if c not in table.columns]
+        missing = [c for c in [*columns, x] if c not in table.columns]
         if missing:
             raise FileError(
                 f"no column {missing[0]!r}",
-                "--column",
+                "--x" if missing[0] == x and x not in columns else "--column",
                 file=str(results),
                 hint=did_you_mean(missing[0], table.columns)
                 + " (the first line of results.csv lists them all)",
@@ -1025,7 +1027,7 @@ def plot(
                 hint=f"use {', '.join(PLOT_SUFFIXES)}",
             )
         check_output(output, "--output")
-        plot_columns(table, columns, output, units=meta.get("units"), title=title)
+        plot_columns(table, columns, output, units=meta.get("units"), title=title, x=x)
         _say(f"wrote {_esc(output)}")
 
 

@@ -207,6 +207,14 @@ class Runner:
             pp = (*path, "plots", k)
             for c, col in enumerate(plot.columns):
                 self._check_column(col, r, (*pp, "columns", c))
+            if plot.x != "t":
+                self._check_column(plot.x, r, (*pp, "x"))
+                if plot.reference is not None:
+                    self.fail(
+                        (*pp, "reference"),
+                        "a reference curve is a law of t: it needs the plot against t",
+                        "remove 'x' or the reference",
+                    )
             if plot.reference is not None:
                 try:
                     parse_expression(plot.reference.expr, self.b.parameters)

@@ -667,12 +667,16 @@ class ReferenceSpec(Spec):
 
 
 class PlotSpec(Spec):
-    """A figure of some columns against time, written to the run's output folder."""
+    """A figure of some columns against time (or another column), a panel per unit, written
+    to the run's output folder."""
 
     file: PlotFile
     """Figure file relative to the run's output folder: ``.png``, ``.svg`` or ``.pdf``."""
     columns: list[str] = Field(min_length=1)
-    """Result columns to plot, e.g. ``[slider.x, crank.phi, A.Fx]``."""
+    """Result columns to plot, e.g. ``[slider.x, crank.phi, A.Fx]`` (one panel per unit)."""
+    x: str = "t"
+    """The column on the x axis (default ``t``), e.g. ``crank.phi`` for the torque against the
+    crank angle."""
     title: Text | None = None
     """Figure title (default: none)."""
     ylabel: Text | None = None

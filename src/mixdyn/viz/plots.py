@@ -1,4 +1,5 @@
-"""Plots of result columns against time (PNG, SVG or PDF), without pyplot's global state."""
+"""Plots of result columns against time or another column (PNG, SVG or PDF), a panel per
+unit, without pyplot's global state."""
 
 from __future__ import annotations
 
@@ -62,20 +63,26 @@ def plot_columns(
     title: str | None = None,
     ylabel: str | None = None,
     reference: tuple | None = None,
-    size: tuple[float, float] = (7.0, 4.2),
+    x: str = "t",
+    size: tuple[float, float] | None = None,
     dpi: int = 120,
 ) -> pathlib.Path:
-    """Plot ``columns`` of ``table`` against its ``t`` and write the figure to ``path``.
+    """Plot ``columns`` of ``table`` against its column ``x`` and write the figure to ``path``:
+    one panel per unit (an angle, a speed and an acceleration are not drawn on one axis, where
+    two of them would come out flat), the panels sharing the x axis.
 
     Args:
-        table: a mapping (or pandas DataFrame) with a ``t`` column and the columns to plot.
+        table: a mapping (or pandas DataFrame) with the column ``x`` and the columns to plot.
         columns: names of the columns to plot.
         path: the output file; ``.png``, ``.svg`` or ``.pdf``.
         units: unit of each column, for the axis labels.
         title: the figure's title.
-        ylabel: the y axis label (default: the unit of the columns).
-        reference: optional ``(t, y, label)`` drawn dashed beside the columns.
-        size: figure size [inch].
+        ylabel: the y axis label (default: the columns' name and unit).
+        reference: optional ``(t, y, label)`` drawn dashed beside the columns (against ``t``:
+            only with ``x = "t"``), in the panel of the first column.
+        x: the column on the x axis (default ``t``), e.g. ``crank.phi`` for the torque against
+            the crank angle.
+        size: figure size [inch] (default: 7 wide, 3.2 per panel, at least 4.2).
         dpi: resolution of a PNG.
 
     Returns:
@@ -88,31 +95,36 @@ def plot_columns(
     if path.suffix.lower() not in PLOT_SUFFIXES:
         raise ValueError(f"cannot write a plot to {path.name!r}; use {', '.join(PLOT_SUFFIXES)}")
     units = dict(units or getattr(table, "attrs", {}).get("units", {}) or {})
-    t = np.asarray(table["t"], dtype=float)
-    fig = Figure(figsize=size, layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot()
-    col_units = []
+    xs = np.asarray(table[x], dtype=float)
+    groups: dict[str, list[str]] = {}
     for name in columns:
-        y = np.asarray(table[name], dtype=float)
-        u = units.get(name, "")
-        col_units.append(u)
-        ax.plot(t, y, lw=1.8, label=f"{name} [{u}]" if u else name)
-    if reference is not None:
-        rt, ry, rlabel = reference
-        ax.plot(np.asarray(rt), np.asarray(ry), "--", lw=1.4, color="k", label=rlabel)
-    tu = units.get("t", "")
-    ax.set_xlabel(f"t [{tu}]" if tu else "t")
-    if ylabel is None and len(set(col_units)) == 1:
-        name = columns[0] if len(columns) == 1 else ""
-        ylabel = f"{name} [{col_units[0]}]" if col_units[0] else name
-    if ylabel:
-        ax.set_ylabel(ylabel)
-    if title:
-        ax.set_title(title)
-    ax.grid(True, alpha=0.35)
-    if len(columns) > 1 or reference is not None:
-        ax.legend(loc="best", fontsize="small")
+        groups.setdefault(units.get(name, ""), []).append(name)
+    n = len(groups)
+    fig = Figure(figsize=size or (7.0, max(4.2, 3.2 * n)), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (unit, names) in zip(axes, groups.items(), strict=True):
+        for name in names:
+            y = np.asarray(table[name], dtype=float)
+            ax.plot(xs, y, lw=1.8, label=f"{name} [{unit}]" if unit else name)
+        if reference is not None and ax is axes[0]:
+            rt, ry, rlabel = reference
+            ax.plot(np.asarray(rt), np.asarray(ry), "--", lw=1.4, color="k", label=rlabel)
+        label = ylabel if (ylabel and n == 1) else None
+        if label is None:
+            head = names[0] if len(names) == 1 else ""
+            label = f"{head} [{unit}]" if unit else head
+        if label:
+            ax.set_ylabel(label)
+        ax.grid(True, alpha=0.35)
+        if len(names) > 1 or (reference is not None and ax is axes[0]):
+            ax.legend(loc="best", fontsize="small")
+    xu = units.get(x, "")
+    axes[-1].set_xlabel(f"{x} [{xu}]" if xu else x)
+    if title and n > 1:
+        fig.suptitle(title)
+    elif title:
+        axes[0].set_title(title)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
     return path
