@@ -1,6 +1,7 @@
 """The ``mixdyn`` command line: a thin shell over :mod:`mixdyn.io` and :mod:`mixdyn.viz`.
 
-Commands: ``check``, ``run``, ``plot``, ``animate``, ``schema``, ``dump``; ``--help`` on each.
+Commands: ``check``, ``show``, ``run``, ``plot``, ``animate``, ``schema``, ``dump``; ``--help``
+on each.
 
 Exit codes: 0 success; 2 bad input (one line on stderr: ``FILE:LINE: element: problem; what to
 do``); 1 a numerical failure (singularity, divergence) with its time and cause. Every input
@@ -230,6 +231,42 @@ def _require_size(spec, file) -> None:
     from .analysis._structure import require_checkable
 
     require_checkable(len(spec.bodies), str(file))
+
+
+# --------------------------------------------------------------------------- show
+@app.command()
+def show(
+    file: FileArg,
+    output: Annotated[
+        pathlib.Path | None,
+        typer.Option(
+            "--output", "-o", help="The drawing: .png, .svg, .pdf or .html (default FILE.png)."
+        ),
+    ] = None,
+):
+    """Draw the model at its assembled start (bodies, joints, ground points and their names),
+    without running an analysis."""
+    with _guard(file):
+        from . import analysis as an
+        from .io import FileError, Runner, read
+        from .io.runs import start_q
+        from .viz.show import SHOW_SUFFIXES, draw
+
+        target = output or pathlib.Path(file).with_suffix(".png")
+        if target.suffix.lower() not in SHOW_SUFFIXES:
+            raise FileError(
+                f"cannot draw to {target.name!r}",
+                "--output",
+                file=str(file),
+                hint=f"use {', '.join(SHOW_SUFFIXES)}",
+            )
+        check_output(target, "--output")
+        spec = read(file)
+        _require_size(spec, file)
+        model = Runner(spec).model
+        asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
+        draw(model, asm.q, target, title=f"{model.name} at its assembled start")
+        _say(f"wrote {_esc(target)}")
 
 
 # --------------------------------------------------------------------------- check

@@ -210,5 +210,98 @@ class Model(eqx.Module):
             f"{len(self.forces)} forces; units {self.units.describe()}"
         )
 
+    # ----------------------------------------------------------------- display
+    def _rows(self) -> tuple[list[tuple], list[tuple]]:
+        """``(bodies, elements)``: per body ``(name, mass, inertia, q0, points)`` and per
+        element ``(group, name, type, bodies, numbers)``, as text in the model's units."""
+        u = self.units
+        bodies = []
+        for b in self.bodies:
+            pts = ", ".join(f"{k} {_vec(v)}" for k, v in b.points.items()) or "(the origin only)"
+            bodies.append(
+                (
+                    b.name,
+                    f"{_num(b.mass)} {u.label('mass')}",
+                    f"{_num(b.inertia)} {u.label('inertia')}",
+                    _vec(b.q0),
+                    pts,
+                )
+            )
+        names = ["ground", *(b.name for b in self.bodies)]
+
+        def between(e) -> str:
+            if isinstance(getattr(e, "bi", None), int) and isinstance(getattr(e, "bj", None), int):
+                return f"{names[e.bi + 1]} - {names[e.bj + 1]}"
+            return " - ".join(names[i + 1] for i in e.body_indices()) or "ground"
+
+        elements = []
+        for group, items in (
+            ("joint", self.joints),
+            ("driver", self.drivers),
+            ("force", self.forces),
+        ):
+            for e in items:
+                elements.append((group, e.name, type(e).__name__, between(e), _numbers(e)))
+        return bodies, elements
+
+    def __repr__(self) -> str:
+        bodies, elements = self._rows()
+        lines = [f"Model {self.summary()}"]
+        for name, mass, inertia, q0, pts in bodies:
+            lines.append(f"  body {name}: mass {mass}, inertia {inertia}, q0 {q0}; points {pts}")
+        for group, name, kind, on, numbers in elements:
+            lines.append(f"  {group} {name}: {kind} on {on}" + (f"; {numbers}" if numbers else ""))
+        return "\n".join(lines)
+
+    def _repr_html_(self) -> str:
+        """A notebook's view: a drawing at the rough start (``q0``, not assembled: drawing
+        runs no analysis) and tables of the bodies and elements."""
+        from html import escape
+
+        from ..viz.show import svg
+
+        bodies, elements = self._rows()
+
+        def table(head, rows):
+            th = "".join(f"<th>{escape(h)}</th>" for h in head)
+            trs = "".join(
+                "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows
+            )
+            return f"<table><tr>{th}</tr>{trs}</table>"
+
+        try:
+            drawing = svg(self, np.asarray(self.q0), title=f"{self.name} (rough start q0)")
+            drawing = drawing[drawing.find("<svg") :]
+        except Exception as e:  # a drawing is a courtesy: the tables still show
+            drawing = f"<p>(no drawing: {escape(str(e))})</p>"
+        return (
+            f"<div><p><b>{escape(self.summary())}</b></p>{drawing}"
+            + table(["body", "mass", "inertia", "q0", "points"], bodies)
+            + table(["kind", "name", "type", "between", "numbers"], elements)
+            + "</div>"
+        )
+
+
+def _num(x) -> str:
+    return f"{float(np.asarray(x)):.6g}"
+
+
+def _vec(x) -> str:
+    return "[" + ", ".join(f"{v:.6g}" for v in np.asarray(x, dtype=float).ravel()) + "]"
+
+
+def _numbers(element) -> str:
+    """The numbers of an element (its array fields, laws' included), as ``name value``."""
+    out = []
+    for leaf_path, leaf in jax.tree_util.tree_leaves_with_path(element):
+        arr = np.asarray(leaf)
+        if arr.dtype.kind != "f" or arr.size > 6:
+            continue
+        key = jax.tree_util.keystr(leaf_path).lstrip(".").replace(".", " ")
+        if key.split(" ")[0] in ("bi", "bj", "si", "sj", "u", "v"):
+            continue
+        out.append(f"{key} {_num(arr) if arr.ndim == 0 else _vec(arr)}")
+    return ", ".join(out)
+
 
 __all__ = ["GROUND_NAME", "Model"]

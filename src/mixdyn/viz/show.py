@@ -1,0 +1,120 @@
+"""A drawing of a model at one configuration: bodies, joints, ground points, guides and their
+names (``mixdyn show``, ``Model._repr_html_``), without running an analysis."""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+from ._draw import COLORS
+from .animate import Scene
+
+#: File types a drawing may be written to.
+SHOW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
+
+
+def _joint_points(model, q: np.ndarray) -> list[tuple[str, np.ndarray]]:
+    """``(name, (2,) global position)`` of each joint's point on its body j (or i)."""
+    out = []
+    for j in model.joints:
+        b, s = (j.bj, j.sj) if j.bj >= 0 else (j.bi, j.si)
+        s = np.asarray(s, dtype=float)
+        if b < 0:
+            out.append((j.name, s))
+        else:
+            out.append((j.name, Scene._place(q[None], b, s[None])[0, 0]))
+    return out
+
+
+def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib.Path:
+    """Draw ``model`` at the coordinates ``q`` (nq,) to ``path`` (``.png``, ``.svg``, ``.pdf``
+    or ``.html``: the SVG in a page), every body, joint and ground point named.
+
+    Returns:
+        The path written.
+    """
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Polygon
+
+    path = pathlib.Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in SHOW_SUFFIXES:
+        raise ValueError(f"cannot draw to {path.name!r}; use {', '.join(SHOW_SUFFIXES)}")
+    q = np.asarray(q, dtype=float)
+    scene = Scene(model, q[None])
+    x0, x1, y0, y1 = scene.bounds
+    aspect = (y1 - y0) / max(x1 - x0, 1e-12)
+    fig = Figure(figsize=(7.0, float(np.clip(7.0 * aspect + 0.9, 3.0, 8.0))), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    ax.set_xlim(x0, x1)
+    ax.set_ylim(y0, y1)
+    ax.set_aspect("equal")
+    ax.grid(True, alpha=0.25)
+    u = model.units.length
+    ax.set_xlabel(f"x [{u}]")
+    ax.set_ylabel(f"y [{u}]")
+    for g in scene.guides:
+        ax.plot(g[:, 0], g[:, 1], color="0.55", lw=1.0, ls="-.", zorder=1)
+    for name, p in model.ground.points.items():
+        p = np.asarray(p, dtype=float)
+        ax.plot([p[0]], [p[1]], "^", color="0.3", ms=9, zorder=2)
+        ax.annotate(f"ground.{name}", p, xytext=(4, -12), textcoords="offset points",
+                    fontsize=7, color="0.3")  # fmt: skip
+    for k, outline in enumerate(scene.outlines):
+        color = COLORS[k % len(COLORS)]
+        closed = outline.shape[1] > 2
+        ax.add_patch(
+            Polygon(
+                outline[0],
+                closed=closed,
+                fc=color if closed else "none",
+                ec=color,
+                alpha=0.85,
+                lw=3.0 if not closed else 1.5,
+                zorder=3,
+                label=scene.names[k],
+            )
+        )
+        x, y = q[3 * k], q[3 * k + 1]
+        ax.plot([x], [y], "+", color="k", ms=6, zorder=6)
+        ax.annotate(scene.names[k], (x, y), xytext=(4, 4), textcoords="offset points",
+                    fontsize=9, weight="bold", color=color, zorder=7)  # fmt: skip
+    for name, p in _joint_points(model, q):
+        ax.plot([p[0]], [p[1]], "o", mfc="white", mec="k", ms=6, zorder=5)
+        ax.annotate(name, p, xytext=(5, -10), textcoords="offset points", fontsize=8, zorder=7)
+    ax.set_title(title or f"{model.name}: {len(model.bodies)} bodies, {len(model.joints)} joints")
+    ax.legend(loc="upper right", fontsize="x-small")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with matplotlib.rc_context({"svg.fonttype": "none"}):  # names as text in an SVG
+        if suffix == ".html":
+            import io
+
+            buf = io.StringIO()
+            fig.savefig(buf, format="svg")
+            path.write_text(
+                "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>"
+                f"{_escape(model.name)}</title></head><body>\n{buf.getvalue()}\n</body></html>\n",
+                encoding="utf-8",
+            )
+        else:
+            fig.savefig(path, dpi=dpi)
+    return path
+
+
+def svg(model, q, *, title: str | None = None) -> str:
+    """The drawing of :func:`draw` as SVG text (for notebooks)."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as d:
+        return draw(model, q, pathlib.Path(d) / "m.svg", title=title).read_text(encoding="utf-8")
+
+
+def _escape(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+__all__ = ["SHOW_SUFFIXES", "draw", "svg"]
