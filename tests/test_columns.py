@@ -86,3 +86,19 @@ def test_a_plot_against_another_column(tmp_path):
     )
     res = CliRunner().invoke(app, ["check", str(path)])
     assert res.exit_code == 2 and "no column 'crank.phy'" in res.output, res.output
+
+
+def test_a_run_without_plots_draws_the_usual_ones(tmp_path):
+    """No plots: section: an inverse run draws its drivers' efforts and its reactions (what
+    check promised and run wrote); a kinematic run draws nothing by default."""
+    lines = [ln for ln in _short("slider_crank.yaml").splitlines() if "{file:" not in ln]
+    text = "\n".join(ln for ln in lines if ln.strip() != "plots:") + "\n"
+    path = tmp_path / "noplots.yaml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    inverse = next(p for p in out.iterdir() if (p / "efforts.png").exists())
+    assert (inverse / "reactions.png").stat().st_size > 10_000
+    kinematic = [p for p in out.iterdir() if p != inverse]
+    assert kinematic and not list(kinematic[0].glob("*.png"))

@@ -203,7 +203,7 @@ def check_output(path: pathlib.Path, option: str, *, folder: bool = False) -> No
         _refuse(path, f"cannot be created: {parent} is not writable", option, "write elsewhere")
 
 
-def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
+def _check_run_outputs(out: pathlib.Path, plans, figures: bool, runner) -> None:
     """The output folder and every file the runs will write, checked before running."""
     check_output(out, "--out", folder=True)
     for plan in plans:
@@ -219,7 +219,8 @@ def _check_run_outputs(out: pathlib.Path, plans, figures: bool) -> None:
         else:
             names = ["results.csv", "meta.json"]
         if figures:
-            names += [p.file for p in getattr(plan.spec, "plots", ())]
+            plots = plan.spec.plots if plan.spec.kind == "sweep" else runner.plots(plan)
+            names += [p.file for p in plots]
             if getattr(plan.spec, "animation", None) is not None:
                 names.append(plan.spec.animation.file)
         for name in names:
@@ -420,9 +421,10 @@ def _run(file, runs, out, parquet, figures, progress):
                 "the file has no runs", "runs", file=str(file), hint="add a runs: section"
             )
         plans = runner.order(runs or None)
-        _check_run_outputs(out, plans, figures)
+        _check_run_outputs(out, plans, figures, runner)
         drawing = figures and any(
             getattr(p.spec, "plots", None)
+            or runner.plots(p)
             or getattr(p.spec, "animation", None) is not None
             or p.spec.kind in ("identify", "optimize")
             for p in plans
@@ -686,7 +688,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                         soft_wrap=True,
                     )
                     return
-                figs = [p.file for p in plan.spec.plots] if figures else []
+                figs = [p.file for p in runner.plots(plan)] if figures else []
                 anim = []
                 if figures and plan.spec.animation is not None:
                     a = plan.spec.animation
@@ -951,7 +953,7 @@ def _figures(runner, plan, result, folder, painter: _Painter) -> None:
 
     from .viz import html, movie_data, result_columns
 
-    for k, p in enumerate(plan.spec.plots):
+    for k, p in enumerate(runner.plots(plan)):
         try:
             cols, units = result_columns(result, [*p.columns, p.x])
         except KeyError as e:

@@ -314,6 +314,36 @@ class Runner:
         owners = {j.name for j in self.model.joints} | set(drivers)
         return cols, owners
 
+    def plots(self, plan: Plan) -> list:
+        """The figures a run draws: its ``plots``, or for a dynamic or inverse run without
+        any, the plots every designer draws first: the drivers' efforts, the unknown forces
+        (mixed) and the joints' reactions (a panel per unit each). A kinematic run has none
+        by default; sweeps, fits and optimizations draw their own."""
+        r = plan.spec
+        if r.kind in STUDIES:
+            return []
+        if r.plots or r.kind == "kinematic":
+            return list(r.plots)
+        names, _ = self.columns(r)
+        drivers = [d.name for d in self.model.drivers if r.drivers is None or d.name in r.drivers]
+        if r.kind != "mixed":
+            drivers += [p.name or f"prescribed {p.coordinate}" for p in r.prescribed]
+        reactions = [c for c in names if c.rsplit(".", 1)[-1] in ("Fx", "Fy", "M")]
+        reactions = [c for c in reactions if c.rsplit(".", 1)[0] in self._joint_names]
+        out = []
+        for file, cols, title in (
+            ("efforts.png", drivers, "Driver efforts"),
+            ("unknown_forces.png", list(getattr(r, "unknown", None) or ()), "Unknown forces"),
+            ("reactions.png", reactions, "Joint reactions (on body j)"),
+        ):
+            if cols:
+                out.append(s.PlotSpec(file=file, columns=cols, title=f"{r.name}: {title}"))
+        return out
+
+    @property
+    def _joint_names(self) -> set[str]:
+        return {j.name for j in self.model.joints}
+
     def _check_column(self, col: str, r, path):
         parts = col.split(".")
         if len(parts) == 3 and parts[0] in self.b.body_index and parts[1] not in BODY_COLUMNS:
