@@ -112,6 +112,11 @@ def test_antonya_from_the_cli_like_the_api(antonya):
     np.testing.assert_allclose(api["mixed"].q, api["forward"].q, atol=1e-6)
     pq = pd.read_parquet(out / "forward" / "results.parquet")
     np.testing.assert_array_equal(pq["slider.x"].to_numpy(), api["forward"]["slider.x"])
+    # the Parquet file alone says its units (issue 14): mm and mN in the paper's system
+    from mixdyn.io.results import parquet_units
+
+    units = parquet_units(out / "forward" / "results.parquet")
+    assert units["slider.x"] == "mm" and units["D.Fx"] == "mN" and units["t"] == "s"
 
 
 def test_antonya_writes_the_papers_figures_and_the_animation(antonya):

@@ -80,7 +80,9 @@ def write_result(
     written.append(csv)
     if parquet:
         pq = folder / RESULTS_PARQUET
-        result.table().reset_index().to_parquet(pq, index=False)
+        _write_parquet(
+            result.table().reset_index(), pq, result.units(), _unit_system(result.model.units)
+        )
         written.append(pq)
     units = result.units()
     meta = {
@@ -107,6 +109,35 @@ def write_result(
     os.replace(tmp, path)
     written.append(path)
     return written
+
+
+#: The key of mixdyn's entry in a Parquet file's schema metadata (JSON: units, unit system).
+PARQUET_KEY = b"mixdyn"
+
+
+def _unit_system(units) -> dict:
+    return {"length": units.length, "mass": units.mass, "time": units.time, "angle": "rad"}
+
+
+def _write_parquet(df, path: pathlib.Path, units: dict, system: dict | None) -> None:
+    """``df`` to Parquet with the columns' units and the unit system in the schema metadata
+    (``PARQUET_KEY``), so that the file alone says what its numbers are."""
+    import pyarrow as pa
+    import pyarrow.parquet as papq
+
+    table = pa.Table.from_pandas(df, preserve_index=False)
+    entry = {"units": {c: units.get(c, "") for c in df.columns}, "unit_system": system}
+    meta = dict(table.schema.metadata or {})
+    meta[PARQUET_KEY] = json.dumps(jsonable(entry)).encode()
+    papq.write_table(table.replace_schema_metadata(meta), path)
+
+
+def parquet_units(path) -> dict:
+    """The units a Parquet file written by mixdyn carries (``{}`` if none)."""
+    import pyarrow.parquet as papq
+
+    meta = papq.read_schema(path).metadata or {}
+    return json.loads(meta[PARQUET_KEY]).get("units", {}) if PARQUET_KEY in meta else {}
 
 
 def _write_csv(path: pathlib.Path, names: list[str], table: np.ndarray) -> None:
@@ -163,6 +194,7 @@ def write_sweep(
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
+    model = next((r.model for r in sweep.sweep.results if r is not None), None)
     members = sweep.members()
     path = folder / MEMBERS_CSV
     tmp = path.with_suffix(".csv.tmp")
@@ -177,9 +209,9 @@ def write_sweep(
     written.append(path)
     if parquet:
         path = folder / TABLE_PARQUET
-        table.to_parquet(path, index=False)
+        system = None if model is None else _unit_system(model.units)
+        _write_parquet(table, path, dict(sweep.units), system)
         written.append(path)
-    model = next((r.model for r in sweep.sweep.results if r is not None), None)
     meta = {
         "mixdyn_version": __version__,
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
@@ -238,7 +270,10 @@ def read_result(path):
     df = pd.read_parquet(p) if p.suffix == ".parquet" else pd.read_csv(p)
     meta_path = folder / META_JSON
     meta = json.loads(meta_path.read_text(encoding="utf-8")) if meta_path.exists() else {}
-    df.attrs["units"] = meta.get("units", {})
+    units = meta.get("units", {})
+    if not units and p.suffix == ".parquet":
+        units = parquet_units(p)
+    df.attrs["units"] = units
     return df, meta
 
 
