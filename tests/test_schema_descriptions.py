@@ -64,6 +64,9 @@ PROPERTIES = {
     "MeasuredSpec": "column data noise",
     "ObjectiveSpec": "column reduce",
     "OptimizeRunSpec": "kind max_iterations name objective run sense vary",
+    # the statics run kind (issue 13)
+    "StaticsRunSpec": "animation drivers hold initial kind linear_solver max_iter name plots "
+    "prescribed time tol velocities",
     "SplineSpec": "spline",
     "SpringDamperSpec": "actuator damping free_length name point_i point_j stiffness type",
     "TimeSpec": "n span step values",
@@ -78,8 +81,8 @@ PROPERTIES = {
 # required key or discriminator changes it. If a pydantic upgrade alone changes the form of
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
-# and optimize kinds, and a plot's x column.
-STRIPPED_SHA256 = "8f3eda44d5fcacab56344c79dcc78e91510348cd929240914f48d2fb0aa220ee"
+# and optimize kinds, a plot's x column, and the statics kind.
+STRIPPED_SHA256 = "4b9e7c47fba710bc2910aab0fc0ee9cd49edf4311048ba6a439b1af7361bb449"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

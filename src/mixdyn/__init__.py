@@ -40,6 +40,7 @@ from .analysis import (  # noqa: E402
     Partitioning,
     Projection,
     Result,
+    Statics,
     Sweep,
     assemble,
     check_mixed,
@@ -54,6 +55,8 @@ from .analysis import (  # noqa: E402
     mixed,
     optimize,
     prescribe,
+    quasi_static,
+    statics,
     sweep,
 )
 from .errors import (  # noqa: E402
@@ -107,6 +110,7 @@ __all__ = [
     "Result",
     "Fit",
     "Optimum",
+    "Statics",
     "Sweep",
     "SingularityError",
     "SolvabilityError",
@@ -119,6 +123,8 @@ __all__ = [
     "differentiable",
     "fit",
     "optimize",
+    "quasi_static",
+    "statics",
     "errors",
     "forward",
     "grid",

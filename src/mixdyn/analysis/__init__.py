@@ -12,6 +12,7 @@ from .methods import Baumgarte, GeneralizedAlpha, IntegratorOptions, Partitionin
 from .mixed import check_mixed, mixed, prescribe
 from .optimize import Optimum, optimize
 from .result import Result
+from .statics import Statics, quasi_static, statics
 from .sweep import Sweep, grid, latin_hypercube, sweep
 
 __all__ = [
@@ -26,6 +27,7 @@ __all__ = [
     "Partitioning",
     "Projection",
     "Result",
+    "Statics",
     "Sweep",
     "assemble",
     "check_mixed",
@@ -40,5 +42,7 @@ __all__ = [
     "mixed",
     "optimize",
     "prescribe",
+    "quasi_static",
+    "statics",
     "sweep",
 ]

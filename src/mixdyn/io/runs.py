@@ -37,6 +37,7 @@ BODY_COLUMNS = ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")
 #: The analyses of the runs, by kind.
 ANALYSES = {
     "kinematic": an.kinematic,
+    "statics": an.quasi_static,
     "inverse": an.inverse,
     "forward": an.forward,
     "mixed": an.mixed,
@@ -149,7 +150,7 @@ class Runner:
         path = ("runs", index)
         b = self.b
         ts = self._times(r.time, (*path, "time"))
-        if r.kind != "kinematic" and ts.size < 2:
+        if r.kind not in ("kinematic", "statics") and ts.size < 2:
             self.fail((*path, "time"), "a dynamic run needs at least two output times", "")
         model_drivers = {d.name for d in self.model.drivers}
         if r.drivers is not None:
@@ -162,7 +163,7 @@ class Runner:
                     )
         for k, ref in enumerate(r.hold or ()):
             b.coordinate(ref, (*path, "hold", k))
-        if r.velocities and r.kind in ("kinematic", "inverse"):
+        if r.velocities and r.kind in ("kinematic", "inverse", "statics"):
             self.fail(
                 (*path, "velocities"),
                 f"initial velocities have no effect in a {r.kind} run (the drivers fix them)",
@@ -585,7 +586,7 @@ class Runner:
         model = self.run_model(plan, () if mixed else laws)
         args = self._start_args(plan, model)
         t0 = float(plan.times[0])
-        kinematic = r.kind in ("kinematic", "inverse")
+        kinematic = r.kind in ("kinematic", "inverse", "statics")
         drivers = (*model.drivers, *(bind_prescribed(model, laws) if mixed else ()))
         key = (
             "kinematic" if kinematic else "dynamic",
@@ -638,7 +639,7 @@ class Runner:
         ls = opts.get("linear_solver", r.linear_solver)
         q0 = self.q_start(plan, model)
         hold = self.hold(plan)
-        if r.kind not in ("kinematic", "inverse"):
+        if r.kind not in ("kinematic", "inverse", "statics"):
             qd0 = self.qd_start(plan, model)
             return dict(q0=q0, qd0=qd0, hold=hold, linear_solver=ls)
         first = bool(opts.get("assemble_first", True)) if r.kind == "inverse" else True
@@ -856,7 +857,7 @@ class Runner:
     def check_masses(self, plan: Plan) -> None:
         """A dynamic run needs every body's mass and inertia > 0."""
         plan = self.base(plan)
-        if plan.spec.kind == "kinematic":
+        if plan.spec.kind in ("kinematic", "statics"):
             return
         for i, body in enumerate(self.model.bodies):
             for key in ("mass", "inertia"):
@@ -968,6 +969,8 @@ class Runner:
             if r.tol is not None:
                 kw["tol"] = r.tol
             return "kinematic", model, dict(prepared=prep, **args, **kw)
+        if r.kind == "statics":
+            return "statics", model, dict(**args, tol=r.tol, max_iter=r.max_iter)
         if r.kind == "inverse":
             opts.pop("assemble_first", None)
             return "inverse", model, dict(prepared=prep, **args, **opts)

@@ -742,6 +742,19 @@ class KinematicRunSpec(_RunSpec):
     """Newton iterations per output time (1 to 1000). Default 25."""
 
 
+class StaticsRunSpec(_RunSpec):
+    """The equilibrium under the loads, or a sequence of them as the drivers move
+    (``mixdyn.statics``): free degrees of freedom settle, drivers hold theirs."""
+
+    kind: Literal["statics"]
+    """Run kind: ``statics`` (a quasi-static analysis over several output times)."""
+    tol: float = Field(default=1e-10, gt=0, allow_inf_nan=False)
+    """Relative tolerance of Newton's method on the force and constraint residuals. Default
+    1e-10."""
+    max_iter: int = Field(default=100, ge=1, le=10_000)
+    """Newton iterations per output time (1 to 10,000). Default 100."""
+
+
 Method = Literal["projection", "baumgarte", "partitioning", "generalized-alpha"]
 Option = float | int | str | bool | None  # None: a check turned off (energy_tol: null)
 
@@ -1008,6 +1021,7 @@ class OptimizeRunSpec(Spec):
 
 RunSpec = Annotated[
     KinematicRunSpec
+    | StaticsRunSpec
     | ForwardRunSpec
     | InverseRunSpec
     | MixedRunSpec
@@ -1048,7 +1062,8 @@ class ModelFile(Spec):
     assembly: AssemblySpec = AssemblySpec()
     """How the starting pose is closed: ``{hold: [crank.phi]}``."""
     runs: list[RunSpec] = Field(default_factory=list)
-    """Named analyses: ``kinematic``, ``forward``, ``inverse``, ``mixed``, ``sweep`` (another
+    """Named analyses: ``kinematic``, ``statics``, ``forward``, ``inverse``, ``mixed``,
+    ``sweep`` (another
     run over many values of some numbers), ``identify`` (numbers fitted to measurements) and
     ``optimize`` (numbers chosen to minimize a scalar of a run)."""
 

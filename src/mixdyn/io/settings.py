@@ -114,7 +114,7 @@ def _check_value(runner: Runner, name: str, value, path) -> None:
 def check_step(runner: Runner, plan: Plan) -> None:
     """A fixed step where needed, and no more steps than ``max_steps``."""
     r = plan.spec
-    if isinstance(r, s.KinematicRunSpec | s.InverseRunSpec):
+    if isinstance(r, s.KinematicRunSpec | s.InverseRunSpec | s.StaticsRunSpec):
         return
     path = plan.path
     if r.dt is None:

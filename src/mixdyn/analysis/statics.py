@@ -1,0 +1,277 @@
+"""Statics: the equilibrium of a mechanism under its loads, its stability, and the efforts and
+reactions that hold it (static force analysis, no inertia forces).
+
+At rest the equations of motion ``M qdd = Q(q, 0, t) - Phi_q^T lambda`` with ``Phi(q, t) = 0``
+become
+
+    R(q, lambda) = [ Q(q, 0, t) - Phi_q(q)^T lambda ;  Phi(q, t) ] = 0,
+
+solved by Newton's method from the assembled start, the Jacobian of ``R`` by ``jax.jacfwd``
+(each step halved until ``|R|`` decreases). Free degrees of freedom move to the equilibrium
+(gravity, springs, constant forces and laws at ``t``); driven ones stay where the drivers put
+them and their efforts are the static ones (kinetostatics without inertia; with inertia:
+:func:`~mixdyn.inverse`).
+
+Stability: the tangent stiffness ``K = -d(Q - Phi_q^T lambda)/dq`` (for conservative loads the
+Hessian of ``V + lambda . Phi``) restricted to the motions the constraints allow,
+``K_r = N^T K N`` with ``N`` an orthonormal basis of the null space of ``Phi_q``: the
+equilibrium is stable when every eigenvalue of ``K_r``'s symmetric part is positive, unstable
+when one is negative (then the mechanism, nudged, leaves it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import applied_forces
+from ..errors import ConvergenceError
+from ..model import Model
+from ._assembly import length_scale
+from ._prepare import prepare_kinematic
+from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
+from .result import Result
+
+
+@dataclasses.dataclass(frozen=True)
+class Statics:
+    """An equilibrium.
+
+    Attributes:
+        q: (nq,) the equilibrium positions [model units].
+        lam: (m,) the multipliers of the independent constraint rows.
+        result: the equilibrium as a one-row :class:`~mixdyn.Result` (kind ``"statics"``):
+            positions, the joints' reactions and the drivers' efforts by name, with units.
+        eigenvalues: the reduced stiffness' eigenvalues, ascending (empty without free
+            degrees of freedom) [model units of generalized stiffness].
+        stable: every eigenvalue positive (True without free degrees of freedom).
+        iterations: Newton iterations.
+        residual: the largest force residual after, relative to the forces' scale.
+    """
+
+    q: np.ndarray
+    lam: np.ndarray
+    result: Result
+    eigenvalues: np.ndarray
+    stable: bool
+    iterations: int
+    residual: float
+
+    def __getitem__(self, column: str) -> float:
+        """A column of the equilibrium (``"crank.phi"``, ``"O.Fx"``, ``"motor"``)."""
+        return float(self.result[column][0])
+
+
+def _residual_of(model, c, t, x):
+    q, lam = x[: model.nq], x[model.nq :]
+    Q = applied_forces(model, q, jnp.zeros_like(q), t)
+    return jnp.concatenate([Q - c.jacobian(q, t).rmv(lam), c(q, t)])
+
+
+@eqx.filter_jit
+def _residual(model, c, t, x):
+    """``R(q, lambda)`` (nq + m,) at time ``t`` (traced once per structure)."""
+    return _residual_of(model, c, t, x)
+
+
+@eqx.filter_jit
+def _jacobian(model, c, t, x):
+    """``dR/d(q, lambda)`` (nq + m, nq + m), by forward-mode differentiation."""
+    return jax.jacfwd(lambda y: _residual_of(model, c, t, y))(x)
+
+
+def statics(
+    model: Model,
+    *,
+    t: float = 0.0,
+    q0=None,
+    hold=(),
+    tol: float = 1e-10,
+    max_iter: int = 100,
+) -> Statics:
+    """The equilibrium of ``model`` under its loads at time ``t``, and its stability.
+
+    Args:
+        model: the mechanism: its free degrees of freedom move to the equilibrium; its drivers
+            hold theirs (their efforts are the static ones).
+        t: the time at which loads and drivers' laws are taken [time].
+        q0: (nq,) rough start (default: the bodies' ``q0``); the equilibrium found is the one
+            Newton's method reaches from there (a mechanism may have several: start near the
+            one wanted).
+        hold: coordinates held while the start is assembled (not at the equilibrium).
+        tol: relative tolerance on the force and constraint residuals.
+        max_iter: Newton iterations at most.
+
+    Returns:
+        A :class:`Statics`.
+
+    Raises:
+        ConvergenceError: no equilibrium reached (a load no position can balance, e.g. an
+            unbalanced constant force on a free slider).
+    """
+    prep = prepare_kinematic(
+        model, float(t), q0=q0, hold=hold, balanced=False, linear_solver="dense"
+    )
+    c = prep.constraints(independent_rows_only=True)
+    nq, m = model.nq, c.m
+    tj = jnp.asarray(float(t))
+
+    def R(x):
+        return _residual(model, c, tj, x)
+
+    def K(x):
+        return _jacobian(model, c, tj, x)
+
+    q = np.asarray(prep.q, dtype=float)
+    r0 = np.asarray(R(jnp.concatenate([jnp.asarray(q), jnp.zeros(m)])))
+    Q0 = r0[:nq]  # the applied forces (no multipliers yet)
+    _, J0 = _tangent(model, c, tj, jnp.asarray(q), jnp.zeros(m))
+    J0 = np.asarray(J0)
+    lam = np.linalg.lstsq(J0.T, Q0, rcond=None)[0] if m else np.zeros(0)
+    x = np.concatenate([q, lam])
+    L = length_scale(model)
+
+    def scaled(r, x):
+        force = max(np.max(np.abs(Q0)), np.max(np.abs(np.asarray(R(jnp.asarray(x)))[:nq])), 1e-300)
+        return max(np.max(np.abs(r[:nq])) / force, np.max(np.abs(r[nq:]), initial=0.0) / L)
+
+    r = np.asarray(R(jnp.asarray(x)))
+    err = scaled(r, x)
+    it = 0
+    while err > tol and it < max_iter:
+        it += 1
+        step = np.linalg.lstsq(np.asarray(K(jnp.asarray(x))), -r, rcond=None)[0]
+        a = 1.0
+        while True:
+            trial = x + a * step
+            rt = np.asarray(R(jnp.asarray(trial)))
+            et = scaled(rt, trial)
+            if np.all(np.isfinite(rt)) and (et < err or a < 1e-6):
+                break
+            a *= 0.5
+        x, r, err = trial, rt, et
+    if not (err <= tol and np.all(np.isfinite(x))):
+        raise ConvergenceError(
+            f"no equilibrium reached from the start: residual {err:.2e} after {it} Newton "
+            "iterations; a load no position can balance (a constant force on a free slider), "
+            "or a start too far from the equilibrium",
+            float(t),
+        )
+    q, lam = x[:nq], x[nq:]
+    eig = _reduced_stiffness(model, c, float(t), q, lam)
+    stable = bool(np.all(eig > 1e-9 * max(np.max(np.abs(eig), initial=0.0), 1e-300)))
+    return Statics(q, lam, _result(model, c, prep, float(t), q, lam), eig, stable, it, err)
+
+
+@eqx.filter_jit
+def _tangent(model, c, t, q, lam):
+    """``(K, Phi_q)``: the tangent stiffness ``-d(Q - Phi_q^T lambda)/dq`` and ``Phi_q``."""
+
+    def force(qq):
+        return applied_forces(model, qq, jnp.zeros_like(qq), t) - c.jacobian(qq, t).rmv(lam)
+
+    return -jax.jacfwd(force)(q), c.jacobian(q, t).dense()
+
+
+@eqx.filter_jit
+def _reactions(c, q, t, lam):
+    return joint_reactions(c, q, t, lam)
+
+
+def _reduced_stiffness(model, c, t, q, lam) -> np.ndarray:
+    """Eigenvalues of ``N^T K N`` (symmetric part), ascending."""
+    nq = model.nq
+    K, J = (
+        np.asarray(a) for a in _tangent(model, c, jnp.asarray(t), jnp.asarray(q), jnp.asarray(lam))
+    )
+    if J.shape[0]:
+        _, s, vt = np.linalg.svd(J)
+        rank = int(np.sum(s > 1e-10 * s[0])) if s.size else 0
+        N = vt[rank:].T
+    else:
+        N = np.eye(nq)
+    if N.shape[1] == 0:
+        return np.zeros(0)
+    Kr = N.T @ K @ N
+    return np.sort(np.linalg.eigvalsh(0.5 * (Kr + Kr.T)))
+
+
+def _result(model, c, prep, t, q, lam) -> Result:
+    qj, lj = jnp.asarray(q), jnp.asarray(lam)
+    R = np.asarray(_reactions(c, qj, jnp.asarray(t), lj))[None]
+    extra = {k: np.asarray(v) for k, v in reaction_columns(c, R).items()}
+    powers = np.zeros((1, c.m))
+    efforts = driver_efforts(c, np.asarray(lam)[None], powers, len(prep.drivers))
+    kinds = reaction_kinds(c)
+    for d in prep.drivers:
+        extra[d.name] = np.asarray(efforts[d.name])
+        kinds[d.name] = d.effort_kind
+    zeros = np.zeros((1, model.nq))
+    return Result(
+        kind="statics",
+        model=model,
+        t=np.array([t]),
+        q=np.asarray(q)[None],
+        qd=zeros,
+        qdd=zeros,
+        extra=extra,
+        kinds=kinds,
+    )
+
+
+def quasi_static(
+    model: Model,
+    t,
+    *,
+    q0=None,
+    hold=(),
+    tol: float = 1e-10,
+    max_iter: int = 100,
+    assemble_first: bool = True,
+    linear_solver: str = "auto",
+) -> Result:
+    """The equilibria at the times ``t`` (N,), each from the one before (the drivers' laws
+    and the loads taken at each time): a quasi-static analysis, e.g. a mechanism slowly
+    driven against its springs and gravity. A :class:`~mixdyn.Result` of kind ``"statics"``
+    (positions, reactions, efforts; velocities and accelerations 0); ``stats`` holds the
+    reduced stiffness' smallest eigenvalue at each time and whether every equilibrium is
+    stable. (The start is always assembled, and the dense path taken: ``assemble_first`` and
+    ``linear_solver`` are accepted for the model-file runner's sake.)"""
+    del assemble_first, linear_solver
+    ts = np.atleast_1d(np.asarray(t, dtype=float))
+    rows, smallest, iters = [], [], 0
+    q = q0
+    for k, tk in enumerate(ts):
+        eq = statics(model, t=float(tk), q0=q, hold=hold if k == 0 else (), tol=tol,
+                     max_iter=max_iter)  # fmt: skip
+        rows.append(eq.result)
+        smallest.append(float(eq.eigenvalues[0]) if eq.eigenvalues.size else float("nan"))
+        iters += eq.iterations
+        q = eq.q
+    first = rows[0]
+    extra = {c: np.concatenate([r.extra[c] for r in rows]) for c in first.extra}
+    zeros = np.zeros((len(ts), model.nq))
+    stable = [bool(np.isnan(e) or e > 0) for e in smallest]
+    return Result(
+        kind="statics",
+        model=model,
+        t=ts,
+        q=np.concatenate([r.q for r in rows]),
+        qd=zeros,
+        qdd=zeros,
+        extra=extra,
+        kinds=dict(first.kinds),
+        stats={
+            "newton_iterations": iters,
+            "min_eigenvalue": smallest,
+            "stable": all(stable),
+            "unstable_at": [float(tk) for tk, s in zip(ts, stable, strict=True) if not s],
+        },
+    )
+
+
+__all__ = ["Statics", "quasi_static", "statics"]
