@@ -105,7 +105,7 @@ def test_the_example_recovers_its_numbers_as_the_api_does(tmp_path):
 @pytest.mark.parametrize(
     ("edit", "words"),
     [
-        (("run: forward\n    data", "run: nope\n    data"), "is not a forward or mixed run"),
+        (("run: forward\n    data", "run: nope\n    data"), "unknown run 'nope'"),
         (("data: rec.csv", "data: missing.csv"), "no data file"),
         (("data: rec.csv", "data: ../rec.csv"), "relative to the model file"),
         (("data: v,", "data: w,"), "has no column 'w'"),

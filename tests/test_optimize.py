@@ -104,7 +104,7 @@ def test_maximizing_ends_on_a_bound(tmp_path):
 @pytest.mark.parametrize(
     ("edit", "words"),
     [
-        (("    run: revolution", "    run: nope"), "not a forward, mixed or inverse run"),
+        (("    run: revolution", "    run: nope"), "unknown run 'nope'"),
         (("{column: motor, reduce: rms}", "{column: motr, reduce: rms}"), "'motr' is not"),
         (("spring.stiffness: {bounds", "spring.stifness: {bounds"), "no field 'stifness'"),
         (("spring.stiffness: {bounds", "O.si: {bounds"), "geometry"),

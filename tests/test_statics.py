@@ -125,3 +125,24 @@ def test_the_example_file_rests_where_its_turning_torque_vanishes(tmp_path):
     zero = phi[k] - torque[k] * (phi[k + 1] - phi[k]) / (torque[k + 1] - torque[k])
     assert abs(zero - rest["crank.phi"][0]) <= 5e-3  # linear interpolation over 5 degrees
     assert (out / "turning" / "motor_torque.png").stat().st_size > 10_000
+
+
+def test_a_sweep_of_equilibria_equals_the_single_ones():
+    """``md.sweep(..., analysis="statics")``: each member's equilibrium is the single one; a
+    stiffer spring moves the rest position."""
+    model = _spring_four_bar()
+    sw = md.sweep(model, [0.0], vary={"spring.stiffness": [40.0, 60.0, 80.0]}, analysis="statics")
+    rests = []
+    for i, k in enumerate((40.0, 60.0, 80.0)):
+        single = md.statics(
+            model.replace(
+                forces=(
+                    md.SpringDamper(
+                        "spring", "ground.S", "coupler.P", stiffness=k, free_length=0.2
+                    ),
+                )
+            )
+        )
+        assert abs(sw[i]["crank.phi"][0] - single["crank.phi"]) <= 1e-12
+        rests.append(single["crank.phi"])
+    assert len(set(np.round(rests, 6))) == 3

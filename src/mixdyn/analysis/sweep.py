@@ -43,11 +43,16 @@ from .inverse import inverse
 from .kinematic import kinematic
 from .mixed import mixed_case
 from .result import Result
+from .statics import quasi_static
 
 #: The dynamic analyses a sweep runs, by name: their set-up functions.
 ANALYSES: dict[str, Callable[..., Case]] = {"forward": forward_case, "mixed": mixed_case}
 #: The analyses a sweep runs member by member, by name.
-MEMBERWISE: dict[str, Callable[..., Result]] = {"kinematic": kinematic, "inverse": inverse}
+MEMBERWISE: dict[str, Callable[..., Result]] = {
+    "kinematic": kinematic,
+    "inverse": inverse,
+    "statics": quasi_static,
+}
 
 #: Fields that hold geometry bound from body points: a number there would disagree with the
 #: bodies' points; vary the points by building the member models instead (``models=``).

@@ -85,21 +85,7 @@ def _selector(runner: Runner, column: str, kind: str):
 def plan(runner: Runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
     """Check an optimization run against the file and its model."""
     path = ("runs", index)
-    kinds = {x.name: x.kind for x in runner.spec.runs}
-    if kinds.get(r.run) not in ("forward", "mixed", "inverse") or r.run not in runner.plans:
-        known = [n for n, k in kinds.items() if k in ("forward", "mixed", "inverse")]
-        runner.fail(
-            (*path, "run"),
-            f"{r.run!r} is not a forward, mixed or inverse run of the file",
-            f"name one of: {', '.join(known) or '(none)'}",
-        )
-    base = runner.plans[r.run]
-    if any(p.from_run is not None for p in base.spec.prescribed):
-        runner.fail(
-            (*path, "run"),
-            f"run {r.run!r} replays another run's motion (from_run)",
-            "optimize with a run whose prescribed motions are laws",
-        )
+    base = runner.study_base(index, r, ("forward", "mixed", "inverse"), "optimize")
     if _selector(runner, r.objective.column, base.spec.kind) is None:
         what = "a body coordinate or velocity"
         if base.spec.kind == "inverse":

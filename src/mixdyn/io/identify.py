@@ -113,21 +113,7 @@ def _read_data(runner: Runner, r: s.IdentifyRunSpec, path):
 def plan(runner: Runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     """Check an identification run against the file, its model and its data."""
     path = ("runs", index)
-    kinds = {x.name: x.kind for x in runner.spec.runs}
-    if r.run not in runner.plans or kinds.get(r.run) not in ("forward", "mixed"):
-        known = ", ".join(n for n, k in kinds.items() if k in ("forward", "mixed")) or "(none)"
-        runner.fail(
-            (*path, "run"),
-            f"{r.run!r} is not a forward or mixed run of the file",
-            f"name one of: {known}",
-        )
-    base = runner.plans[r.run]
-    if any(p.from_run is not None for p in base.spec.prescribed):
-        runner.fail(
-            (*path, "run"),
-            f"run {r.run!r} replays another run's motion (from_run)",
-            "fit with a run whose prescribed motions are laws",
-        )
+    base = runner.study_base(index, r, ("forward", "mixed"), "fit")
     file, table, t = _read_data(runner, r, path)
     measured, noise = {}, {}
     for k, m in enumerate(r.measured):

@@ -113,6 +113,31 @@ class Runner:
         self.plans = {run: self._plan(index, spec.runs[index])}
         return self
 
+    def study_base(self, index: int, r, kinds: tuple[str, ...], verb: str) -> Plan:
+        """The run a sweep, fit or optimization repeats (``r.run``), checked: of one of
+        ``kinds``, with its prescribed motions given by laws (not replayed ``from_run``, which
+        its members or trials would not share); ``verb`` names the study in the hints."""
+        path = ("runs", index, "run")
+        kind = {x.name: x.kind for x in self.spec.runs}.get(r.run)
+        known = ", ".join(x.name for x in self.spec.runs if x.kind in kinds) or "(none)"
+        allowed = " or ".join([", ".join(kinds[:-1]), kinds[-1]] if len(kinds) > 1 else kinds)
+        if kind is None or r.run not in self.plans:
+            self.fail(path, f"unknown run {r.run!r}", f"runs to {verb}: {known}")
+        if kind not in kinds:
+            self.fail(
+                path,
+                f"run {r.run!r} is a {kind} run, not a {allowed} run",
+                f"runs to {verb}: {known}",
+            )
+        base = self.plans[r.run]
+        if any(p.from_run is not None for p in base.spec.prescribed):
+            self.fail(
+                path,
+                f"run {r.run!r} replays another run's motion (from_run)",
+                f"{verb} a run whose prescribed motions are laws",
+            )
+        return base
+
     def base(self, plan: Plan) -> Plan:
         """The run a sweep sweeps or a fit uses (``plan`` itself for the other kinds)."""
         return self.plans[plan.spec.run] if plan.spec.kind in STUDIES else plan

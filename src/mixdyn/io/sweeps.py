@@ -160,24 +160,9 @@ def outputs_of(r: s.SweepRunSpec) -> list[str]:
 def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
     """Check a sweep run against the file and its model; its members' values made."""
     path = ("runs", index)
-    kinds = {x.name: x.kind for x in runner.spec.runs}
-    if kinds.get(r.run) in ("sweep", "identify", "optimize"):
-        runner.fail(
-            (*path, "run"),
-            f"run {r.run!r} is a {kinds[r.run]}",
-            "sweep a kinematic, forward, inverse or mixed run",
-        )
-    if r.run not in runner.plans:
-        known = ", ".join(n for n, k in kinds.items() if k != "sweep") or "(none)"
-        runner.fail((*path, "run"), f"unknown run {r.run!r}", f"runs that can be swept: {known}")
-    base = runner.plans[r.run]
-    if any(p.from_run is not None for p in base.spec.prescribed):
-        runner.fail(
-            (*path, "run"),
-            f"run {r.run!r} replays another run's motion (from_run), which the members "
-            "would not share",
-            "sweep a run whose prescribed motions are laws",
-        )
+    base = runner.study_base(
+        index, r, ("kinematic", "statics", "forward", "inverse", "mixed"), "sweep"
+    )
     axes, spans = {}, {}
     for name, v in r.vary.items():
         vpath = (*path, "vary", name)
