@@ -80,6 +80,17 @@ from .units import SI, UnitSystem  # noqa: E402
 __version__ = "0.1.0"
 
 
+def _model_html(model) -> str:
+    """A notebook's view of a model, drawn by :func:`mixdyn.viz.show.model_html` (the plots
+    load on first use; attached here, above both, so that the model does not import them)."""
+    from .viz.show import model_html
+
+    return model_html(model)
+
+
+Model._repr_html_ = _model_html  # noqa: F405  (Model comes from .model's *)
+
+
 def __getattr__(name):
     # The file layer (pydantic, pint) and the plots (matplotlib) load on first use.
     if name in ("io", "viz"):

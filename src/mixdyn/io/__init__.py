@@ -15,6 +15,7 @@ Example::
     mio.write_result(results["forward"], "out/forward")
 """
 
+from . import design, identify, sweeps  # noqa: F401  (they register their run kinds)
 from ._errors import FileError
 from .dump import describe, dump, dumps
 from .expressions import FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw

@@ -33,7 +33,7 @@ from ..analysis.optimize import Optimum, reduce
 from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
 from . import schema as s
-from .runs import ANALYSES, Plan, Runner
+from .runs import ANALYSES, Plan, Runner, register_study
 
 
 @dataclasses.dataclass(frozen=True)
@@ -195,5 +195,7 @@ def execute(runner: Runner, plan: OptimizePlan) -> FileOptimum:
 
     return FileOptimum(plan, opt, at(opt.values), at(opt.start))
 
+
+register_study("optimize", plan, OptimizePlan, lambda runner, plan, progress: execute(runner, plan))
 
 __all__ = ["FileOptimum", "OptimizePlan", "execute", "plan"]

@@ -37,7 +37,7 @@ from ..analysis.fit import _RATES, Fit
 from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
 from . import schema as s
-from .runs import ANALYSES, Plan, Runner
+from .runs import ANALYSES, Plan, Runner, register_study
 
 #: Kinds of quantity of a measured column, by its suffix.
 _KINDS = {
@@ -214,5 +214,7 @@ def execute(runner: Runner, plan: IdentifyPlan) -> FileFit:
     run = ANALYSES[analysis](fitted, plan.times, **kwargs)
     return FileFit(plan, result, run)
 
+
+register_study("identify", plan, IdentifyPlan, lambda runner, plan, progress: execute(runner, plan))
 
 __all__ = ["FileFit", "IdentifyPlan", "execute", "plan"]

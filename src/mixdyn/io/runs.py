@@ -42,8 +42,17 @@ ANALYSES = {
     "forward": an.forward,
     "mixed": an.mixed,
 }
-#: Run kinds that repeat another run (``run:``): a sweep, an identification.
+#: Run kinds that repeat another run (``run:``): a sweep, an identification, an optimization.
 STUDIES = ("sweep", "identify", "optimize")
+#: Each such kind's ``(plan(runner, index, spec), its plan class, execute(runner, plan,
+#: progress))``, registered by its module (:mod:`.sweeps`, :mod:`.identify`, :mod:`.design`,
+#: imported by the package) so that the runner does not import them.
+STUDY_KINDS: dict[str, tuple] = {}
+
+
+def register_study(kind: str, planner, plan_class, execute) -> None:
+    """Register a run kind that repeats another run (see :data:`STUDY_KINDS`)."""
+    STUDY_KINDS[kind] = (planner, plan_class, execute)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,9 +92,7 @@ class Runner:
         self.spec = spec
         self.b = Builder(spec)
         self.model = model if model is not None else self.b.model()
-        from . import design, identify, sweeps
-
-        studies = {"sweep": sweeps.plan, "identify": identify.plan, "optimize": design.plan}
+        studies = {kind: planner for kind, (planner, _, _) in STUDY_KINDS.items()}
         self.plans = {}  # sweeps and fits last: they take their settings from other runs
         for i, r in enumerate(spec.runs):
             if r.kind not in studies:
@@ -922,15 +929,10 @@ class Runner:
         """Run one plan (its dependencies' results in ``results``) and return its Result (a
         sweep's: its :class:`~mixdyn.io.sweeps.FileSweep`; ``progress`` then gets member
         indices)."""
-        from . import design, identify, sweeps
-
-        if isinstance(plan, sweeps.SweepPlan):
-            return sweeps.execute(self, plan, progress)
         try:
-            if isinstance(plan, identify.IdentifyPlan):
-                return identify.execute(self, plan)
-            if isinstance(plan, design.OptimizePlan):
-                return design.execute(self, plan)
+            for _, kind_of_plan, run in STUDY_KINDS.values():
+                if isinstance(plan, kind_of_plan):
+                    return run(self, plan, progress)
             try:
                 analysis, model, kwargs = self.call(plan, results)
                 if progress is not None and analysis in ("forward", "mixed"):

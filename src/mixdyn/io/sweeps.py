@@ -42,7 +42,7 @@ from ..errors import MixdynError, ModelError
 from . import schema as s
 from ._errors import FileError
 from .load import Builder
-from .runs import Plan, Runner
+from .runs import Plan, Runner, register_study
 
 #: Units of the numbers of bodies a sweep may vary (other numbers: model units).
 FIELD_KINDS = {"mass": "mass", "inertia": "inertia"}
@@ -334,5 +334,7 @@ def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
         units[x.name] = units.get(x.column, "")
     return out, units
 
+
+register_study("sweep", plan, SweepPlan, execute)
 
 __all__ = ["FileSweep", "SweepPlan", "execute", "outputs_of", "plan"]

@@ -253,34 +253,6 @@ class Model(eqx.Module):
             lines.append(f"  {group} {name}: {kind} on {on}" + (f"; {numbers}" if numbers else ""))
         return "\n".join(lines)
 
-    def _repr_html_(self) -> str:
-        """A notebook's view: a drawing at the rough start (``q0``, not assembled: drawing
-        runs no analysis) and tables of the bodies and elements."""
-        from html import escape
-
-        from ..viz.show import svg
-
-        bodies, elements = self._rows()
-
-        def table(head, rows):
-            th = "".join(f"<th>{escape(h)}</th>" for h in head)
-            trs = "".join(
-                "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows
-            )
-            return f"<table><tr>{th}</tr>{trs}</table>"
-
-        try:
-            drawing = svg(self, np.asarray(self.q0), title=f"{self.name} (rough start q0)")
-            drawing = drawing[drawing.find("<svg") :]
-        except Exception as e:  # a drawing is a courtesy: the tables still show
-            drawing = f"<p>(no drawing: {escape(str(e))})</p>"
-        return (
-            f"<div><p><b>{escape(self.summary())}</b></p>{drawing}"
-            + table(["body", "mass", "inertia", "q0", "points"], bodies)
-            + table(["kind", "name", "type", "between", "numbers"], elements)
-            + "</div>"
-        )
-
 
 def _num(x) -> str:
     return f"{float(np.asarray(x)):.6g}"

@@ -113,8 +113,36 @@ def svg(model, q, *, title: str | None = None) -> str:
         return draw(model, q, pathlib.Path(d) / "m.svg", title=title).read_text(encoding="utf-8")
 
 
+def model_html(model) -> str:
+    """A notebook's view of a model (``Model._repr_html_``, attached by the package): a
+    drawing at the rough start (``q0``, not assembled: drawing runs no analysis) and tables of
+    the bodies and elements with their numbers."""
+    from html import escape
+
+    bodies, elements = model._rows()
+
+    def table(head, rows):
+        th = "".join(f"<th>{escape(h)}</th>" for h in head)
+        trs = "".join(
+            "<tr>" + "".join(f"<td>{escape(str(c))}</td>" for c in r) + "</tr>" for r in rows
+        )
+        return f"<table><tr>{th}</tr>{trs}</table>"
+
+    try:
+        drawing = svg(model, np.asarray(model.q0), title=f"{model.name} (rough start q0)")
+        drawing = drawing[drawing.find("<svg") :]
+    except Exception as e:  # a drawing is a courtesy: the tables still show
+        drawing = f"<p>(no drawing: {escape(str(e))})</p>"
+    return (
+        f"<div><p><b>{escape(model.summary())}</b></p>{drawing}"
+        + table(["body", "mass", "inertia", "q0", "points"], bodies)
+        + table(["kind", "name", "type", "between", "numbers"], elements)
+        + "</div>"
+    )
+
+
 def _escape(text: str) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
-__all__ = ["SHOW_SUFFIXES", "draw", "svg"]
+__all__ = ["SHOW_SUFFIXES", "draw", "model_html", "svg"]
