@@ -36,7 +36,7 @@ PROPERTIES = {
     "MixedRunSpec": "animation atol drivers dt hold independent initial kind linear_solver "
     "method name options plots prescribed rtol solver time unknown velocities",
     "ModelFile": "assembly bodies description drivers forces gravity ground joints mixdyn name "
-    "parameters runs units",
+    "output_units parameters runs units",  # output_units: issue 14
     "PiecewiseArgs": "breaks coeffs",
     "PiecewiseSpec": "piecewise",
     "PinInSlotSpec": "axis name point_i point_j type",
@@ -81,8 +81,8 @@ PROPERTIES = {
 # required key or discriminator changes it. If a pydantic upgrade alone changes the form of
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
-# and optimize kinds, a plot's x column, and the statics kind.
-STRIPPED_SHA256 = "4b9e7c47fba710bc2910aab0fc0ee9cd49edf4311048ba6a439b1af7361bb449"
+# and optimize kinds, a plot's x column, the statics kind and output_units.
+STRIPPED_SHA256 = "9e51a2973790ca024c91247b3fa059dbbb8f168c5cf419b1e9399ee680ec346f"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

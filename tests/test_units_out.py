@@ -45,3 +45,49 @@ def test_the_plain_names():
     assert md.UnitSystem("mm", "g", "ms").label("torque") == "N*mm"
     # no SI prefix is exact in inches and pounds: the base spelling
     assert md.UnitSystem("in", "lb", "s").label("force") == "lb*in/s**2"
+
+
+def test_output_units_convert_the_written_results(tmp_path):
+    """``output_units: {angle: deg, torque: N*mm, angular_velocity: rpm}``: results.csv holds
+    the crank angle in degrees, its speed in rpm and the motor torque in N*mm (the API's values
+    converted by pint's factors), and says so in meta.json; a kind or unit that does not fit is
+    refused at its line."""
+    import json
+    import math
+    import pathlib
+
+    import numpy as np
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    import mixdyn.io as mio
+    from mixdyn.cli import app
+
+    example = pathlib.Path(__file__).resolve().parent.parent / "examples" / "slider_crank.yaml"
+    text = example.read_text().replace("n: 181", "n: 7")
+    head = "output_units: {angle: deg, angular_velocity: rpm, torque: N*mm}\n"
+    path = tmp_path / "u.yaml"
+    path.write_text(head + text)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--no-figures"])
+    assert res.exit_code == 0, res.output
+    api = mio.execute(mio.reads(text))
+    for name, result in api.items():
+        table = pd.read_csv(out / name / "results.csv")
+        np.testing.assert_allclose(table["crank.phi"], np.degrees(result["crank.phi"]), rtol=1e-14)
+        np.testing.assert_allclose(
+            table["crank.omega"], result["crank.omega"] * 30 / math.pi, rtol=1e-14
+        )
+        np.testing.assert_array_equal(table["slider.x"], result["slider.x"])  # not asked: m
+        meta = json.loads((out / name / "meta.json").read_text())
+        assert meta["units"]["crank.phi"] == "deg" and meta["units"]["slider.x"] == "m"
+        if result.kind == "inverse":
+            np.testing.assert_allclose(table["motor"], 1000 * result["motor"], rtol=1e-14)
+            assert meta["units"]["motor"] == "N*mm"
+    for bad, words in (
+        ("{angel: deg}", "no kind of quantity 'angel'"),
+        ("{torque: N}", "expected a torque"),
+    ):
+        path.write_text(f"output_units: {bad}\n" + text)
+        res = CliRunner().invoke(app, ["check", str(path)])
+        assert res.exit_code == 2 and words in res.output, res.output

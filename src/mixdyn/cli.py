@@ -516,6 +516,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
             parquet=parquet,
             settings=run_settings(plan.base.spec),
             extra=extra,
+            output_units=runner.output_units,
         )
         path = folder / "optimum.csv"
         o.table().to_csv(path, index=False, float_format="%.17g")
@@ -567,6 +568,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
             parquet=parquet,
             settings=run_settings(plan.base.spec),
             extra=extra,
+            output_units=runner.output_units,
         )
         table = f.table()
         path = folder / "fit.csv"
@@ -701,6 +703,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                         folder,
                         parquet=parquet,
                         settings=run_settings(plan.spec),
+                        output_units=runner.output_units,
                         extra={
                             "file": str(file),
                             "run": plan.name,
@@ -951,6 +954,8 @@ def _figures(runner, plan, result, folder, painter: _Painter) -> None:
     here: columns, references, the scene; the HTML page is written here)."""
     import shutil
 
+    from .io.quantities import factor
+    from .io.results import in_units
     from .viz import html, movie_data, result_columns
 
     for k, p in enumerate(runner.plots(plan)):
@@ -958,13 +963,15 @@ def _figures(runner, plan, result, folder, painter: _Painter) -> None:
             cols, units = result_columns(result, [*p.columns, p.x])
         except KeyError as e:
             runner.fail((*plan.path, "plots", k, "columns"), str(e.args[0]), "fix the column name")
+        shown, units = in_units(result, cols, units, runner.output_units)
         reference = None
         if p.reference is not None:
-            reference = (
-                result.t,
-                _reference(runner, p.reference, result.t),
-                p.reference.label or p.reference.expr,
-            )
+            y = _reference(runner, p.reference, result.t)
+            kind = result.kind_of(p.columns[0])  # drawn in the first column's unit
+            if kind in runner.output_units:
+                y = y / factor(runner.output_units[kind], kind, result.model.units)
+            reference = (result.t, y, p.reference.label or p.reference.expr)
+        cols = shown
         painter.draw(
             "plot",
             cols,

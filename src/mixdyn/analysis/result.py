@@ -102,6 +102,23 @@ class Result:
         out.update({k: u.label(v) for k, v in self.kinds.items()})
         return out
 
+    def kind_of(self, name: str) -> str | None:
+        """The kind of quantity of a column (a key of ``mixdyn.units.DIMENSIONS``): ``time``,
+        a body's ``length``/``angle``/``velocity``..., a point's (``body.P.vx``), or an extra
+        column's (a force, a torque...); None for an unknown column."""
+        if name == "t":
+            return "time"
+        if name in self.kinds:
+            return self.kinds[name]
+        parts = name.split(".")
+        bodies = {b.name for b in self.model.bodies}
+        if len(parts) == 2 and parts[0] in bodies:
+            return next((k for s, _, _, k in _BODY_COLUMNS if s == parts[1]), None)
+        if len(parts) == 3 and parts[0] in bodies:
+            return {"x": "length", "y": "length", "vx": "velocity", "vy": "velocity",
+                    "ax": "acceleration", "ay": "acceleration"}.get(parts[2])  # fmt: skip
+        return None
+
     def __getitem__(self, name: str) -> np.ndarray:
         cols = self.columns()
         if name in cols:

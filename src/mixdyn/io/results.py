@@ -46,6 +46,26 @@ def jsonable(value: Any) -> Any:
         return str(value)
 
 
+def in_units(result: Result, columns: dict, units: dict, output_units: dict | None):
+    """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
+    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``) converted into that unit; the others
+    as they are (the model's units). ``columns`` and ``units`` as from
+    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
+    if not output_units:
+        return columns, units
+    from .quantities import factor
+
+    cols, out = dict(columns), dict(units)
+    for name in columns:
+        kind = result.kind_of(name)
+        if kind in output_units:
+            cols[name] = np.asarray(columns[name]) / factor(
+                output_units[kind], kind, result.model.units
+            )
+            out[name] = output_units[kind]
+    return cols, out
+
+
 def write_result(
     result: Result,
     folder,
@@ -53,6 +73,7 @@ def write_result(
     parquet: bool = False,
     settings: dict | None = None,
     extra: dict | None = None,
+    output_units: dict | None = None,
 ) -> list[pathlib.Path]:
     """Write ``result`` to ``folder/results.csv`` (and ``.parquet``) and ``folder/meta.json``.
 
@@ -62,6 +83,8 @@ def write_result(
         parquet: also write ``results.parquet``.
         settings: the run's settings (analysis kind, solver, tolerances...) for ``meta.json``.
         extra: further entries of ``meta.json``.
+        output_units: kind -> unit for the written columns (:func:`in_units`; default: the
+            model's units).
 
     Returns:
         The files written.
@@ -69,7 +92,7 @@ def write_result(
     from .. import __version__
 
     folder = pathlib.Path(folder)
-    cols = result.columns()
+    cols, units = in_units(result, result.columns(), result.units(), output_units)
     names = list(cols)
     table = np.column_stack([np.asarray(cols[n]) for n in names]) if names else np.zeros((0, 0))
     _refuse_non_finite(table, names)
@@ -80,11 +103,10 @@ def write_result(
     written.append(csv)
     if parquet:
         pq = folder / RESULTS_PARQUET
-        _write_parquet(
-            result.table().reset_index(), pq, result.units(), _unit_system(result.model.units)
-        )
+        import pandas as pd
+
+        _write_parquet(pd.DataFrame(cols), pq, units, _unit_system(result.model.units))
         written.append(pq)
-    units = result.units()
     meta = {
         "mixdyn_version": __version__,
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
@@ -99,6 +121,7 @@ def write_result(
         "rows": len(table),
         "columns": names,
         "units": {c: units.get(c, "") for c in names},
+        "output_units": dict(output_units or {}),
         "settings": jsonable(settings or {}),
         "stats": jsonable(result.stats),
     }

@@ -103,6 +103,24 @@ class Runner:
         self.plans = {r.name: self.plans[r.name] for r in spec.runs}
         self._check_cycles()
         settings.check_replays(self)
+        self.output_units = self._output_units()
+
+    def _output_units(self) -> dict[str, str]:
+        """``output_units`` checked: known kinds, units of their dimension."""
+        from ..units import DIMENSIONS
+
+        out = {}
+        for kind, unit in self.spec.output_units.items():
+            path = ("output_units", kind)
+            if kind not in DIMENSIONS:
+                from .._hints import did_you_mean
+
+                self.fail(
+                    path, f"no kind of quantity {kind!r}", did_you_mean(kind, DIMENSIONS, "kinds")
+                )
+            self.b.factor(unit, kind, path)  # the dimension checked
+            out[kind] = unit
+        return out
 
     @classmethod
     def member(cls, spec: s.ModelFile, model: m.Model, run: str, like: Runner | None = None):
