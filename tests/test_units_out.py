@@ -91,3 +91,55 @@ def test_output_units_convert_the_written_results(tmp_path):
         path.write_text(f"output_units: {bad}\n" + text)
         res = CliRunner().invoke(app, ["check", str(path)])
         assert res.exit_code == 2 and words in res.output, res.output
+
+
+def test_plot_draws_a_column_in_another_unit(tmp_path):
+    """``mixdyn plot --unit crank.phi=deg``: the written radians drawn in degrees (the
+    conversion checked on the table handed to the plot); a unit of another dimension, an
+    unknown column or a malformed option are refused, naming ``--unit``."""
+    import math
+    import pathlib
+
+    import numpy as np
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from mixdyn.cli import _in_unit, app
+
+    example = pathlib.Path(__file__).resolve().parent.parent / "examples" / "slider_crank.yaml"
+    path = tmp_path / "s.yaml"
+    path.write_text(example.read_text().replace("n: 181", "n: 7"))
+    out = tmp_path / "out"
+    assert (
+        CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--no-figures"]).exit_code
+        == 0
+    )
+    folder = out / "inverse"
+    table = pd.read_csv(folder / "results.csv")
+    units = {"crank.phi": "rad", "motor": "N*m"}
+    conv, new = _in_unit(table, units, "crank.phi=deg", folder, 0)
+    np.testing.assert_allclose(conv["crank.phi"], table["crank.phi"] * 180 / math.pi, rtol=1e-14)
+    conv, new = _in_unit(table, units, "motor = N*mm", folder, 0)
+    np.testing.assert_allclose(conv["motor"], 1000 * table["motor"], rtol=1e-14)
+    assert new["motor"] == "N*mm" and units["motor"] == "N*m"
+    ok = CliRunner().invoke(
+        app,
+        [
+            "plot",
+            str(folder),
+            "-c",
+            "crank.phi",
+            "-u",
+            "crank.phi=deg",
+            "-o",
+            str(tmp_path / "p.png"),
+        ],
+    )
+    assert ok.exit_code == 0 and (tmp_path / "p.png").stat().st_size > 10_000, ok.output
+    for bad, words in (
+        ("motor=mm", "not a unit of"),
+        ("rod.q=deg", "no column"),
+        ("deg", "not COLUMN=UNIT"),
+    ):
+        res = CliRunner().invoke(app, ["plot", str(folder), "-c", "motor", "-u", bad])
+        assert res.exit_code == 2 and words in res.output and "--unit 1" in res.output, res.output

@@ -234,6 +234,38 @@ def _require_size(spec, file) -> None:
     require_checkable(len(spec.bodies), str(file))
 
 
+def _in_unit(table, units: dict, spec: str, results, k: int):
+    """``table`` with the column of ``spec`` (``COLUMN=UNIT``) converted from its written
+    unit (meta.json, or the Parquet file's) into UNIT; a unit of another dimension, an unknown
+    column or unit is an input error naming ``--unit``."""
+    from .io import FileError
+    from .io.quantities import QuantityError, exponents, factor
+    from .units import SI
+
+    col, sep, target = spec.partition("=")
+    col, target = col.strip(), target.strip()
+    where = dict(file=str(results), hint="write --unit COLUMN=UNIT, e.g. crank.phi=deg")
+    if not sep or not col or not target:
+        raise FileError(f"{spec!r} is not COLUMN=UNIT", f"--unit {k + 1}", **where)
+    if col not in table.columns:
+        raise FileError(f"no column {col!r}", f"--unit {k + 1}", **where)
+    source = units.get(col) or ""
+    try:
+        same = exponents(source or "1") == exponents(target)
+        scale = factor(source or "1", None, SI) / factor(target, None, SI)
+    except QuantityError as e:
+        raise FileError(f"{target!r}: {e.problem}", f"--unit {k + 1}", **where) from None
+    if not same:
+        raise FileError(
+            f"column {col!r} is in {source or 'no unit'}, which {target!r} is not a unit of",
+            f"--unit {k + 1}",
+            **where,
+        )
+    table = table.copy()
+    table[col] = table[col] * scale
+    return table, {**units, col: target}
+
+
 # --------------------------------------------------------------------------- show
 @app.command()
 def show(
@@ -1039,6 +1071,12 @@ def plot(
         typer.Option("--output", "-o", help="The figure (.png, .svg or .pdf)."),
     ] = None,
     title: Annotated[str | None, typer.Option("--title", help="The figure's title.")] = None,
+    unit: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--unit", "-u", help="COLUMN=UNIT: draw a column in another unit, e.g. crank.phi=deg."
+        ),
+    ] = None,
 ):
     """Plot chosen columns of written results against time (or --x), to PNG, SVG or PDF."""
     with _guard(results):
@@ -1073,7 +1111,10 @@ def plot(
                 hint=f"use {', '.join(PLOT_SUFFIXES)}",
             )
         check_output(output, "--output")
-        plot_columns(table, columns, output, units=meta.get("units"), title=title, x=x)
+        units = dict(meta.get("units") or {})
+        for k, spec in enumerate(unit or ()):
+            table, units = _in_unit(table, units, spec, results, k)
+        plot_columns(table, columns, output, units=units, title=title, x=x)
         _say(f"wrote {_esc(output)}")
 
 
