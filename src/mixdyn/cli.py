@@ -512,7 +512,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
         TimeElapsedColumn,
     )
 
-    from .io.results import run_settings, write_result
+    from .io.results import run_settings, write_frame, write_result
 
     written = []
 
@@ -550,9 +550,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
             extra=extra,
             output_units=runner.output_units,
         )
-        path = folder / "optimum.csv"
-        o.table().to_csv(path, index=False, float_format="%.17g")
-        files.append(path)
+        files.append(write_frame(o.table(), folder / "optimum.csv"))
         if painter is not None:
             from .viz.plots import result_columns
 
@@ -602,10 +600,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
             extra=extra,
             output_units=runner.output_units,
         )
-        table = f.table()
-        path = folder / "fit.csv"
-        table.to_csv(path, index=False, float_format="%.17g")
-        files.append(path)
+        files.append(write_frame(f.table(), folder / "fit.csv"))
         if painter is not None:
             from .viz.plots import result_columns
 

@@ -91,21 +91,10 @@ def plan(runner: Runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
         if base.spec.kind == "inverse":
             what += ", a joint's Fx/Fy/M or a driver's effort"
         runner.fail((*path, "objective", "column"), f"{r.objective.column!r} is not {what}", "")
-    bodies_forces = {b.name for b in runner.model.bodies} | {f.name for f in runner.model.forces}
     bounds, start = {}, {}
     for name, v in r.vary.items():
         vp = (*path, "vary", name)
-        try:
-            _, shape = _leaf_getter(runner.model, name)
-        except ModelError as e:
-            runner.fail(vp, str(e.args[0]), "name a number of a body or force element")
-        if shape != () or name.split(".", 1)[0] not in bodies_forces:
-            runner.fail(
-                vp,
-                f"{name!r} is not a number of a body or force element",
-                "vary masses, inertias, and numbers of forces and their laws",
-            )
-        kind = _field_kind(runner, name)
+        kind = runner.model_number(name, vp, "vary")
         lo = runner.b.scalar(v.bounds[0], kind, (*vp, "bounds", 0))
         hi = runner.b.scalar(v.bounds[1], kind, (*vp, "bounds", 1))
         if not hi > lo:
@@ -117,27 +106,6 @@ def plan(runner: Runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
                 runner.fail((*vp, "start"), f"the start {x:g} is outside [{lo:g}, {hi:g}]", "")
             start[name] = x
     return OptimizePlan(r, index, base.times, (), base=base, bounds=bounds, start=start)
-
-
-def _field_kind(runner: Runner, path: str) -> str | None:
-    """The kind of quantity of a body's or spring's number (None: model units)."""
-    head, _, field = path.rpartition(".")
-    kinds = {
-        "mass": "mass",
-        "inertia": "inertia",
-        "free_length": "length",
-        "stiffness": "stiffness",
-        "damping": "damping",
-    }
-    if "." in head:  # a law's number: its unit is the law's
-        return None
-    if head not in runner.b.body_index:
-        from ..model import RotarySpringDamper
-
-        if isinstance(runner.model.element(head), RotarySpringDamper):
-            kinds.update(stiffness="rotational_stiffness", damping="rotational_damping")
-            kinds["free_angle"] = "angle"
-    return kinds.get(field)
 
 
 def execute(runner: Runner, plan: OptimizePlan) -> FileOptimum:

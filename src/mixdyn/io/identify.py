@@ -152,17 +152,7 @@ def plan(runner: Runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     start, bounds = {}, {}
     for name, f in r.fit.items():
         fp = (*path, "fit", name)
-        try:
-            _, shape = _leaf_getter(runner.model, name)
-        except ModelError as e:
-            runner.fail(fp, str(e.args[0]), "name a number of a body or force element")
-        if shape != () or name.split(".", 1)[0] not in _fittable(runner):
-            runner.fail(
-                fp,
-                f"{name!r} is not a number of a body or force element",
-                "fit masses, inertias, and numbers of forces and their laws",
-            )
-        kind = {"mass": "mass", "inertia": "inertia"}.get(name.rsplit(".", 1)[1])
+        kind = runner.model_number(name, fp, "fit")
         if f.start is not None:
             start[name] = runner.b.scalar(f.start, kind, (*fp, "start"))
         if f.bounds is not None:
@@ -174,10 +164,6 @@ def plan(runner: Runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     return IdentifyPlan(
         r, index, t, (), base=base, measured=measured, noise=noise, start=start, bounds=bounds
     )
-
-
-def _fittable(runner: Runner) -> set[str]:
-    return {b.name for b in runner.model.bodies} | {f.name for f in runner.model.forces}
 
 
 def execute(runner: Runner, plan: IdentifyPlan) -> FileFit:

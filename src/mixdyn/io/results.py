@@ -134,6 +134,15 @@ def write_result(
     return written
 
 
+def write_frame(df, path: pathlib.Path) -> pathlib.Path:
+    """A pandas DataFrame to CSV at full precision, written whole or not at all (through a
+    temporary file replaced at the end)."""
+    tmp = path.with_suffix(".csv.tmp")
+    df.to_csv(tmp, index=False, float_format="%.17g")
+    os.replace(tmp, path)
+    return path
+
+
 #: The key of mixdyn's entry in a Parquet file's schema metadata (JSON: units, unit system).
 PARQUET_KEY = b"mixdyn"
 
@@ -218,18 +227,9 @@ def write_sweep(
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     model = next((r.model for r in sweep.sweep.results if r is not None), None)
-    members = sweep.members()
-    path = folder / MEMBERS_CSV
-    tmp = path.with_suffix(".csv.tmp")
-    members.to_csv(tmp, index=False, float_format="%.17g")
-    os.replace(tmp, path)
-    written.append(path)
+    written.append(write_frame(sweep.members(), folder / MEMBERS_CSV))
     table = sweep.table()
-    path = folder / TABLE_CSV
-    tmp = path.with_suffix(".csv.tmp")
-    table.to_csv(tmp, index=False, float_format="%.17g")
-    os.replace(tmp, path)
-    written.append(path)
+    written.append(write_frame(table, folder / TABLE_CSV))
     if parquet:
         path = folder / TABLE_PARQUET
         system = None if model is None else _unit_system(model.units)

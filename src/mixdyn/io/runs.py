@@ -50,6 +50,16 @@ STUDIES = ("sweep", "identify", "optimize")
 STUDY_KINDS: dict[str, tuple] = {}
 
 
+#: Kinds of quantity of the numbers of bodies and force elements, by field.
+_NUMBER_KINDS = {
+    "mass": "mass",
+    "inertia": "inertia",
+    "free_length": "length",
+    "stiffness": "stiffness",
+    "damping": "damping",
+}
+
+
 def register_study(kind: str, planner, plan_class, execute) -> None:
     """Register a run kind that repeats another run (see :data:`STUDY_KINDS`)."""
     STUDY_KINDS[kind] = (planner, plan_class, execute)
@@ -162,6 +172,40 @@ class Runner:
                 f"{verb} a run whose prescribed motions are laws",
             )
         return base
+
+    def number_kind(self, path: str) -> str | None:
+        """The kind of quantity of a body's or force element's number ``"name.field"`` (a
+        mass, a spring's stiffness...), for its values with units; None (model units) for a
+        law's number or a field of no fixed kind."""
+        head, _, field = path.rpartition(".")
+        if "." in head:  # a law's number: its unit is the law's
+            return None
+        kinds = dict(_NUMBER_KINDS)
+        rotary = head not in self.b.body_index and isinstance(
+            self.model.element(head), m.RotarySpringDamper
+        )
+        if rotary:
+            kinds.update(stiffness="rotational_stiffness", damping="rotational_damping")
+            kinds["free_angle"] = "angle"
+        return kinds.get(field)
+
+    def model_number(self, name: str, path, verb: str) -> str | None:
+        """Check that ``name`` is one number of a body or force element (what a fit or an
+        optimization may change); its kind of quantity (:meth:`number_kind`)."""
+        from ..analysis.sweep import _leaf_getter
+
+        try:
+            _, shape = _leaf_getter(self.model, name)
+        except ModelError as e:
+            self.fail(path, str(e.args[0]), "name a number of a body or force element")
+        owners = {b.name for b in self.model.bodies} | {f.name for f in self.model.forces}
+        if shape != () or name.split(".", 1)[0] not in owners:
+            self.fail(
+                path,
+                f"{name!r} is not a number of a body or force element",
+                f"{verb} masses, inertias, and numbers of forces and their laws",
+            )
+        return self.number_kind(name)
 
     def base(self, plan: Plan) -> Plan:
         """The run a sweep sweeps or a fit uses (``plan`` itself for the other kinds)."""

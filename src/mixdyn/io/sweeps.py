@@ -44,8 +44,6 @@ from ._errors import FileError
 from .load import Builder
 from .runs import Plan, Runner, register_study
 
-#: Units of the numbers of bodies a sweep may vary (other numbers: model units).
-FIELD_KINDS = {"mass": "mass", "inertia": "inertia"}
 #: Most members a sweep may have.
 MAX_MEMBERS = 1_000_000
 
@@ -234,7 +232,7 @@ def _check_name(runner: Runner, name: str, path) -> str | None:
             f"{name!r} holds {int(np.prod(shape))} numbers, not one",
             "put the number in a file parameter and vary the parameter",
         )
-    return FIELD_KINDS.get(name.rsplit(".", 1)[1])
+    return runner.number_kind(name)
 
 
 # --------------------------------------------------------------------------- executing
