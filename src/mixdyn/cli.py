@@ -516,40 +516,47 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
 
     written = []
 
-    def _optimum_done(plan, result, seconds, folder, painter):
-        import numpy as np
-
-        o, r = result.optimum, plan.spec
+    def _study_written(plan, run, seconds, folder, key, details, painter):
+        """The run at a fit's estimate or an optimum written like any run, the study's
+        numbers under ``key`` in its meta.json."""
+        figure = {"fit": "fit.png", "optimize": "optimize.png"}[key]
         extra = {
             "file": str(file),
             "run": plan.name,
-            "kind": "optimize",
+            "kind": plan.spec.kind,
             "wall_time_s": round(seconds, 3),
-            "optimize": {
-                "objective": r.objective.model_dump(),
-                "sense": r.sense,
-                "parameters": list(o.params),
-                "optimum": o.values,
-                "start": o.start,
-                "bounds": o.bounds,
-                "gradient": o.gradient,
-                "objective_start": o.objective_start,
-                "objective_optimum": o.objective,
-                "history": o.history,
-                "iterations": o.iterations,
-                "evaluations": o.evaluations,
-                "message": o.message,
-            },
-            "figures": ["optimize.png"] if painter is not None else [],
+            key: details,
+            "figures": [figure] if painter is not None else [],
         }
-        files = write_result(
-            result.result,
+        return write_result(
+            run,
             folder,
             parquet=parquet,
             settings=run_settings(plan.base.spec),
             extra=extra,
             output_units=runner.output_units,
         )
+
+    def _optimum_done(plan, result, seconds, folder, painter):
+        import numpy as np
+
+        o, r = result.optimum, plan.spec
+        details = {
+            "objective": r.objective.model_dump(),
+            "sense": r.sense,
+            "parameters": list(o.params),
+            "optimum": o.values,
+            "start": o.start,
+            "bounds": o.bounds,
+            "gradient": o.gradient,
+            "objective_start": o.objective_start,
+            "objective_optimum": o.objective,
+            "history": o.history,
+            "iterations": o.iterations,
+            "evaluations": o.evaluations,
+            "message": o.message,
+        }
+        files = _study_written(plan, result.result, seconds, folder, "optimize", details, painter)
         files.append(write_frame(o.table(), folder / "optimum.csv"))
         if painter is not None:
             from .viz.plots import result_columns
@@ -575,31 +582,17 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
         import numpy as np
 
         f = result.fit
-        extra = {
-            "file": str(file),
-            "run": plan.name,
-            "kind": "identify",
-            "wall_time_s": round(seconds, 3),
-            "fit": {
-                "parameters": list(f.params),
-                "estimate": f.values,
-                "std_dev": f.deviations,
-                "start": f.start,
-                "chi2_reduced": f.chi2,
-                "evaluations": f.evaluations,
-                "message": f.message,
-                "noise": plan.noise,
-            },
-            "figures": ["fit.png"] if painter is not None else [],
+        details = {
+            "parameters": list(f.params),
+            "estimate": f.values,
+            "std_dev": f.deviations,
+            "start": f.start,
+            "chi2_reduced": f.chi2,
+            "evaluations": f.evaluations,
+            "message": f.message,
+            "noise": plan.noise,
         }
-        files = write_result(
-            result.result,
-            folder,
-            parquet=parquet,
-            settings=run_settings(plan.base.spec),
-            extra=extra,
-            output_units=runner.output_units,
-        )
+        files = _study_written(plan, result.result, seconds, folder, "fit", details, painter)
         files.append(write_frame(f.table(), folder / "fit.csv"))
         if painter is not None:
             from .viz.plots import result_columns
