@@ -348,8 +348,12 @@ class Builder:
 
     def _units(self) -> UnitSystem:
         u = self.spec.units
+        from ..units import _KNOWN
+
         for kind in ("length", "mass", "time"):
             text = getattr(u, kind)
+            if text in _KNOWN[kind]:  # the common spellings, without loading pint (0.4 s)
+                continue
             try:
                 factor(text, kind, UnitSystem())
             except QuantityError as e:
