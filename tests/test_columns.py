@@ -41,7 +41,7 @@ def test_the_promised_columns_are_the_results_columns(name):
     [
         ("forward", "A.M", "no column 'A.M'"),  # a revolute joint carries no moment
         ("forward", "B.Fz", "no column 'B.Fz'"),
-        ("forward", "F1", "no column 'F1'"),  # known only where F1 is unknown (mixed)
+        ("forward", "F1.tension", "no column 'F1.tension'"),  # a point force: no tension
         ("forward", "work.total", "no column"),
         ("mixed", "F1.powr", "F1.power"),
     ],

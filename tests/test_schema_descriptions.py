@@ -14,7 +14,7 @@ EXAMPLES = sorted((pathlib.Path(__file__).resolve().parent.parent / "examples").
 
 # The property names of every definition, recorded before the descriptions were added.
 PROPERTIES = {
-    "AnimationSpec": "file fps frames html trace",
+    "AnimationSpec": "file forces fps frames html trace",
     "AssemblySpec": "hold",
     "BodySpec": "inertia mass name points q0 vectors",
     "ConstantSpec": "constant",
@@ -82,7 +82,7 @@ PROPERTIES = {
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
 # and optimize kinds, a plot's x column, the statics kind and output_units.
-STRIPPED_SHA256 = "9e51a2973790ca024c91247b3fa059dbbb8f168c5cf419b1e9399ee680ec346f"
+STRIPPED_SHA256 = "83d13ed8afbbfcf8d819ee6afa52d90c0984ff9b8b08d21d3654f956ec8c6dd2"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

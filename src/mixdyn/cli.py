@@ -1011,19 +1011,13 @@ def _figures(runner, plan, result, folder, painter: _Painter) -> None:
                 "writing MP4 needs ffmpeg, which is not installed; write a .gif or .html"
             )
         if path.suffix.lower() == ".html":
-            painter.done(html(result, path, fps=a.fps, frames=a.frames, trace=a.trace))
+            painter.done(html(result, path, fps=a.fps, trace=a.trace, forces=a.forces))
         else:
-            data = movie_data(result, frames=a.frames, trace=a.trace)
+            data = movie_data(result, frames=a.frames, trace=a.trace, forces=a.forces)
             painter.draw("movie", data, path, fps=a.fps)
         if a.html:
             painter.done(
-                html(
-                    result,
-                    path.with_suffix(".html"),
-                    fps=a.fps,
-                    frames=max(a.frames, 200),
-                    trace=a.trace,
-                )
+                html(result, path.with_suffix(".html"), fps=a.fps, trace=a.trace, forces=a.forces)
             )
 
 
@@ -1205,16 +1199,28 @@ def animate(
             res = runner.execute([run_name])[run_name]
             res = getattr(res, "result", res)  # an identify run: the run at the estimate
             t, q = res.t, res.q
+        forces = a.forces if a else False
+        if forces and (results is not None or res.kind == "kinematic"):
+            _say(
+                "[yellow]note[/]: no force arrows: "
+                + (
+                    "written results carry no model to place them"
+                    if results is not None
+                    else "a kinematic run has no forces"
+                )
+            )
+            forces = False
         for target in targets:
             write_animation(
-                None,
+                res if forces else None,
                 target,
                 model=model,
                 t=np.asarray(t),
                 q=np.asarray(q),
                 fps=fps,
-                frames=frames if target.suffix.lower() != ".html" else max(frames, 200),
+                frames=frames if target.suffix.lower() != ".html" else None,
                 trace=trace,
+                forces=forces,
             )
             _say(f"wrote {_esc(target)}")
 

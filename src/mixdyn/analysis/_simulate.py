@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._compile import cached_jit
-from ..equations import kinetic_energy, potential_energy
+from ..equations import force_output_kinds, force_outputs, kinetic_energy, potential_energy
 from ..errors import (
     EnergyBalanceError,
     ModelError,
@@ -77,7 +77,8 @@ def _post_arrays(problem: Problem, ts, Q, QD):
         T = kinetic_energy(problem.model, qd)
         V = potential_energy(problem.model, q)
         viol = jnp.max(jnp.abs(st.phi)) if c.m else jnp.zeros(())
-        return st.qdd, st.mu, st.ratio, R, powers, jnp.stack([T, V, T + V]), viol
+        forces = force_outputs(problem.model, q, qd, t, exclude=problem.unknown)
+        return st.qdd, st.mu, st.ratio, R, powers, jnp.stack([T, V, T + V]), viol, forces
 
     return jax.lax.map(one, (Q, QD, ts))
 
@@ -88,9 +89,10 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int):
     reactions, driver efforts and powers, ``lambda.*``, unknown forces and their powers,
     energies and the constraint violation."""
     c = problem.c
-    qdd, mu, ratio, R, powers, E, viol = _post_arrays(problem, ts, Q, QD)
+    qdd, mu, ratio, R, powers, E, viol, forces = _post_arrays(problem, ts, Q, QD)
     mu, R, powers, E = (np.asarray(a) for a in (mu, R, powers, E))
     out = reaction_columns(c, R)
+    out.update({k: np.asarray(v) for k, v in forces.items()})
     out.update(driver_efforts(c, mu, powers, n_drivers))
     for k in range(c.m - problem.p):
         out[f"lambda.{c.labels[c.active[k]]}"] = mu[:, k]
@@ -119,6 +121,7 @@ def post_kinds(problem: Problem, n_drivers: int) -> dict[str, str]:
     for name in problem.unknown:
         kinds[name] = problem.model.element(name).magnitude_kind
         kinds[f"{name}.power"] = "power"
+    kinds.update(force_output_kinds(problem.model, exclude=problem.unknown))
     kinds.update(
         {
             "energy.kinetic": "energy",

@@ -88,6 +88,8 @@ def forward(
     Returns:
         A :class:`Result` with the motion, the multipliers' physical meaning (joint reactions
         ``{joint}.Fx``, ``.Fy``, ``.M``, driver efforts by driver name and their ``.power``),
+        the force elements' columns (``{force}`` its magnitude, a spring's ``.length`` and
+        ``.tension``, a rotary spring's ``.angle`` and ``.torque``, each one's ``.power``),
         energies (``energy.kinetic``, ``energy.potential``, ``energy.total``), accumulated
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
     """

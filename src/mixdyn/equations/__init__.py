@@ -4,6 +4,8 @@ from ._constraints import Constraints
 from ._dynamics import (
     applied_forces,
     force_directions,
+    force_output_kinds,
+    force_outputs,
     gravity_force,
     kinetic_energy,
     nonconservative_power,
@@ -14,6 +16,8 @@ __all__ = [
     "Constraints",
     "applied_forces",
     "force_directions",
+    "force_output_kinds",
+    "force_outputs",
     "gravity_force",
     "kinetic_energy",
     "nonconservative_power",

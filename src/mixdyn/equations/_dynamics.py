@@ -33,6 +33,32 @@ def applied_forces(model: Model, q, qd, t, exclude: tuple[str, ...] = ()) -> jax
     return Q
 
 
+def force_outputs(model: Model, q, qd, t, exclude: tuple[str, ...] = ()) -> dict:
+    """The known force elements' result columns (those not in ``exclude``): each element's
+    :meth:`~mixdyn.model.ForceElement.outputs` (``name``, ``name.length``...) and its power
+    ``name.power = Q . qd`` [power]. Values () each."""
+    out = {}
+    for f in model.forces:
+        if f.name in exclude:
+            continue
+        for suffix, v in f.outputs(q, qd, t).items():
+            out[f"{f.name}.{suffix}" if suffix else f.name] = v
+        out[f"{f.name}.power"] = jnp.dot(f.generalized(q, qd, t, model.nq), qd)
+    return out
+
+
+def force_output_kinds(model: Model, exclude: tuple[str, ...] = ()) -> dict[str, str]:
+    """The kinds of quantity of :func:`force_outputs`' columns."""
+    out = {}
+    for f in model.forces:
+        if f.name in exclude:
+            continue
+        for suffix, kind in f.output_kinds.items():
+            out[f"{f.name}.{suffix}" if suffix else f.name] = kind
+        out[f"{f.name}.power"] = "power"
+    return out
+
+
 def force_directions(model: Model, names: tuple[str, ...], q, qd, t) -> jax.Array:
     """Matrix ``B`` (nq, len(names)): generalized force per unit magnitude of each element."""
     cols = [model.element(n).direction(q, qd, t, model.nq) for n in names]

@@ -401,8 +401,13 @@ class Runner:
         drivers = [d.name for d in self.model.drivers if r.drivers is None or d.name in r.drivers]
         if r.kind != "mixed":  # a mixed run's prescribed motions are paired with its unknowns
             drivers += [p.name or f"prescribed {p.coordinate}" for p in r.prescribed]
-        for name in [*drivers, *(getattr(r, "unknown", None) or ())]:
+        unknown = tuple(getattr(r, "unknown", None) or ())
+        for name in [*drivers, *unknown]:
             cols += [name, f"{name}.power"]
+        if r.kind != "statics":
+            from ..equations import force_output_kinds
+
+            cols += list(force_output_kinds(self.model, exclude=unknown))
         cols += ["energy.kinetic", "energy.potential", "energy.total", "constraint.violation"]
         if r.kind in ("forward", "mixed"):
             cols += ["work.nonconservative", "work.constraints"]

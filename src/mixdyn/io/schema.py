@@ -696,9 +696,14 @@ class AnimationSpec(Spec):
     fps: int = Field(default=20, ge=1, le=120)
     """Frames per second (1 to 120). Default 20."""
     frames: int = Field(default=80, ge=2, le=2000)
-    """Largest number of frames, at evenly spaced output times (2 to 2000). Default 80."""
+    """Largest number of frames of a GIF or MP4, at evenly spaced output times (2 to 2000).
+    Default 80. The HTML player shows every output time."""
     trace: list[Ref] = Field(default_factory=list)
     """Points whose paths are drawn, e.g. ``[coupler.C]``. Default none."""
+    forces: bool | list[Name] = False
+    """Forces drawn as arrows (one scale for all): ``true`` for every joint's reaction (on its
+    body j) and every point force, or a list of joint and force names. Not in kinematic runs.
+    Default false."""
 
 
 class _RunSpec(Spec):

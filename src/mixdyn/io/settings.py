@@ -166,6 +166,33 @@ def check_outputs(runner: Runner, plan: Plan) -> None:
     if a.html and not a.file.lower().endswith(".html"):
         stem = a.file.rsplit(".", 1)[0]
         claim(f"{stem}.html", (*plan.path, "animation", "html"))
+    _check_arrows(runner, plan, a.forces, (*plan.path, "animation", "forces"))
+
+
+def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
+    """Force arrows: not in a kinematic run; each name a joint or a point force."""
+    if not forces:
+        return
+    if plan.spec.kind == "kinematic":
+        runner.fail(
+            path,
+            "a kinematic run has no forces to draw",
+            "drop 'forces', or animate an inverse, forward or mixed run",
+        )
+    if forces is True:
+        return
+    from .._hints import did_you_mean
+    from ..model import PointForce
+
+    known = [j.name for j in runner.model.joints]
+    known += [f.name for f in runner.model.forces if isinstance(f, PointForce)]
+    for k, name in enumerate(forces):
+        if name not in known:
+            runner.fail(
+                (*path, k),
+                f"{name!r} is neither a joint nor a point force",
+                did_you_mean(name, known),
+            )
 
 
 def check_laws(runner: Runner, plan: Plan) -> None:

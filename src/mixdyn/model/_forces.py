@@ -100,6 +100,16 @@ class ForceElement(Element):
         """``"force"`` or ``"torque"``: the unit of the magnitude."""
         return "force"
 
+    def outputs(self, q, qd, t) -> dict[str, jax.Array]:
+        """The element's result columns by suffix (``""``: the column named as the element):
+        its magnitude, and what else a reader wants of it (a spring's length and tension)."""
+        return {"": self.magnitude(q, qd, t)} if self.has_magnitude else {}
+
+    @property
+    def output_kinds(self) -> dict[str, str]:
+        """The kind of quantity of each of :meth:`outputs`' columns."""
+        return {"": self.magnitude_kind} if self.has_magnitude else {}
+
 
 class PointForce(ForceElement):
     """A force at a body point along a fixed direction, of magnitude ``magnitude`` [force].
@@ -251,6 +261,18 @@ class SpringDamper(ForceElement):
         d = point(q, self.bj, self.sj) - point(q, self.bi, self.si)
         return 0.5 * self.stiffness * (jnp.linalg.norm(d) - self.free_length) ** 2
 
+    def outputs(self, q, qd, t):
+        """The actuator force (``""``), the length ``L`` and the tension ``T`` (pulling the
+        points together: spring and damper less the actuator)."""
+        L, Ld, _ = self._geometry(q, qd)
+        a = self.magnitude(q, qd, t)
+        T = self.stiffness * (L - self.free_length) + self.damping * Ld - a
+        return {"": a, "length": L, "tension": T}
+
+    @property
+    def output_kinds(self):
+        return {"": "force", "length": "length", "tension": "force"}
+
 
 class RotarySpringDamper(ForceElement):
     """Rotational spring–damper–actuator between body i and body j (either may be the ground).
@@ -302,6 +324,18 @@ class RotarySpringDamper(ForceElement):
 
     def potential(self, q):
         return 0.5 * self.stiffness * (self._theta(q) - self.free_angle) ** 2
+
+    def outputs(self, q, qd, t):
+        """The actuator torque (``""``), the relative angle ``theta`` and the whole torque
+        on body j (spring, damper and actuator)."""
+        th, thd = jax.jvp(self._theta, (q,), (qd,))
+        a = self.magnitude(q, qd, t)
+        tau = -self.stiffness * (th - self.free_angle) - self.damping * thd + a
+        return {"": a, "angle": th, "torque": tau}
+
+    @property
+    def output_kinds(self):
+        return {"": "torque", "angle": "angle", "torque": "torque"}
 
     @property
     def magnitude_kind(self):

@@ -79,9 +79,29 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 80) -> pathl
         patches.append(patch)
     (pins,) = ax.plot([], [], "o", mfc="white", mec="k", ms=6, zorder=5)
     trace_lines = [ax.plot([], [], "-", lw=1.0, color="k", alpha=0.6, zorder=4)[0] for _ in traces]
+    arrows = data.get("arrows", [])
+    quiver = None
+    if arrows:
+        at = np.stack([a["at"] for a in arrows], axis=1)  # (F, A, 2)
+        vec = np.stack([a["v"] for a in arrows], axis=1)
+        quiver = ax.quiver(
+            at[0, :, 0],
+            at[0, :, 1],
+            vec[0, :, 0],
+            vec[0, :, 1],
+            angles="xy",
+            scale_units="xy",
+            scale=1.0,
+            color=[a["color"] for a in arrows],
+            width=0.006,
+            zorder=6,
+        )
+        for a in arrows:
+            ax.plot([], [], color=a["color"], lw=2.5, label=a["name"])
+        ax.text(0.02, 0.02, data.get("arrow_note", ""), transform=ax.transAxes, fontsize=8)
     label = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top", fontsize=9)
     ax.set_title(data["title"])
-    ax.legend(loc="upper right", fontsize="x-small")
+    ax.legend(loc="upper right", fontsize="small")
     tu = data["time_unit"]
 
     def draw(i):
@@ -92,6 +112,10 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 80) -> pathl
         for line, tr in zip(trace_lines, traces, strict=True):
             line.set_data(tr[: i + 1, 0], tr[: i + 1, 1])
         label.set_text(f"t = {times[i]:.3f} {tu}")
+        if quiver is not None:
+            quiver.set_offsets(at[i])
+            quiver.set_UVC(vec[i, :, 0], vec[i, :, 1])
+            return [*patches, pins, *trace_lines, quiver, label]
         return [*patches, pins, *trace_lines, label]
 
     # Lay the figure out once, then keep that layout for every frame.

@@ -1,5 +1,5 @@
 """The mechanism moving: an animated GIF (or MP4, if ffmpeg exists) and a self-contained HTML
-page (an inline script drawing on a canvas; no network access needed).
+player (:mod:`mixdyn.viz.player`).
 
 Each body is drawn as the outline of its points (their convex hull, or a bar when they are in a
 line, or a small block when it has none), joints as pins, the ground's points as small
@@ -8,7 +8,6 @@ triangles, and a sliding joint on the ground as its guide line.
 
 from __future__ import annotations
 
-import json
 import pathlib
 import shutil
 
@@ -17,7 +16,8 @@ import numpy as np
 from ..model import Model, PinInSlot, Revolute, Translational
 from ..model._element import Resolver
 from . import _draw
-from ._draw import COLORS as _COLORS
+from .arrows import arrow_scale, force_arrows
+from .player import html
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
 
@@ -147,11 +147,12 @@ def animate(
     t=None,
     q=None,
     fps: int = 20,
-    frames: int = 80,
+    frames: int | None = None,
     trace=(),
     title: str | None = None,
     size: tuple[float, float] | None = None,
     dpi: int = 80,
+    forces=False,
 ) -> pathlib.Path:
     """Write an animation of a motion: ``.gif`` (Pillow), ``.mp4`` (needs ffmpeg) or
     ``.html`` (see :func:`html`).
@@ -160,10 +161,13 @@ def animate(
         result: a :class:`mixdyn.Result`; or give ``model``, ``t`` (N,) and ``q`` (N, nq).
         path: the output file.
         fps: frames per second.
-        frames: the largest number of frames (evenly spaced output times).
+        frames: the largest number of frames (evenly spaced output times; default 80 for a
+            GIF or MP4, every output time for HTML).
         trace: point references (``"coupler.C"``) whose paths are drawn.
         title: a title (default: the model's name).
         size, dpi: figure size [inch] (default: from the scene's proportions) and resolution.
+        forces: ``True`` to draw every joint reaction and point force as an arrow (one scale
+            for all), or their names (:func:`mixdyn.viz.arrows.force_arrows`).
 
     Returns:
         The path written.
@@ -172,7 +176,16 @@ def animate(
     suffix = path.suffix.lower()
     if suffix == ".html":
         return html(
-            result, path, model=model, t=t, q=q, fps=fps, frames=frames, trace=trace, title=title
+            result,
+            path,
+            model=model,
+            t=t,
+            q=q,
+            fps=fps,
+            frames=frames,
+            trace=trace,
+            title=title,
+            forces=forces,
         )
     if suffix not in (".gif", ".mp4"):
         raise ValueError(
@@ -181,7 +194,16 @@ def animate(
     if suffix == ".mp4" and shutil.which("ffmpeg") is None:
         raise ValueError("writing MP4 needs ffmpeg, which is not installed; write a .gif or .html")
     return _draw.movie(
-        movie_data(result, model=model, t=t, q=q, frames=frames, trace=trace, title=title),
+        movie_data(
+            result,
+            model=model,
+            t=t,
+            q=q,
+            frames=frames or 80,
+            trace=trace,
+            title=title,
+            forces=forces,
+        ),
         path,
         fps=fps,
         size=size,
@@ -189,13 +211,31 @@ def animate(
     )
 
 
-def movie_data(result=None, *, model=None, t=None, q=None, frames=80, trace=(), title=None):
+def movie_data(
+    result=None, *, model=None, t=None, q=None, frames=80, trace=(), title=None, forces=False
+):
     """What :func:`animate` draws, as plain data (NumPy arrays, strings): the scene at the
-    frames' times, their times, the title and units (see :func:`mixdyn.viz._draw.movie`)."""
+    frames' times, their times, the title and units, the force arrows (scaled to lengths) and
+    their scale's note (see :func:`mixdyn.viz._draw.movie`)."""
     model, ts, qs = _motion(result, model, t, q)
     idx = _frames(len(ts), frames)
     scene = Scene(model, qs[idx], trace)
+    arrows, note = [], ""
+    if forces:
+        if result is None:
+            raise ValueError("force arrows need a result (its reaction and force columns)")
+        found = force_arrows(result, forces)
+        scale = arrow_scale(found, scene.bounds)
+        arrows = [
+            {"name": a["name"], "color": a["color"], "at": a["at"][idx], "v": a["F"][idx] * scale}
+            for a in found
+        ]
+        if found and scale:
+            big = max(float(np.max(np.hypot(*a["F"].T))) for a in found)
+            note = f"arrows: {big:.4g} {found[0]['unit']} = {big * scale:.4g} {model.units.length}"
     return {
+        "arrows": arrows,
+        "arrow_note": note,
         "outlines": scene.outlines,
         "names": scene.names,
         "pins": scene.pins,
@@ -209,150 +249,5 @@ def movie_data(result=None, *, model=None, t=None, q=None, frames=80, trace=(), 
         "time_unit": model.units.time,
     }
 
-
-def html(
-    result=None,
-    path="animation.html",
-    *,
-    model: Model | None = None,
-    t=None,
-    q=None,
-    fps: int = 20,
-    frames: int = 200,
-    trace=(),
-    title: str | None = None,
-) -> pathlib.Path:
-    """Write a self-contained HTML page that plays the motion (play/pause, time slider).
-
-    Arguments as in :func:`animate`. The page holds its data and script inline.
-    """
-    model, ts, qs = _motion(result, model, t, q)
-    idx = _frames(len(ts), frames)
-    scene = Scene(model, qs[idx], trace)
-
-    def r(a):
-        return np.round(np.asarray(a, dtype=float), 6).tolist()
-
-    data = {
-        "title": title if title is not None else model.name,
-        "t": r(ts[idx]),
-        "units": {"length": model.units.length, "time": model.units.time},
-        "bounds": r(scene.bounds),
-        "fps": int(fps),
-        "bodies": [
-            {"name": n, "color": _COLORS[k % len(_COLORS)], "outline": r(o)}
-            for k, (n, o) in enumerate(zip(scene.names, scene.outlines, strict=True))
-        ],
-        "pins": r(scene.pins),
-        "ground": r(scene.ground),
-        "guides": r(scene.guides),
-        "traces": [r(tr) for tr in scene.traces],
-    }
-    page = _HTML.replace("__TITLE__", _escape(data["title"])).replace(
-        "__DATA__", json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
-    )
-    path = pathlib.Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(page, encoding="utf-8")
-    return path
-
-
-def _escape(text: str) -> str:
-    return (
-        str(text)
-        .replace("&", "&amp;")
-        .replace("<", "&lt;")
-        .replace(">", "&gt;")
-        .replace('"', "&quot;")
-    )
-
-
-_HTML = """<!DOCTYPE html>
-<html lang="en">
-<head>
-<meta charset="utf-8">
-<title>__TITLE__ - mixdyn</title>
-<style>
- body { font-family: system-ui, sans-serif; margin: 1.2em; color: #222; }
- canvas { border: 1px solid #ccc; background: #fff; max-width: 100%; }
- .bar { display: flex; gap: .8em; align-items: center; margin-top: .5em; }
- input[type=range] { flex: 1; }
- .legend span { display: inline-block; margin-right: 1em; }
- .legend i { display: inline-block; width: .9em; height: .9em; margin-right: .3em; }
-</style>
-</head>
-<body>
-<h2>__TITLE__</h2>
-<canvas id="view" width="800" height="600"></canvas>
-<div class="bar">
- <button id="play">Pause</button>
- <input id="slider" type="range" min="0" value="0">
- <span id="time"></span>
-</div>
-<div class="legend" id="legend"></div>
-<script>
-"use strict";
-const D = __DATA__;
-const cv = document.getElementById("view"), cx = cv.getContext("2d");
-const slider = document.getElementById("slider"), play = document.getElementById("play");
-const label = document.getElementById("time");
-const n = D.t.length;
-slider.max = n - 1;
-const [x0, x1, y0, y1] = D.bounds;
-const k = Math.min(cv.width / (x1 - x0), cv.height / (y1 - y0));
-const ox = (cv.width - k * (x1 - x0)) / 2, oy = (cv.height - k * (y1 - y0)) / 2;
-const X = x => ox + k * (x - x0), Y = y => cv.height - oy - k * (y - y0);
-for (const b of D.bodies) {
-  const s = document.createElement("span");
-  s.innerHTML = '<i style="background:' + b.color + '"></i>' + b.name;
-  document.getElementById("legend").appendChild(s);
-}
-function path(pts, close) {
-  cx.beginPath();
-  pts.forEach((p, i) => i ? cx.lineTo(X(p[0]), Y(p[1])) : cx.moveTo(X(p[0]), Y(p[1])));
-  if (close) cx.closePath();
-}
-function draw(i) {
-  cx.clearRect(0, 0, cv.width, cv.height);
-  cx.setLineDash([6, 4]); cx.strokeStyle = "#999"; cx.lineWidth = 1;
-  for (const g of D.guides) { path(g, false); cx.stroke(); }
-  cx.setLineDash([]);
-  cx.fillStyle = "#555";
-  for (const g of D.ground) {
-    cx.beginPath(); cx.moveTo(X(g[0]), Y(g[1]));
-    cx.lineTo(X(g[0]) - 7, Y(g[1]) + 12); cx.lineTo(X(g[0]) + 7, Y(g[1]) + 12);
-    cx.closePath(); cx.fill();
-  }
-  cx.strokeStyle = "#000"; cx.globalAlpha = 0.6;
-  for (const tr of D.traces) { path(tr.slice(0, i + 1), false); cx.stroke(); }
-  cx.globalAlpha = 1;
-  for (const b of D.bodies) {
-    const o = b.outline[i], closed = o.length > 2;
-    path(o, closed);
-    cx.strokeStyle = b.color; cx.lineWidth = closed ? 2 : 6;
-    if (closed) { cx.globalAlpha = 0.75; cx.fillStyle = b.color; cx.fill(); cx.globalAlpha = 1; }
-    cx.stroke();
-  }
-  cx.lineWidth = 1.5; cx.strokeStyle = "#000"; cx.fillStyle = "#fff";
-  for (const p of (D.pins[i] || [])) {
-    cx.beginPath(); cx.arc(X(p[0]), Y(p[1]), 4.5, 0, 2 * Math.PI); cx.fill(); cx.stroke();
-  }
-  label.textContent = "t = " + D.t[i].toFixed(3) + " " + D.units.time +
-    "   (lengths in " + D.units.length + ")";
-  slider.value = i;
-}
-let frame = 0, running = true, last = 0;
-function tick(now) {
-  if (running && now - last >= 1000 / D.fps) { last = now; frame = (frame + 1) % n; draw(frame); }
-  requestAnimationFrame(tick);
-}
-play.onclick = () => { running = !running; play.textContent = running ? "Pause" : "Play"; };
-slider.oninput = () => { frame = +slider.value; draw(frame); };
-draw(0);
-requestAnimationFrame(tick);
-</script>
-</body>
-</html>
-"""
 
 __all__ = ["ANIMATION_SUFFIXES", "Scene", "animate", "html", "movie_data"]

@@ -1,0 +1,154 @@
+"""The HTML player: one self-contained page (data and script inline, no network) that plays a
+motion on a canvas.
+
+Controls: play/pause, step back and forward, first and last frame, playback speed as a
+multiple of real time (1× plays one second of the model's time in one second), loop, traces
+and force arrows on or off, a time slider over every frame of the result. The view has axes
+with the model's length unit, zooms with the wheel, pans by dragging, fits on a double click,
+and shows a body's coordinates on hover. The canvas is drawn at the screen's pixel density
+(sharp on high-DPI screens). Keys: space, arrows, Home, End.
+
+Why a small canvas player rather than plotly's animation frames: plotly.js alone is about
+4.6 MB per page (this page: tens of kB for the paper's example), and its frames cannot play
+at a chosen multiple of real time or step by key. A URL fragment ``#t=0.5`` (or
+``#frame=10``) opens the page paused at that time; the page states the frame shown and its
+view transform in ``data-`` attributes of ``<body>`` for automated checks (the browser test).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+
+import numpy as np
+
+from ..model import Model
+from ._draw import COLORS
+from .arrows import arrow_scale, force_arrows
+
+
+def seconds_per_time_unit(model: Model) -> float:
+    """Seconds in one of the model's time units (for real-time playback)."""
+    from ..io.quantities import factor
+
+    return 1.0 / factor("s", "time", model.units)
+
+
+def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=()) -> dict:
+    """The page's data: times, bodies' outlines and coordinates, pins, ground, guides, traces,
+    arrows (already scaled to lengths), units. Numbers rounded to 9 significant digits."""
+
+    def r(a):
+        a = np.asarray(a, dtype=float)
+        return [float(f"{v:.9g}") for v in a.ravel()] if a.ndim == 1 else [r(x) for x in a]
+
+    scale = arrow_scale(arrows, scene.bounds) if arrows else 0.0
+    biggest = max((float(np.max(np.hypot(*a["F"].T))) for a in arrows), default=0.0)
+    return {
+        "title": title if title is not None else model.name,
+        "t": r(ts),
+        "units": {
+            "length": model.units.length,
+            "time": model.units.time,
+            "seconds": seconds_per_time_unit(model),
+        },
+        "bounds": r(scene.bounds),
+        "fps": int(fps),
+        "bodies": [
+            {
+                "name": n,
+                "color": COLORS[k % len(COLORS)],
+                "outline": r(o),
+                "q": r(qs[:, 3 * k : 3 * k + 3]),
+            }
+            for k, (n, o) in enumerate(zip(scene.names, scene.outlines, strict=True))
+        ],
+        "pins": r(scene.pins),
+        "ground": r(scene.ground),
+        "guides": r(scene.guides),
+        "traces": [r(tr) for tr in scene.traces],
+        "arrows": [
+            {
+                "name": a["name"],
+                "color": a["color"],
+                "at": r(a["at"]),
+                "v": r(a["F"] * scale),
+                "F": r(np.hypot(*a["F"].T)),
+                "unit": a["unit"],
+            }
+            for a in arrows
+        ],
+        "arrowNote": (
+            f"arrows: {biggest:.4g} {arrows[0]['unit']} = {biggest * scale:.4g} "
+            f"{model.units.length}"
+            if arrows and scale
+            else ""
+        ),
+    }
+
+
+def html(
+    result=None,
+    path="animation.html",
+    *,
+    model: Model | None = None,
+    t=None,
+    q=None,
+    fps: int = 20,
+    frames: int | None = None,
+    trace=(),
+    title: str | None = None,
+    forces=False,
+) -> pathlib.Path:
+    """Write the player page of a motion.
+
+    Args:
+        result: a :class:`mixdyn.Result`; or give ``model``, ``t`` (N,) and ``q`` (N, nq).
+        path: the ``.html`` file to write.
+        fps: unused by the page's real-time playback; kept for :func:`mixdyn.viz.animate`.
+        frames: the largest number of frames (default: every output time of the result).
+        trace: point references (``"coupler.C"``) whose paths are drawn.
+        title: a title (default: the model's name).
+        forces: ``True`` to draw every joint reaction and point force as an arrow, or their
+            names (see :func:`mixdyn.viz.arrows.force_arrows`); needs a result with forces.
+
+    Returns:
+        The path written.
+    """
+    from .animate import Scene, _frames, _motion
+
+    model, ts, qs = _motion(result, model, t, q)
+    idx = np.arange(len(ts)) if frames is None else _frames(len(ts), frames)
+    scene = Scene(model, qs[idx], trace)
+    arrows = []
+    if forces:
+        if result is None:
+            raise ValueError("force arrows need a result (its reaction and force columns)")
+        arrows = [{**a, "at": a["at"][idx], "F": a["F"][idx]} for a in force_arrows(result, forces)]
+    data = player_data(model, ts[idx], qs[idx], scene, title=title, fps=fps, arrows=arrows)
+    text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
+    page = _page().replace("__TITLE__", _escape(data["title"])).replace("__DATA__", text)
+    path = pathlib.Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".html.tmp")
+    tmp.write_text(page, encoding="utf-8")
+    tmp.replace(path)
+    return path
+
+
+def _escape(text: str) -> str:
+    return (
+        str(text)
+        .replace("&", "&amp;")
+        .replace("<", "&lt;")
+        .replace(">", "&gt;")
+        .replace('"', "&quot;")
+    )
+
+
+def _page() -> str:
+    """The page's template (``_player.html`` beside this module: the script and its style)."""
+    return (pathlib.Path(__file__).parent / "_player.html").read_text(encoding="utf-8")
+
+
+__all__ = ["html", "player_data", "seconds_per_time_unit"]
