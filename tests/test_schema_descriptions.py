@@ -22,19 +22,19 @@ PROPERTIES = {
     "DistanceDriverSpec": "law name point_i point_j type",
     "DistanceSpec": "length name point_i point_j type",
     "ExpressionSpec": "expr unit",
-    "ForwardRunSpec": "animation atol drivers dt hold initial kind linear_solver method name "
-    "options plots prescribed rtol time velocities",
+    "ForwardRunSpec": "animation atol drivers dt hold initial kind linear_solver "
+    "method name options outputs plots prescribed rtol time velocities",
     "GroundSpec": "points",
     "HarmonicArgs": "amplitude offset omega phase",
     "HarmonicSpec": "harmonic",
     "HermiteArgs": "t unit y yd ydd",
     "HermiteSpec": "hermite",
-    "InverseRunSpec": "animation drivers hold initial kind linear_solver name options plots "
-    "prescribed time velocities",
-    "KinematicRunSpec": "animation drivers hold initial kind linear_solver max_iter name plots "
-    "prescribed time tol velocities",
-    "MixedRunSpec": "animation atol drivers dt hold independent initial kind linear_solver "
-    "method name options plots prescribed rtol solver time unknown velocities",
+    "InverseRunSpec": "animation drivers hold initial kind linear_solver name "
+    "options outputs plots prescribed time velocities",
+    "KinematicRunSpec": "animation drivers hold initial kind linear_solver max_iter "
+    "name outputs plots prescribed time tol velocities",
+    "MixedRunSpec": "animation atol drivers dt hold independent initial kind linear_solver method "
+    "name options outputs plots prescribed rtol solver time unknown velocities",
     "ModelFile": "assembly bodies description drivers forces gravity ground joints mixdyn name "
     "output_units parameters runs units",  # output_units: issue 14
     "PiecewiseArgs": "breaks coeffs",
@@ -65,8 +65,8 @@ PROPERTIES = {
     "ObjectiveSpec": "column reduce",
     "OptimizeRunSpec": "kind max_iterations name objective run sense vary",
     # the statics run kind (issue 13)
-    "StaticsRunSpec": "animation drivers hold initial kind linear_solver max_iter name plots "
-    "prescribed time tol velocities",
+    "StaticsRunSpec": "animation drivers hold initial kind linear_solver max_iter "
+    "name outputs plots prescribed time tol velocities",
     "SplineSpec": "spline",
     "SpringDamperSpec": "actuator damping free_length name point_i point_j stiffness type",
     "TimeSpec": "n span step values",
@@ -82,7 +82,7 @@ PROPERTIES = {
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
 # and optimize kinds, a plot's x column, the statics kind and output_units.
-STRIPPED_SHA256 = "83d13ed8afbbfcf8d819ee6afa52d90c0984ff9b8b08d21d3654f956ec8c6dd2"
+STRIPPED_SHA256 = "641415def5d8ac6347cbd36fab6f8434628b57d7558d538275fa9b9470c55f24"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -218,3 +218,19 @@ def test_a_sweep_is_not_replayed_nor_swept_nor_animated(tmp_path):
     assert res.exit_code == 2 and "no single motion" in res.output
     res = CliRunner().invoke(app, ["check", str(path)])
     assert res.exit_code == 0 and "4 members (grid) over F0, m5" in res.output
+
+
+def test_output_units_apply_to_the_summaries_and_the_long_table(swept):
+    """``output_units: {angle: deg, force: N}`` in the file (model: mm, kg, s, so forces in
+    mN): the summaries and the long table in degrees and newtons, the varied values as given."""
+    spec = mio.reads("output_units: {angle: deg, force: N}\n" + MODEL + BASE + SWEEP)
+    conv = mio.execute(spec, ["sweep"])["sweep"]
+    turn, d_rms = swept.summaries["turn"], swept.summaries["d_rms"]
+    np.testing.assert_allclose(conv.summaries["turn"], np.degrees(turn), rtol=1e-12)
+    np.testing.assert_allclose(conv.summaries["d_rms"], d_rms / 1000, rtol=1e-12)
+    np.testing.assert_array_equal(conv.summaries["x_max"], swept.summaries["x_max"])
+    assert (conv.units["turn"], conv.units["d_rms"], conv.units["x_max"]) == ("deg", "N", "mm")
+    a, b = swept.table(), conv.table()
+    np.testing.assert_allclose(b["crank.phi"], np.degrees(a["crank.phi"]), rtol=1e-12)
+    np.testing.assert_allclose(b["D.Fx"], a["D.Fx"] / 1000, rtol=1e-12)
+    np.testing.assert_array_equal(b["F0"], a["F0"])

@@ -143,3 +143,46 @@ def test_plot_draws_a_column_in_another_unit(tmp_path):
     ):
         res = CliRunner().invoke(app, ["plot", str(folder), "-c", "motor", "-u", bad])
         assert res.exit_code == 2 and words in res.output and "--unit 1" in res.output, res.output
+
+
+def test_points_listed_in_outputs_are_written_and_the_api_converts_too(tmp_path):
+    """``outputs: [rod.B]`` writes the point's x, y, vx, vy, ax, ay to results.csv, equal to
+    ``Result.point`` (and so to the slider's own columns: rod.B is the slider's pin);
+    ``Result.table(output_units=...)`` and ``Sweep.table(output_units=...)`` convert as the
+    file does; a point that does not exist is refused at its line."""
+    import pathlib
+
+    import numpy as np
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from mixdyn.cli import app
+
+    example = pathlib.Path(__file__).resolve().parent.parent / "examples" / "slider_crank.yaml"
+    text = example.read_text().replace("n: 181", "n: 7")
+    text = text.replace("    kind: inverse\n", "    kind: inverse\n    outputs: [rod.B]\n", 1)
+    path = tmp_path / "p.yaml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--no-figures"])
+    assert res.exit_code == 0, res.output
+    table = pd.read_csv(out / "inverse" / "results.csv")
+    for a, b in (("x", "x"), ("vx", "vx"), ("ax", "ax")):
+        np.testing.assert_allclose(table[f"rod.B.{a}"], table[f"slider.{b}"], atol=1e-12)
+    np.testing.assert_allclose(table["rod.B.y"], 0.0, atol=1e-12)
+    path.write_text(text.replace("outputs: [rod.B]", "outputs: [rod.Q]"))
+    res = CliRunner().invoke(app, ["check", str(path)])
+    assert res.exit_code == 2 and "outputs[0]" in res.output and "'Q'" in res.output
+
+    import mixdyn.io as mio
+
+    result = mio.execute(mio.reads(text), ["inverse"])["inverse"]
+    df = result.table(["rod.B"], output_units={"angle": "deg", "length": "mm", "time": "ms"})
+    np.testing.assert_allclose(df["crank.phi"], np.degrees(result["crank.phi"]), rtol=1e-14)
+    np.testing.assert_allclose(df["rod.B.x"], 1000 * result.point("rod.B")[0][:, 0], rtol=1e-14)
+    np.testing.assert_allclose(df.index, 1000 * result.t, rtol=1e-14)
+    assert df.attrs["units"]["rod.B.vx"] == "m/s" and df.attrs["units"]["rod.B.x"] == "mm"
+    sweep = md.Sweep([result, None], {}, [{}, {}], {})
+    long = sweep.table(["crank.phi"], output_units={"angle": "deg"})
+    np.testing.assert_allclose(long["crank.phi"], np.degrees(result["crank.phi"]), rtol=1e-14)
+    assert long.attrs["units"]["crank.phi"] == "deg"

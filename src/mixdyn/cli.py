@@ -535,6 +535,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
             settings=run_settings(plan.base.spec),
             extra=extra,
             output_units=runner.output_units,
+            points=getattr(plan.base.spec, "outputs", ()),
         )
 
     def _optimum_done(plan, result, seconds, folder, painter):
@@ -724,6 +725,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
                         parquet=parquet,
                         settings=run_settings(plan.spec),
                         output_units=runner.output_units,
+                        points=plan.spec.outputs,
                         extra={
                             "file": str(file),
                             "run": plan.name,

@@ -168,4 +168,13 @@ def _check_unit(text, kind: str) -> None:
         raise ModelError(f"{text!r} is not a unit of {kind}", "units")
 
 
+def size_in(unit_text: str, kind: str, system: UnitSystem) -> float:
+    """How many of ``system``'s units of ``kind`` one ``unit_text`` is (``"N"`` -> 1000 in
+    mm, kg, s; ``"deg"`` -> pi/180 for an angle). Raises ``QuantityError`` (a
+    :class:`mixdyn.errors.ModelError`) for a unit of another kind or an unknown one."""
+    from .io.quantities import factor
+
+    return factor(unit_text, kind, system)
+
+
 SI = UnitSystem("m", "kg", "s")

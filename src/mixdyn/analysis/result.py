@@ -53,6 +53,41 @@ def require_finite(result: Result) -> None:
     )
 
 
+def in_units(result: Result, columns: dict, units: dict, output_units: dict | None):
+    """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
+    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``) converted into that unit; the others
+    as they are (the model's units). ``columns`` and ``units`` as from
+    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
+    if not output_units:
+        return columns, units
+    from ..units import size_in as factor
+
+    cols, out = dict(columns), dict(units)
+    for name in columns:
+        kind = result.kind_of(name)
+        if kind in output_units:
+            cols[name] = np.asarray(columns[name]) / factor(
+                output_units[kind], kind, result.model.units
+            )
+            out[name] = output_units[kind]
+    return cols, out
+
+
+def point_columns(result: Result, points=()) -> tuple[dict, dict]:
+    """``(columns, units)`` of ``result`` with, for each point reference of ``points``, its
+    global position, velocity and acceleration (``coupler.P.x``, ``.y``, ``.vx``, ``.vy``,
+    ``.ax``, ``.ay``) [model units]."""
+    cols, units = result.columns(), result.units()
+    for ref in points:
+        for arr, pre, kind in zip(
+            result.point(ref), ("", "v", "a"), ("length", "velocity", "acceleration"), strict=True
+        ):
+            for k, axis in enumerate("xy"):
+                cols[f"{ref}.{pre}{axis}"] = arr[:, k]
+                units[f"{ref}.{pre}{axis}"] = result.model.units.label(kind)
+    return cols, units
+
+
 @dataclasses.dataclass(frozen=True)
 class Result:
     """Time histories of one analysis.
@@ -125,29 +160,21 @@ class Result:
             return cols[name]
         raise KeyError(f"no column {name!r}; {did_you_mean(name, cols)}")
 
-    def table(self, points=()):
+    def table(self, points=(), output_units: dict | None = None):
         """A pandas DataFrame indexed by ``t``; ``points`` adds point trajectories.
 
         Args:
             points: point references (``"crank.B"``) whose global position, velocity and
                 acceleration are added as columns ``crank.B.x``, ``.vx``, ``.ax`` (and y).
+            output_units: kind of quantity -> unit, e.g. ``{"angle": "deg", "torque":
+                "N*m", "time": "ms"}``: the columns of those kinds converted (default: the
+                model's units). The kinds are the keys of ``mixdyn.units.DIMENSIONS``.
 
         The units of the columns are in ``df.attrs["units"]``.
         """
         import pandas as pd
 
-        cols = self.columns()
-        units = self.units()
-        for ref in points:
-            p, v, a = self.point(ref)
-            for arr, pre, kind in (
-                (p, "", "length"),
-                (v, "v", "velocity"),
-                (a, "a", "acceleration"),
-            ):
-                for k, axis in enumerate("xy"):
-                    cols[f"{ref}.{pre}{axis}"] = arr[:, k]
-                    units[f"{ref}.{pre}{axis}"] = self.model.units.label(kind)
+        cols, units = in_units(self, *point_columns(self, points), output_units)
         df = pd.DataFrame(cols).set_index("t")
         df.attrs["units"] = units
         df.attrs["kind"] = self.kind

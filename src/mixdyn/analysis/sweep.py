@@ -238,19 +238,22 @@ class Sweep:
             raise self.errors[i]
         return self.results[i]
 
-    def table(self, columns: Sequence[str] = ()):
+    def table(self, columns: Sequence[str] = (), output_units: dict | None = None):
         """A long-format pandas DataFrame: one row per (member, output time), with the member
-        index, its varied values, ``t`` and the result ``columns`` (default: every column);
-        the units in ``df.attrs["units"]``. Failed members have no rows."""
+        index, its varied values, ``t`` and the result ``columns`` (default: every column),
+        in ``output_units`` (kind -> unit, as :meth:`mixdyn.Result.table`; default the
+        model's units); the units in ``df.attrs["units"]``. Failed members have no rows."""
         import pandas as pd
+
+        from .result import in_units
 
         frames, units = [], {}
         for i, res in enumerate(self.results):
             if res is None:
                 continue
-            cols = res.columns()
+            cols, member_units = in_units(res, res.columns(), res.units(), output_units)
             if not units:
-                units = res.units()
+                units = member_units
             keep = ["t", *columns] if columns else list(cols)
             for c in keep:
                 if c not in cols:

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..analysis import Result
+from ..analysis.result import in_units, point_columns
 from ..errors import NumericalError
 
 RESULTS_CSV = "results.csv"
@@ -46,26 +47,6 @@ def jsonable(value: Any) -> Any:
         return str(value)
 
 
-def in_units(result: Result, columns: dict, units: dict, output_units: dict | None):
-    """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
-    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``) converted into that unit; the others
-    as they are (the model's units). ``columns`` and ``units`` as from
-    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
-    if not output_units:
-        return columns, units
-    from .quantities import factor
-
-    cols, out = dict(columns), dict(units)
-    for name in columns:
-        kind = result.kind_of(name)
-        if kind in output_units:
-            cols[name] = np.asarray(columns[name]) / factor(
-                output_units[kind], kind, result.model.units
-            )
-            out[name] = output_units[kind]
-    return cols, out
-
-
 def write_result(
     result: Result,
     folder,
@@ -74,6 +55,7 @@ def write_result(
     settings: dict | None = None,
     extra: dict | None = None,
     output_units: dict | None = None,
+    points=(),
 ) -> list[pathlib.Path]:
     """Write ``result`` to ``folder/results.csv`` (and ``.parquet``) and ``folder/meta.json``.
 
@@ -85,6 +67,8 @@ def write_result(
         extra: further entries of ``meta.json``.
         output_units: kind -> unit for the written columns (:func:`in_units`; default: the
             model's units).
+        points: point references (``"coupler.P"``) whose position, velocity and acceleration
+            are written too (columns ``coupler.P.x``, ``.vx``, ``.ax`` and y).
 
     Returns:
         The files written.
@@ -92,7 +76,7 @@ def write_result(
     from .. import __version__
 
     folder = pathlib.Path(folder)
-    cols, units = in_units(result, result.columns(), result.units(), output_units)
+    cols, units = in_units(result, *point_columns(result, points), output_units)
     names = list(cols)
     table = np.column_stack([np.asarray(cols[n]) for n in names]) if names else np.zeros((0, 0))
     _refuse_non_finite(table, names)
@@ -313,7 +297,9 @@ __all__ = [
     "RESULTS_PARQUET",
     "TABLE_CSV",
     "TABLE_PARQUET",
+    "in_units",
     "jsonable",
+    "point_columns",
     "read_result",
     "write_result",
     "write_sweep",

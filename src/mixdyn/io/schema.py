@@ -729,6 +729,10 @@ class _RunSpec(Spec):
     velocities: dict[str, Scalar] = Field(default_factory=dict)
     """Start velocities kept exactly, forward/mixed runs only, ``{coordinate: value}`` [length or
     rad per time unit], e.g. ``{crank.phi: 1 rad/s}`` (default: at rest)."""
+    outputs: list[Ref] = Field(default_factory=list)
+    """Points whose global position, velocity and acceleration are written to
+    ``results.csv`` as columns ``body.P.x``, ``.y``, ``.vx``, ``.vy``, ``.ax``, ``.ay``, e.g.
+    ``[coupler.P]`` (plots may use any point without listing it). Default none."""
     plots: list[PlotSpec] = Field(default_factory=list)
     """Figures of result columns to write."""
     animation: AnimationSpec | None = None

@@ -156,6 +156,8 @@ def check_outputs(runner: Runner, plan: Plan) -> None:
 
     for k, plot in enumerate(r.plots):
         claim(plot.file, (*plan.path, "plots", k, "file"))
+    for k, ref in enumerate(getattr(r, "outputs", None) or ()):
+        runner.b.point(ref, (*plan.path, "outputs", k))
     a = r.animation
     if a is None:
         return

@@ -26,7 +26,8 @@ Example (``examples/antonya_sweep.yaml``)::
 ``mixdyn run`` writes, per sweep, ``members.csv`` (a row per member: index, varied values,
 ``status`` ``ok`` or the error's class, the error, the summaries), ``table.csv`` (long
 format: a row per member and output time with the ``outputs`` columns), the plots and
-``meta.json`` (units, settings, timings). Values are in the model's units.
+``meta.json`` (units, settings, timings). The varied values are in the model's units; the
+summaries and table columns in the file's ``output_units`` where it gives them.
 """
 
 from __future__ import annotations
@@ -82,8 +83,10 @@ class FileSweep:
         plan: the sweep's plan.
         sweep: the members' results and errors (:class:`mixdyn.Sweep`).
         summaries: summary name -> (M,) its value per member (NaN for a failed member).
-        units: unit of each summary and output column (model units, pint spelling).
+        units: unit of each summary and output column (pint spelling).
         seconds: wall time of building the members and of running them [s].
+        output_units: kind -> unit of the summaries and table columns (the file's
+            ``output_units``; default the model's units).
     """
 
     plan: SweepPlan
@@ -91,6 +94,7 @@ class FileSweep:
     summaries: dict[str, np.ndarray]
     units: dict[str, str]
     seconds: dict[str, float]
+    output_units: dict[str, str] = dataclasses.field(default_factory=dict)
 
     @property
     def kind(self) -> str:
@@ -121,7 +125,7 @@ class FileSweep:
         for i, res in enumerate(self.sweep.results):
             if res is None:
                 continue
-            cols = _columns(res, self.plan.spec_outputs)
+            cols = _columns(res, self.plan.spec_outputs, self.output_units)
             df = pd.DataFrame(cols)
             for k, (name, v) in enumerate(self.plan.values.items()):
                 df.insert(k, name, float(v[i]))
@@ -139,11 +143,12 @@ def _error_time(err) -> float:
     return float(t) if t is not None else float("nan")
 
 
-def _columns(result, names) -> dict[str, np.ndarray]:
+def _columns(result, names, output_units=None) -> dict[str, np.ndarray]:
     from ..viz.plots import result_columns
+    from .results import in_units
 
-    cols, _ = result_columns(result, list(names))
-    return cols
+    cols, units = result_columns(result, list(names))
+    return in_units(result, cols, units, output_units)[0]
 
 
 # --------------------------------------------------------------------------- planning
@@ -294,7 +299,8 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     params = [{k: float(v[i]) for k, v in plan.values.items()} for i in range(plan.members)]
     sweep = Sweep(results, errors, params, {"total": done - built})
     summaries, units = _summaries(runner, plan, results)
-    return FileSweep(plan, sweep, summaries, units, {"build": built - started, "run": done - built})
+    seconds = {"build": built - started, "run": done - built}
+    return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
 
 
 _REDUCE = {
@@ -310,7 +316,10 @@ _REDUCE = {
 
 
 def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
+    """Each summary per member and the units of the summaries and table columns (in the
+    file's ``output_units``)."""
     from ..viz.plots import result_columns
+    from .results import in_units
 
     r: s.SweepRunSpec = plan.spec
     ok = next((res for res in results if res is not None), None)
@@ -318,15 +327,16 @@ def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
     if ok is not None:
         wanted = [x.column for x in r.summaries] + plan.spec_outputs
         try:
-            _, units = result_columns(ok, wanted)
+            cols, units = result_columns(ok, wanted)
         except KeyError as e:
             runner.fail((*plan.path, "summaries"), str(e.args[0]), "fix the column name")
+        units = in_units(ok, cols, units, runner.output_units)[1]
     out = {}
     for x in r.summaries:
         vals = np.full(len(results), np.nan)
         for i, res in enumerate(results):
             if res is not None:
-                y = np.asarray(result_columns(res, [x.column])[0][x.column])
+                y = np.asarray(_columns(res, [x.column], runner.output_units)[x.column])
                 vals[i] = float(_REDUCE[x.reduce](y))
         out[x.name] = vals
         units[x.name] = units.get(x.column, "")
