@@ -228,6 +228,28 @@ def test_schema_and_dump(cli, tmp_path):
     assert mio.read(out) == mio.read(EXAMPLES / "four_bar.yaml")
 
 
+@pytest.mark.parametrize("name", ["antonya.yaml", "four_bar.yaml", "antonya_sweep.yaml"])
+def test_dump_keeps_the_comments(cli, tmp_path, name):
+    """Every comment of the file whose line keeps a key is in the dump, in the same order;
+    a default written out (``gravity: [0, 0]``, ``html: true``) goes; the dump reads back as
+    the same description."""
+    src = (EXAMPLES / name).read_text()
+    path = tmp_path / name
+    path.write_text(src)
+    out = tmp_path / f"dumped_{name}"
+    _run(cli, "dump", path, "-o", out)
+    text = out.read_text()
+    assert mio.read(out) == mio.read(path)
+    assert "gravity: [0, 0]" not in text and "html: true" not in text
+    comments = [
+        line.split("#", 1)[1].strip()
+        for line in src.splitlines()
+        if "#" in line and "gravity: [0, 0]" not in line and "html: true" not in line
+    ]
+    kept = [line.split("#", 1)[1].strip() for line in text.splitlines() if "#" in line]
+    assert len(comments) > 3 and kept == comments
+
+
 def test_cache_can_be_turned_off(monkeypatch):
     monkeypatch.setenv("MIXDYN_NO_CACHE", "1")
     assert configure_cache() is None

@@ -1256,16 +1256,18 @@ def dump(
     ] = None,
 ):
     """Read, validate and build a model file, then write it back in normal form (defaults
-    left out); loading the output gives the same model."""
+    left out), keeping its comments, key order and flow style where its keys remain; loading
+    the output gives the same model."""
     with _guard(file):
-        from .io import build, dumps, read
+        from .io import build, read
+        from .io.dump import dumps_keeping
 
         if output is not None:
             check_output(output, "--output")
         spec = read(file)
         _require_size(spec, file)
         build(spec)
-        text = dumps(spec)
+        text = dumps_keeping(pathlib.Path(file).read_text(encoding="utf-8"), spec)
         if output is None:
             typer.echo(text, nl=False)
         else:

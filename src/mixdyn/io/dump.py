@@ -72,6 +72,69 @@ def dumps(obj) -> str:
     )
 
 
+def dumps_keeping(source: str, spec: s.ModelFile) -> str:
+    """:func:`dumps` of ``spec`` (read from the YAML text ``source``) with ``source``'s
+    comments, key order and flow style kept where its keys remain: the normal form's values
+    are written into ``source``'s own tree (ruamel.yaml's round trip); keys the normal form
+    leaves out (defaults) go, with their comments. ``reads`` of the result equals ``spec``."""
+    import io
+
+    from ruamel.yaml import YAML
+    from ruamel.yaml.comments import CommentedMap, CommentedSeq
+
+    rt = YAML(typ="rt")
+    rt.width = 100
+    rt.preserve_quotes = True
+    rt.indent(mapping=2, sequence=4, offset=2)  # "  - item", as the examples are written
+    tree = rt.load(source)
+
+    def fresh(value):
+        if isinstance(value, dict):
+            out = CommentedMap()
+            for k, v in value.items():
+                out[k] = fresh(v)
+            return out
+        if isinstance(value, list):
+            out = CommentedSeq(fresh(v) for v in value)
+            flow = len(value) <= 12 and all(
+                isinstance(x, int | float | str) and (not isinstance(x, str) or len(x) < 30)
+                for x in value
+            )
+            if flow:
+                out.fa.set_flow_style()
+            return out
+        return value
+
+    def merge(old, new):
+        if isinstance(old, CommentedMap) and isinstance(new, dict):
+            for k in [k for k in old if k not in new]:
+                del old[k]
+            for pos, (k, v) in enumerate(new.items()):
+                if k in old:
+                    old[k] = merge(old[k], v)
+                else:
+                    old.insert(min(pos, len(old)), k, fresh(v))
+            return old
+        if isinstance(old, CommentedSeq) and isinstance(new, list) and len(old) == len(new):
+            for i, v in enumerate(new):
+                old[i] = merge(old[i], v)
+            return old
+        if not isinstance(old, dict | list) and not isinstance(new, dict | list):
+            if type(old) is not bool and type(new) is not bool and old == new:
+                return old  # the user's spelling of an equal value (1.0 vs 1, quotes)
+            if type(old) is type(new) is bool and old == new:
+                return old
+        return fresh(new)
+
+    data = to_data(spec)
+    if not isinstance(tree, CommentedMap):
+        return dumps(spec)
+    merged = merge(tree, data)
+    buf = io.StringIO()
+    rt.dump(merged, buf)
+    return buf.getvalue()
+
+
 def dump(obj, path) -> None:
     """Write :func:`dumps` of ``obj`` to ``path``."""
     text = dumps(obj)
