@@ -49,3 +49,17 @@ def test_a_result_shows_its_columns_with_units():
     res = md.kinematic(slider_crank(), np.linspace(0.0, 1.0, 5))
     html = res._repr_html_()
     assert "<td>slider.x</td><td>m</td>" in html and "Result(kinematic" in html
+
+
+def test_a_result_in_a_notebook_plots_its_headline_columns():
+    """An inverse run shows its motor torque plotted (the curve's SVG) besides the table; a
+    kinematic run its bodies' angles."""
+    from mixdyn.viz.show import headline_columns
+
+    inv = md.inverse(slider_crank(), np.linspace(0.0, 1.0, 9))
+    assert headline_columns(inv) == ["motor"]
+    html = inv._repr_html_()
+    assert "<svg" in html and "motor" in html and "<td>motor</td><td>N*m</td>" in html
+    kin = md.kinematic(slider_crank(), np.linspace(0.0, 1.0, 5))
+    assert headline_columns(kin) == ["crank.phi", "rod.phi", "slider.phi"]
+    assert "<svg" in kin._repr_html_()

@@ -88,7 +88,15 @@ def _model_html(model) -> str:
     return model_html(model)
 
 
+def _result_html(result) -> str:
+    """A notebook's view of a result, by :func:`mixdyn.viz.show.result_html` (as above)."""
+    from .viz.show import result_html
+
+    return result_html(result)
+
+
 Model._repr_html_ = _model_html  # noqa: F405  (Model comes from .model's *)
+Result._repr_html_ = _result_html
 
 
 def __getattr__(name):

@@ -205,25 +205,3 @@ class Result:
             f"Result({self.kind}, {self.model.name}, {len(self.t)} times "
             f"{self.t[0]:.4g}..{self.t[-1]:.4g}, {len(self.columns())} columns)"
         )
-
-    def _repr_html_(self) -> str:
-        """A notebook's view: the summary, the solver's counters and the columns' ranges
-        (with their units)."""
-        from html import escape
-
-        units = self.units()
-        rows = "".join(
-            f"<tr><td>{escape(k)}</td><td>{escape(units.get(k, ''))}</td>"
-            f"<td>{float(np.min(v)):.6g}</td><td>{float(np.max(v)):.6g}</td></tr>"
-            for k, v in self.columns().items()
-        )
-        stats = ", ".join(
-            f"{escape(str(k))} {escape(str(v))}"
-            for k, v in self.stats.items()
-            if isinstance(v, int | float | str)
-        )
-        return (
-            f"<div><p><b>{escape(repr(self))}</b></p><p>{stats}</p>"
-            "<table><tr><th>column</th><th>unit</th><th>min</th><th>max</th></tr>"
-            f"{rows}</table></div>"
-        )

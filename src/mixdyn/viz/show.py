@@ -141,8 +141,62 @@ def model_html(model) -> str:
     )
 
 
+def headline_columns(result) -> list[str]:
+    """The columns a reader looks at first: the drivers' efforts, else the unknown forces
+    (a mixed run), else every body's angle."""
+    cols = result.columns()
+    efforts = [d.name for d in result.model.drivers if d.name in cols]
+    if efforts:
+        return efforts
+    unknown = [name for name in result.stats.get("unknown_forces", ()) if name in cols]
+    return unknown or [f"{b.name}.phi" for b in result.model.bodies]
+
+
+def result_html(result) -> str:
+    """A notebook's view of a result (``Result._repr_html_``, attached by the package): the
+    summary and solver counters, a plot of :func:`headline_columns` against time (a panel
+    per unit) and the columns' ranges with their units."""
+    import tempfile
+    from html import escape
+
+    from .plots import plot_columns, result_columns
+
+    units = result.units()
+    rows = "".join(
+        f"<tr><td>{escape(k)}</td><td>{escape(units.get(k, ''))}</td>"
+        f"<td>{float(np.min(v)):.6g}</td><td>{float(np.max(v)):.6g}</td></tr>"
+        for k, v in result.columns().items()
+    )
+    stats = ", ".join(
+        f"{escape(str(k))} {escape(str(v))}"
+        for k, v in result.stats.items()
+        if isinstance(v, int | float | str)
+    )
+    try:
+        names = headline_columns(result)
+        cols, col_units = result_columns(result, names)
+        with tempfile.TemporaryDirectory() as d:
+            path = plot_columns(
+                cols,
+                names,
+                pathlib.Path(d) / "r.svg",
+                units=col_units,
+                title=f"{result.model.name}: {result.kind}",
+                size=(6.4, 3.2),
+            )
+            plot = path.read_text(encoding="utf-8")
+        plot = plot[plot.find("<svg") :]
+    except Exception as e:  # a plot is a courtesy: the table still shows
+        plot = f"<p>(no plot: {escape(str(e))})</p>"
+    return (
+        f"<div><p><b>{escape(repr(result))}</b></p><p>{stats}</p>{plot}"
+        "<table><tr><th>column</th><th>unit</th><th>min</th><th>max</th></tr>"
+        f"{rows}</table></div>"
+    )
+
+
 def _escape(text: str) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
-__all__ = ["SHOW_SUFFIXES", "draw", "model_html", "svg"]
+__all__ = ["SHOW_SUFFIXES", "draw", "headline_columns", "model_html", "result_html", "svg"]
