@@ -65,6 +65,15 @@ PROPERTIES = {
     "ObjectiveSpec": "column reduce",
     "OptimizeRunSpec": "kind max_iterations name objective run sense vary",
     # the statics run kind (issue 13)
+    # gears, rack and pinion, rolling, cams (issue 13)
+    "CamFollowerSpec": "axis base cam center follower follower_type frame law name point "
+    "roller type",
+    "GearPairSpec": "body_i body_j carrier center_i center_j internal name pressure_angle "
+    "radius_i radius_j type",
+    "RackPinionSpec": "axis center line_point name pressure_angle radius type wheel",
+    "RollingDisksSpec": "body_i body_j carrier center_i center_j internal name radius_i "
+    "radius_j type",
+    "RollingOnLineSpec": "axis center line_point name radius type wheel",
     "StaticsRunSpec": "animation drivers hold initial kind linear_solver max_iter "
     "name outputs plots prescribed time tol velocities",
     "SplineSpec": "spline",
@@ -82,7 +91,7 @@ PROPERTIES = {
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
 # and optimize kinds, a plot's x column, the statics kind and output_units.
-STRIPPED_SHA256 = "641415def5d8ac6347cbd36fab6f8434628b57d7558d538275fa9b9470c55f24"
+STRIPPED_SHA256 = "fcb20a76a94f983f814d9995ca963ddff34ca6259d1073e553264f831fb145ea"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

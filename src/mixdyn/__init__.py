@@ -61,6 +61,7 @@ from .analysis import (  # noqa: E402
 )
 from .errors import (  # noqa: E402
     AssemblyError,
+    ContactLostError,
     ConvergenceError,
     DegreesOfFreedomError,
     EnergyBalanceError,
@@ -122,6 +123,7 @@ __all__ = [
     "MixdynError",
     "ModelError",
     "NonFiniteError",
+    "ContactLostError",
     "NumericalError",
     "Partitioning",
     "Projection",

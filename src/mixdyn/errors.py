@@ -85,5 +85,10 @@ class EnergyBalanceError(NumericalError):
     steps were too large for the accuracy the result claims."""
 
 
+class ContactLostError(NumericalError):
+    """A one-sided contact (a cam and its follower, a rolling disk) would have to pull: the
+    bodies separate there, which the run's equations do not follow."""
+
+
 class NonFiniteError(NumericalError):
     """A result column holds a NaN or an infinity (a singular force law, an overflow)."""

@@ -23,10 +23,29 @@ def reaction_kinds(c: Constraints) -> dict[str, str]:
     """The reaction columns of :func:`reaction_columns` and their kinds of quantity."""
     kinds = {}
     for j in c.joints:
-        kinds[f"{j.name}.Fx"] = kinds[f"{j.name}.Fy"] = "force"
-        if j.carries_moment:
-            kinds[f"{j.name}.M"] = "torque"
+        if j.generic_reaction:
+            kinds[f"{j.name}.Fx"] = kinds[f"{j.name}.Fy"] = "force"
+            if j.carries_moment:
+                kinds[f"{j.name}.M"] = "torque"
+        kinds.update({f"{j.name}.{k}": v for k, v in j.contact_kinds.items()})
     return kinds
+
+
+def contact_columns(c: Constraints, q, lam) -> dict:
+    """The joints' own columns (a gear pair's tooth force, a rolling contact's normal and
+    friction forces: ``Joint.contact``) at one state, from the multipliers ``lam`` (m,) of
+    the kept rows (a dropped, redundant row counts 0)."""
+    out = {}
+    where = {row: k for k, row in enumerate(c.active)}
+    start = 0
+    for j in c.joints:
+        rows = range(start, start + j.n_equations)
+        start += j.n_equations
+        if not j.contact_kinds:
+            continue
+        lj = jnp.stack([lam[where[r]] if r in where else jnp.zeros((), lam.dtype) for r in rows])
+        out.update({f"{j.name}.{k}": v for k, v in j.contact(q, lj).items()})
+    return out
 
 
 def _reaction_bodies(c: Constraints):
@@ -87,11 +106,47 @@ def joint_reactions(c: Constraints, q, t, lam, J=None) -> jax.Array:
     return jnp.concatenate([F, M[:, None]], axis=1)
 
 
+def check_contacts(c: Constraints, ts, cols: dict, units: dict | None = None) -> None:
+    """A one-sided contact (a joint with a ``unilateral`` column: a cam's ``F``, a rolling
+    contact's ``N``) must push at every output time; where it pulls, the bodies separate.
+
+    Raises:
+        ContactLostError: at the first time (interpolated between outputs) the contact force
+            crosses zero, with the joint's name and the force there.
+    """
+    from ..errors import ContactLostError
+
+    for j in c.joints:
+        key = getattr(j, "unilateral", None)
+        if key is None:
+            continue
+        name = f"{j.name}.{key}"
+        f = np.asarray(cols[name])
+        tol = 1e-9 * float(np.max(np.abs(f), initial=0.0))
+        bad = np.flatnonzero(f < -tol)
+        if not bad.size:
+            continue
+        k = int(bad[0])
+        t = float(ts[k])
+        if k > 0 and f[k - 1] > 0:
+            t = float(ts[k - 1] + (ts[k] - ts[k - 1]) * f[k - 1] / (f[k - 1] - f[k]))
+        unit = f" {units[name]}" if units and name in units else ""
+        raise ContactLostError(
+            f"contact {j.name!r} is lost: its force {name} falls to zero and would turn "
+            f"negative ({f[k]:.4g}{unit} at the next output); the bodies separate there "
+            "(a stronger spring or preload, or a lower speed, keeps them together)",
+            t,
+            (j.name,),
+        )
+
+
 def reaction_columns(c: Constraints, R) -> dict:
     """The reaction columns ``{joint}.Fx``, ``{joint}.Fy`` (and ``{joint}.M`` where the joint
     carries a moment) from :func:`joint_reactions`' values ``R`` (..., n_joints, 3)."""
     out = {}
     for k, j in enumerate(c.joints):
+        if not j.generic_reaction:
+            continue
         out[f"{j.name}.Fx"], out[f"{j.name}.Fy"] = R[..., k, 0], R[..., k, 1]
         if j.carries_moment:
             out[f"{j.name}.M"] = R[..., k, 2]

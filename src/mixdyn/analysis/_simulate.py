@@ -24,7 +24,14 @@ from ..model import Model
 from ._assembly import length_scale
 from ._options import value_problem
 from ._problem import Problem
-from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
+from ._reactions import (
+    check_contacts,
+    contact_columns,
+    driver_efforts,
+    joint_reactions,
+    reaction_columns,
+    reaction_kinds,
+)
 from ._structure import _jac
 from .integrators import INTEGRATORS, STATUS_MESSAGES
 from .integrators._common import (
@@ -78,6 +85,7 @@ def _post_arrays(problem: Problem, ts, Q, QD):
         V = potential_energy(problem.model, q)
         viol = jnp.max(jnp.abs(st.phi)) if c.m else jnp.zeros(())
         forces = force_outputs(problem.model, q, qd, t, exclude=problem.unknown)
+        forces.update(contact_columns(c, q, st.mu[: c.m]))
         return st.qdd, st.mu, st.ratio, R, powers, jnp.stack([T, V, T + V]), viol, forces
 
     return jax.lax.map(one, (Q, QD, ts))
@@ -101,6 +109,7 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int):
         out[f"{name}.power"] = powers[:, c.m - problem.p + k]
     out["energy.kinetic"], out["energy.potential"], out["energy.total"] = E[:, 0], E[:, 1], E[:, 2]
     out["constraint.violation"] = np.asarray(viol)
+    check_contacts(c, np.asarray(ts), out)
     return qdd, mu, ratio, out
 
 

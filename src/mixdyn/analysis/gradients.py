@@ -175,7 +175,7 @@ def _inverse(model: Model, t, getters, kwargs):
         for k, get in enumerate(getters):
             m = eqx.tree_at(get, m, theta[k])
         p = eqx.tree_at(lambda p: p.model, problem, m)
-        _, mu, _, R, powers, _, _ = _post_arrays(p, tj, Q, QD)
+        _, mu, _, R, powers, *_ = _post_arrays(p, tj, Q, QD)
         out = {"q": Q, "qd": QD, "qdd": QDD}
         out.update(reaction_columns(p.c, R))
         out.update(

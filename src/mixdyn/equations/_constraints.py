@@ -36,8 +36,8 @@ LINEAR_SOLVERS = ("dense", "sparse", "auto")
 
 # Static fields that only name things (resolved into indices and arrays at binding): cleared
 # so that elements of one kind share one vectorized evaluation.
-_NAME_FIELDS = ("name", "point_i", "point_j", "point", "body", "body_i", "body_j")
-_BODY_FIELDS = ("b", "bi", "bj")
+_NAME_FIELDS = ("name", "point_i", "point_j", "point", "body", "body_i", "body_j", "carrier",
+                "center", "center_i", "center_j", "wheel", "line_point")  # fmt: skip
 
 
 class Constraints(eqx.Module):
@@ -561,9 +561,10 @@ def _localize(e):
     bodies = type(e).body_indices(e)  # through the class: equinox wraps bound methods (slow)
     where = {b: k for k, b in enumerate(bodies)}
     names = {f.name for f in dataclasses.fields(e)}
-    if not names & set(_BODY_FIELDS) and bodies:
-        raise ValueError(type(e).__name__)
-    repl = {f: where.get(getattr(e, f), getattr(e, f)) for f in _BODY_FIELDS if f in names}
+    fields = [f for f in type(e).body_fields if f in names]
+    if not fields and bodies:
+        raise ValueError(f"{type(e).__name__} names no body_fields")
+    repl = {f: where.get(getattr(e, f), getattr(e, f)) for f in fields}
     repl.update({f: "" for f in _NAME_FIELDS if f in names})
     # A field-by-field copy: the element is already bound and checked, and
     # ``dataclasses.replace`` (through ``__init__``) costs several times more, per element and

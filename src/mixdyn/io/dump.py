@@ -206,20 +206,10 @@ class _Describer:
         return {"expr": source} if unit is None else {"expr": source, "unit": unit}
 
     def joint(self, j):
-        base = {"name": j.name, "point_i": j.point_i, "point_j": j.point_j}
-        if isinstance(j, m.PinInSlot):
-            return s.PinInSlotSpec(type="pin_in_slot", axis=self.axis(j.axis), **base)
-        if isinstance(j, m.Translational):
-            return s.TranslationalSpec(
-                type="translational", axis=self.axis(j.axis), angle=_f(j.angle), **base
-            )
-        if isinstance(j, m.Revolute):
-            return s.RevoluteSpec(type="revolute", **base)
-        if isinstance(j, m.Weld):
-            return s.WeldSpec(type="weld", angle=_f(j.angle), **base)
-        if isinstance(j, m.Distance):
-            return s.DistanceSpec(type="distance", length=_f(j.length), **base)
-        raise ModelError(f"a {type(j).__name__} joint cannot be written to a file", j.name)
+        spec = s.JOINT_SPECS.get(type(j).__name__)
+        if spec is None:
+            raise ModelError(f"a {type(j).__name__} joint cannot be written to a file", j.name)
+        return spec.from_element(j, self)
 
     @staticmethod
     def axis(a):

@@ -641,51 +641,34 @@ class Builder:
         vectors = {k: self.direction(v, (*p, "vectors", k)) for k, v in b.vectors.items()}
         return m.Body(b.name, mass, inertia, q0=q0, points=points, vectors=vectors)
 
-    def _two_points(self, p, j):
-        self.point(j.point_i, (*p, "point_i"))
-        self.point(j.point_j, (*p, "point_j"))
-        bi, bj = j.point_i.split(".")[0], j.point_j.split(".")[0]
-        if bi == bj:
-            self.fail(p, f"both points are on {bi!r}", "connect two different bodies")
+    #: The model package, for the joint specs' ``build`` (``mixdyn.io.schema.JOINT_SPECS``).
+    m = m
 
-    def _axis(self, j, p):
-        if isinstance(j.axis, str):
-            body = j.point_i.split(".")[0]
+    def axis(self, axis, point_ref: str, path):
+        """A joint's direction: ``[x, y]`` (normalized) or the name of a vector of the body
+        of ``point_ref``."""
+        if isinstance(axis, str):
+            body = point_ref.split(".")[0]
             vecs = {} if body == "ground" else self.spec.bodies[self.body_index[body]].vectors
-            if j.axis not in vecs:
+            if axis not in vecs:
                 self.fail(
-                    (*p, "axis"),
-                    f"body {body!r} has no vector {j.axis!r}",
+                    path,
+                    f"body {body!r} has no vector {axis!r}",
                     f"its vectors: {', '.join(vecs) or '(none)'}; or give [x, y]",
                 )
-            return j.axis
-        return self.direction(j.axis, (*p, "axis"))
+            return axis
+        return self.direction(axis, path)
 
     def _joint(self, i, j) -> m.Joint:
-        p = ("joints", i)
-        self._two_points(p, j)
-        if isinstance(j, s.RevoluteSpec):
-            return m.Revolute(j.name, j.point_i, j.point_j)
-        if isinstance(j, s.WeldSpec):
-            return m.Weld(
-                j.name, j.point_i, j.point_j, self.scalar(j.angle, "angle", (*p, "angle"))
-            )
-        if isinstance(j, s.TranslationalSpec):
-            return m.Translational(
-                j.name,
-                j.point_i,
-                j.point_j,
-                axis=self._axis(j, p),
-                angle=self.scalar(j.angle, "angle", (*p, "angle")),
-            )
-        if isinstance(j, s.PinInSlotSpec):
-            return m.PinInSlot(j.name, j.point_i, j.point_j, axis=self._axis(j, p))
-        if isinstance(j, s.DistanceSpec):
-            length = self.scalar(j.length, "length", (*p, "length"))
-            if not length > 0:
-                self.fail((*p, "length"), f"length {length:g} is not positive", "give a length > 0")
-            return m.Distance(j.name, j.point_i, j.point_j, length=length)
-        raise AssertionError(type(j))  # pragma: no cover
+        return j.build(self, ("joints", i))
+
+    def _two_points(self, p, e):
+        """An element's ``point_i`` and ``point_j``: both known, on two different bodies."""
+        self.point(e.point_i, (*p, "point_i"))
+        self.point(e.point_j, (*p, "point_j"))
+        bi, bj = e.point_i.split(".")[0], e.point_j.split(".")[0]
+        if bi == bj:
+            self.fail(p, f"both points are on {bi!r}", "connect two different bodies")
 
     def driver(self, d, p) -> m.Driver:
         """A driver from its description at path ``p`` (also used for prescribed motions)."""

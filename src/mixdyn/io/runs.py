@@ -397,7 +397,10 @@ class Runner:
         if r.kind == "kinematic":
             return cols, set()
         for j in self.model.joints:
-            cols += [f"{j.name}.Fx", f"{j.name}.Fy"] + ([f"{j.name}.M"] if j.carries_moment else [])
+            if j.generic_reaction:
+                cols += [f"{j.name}.Fx", f"{j.name}.Fy"]
+                cols += [f"{j.name}.M"] if j.carries_moment else []
+            cols += [f"{j.name}.{k}" for k in j.contact_kinds]
         drivers = [d.name for d in self.model.drivers if r.drivers is None or d.name in r.drivers]
         if r.kind != "mixed":  # a mixed run's prescribed motions are paired with its unknowns
             drivers += [p.name or f"prescribed {p.coordinate}" for p in r.prescribed]

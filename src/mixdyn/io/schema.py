@@ -16,7 +16,9 @@ Scalars (:data:`Scalar`) are numbers in the model's units, or strings with units
 
 from __future__ import annotations
 
+import functools
 import math
+import operator
 import re
 from typing import Annotated, Any, Literal
 
@@ -356,7 +358,37 @@ class BodySpec(Spec):
     ``axis``)."""
 
 
-class RevoluteSpec(Spec):
+#: The joint registry: a joint kind is one model class (``mixdyn.model``) and one spec class
+#: here, registered with :func:`joint_kind`; the spec builds the element (``build``) and
+#: describes one (``from_element``). Loading, writing back and the schema's ``joints`` union
+#: read this registry; nothing else in ``io`` names a joint kind.
+JOINT_SPECS: dict[str, type] = {}
+
+
+def joint_kind(model_class: str):
+    """Register a joint spec class for the model class named ``model_class``."""
+
+    def register(cls):
+        cls.element_class = model_class
+        JOINT_SPECS[model_class] = cls
+        return cls
+
+    return register
+
+
+class _TwoPointJoint(Spec):
+    """Joints between two points: both checked, on two different bodies."""
+
+    def _points(self, b, p) -> None:
+        b._two_points(p, self)
+
+    @staticmethod
+    def _base(j) -> dict:
+        return {"name": j.name, "point_i": j.point_i, "point_j": j.point_j}
+
+
+@joint_kind("Revolute")
+class RevoluteSpec(_TwoPointJoint):
     """A revolute (pin) joint: two points coincide; the bodies rotate freely."""
 
     type: Literal["revolute"]
@@ -369,8 +401,17 @@ class RevoluteSpec(Spec):
     point_j: Ref
     """Point on body j (another body), coinciding with ``point_i``."""
 
+    def build(self, b, p):
+        self._points(b, p)
+        return b.m.Revolute(self.name, self.point_i, self.point_j)
 
-class WeldSpec(Spec):
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="revolute", **cls._base(j))
+
+
+@joint_kind("Weld")
+class WeldSpec(_TwoPointJoint):
     """A weld (rigid) joint: two points coincide and the relative angle is fixed."""
 
     type: Literal["weld"]
@@ -385,8 +426,18 @@ class WeldSpec(Spec):
     angle: Scalar = 0.0
     """Fixed relative angle ``phi_j - phi_i`` [rad] (or with a unit, ``"30 deg"``). Default 0."""
 
+    def build(self, b, p):
+        self._points(b, p)
+        angle = b.scalar(self.angle, "angle", (*p, "angle"))
+        return b.m.Weld(self.name, self.point_i, self.point_j, angle)
 
-class TranslationalSpec(Spec):
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="weld", angle=float(j.angle), **cls._base(j))
+
+
+@joint_kind("Translational")
+class TranslationalSpec(_TwoPointJoint):
     """A translational (sliding) joint: ``point_j`` moves on a line through ``point_i`` fixed in
     body i; no relative rotation."""
 
@@ -405,8 +456,19 @@ class TranslationalSpec(Spec):
     angle: Scalar = 0.0
     """Fixed relative angle ``phi_j - phi_i`` [rad] (or with a unit). Default 0."""
 
+    def build(self, b, p):
+        self._points(b, p)
+        axis = b.axis(self.axis, self.point_i, (*p, "axis"))
+        angle = b.scalar(self.angle, "angle", (*p, "angle"))
+        return b.m.Translational(self.name, self.point_i, self.point_j, axis=axis, angle=angle)
 
-class PinInSlotSpec(Spec):
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="translational", axis=d.axis(j.axis), angle=float(j.angle), **cls._base(j))
+
+
+@joint_kind("PinInSlot")
+class PinInSlotSpec(_TwoPointJoint):
     """A pin-in-slot joint: ``point_j`` moves on a line through ``point_i`` fixed in body i; body
     j rotates freely."""
 
@@ -423,8 +485,18 @@ class PinInSlotSpec(Spec):
     """Direction of the slot in body i's frame: ``[x, y]`` or the name of one of body i's
     ``vectors``. Default ``[1, 0]``."""
 
+    def build(self, b, p):
+        self._points(b, p)
+        axis = b.axis(self.axis, self.point_i, (*p, "axis"))
+        return b.m.PinInSlot(self.name, self.point_i, self.point_j, axis=axis)
 
-class DistanceSpec(Spec):
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="pin_in_slot", axis=d.axis(j.axis), **cls._base(j))
+
+
+@joint_kind("Distance")
+class DistanceSpec(_TwoPointJoint):
     """A distance constraint (massless rod): two points stay ``length`` apart."""
 
     type: Literal["distance"]
@@ -439,11 +511,324 @@ class DistanceSpec(Spec):
     length: Scalar
     """Distance between the points [length], > 0, e.g. ``"120 mm"``."""
 
+    def build(self, b, p):
+        self._points(b, p)
+        length = b.scalar(self.length, "length", (*p, "length"))
+        if not length > 0:
+            b.fail((*p, "length"), f"length {length:g} is not positive", "give a length > 0")
+        return b.m.Distance(self.name, self.point_i, self.point_j, length=length)
+
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="distance", length=float(j.length), **cls._base(j))
+
+
+class _WheelsSpec(Spec):
+    """Two wheels (pitch circles) of two bodies, meshing or rolling."""
+
+    name: Name
+    """Unique name of the pair; its contact forces are result columns ``name.*``."""
+    body_i: Name
+    """Body i (the ring, if ``internal``)."""
+    body_j: Name
+    """Body j (another body)."""
+    radius_i: Scalar
+    """Pitch (or rolling) radius of body i [length], > 0, e.g. ``"40 mm"``."""
+    radius_j: Scalar
+    """Pitch (or rolling) radius of body j [length], > 0."""
+    internal: bool = False
+    """True for body j inside the ring of body i (``radius_i > radius_j``). Default false."""
+    carrier: Name = "ground"
+    """The body holding both centres (a planet carrier); default the ground."""
+    center_i: Ref | None = None
+    """Centre of body i's wheel, ``body_i.point`` (default: its origin)."""
+    center_j: Ref | None = None
+    """Centre of body j's wheel, ``body_j.point`` (default: its origin)."""
+
+    def _args(self, b, p) -> dict:
+        for key in ("body_i", "body_j", "carrier"):
+            b.body(getattr(self, key), (*p, key))
+        if self.body_i == self.body_j:
+            b.fail(p, f"both wheels are on {self.body_i!r}", "pair two different bodies")
+        for key in ("center_i", "center_j"):
+            ref = getattr(self, key)
+            if ref is not None:
+                b.point(ref, (*p, key))
+        radii = {}
+        for key in ("radius_i", "radius_j"):
+            radii[key] = b.scalar(getattr(self, key), "length", (*p, key))
+            if not radii[key] > 0:
+                b.fail((*p, key), f"radius {radii[key]:g} is not positive", "give a radius > 0")
+        if self.internal and not radii["radius_i"] > radii["radius_j"]:
+            b.fail(
+                (*p, "radius_i"),
+                "an internal pair needs radius_i > radius_j",
+                "make body i the ring",
+            )
+        return dict(
+            internal=self.internal,
+            carrier=self.carrier,
+            center_i=self.center_i,
+            center_j=self.center_j,
+            **radii,
+        )
+
+    @staticmethod
+    def _base(j) -> dict:
+        out = {
+            "name": j.name,
+            "body_i": j.body_i,
+            "body_j": j.body_j,
+            "radius_i": float(j.radius_i),
+            "radius_j": float(j.radius_j),
+        }
+        for key, default in (
+            ("internal", False),
+            ("carrier", "ground"),
+            ("center_i", None),
+            ("center_j", None),
+        ):
+            if getattr(j, key) != default:
+                out[key] = getattr(j, key)
+        return out
+
+
+@joint_kind("GearPair")
+class GearPairSpec(_WheelsSpec):
+    """A pair of spur gears (external, or internal with body i the ring gear), the centres
+    held by other joints. Ratio ``-radius_i / radius_j`` (internal: ``+``). Columns
+    ``name.Ft`` (tooth force on gear j), ``name.Fn`` (along the line of action), ``name.Fr``
+    (radial)."""
+
+    type: Literal["gear_pair"]
+    """Joint type: ``gear_pair``."""
+    pressure_angle: Scalar = "20 deg"
+    """Pressure angle [rad] (or ``"20 deg"``), below 90 degrees. Default 20 degrees."""
+
+    def build(self, b, p):
+        angle = b.scalar(self.pressure_angle, "angle", (*p, "pressure_angle"))
+        if not 0 <= angle < math.pi / 2:
+            b.fail((*p, "pressure_angle"), "the pressure angle must be in [0, 90) degrees")
+        return b.m.GearPair(
+            self.name, self.body_i, self.body_j, pressure_angle=angle, **self._args(b, p)
+        )
+
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="gear_pair", pressure_angle=float(j.pressure_angle), **cls._base(j))
+
+
+@joint_kind("RollingDisks")
+class RollingDisksSpec(_WheelsSpec):
+    """Two disks rolling on each other without slipping (external, or disk j inside the ring
+    of body i): their centres a sum (difference) of radii apart, no slip. Columns ``name.N``
+    (normal force on j) and ``name.T`` (friction force on j)."""
+
+    type: Literal["rolling_disks"]
+    """Joint type: ``rolling_disks``."""
+
+    def build(self, b, p):
+        return b.m.RollingDisks(self.name, self.body_i, self.body_j, **self._args(b, p))
+
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="rolling_disks", **cls._base(j))
+
+
+class _OnLineSpec(Spec):
+    """A wheel of one body on a straight line of another."""
+
+    name: Name
+    """Unique name of the pair; its contact forces are result columns ``name.*``."""
+    wheel: Name
+    """The body of the wheel (pinion, disk)."""
+    line_point: Ref
+    """A point of the line (rack's pitch line, track), ``body.point`` or ``ground.point``."""
+    axis: Vec2 | Name = (1.0, 0.0)
+    """Direction of the line in its body's frame: ``[x, y]`` or a vector's name. Default
+    ``[1, 0]``."""
+    radius: Scalar
+    """Pitch (rolling) radius of the wheel [length], > 0."""
+    center: Ref | None = None
+    """Centre of the wheel, ``wheel.point`` (default: the wheel body's origin)."""
+
+    def _args(self, b, p) -> dict:
+        b.body(self.wheel, (*p, "wheel"), ground=False)
+        b.point(self.line_point, (*p, "line_point"))
+        if self.center is not None:
+            b.point(self.center, (*p, "center"))
+        if self.line_point.split(".")[0] == self.wheel:
+            b.fail(p, "the wheel and its line are on the same body", "use two bodies")
+        radius = b.scalar(self.radius, "length", (*p, "radius"))
+        if not radius > 0:
+            b.fail((*p, "radius"), f"radius {radius:g} is not positive", "give a radius > 0")
+        axis = b.axis(self.axis, self.line_point, (*p, "axis"))
+        return dict(radius=radius, axis=axis, center=self.center)
+
+    @staticmethod
+    def _base(j, d) -> dict:
+        out = {
+            "name": j.name,
+            "wheel": j.wheel,
+            "line_point": j.line_point,
+            "radius": float(j.radius),
+            "axis": d.axis(j.axis),
+        }
+        if j.center is not None:
+            out["center"] = j.center
+        return out
+
+
+@joint_kind("RackPinion")
+class RackPinionSpec(_OnLineSpec):
+    """A rack (the line's body, pitch line through ``line_point`` along ``axis``) and a
+    pinion (``wheel``), the pinion's centre and the rack's guide held by other joints. The
+    rack moves ``radius`` per radian of the pinion. Columns ``name.Ft`` (tooth force on the
+    rack along ``axis``), ``name.Fn``, ``name.Fr``."""
+
+    type: Literal["rack_pinion"]
+    """Joint type: ``rack_pinion``."""
+    pressure_angle: Scalar = "20 deg"
+    """Pressure angle [rad] (or ``"20 deg"``), below 90 degrees. Default 20 degrees."""
+
+    def build(self, b, p):
+        angle = b.scalar(self.pressure_angle, "angle", (*p, "pressure_angle"))
+        if not 0 <= angle < math.pi / 2:
+            b.fail((*p, "pressure_angle"), "the pressure angle must be in [0, 90) degrees")
+        return b.m.RackPinion(
+            self.name, self.wheel, self.line_point, pressure_angle=angle, **self._args(b, p)
+        )
+
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="rack_pinion", pressure_angle=float(j.pressure_angle), **cls._base(j, d))
+
+
+@joint_kind("RollingOnLine")
+class RollingOnLineSpec(_OnLineSpec):
+    """A disk (``wheel``) rolling without slipping on a straight line (a track, an incline):
+    its centre a radius from the line, no slip. Columns ``name.N`` (normal force on the disk)
+    and ``name.T`` (friction force on the disk along ``axis``)."""
+
+    type: Literal["rolling_on_line"]
+    """Joint type: ``rolling_on_line``."""
+
+    def build(self, b, p):
+        return b.m.RollingOnLine(self.name, self.wheel, self.line_point, **self._args(b, p))
+
+    @classmethod
+    def from_element(cls, j, d):
+        return cls(type="rolling_on_line", **cls._base(j, d))
+
+
+@joint_kind("CamFollower")
+class CamFollowerSpec(Spec):
+    """A cam (``cam``, turning about ``center``) driving a translating follower (``follower``,
+    its point ``point`` along ``axis``) by a displacement law of the cam angle ``theta``
+    [rad]: ``(P - C) . axis = base + law(theta)``. The follower's guide is a joint of its
+    own. Columns ``name.F`` (the force along the axis, > 0 in contact; a run where it would
+    pull fails, naming the time the follower leaves the cam), ``name.alpha`` (pressure
+    angle), ``name.Fn`` (normal contact force)."""
+
+    type: Literal["cam_follower"]
+    """Joint type: ``cam_follower``."""
+    name: Name
+    """Unique name of the cam pair."""
+    cam: Name
+    """The cam's body."""
+    follower: Name
+    """The follower's body."""
+    law: LawSpec
+    """Displacement [length] as a law of the cam angle: an expression of ``theta`` [rad]
+    (``h/2*(1 - cos(theta))``), a polynomial or spline in ``theta`` [model units]."""
+    base: Scalar
+    """Distance from the cam's centre to the follower's point at zero displacement [length]
+    (the prime circle: base circle plus roller)."""
+    axis: Vec2 | Name = (0.0, 1.0)
+    """Direction of the follower's motion away from the cam, in ``frame``'s frame. Default
+    ``[0, 1]``."""
+    follower_type: Literal["knife", "roller", "flat"] = "knife"
+    """``knife`` (default), ``roller`` (give ``roller``) or ``flat`` (flat-faced)."""
+    roller: Scalar = 0.0
+    """The roller's radius [length]."""
+    frame: Name = "ground"
+    """The body of the follower's guide. Default the ground."""
+    center: Ref | None = None
+    """The cam's centre, ``cam.point`` (default its origin)."""
+    point: Ref | None = None
+    """The follower's point (knife edge or roller centre), ``follower.point`` (default its
+    origin)."""
+
+    def build(self, b, p):
+        import re as _re
+
+        b.body(self.cam, (*p, "cam"), ground=False)
+        b.body(self.follower, (*p, "follower"), ground=False)
+        b.body(self.frame, (*p, "frame"))
+        for key in ("center", "point"):
+            if getattr(self, key) is not None:
+                b.point(getattr(self, key), (*p, key))
+        law = self.law
+        src = law if isinstance(law, str) else getattr(law, "expr", None)
+        if src is not None:
+            if _re.search(r"\bt\b", src):
+                b.fail(
+                    (*p, "law"),
+                    "a cam law is a law of the cam angle theta, not of time t",
+                    "write it with theta [rad], e.g. 'h/2*(1 - cos(theta))'",
+                )
+            src = _re.sub(r"\btheta\b", "t", src)
+            law = src if isinstance(law, str) else law.model_copy(update={"expr": src})
+        base = b.scalar(self.base, "length", (*p, "base"))
+        roller = b.scalar(self.roller, "length", (*p, "roller"))
+        if not base > 0:
+            b.fail((*p, "base"), f"base {base:g} is not positive", "give a distance > 0")
+        if self.follower_type == "roller" and not 0 < roller < base:
+            b.fail((*p, "roller"), "a roller follower needs 0 < roller < base", "")
+        return b.m.CamFollower(
+            self.name,
+            self.cam,
+            self.follower,
+            law=b.law(law, "length", (*p, "law")),
+            base=base,
+            axis=b.axis(self.axis, f"{self.frame}.", (*p, "axis")),
+            follower_type=self.follower_type,
+            roller=roller,
+            frame=self.frame,
+            center=self.center,
+            point=self.point,
+        )
+
+    @classmethod
+    def from_element(cls, j, d):
+        import re as _re
+
+        law = d.law(j.law, j.name)
+        if isinstance(law, str):
+            law = _re.sub(r"\bt\b", "theta", law)
+        elif isinstance(law, dict) and "expr" in law:
+            law = {**law, "expr": _re.sub(r"\bt\b", "theta", law["expr"])}
+        out = {
+            "type": "cam_follower",
+            "name": j.name,
+            "cam": j.cam,
+            "follower": j.follower,
+            "law": law,
+            "base": float(j.base),
+            "axis": d.axis(j.axis),
+            "follower_type": j.follower_type,
+            "roller": float(j.roller),
+            "frame": j.frame,
+        }
+        out.update({k: getattr(j, k) for k in ("center", "point") if getattr(j, k)})
+        return cls(**out)
+
 
 JointSpec = Annotated[
-    RevoluteSpec | WeldSpec | TranslationalSpec | PinInSlotSpec | DistanceSpec,
+    functools.reduce(operator.or_, JOINT_SPECS.values()),
     Field(discriminator="type"),
 ]
+"""Any registered joint kind (:data:`JOINT_SPECS`), told apart by ``type``."""
 
 
 class CoordinateDriverSpec(Spec):

@@ -1,6 +1,8 @@
 """Model of a planar mechanism: bodies, joints, drivers, forces and laws of time."""
 
 from ._body import Body, Ground
+from ._cams import CAM_TYPES, CamFollower
+from ._contacts import CONTACT_TYPES, GearPair, RackPinion, RollingDisks, RollingOnLine
 from ._drivers import (
     DRIVER_TYPES,
     CoordinateDriver,
@@ -35,10 +37,13 @@ from ._laws import (
 from ._model import Model
 
 __all__ = [
+    "CAM_TYPES",
+    "CONTACT_TYPES",
     "DRIVER_TYPES",
     "FORCE_TYPES",
     "JOINT_TYPES",
     "Body",
+    "CamFollower",
     "Constant",
     "CoordinateDriver",
     "Distance",
@@ -46,6 +51,7 @@ __all__ = [
     "Driver",
     "ForceElement",
     "FunctionLaw",
+    "GearPair",
     "GeneralizedForce",
     "Ground",
     "Harmonic",
@@ -58,9 +64,12 @@ __all__ = [
     "PointForce",
     "Polynomial",
     "QuinticHermite",
+    "RackPinion",
     "Ramp",
     "RelativeAngleDriver",
     "Revolute",
+    "RollingDisks",
+    "RollingOnLine",
     "RotarySpringDamper",
     "Spline",
     "SpringDamper",

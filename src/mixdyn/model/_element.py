@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
@@ -20,6 +22,10 @@ class Element(eqx.Module):
     """
 
     name: str = eqx.field(static=True)
+
+    #: The fields holding body indices (filled by :meth:`bind`): the constraint set reads an
+    #: element's bodies from a local vector through them (``mixdyn.equations``).
+    body_fields: ClassVar[tuple[str, ...]] = ("b", "bi", "bj")
 
     def bind(self, r: Resolver) -> Element:
         """Return a copy with every reference resolved (called by the model)."""

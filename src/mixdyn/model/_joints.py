@@ -50,6 +50,23 @@ class Joint(Element):
         """Whether the joint transmits a moment (about its reaction point)."""
         return False
 
+    #: Whether the reaction on body j (``{name}.Fx``, ``.Fy``, ``.M``) is reported; contact
+    #: joints (gears, rolling) report their contact forces instead (:meth:`contact`).
+    generic_reaction: ClassVar[bool] = True
+    #: The joint's own result columns ``{name}.{key}`` and their kinds of quantity.
+    contact_kinds: ClassVar[dict[str, str]] = {}
+
+    def contact(self, q, lam) -> dict:
+        """The joint's own result columns (:attr:`contact_kinds`) from ``q`` and the
+        multipliers of its equations ``lam`` (n_equations,)."""
+        return {}
+
+    def drawing(self) -> dict:
+        """What an animation draws of the joint: ``pins`` [(body, body point)], ``guides``
+        [(ground point, direction)] (lines fixed on the ground), ``circles`` [(body, body
+        point, radius)]."""
+        return {}
+
 
 class _TwoPoint(Joint):
     point_i: str = eqx.field(static=True)
@@ -93,6 +110,9 @@ class Revolute(_TwoPoint):
 
     def residual(self, q):
         return self._d(q)
+
+    def drawing(self):
+        return {"pins": [(self.bj, self.sj)]}
 
 
 class Weld(_TwoPoint):
@@ -152,6 +172,11 @@ class Translational(_TwoPoint):
     def carries_moment(self):
         return True
 
+    def drawing(self):
+        if self.bi < 0 and self.u is not None:
+            return {"guides": [(self.si, self.u)]}
+        return {}
+
 
 class PinInSlot(Translational):
     """Revolute–translational joint: point ``point_j`` of body j moves in a slot of body i.
@@ -169,6 +194,9 @@ class PinInSlot(Translational):
     @property
     def carries_moment(self):
         return False
+
+    def drawing(self):
+        return {"pins": [(self.bj, self.sj)], **super().drawing()}
 
 
 class Distance(_TwoPoint):

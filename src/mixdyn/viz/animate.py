@@ -13,7 +13,7 @@ import shutil
 
 import numpy as np
 
-from ..model import Model, PinInSlot, Revolute, Translational
+from ..model import Model
 from ..model._element import Resolver
 from . import _draw
 from .arrows import arrow_scale, force_arrows
@@ -68,18 +68,35 @@ class Scene:
         self.model = model
         self.names = [b.name for b in model.bodies]
         scale = self._scale(model, q)
+        drawings = [j.drawing() for j in model.joints]
+        rims = {b: [] for b in range(len(model.bodies))}  # circles' samples per body
+        ring = np.linspace(0.0, 2 * np.pi, 48, endpoint=False)
+        for d in drawings:
+            for b, s, radius in d.get("circles", ()):
+                if b >= 0:  # the circle, with a tooth on the body's x axis to show its turning
+                    c = np.asarray(s, dtype=float) + float(radius) * np.stack(
+                        [np.cos(ring), np.sin(ring)], axis=1
+                    )
+                    tooth = np.asarray(s, dtype=float) + np.array([1.15 * float(radius), 0.0])
+                    rims[b].append(np.vstack([c, tooth]))
+        shapes = {b: np.asarray(s, dtype=float) for d in drawings for b, s in d.get("shapes", ())}
         self.outlines = []
         for b, body in enumerate(model.bodies):
+            if b in shapes:  # a body drawn by its own outline (a cam's profile)
+                self.outlines.append(self._place(q, b, shapes[b]))
+                continue
             local = np.array([[0.0, 0.0], *[np.asarray(p) for p in body.points.values()]])
+            if rims[b]:
+                local = np.concatenate([local, *rims[b]])
             hull = _hull(local)
             if len(hull) == 1:
                 h = 0.03 * scale
                 hull = np.array([[-h, -h * 0.6], [h, -h * 0.6], [h, h * 0.6], [-h, h * 0.6]])
             self.outlines.append(self._place(q, b, hull))
         pins = []
-        for j in model.joints:
-            if isinstance(j, Revolute | PinInSlot):
-                b, s = j.bj, np.asarray(j.sj)
+        for d in drawings:
+            for b, s in d.get("pins", ()):
+                s = np.asarray(s, dtype=float)
                 pins.append(
                     self._place(q, b, s[None])[:, 0] if b >= 0 else np.broadcast_to(s, (len(q), 2))
                 )
@@ -94,17 +111,25 @@ class Scene:
                 self.traces.append(np.broadcast_to(s, (len(q), 2)).copy())
             else:
                 self.traces.append(self._place(q, b, s[None])[:, 0])
-        allpts = [o.reshape(-1, 2) for o in self.outlines] + [self.ground] + self.traces
+        rings = [  # circles on the ground (a ring a wheel rolls in)
+            np.asarray(s, dtype=float) + float(radius) * np.stack([np.cos(ring), np.sin(ring)], 1)
+            for d in drawings
+            for b, s, radius in d.get("circles", ())
+            if b < 0
+        ]
+        allpts = [o.reshape(-1, 2) for o in self.outlines] + [self.ground] + self.traces + rings
         allpts = np.concatenate([a for a in allpts if a.size], axis=0)
         lo, hi = allpts.min(axis=0), allpts.max(axis=0)
         span = max(float((hi - lo).max()), 1e-9)
         pad = 0.08 * span
         self.bounds = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
         guides = []
-        for j in model.joints:
-            if isinstance(j, Translational) and j.bi < 0 and j.u is not None:
-                p0, u = np.asarray(j.si), np.asarray(j.u)
+        for d in drawings:
+            for p0, u in d.get("guides", ()):
+                p0, u = np.asarray(p0, dtype=float), np.asarray(u, dtype=float)
                 guides.append([p0 - 2 * span * u, p0 + 2 * span * u])
+        for c in rings:  # drawn as its chords
+            guides += [[c[k], c[(k + 1) % len(c)]] for k in range(len(c))]
         self.guides = np.array(guides).reshape(-1, 2, 2)
 
     @staticmethod

@@ -47,7 +47,7 @@ def force_arrows(result, names=True) -> list[dict]:
         raise ValueError(
             "a kinematic result has no forces to draw; run an inverse, forward or mixed analysis"
         )
-    joints = {j.name: j for j in model.joints}
+    joints = {j.name: j for j in model.joints if j.generic_reaction}
     forces = {f.name: f for f in model.forces if isinstance(f, PointForce)}
     wanted = list(joints) + list(forces) if names is True else list(names)
     cols, units = result.columns(), result.units()

@@ -1,0 +1,176 @@
+"""A cam and its translating follower (knife-edge, roller or flat-faced).
+
+The cam (body ``cam``) turns about its centre ``center``; the follower's point ``point`` (its
+knife edge, or its roller's centre) moves along the follower's axis ``axis`` (fixed in
+``frame``, default the ground; the follower's guide, a translational joint, is a joint of its
+own). The cam is designed by its displacement diagram: the follower's displacement
+``s(theta)`` [length] as a law of the cam angle ``theta = phi_cam - phi_frame`` [rad] (any
+law: harmonic, cycloidal by an expression, polynomial, spline through samples), so
+
+    (P_follower - C_cam) . u - (base + s(theta)) = 0        (1 equation)
+
+with ``u`` the axis and ``base`` the distance at ``s = 0`` (the prime circle's radius:
+the base circle's plus the roller's). The knife-edge, roller and flat-faced followers share
+this motion; the cam profile that produces it differs (drawn by the animation: the pitch
+curve minus the roller, or the envelope of the flat face).
+
+The multiplier gives the force along the axis with which the cam pushes the follower,
+``{name}.F`` [force] (the contact's component along the axis; > 0 while in contact): the cam
+can only push, so a run where ``F`` turns negative has lost contact and fails with
+:class:`mixdyn.errors.ContactLostError` at that time. The pressure angle
+``{name}.alpha`` [rad] (knife-edge and roller: ``atan((s' - e) / x)`` with ``x`` the
+follower point's distance along the axis and ``e`` its offset; flat-faced: 0) gives the
+normal contact force ``{name}.Fn = F / cos(alpha)``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ModelError
+from ._element import Resolver, moving, static_direction
+from ._geometry import angle, cross, point, vector
+from ._joints import _UNBOUND, Joint, _f64
+from ._laws import Law, as_law
+from ._validate import finite
+
+FOLLOWERS = ("knife", "roller", "flat")
+
+
+class CamFollower(Joint):
+    """A cam driving a translating follower by the displacement law ``law`` (see the module).
+
+    Args:
+        name: unique name.
+        cam: the cam's body.
+        follower: the follower's body.
+        law: ``s(theta)`` [length], a law of the cam angle [rad].
+        base: distance from the cam's centre to the follower's point at ``s = 0`` [length].
+        axis: the follower's direction of motion (away from the cam), in ``frame``'s frame.
+        follower_type: ``"knife"``, ``"roller"`` (give ``roller``) or ``"flat"``.
+        roller: the roller's radius [length] (0 for knife-edge and flat-faced followers).
+        frame: the body of the follower's guide (default the ground).
+        center: the cam's centre, ``cam.point`` (default the cam's origin).
+        point: the follower's point, ``follower.point`` (default its origin).
+    """
+
+    cam: str = eqx.field(static=True)
+    follower: str = eqx.field(static=True)
+    law: Law = eqx.field(converter=as_law, kw_only=True)
+    base: object = eqx.field(default=1.0, converter=_f64, kw_only=True)
+    axis: str | tuple[float, ...] = eqx.field(
+        static=True, default=(0.0, 1.0), converter=static_direction, kw_only=True
+    )
+    follower_type: str = eqx.field(static=True, default="knife", kw_only=True)
+    roller: object = eqx.field(default=0.0, converter=_f64, kw_only=True)
+    frame: str = eqx.field(static=True, default="ground", kw_only=True)
+    center: str | None = eqx.field(static=True, default=None, kw_only=True)
+    point: str | None = eqx.field(static=True, default=None, kw_only=True)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bc: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    si: object = eqx.field(default=None, kw_only=True)
+    sj: object = eqx.field(default=None, kw_only=True)
+    u: object = eqx.field(default=None, kw_only=True)
+    body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj", "bc")
+    generic_reaction: ClassVar[bool] = False
+    n_equations: ClassVar[int] = 1
+    equation_labels: ClassVar[tuple[str, ...]] = ("cam",)
+    contact_kinds: ClassVar[dict[str, str]] = {"F": "force", "alpha": "angle", "Fn": "force"}
+    #: The contact column that must stay positive (the cam only pushes).
+    unilateral: ClassVar[str] = "F"
+
+    def __check_init__(self):
+        finite(self.base, "base", self.name, above=0.0)
+        finite(self.roller, "roller", self.name, at_least=0.0)
+        if self.follower_type not in FOLLOWERS:
+            raise ModelError(
+                f"follower_type must be one of {', '.join(FOLLOWERS)}, got {self.follower_type!r}",
+                self.name,
+            )
+        if self.follower_type == "roller" and not float(self.roller) > 0:
+            raise ModelError("a roller follower needs its roller's radius > 0", self.name)
+        if float(self.roller) >= float(self.base):
+            raise ModelError("the roller must be smaller than the base distance", self.name)
+
+    def bind(self, r: Resolver):
+        bi, si = r.point(self.center or self.cam, self.name)
+        bj, sj = r.point(self.point or self.follower, self.name)
+        bc = r.body(self.frame, self.name)
+        if len({bi, bj, bc}) < 3:
+            raise ModelError(
+                "the cam, the follower and the frame must be three bodies "
+                "(the frame may be the ground)",
+                self.name,
+            )
+        u = r.vector(self.axis, bc, self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, u=u)
+
+    def body_indices(self):
+        return moving(self.bi, self.bj, self.bc)
+
+    def reaction_point(self):
+        return self.bj, self.sj
+
+    def theta(self, q):
+        """The cam angle relative to the frame [rad]."""
+        return angle(q, self.bi) - angle(q, self.bc)
+
+    def _geometry(self, q):
+        u = vector(q, self.bc, self.u)
+        d = point(q, self.bj, self.sj) - point(q, self.bi, self.si)
+        return jnp.dot(d, u), cross(u, d)  # along the axis, offset (to the axis' left)
+
+    def residual(self, q):
+        x, _ = self._geometry(q)
+        return (x - self.base - self.law(self.theta(q)))[None]
+
+    def contact(self, q, lam):
+        F = -lam[0]
+        if self.follower_type == "flat":
+            alpha = jnp.zeros_like(F)
+        else:
+            x, e = self._geometry(q)
+            ds = jax.jvp(self.law, (self.theta(q),), (jnp.ones_like(F),))[1]
+            alpha = jnp.arctan2(ds - e, x)
+        return {"F": F, "alpha": alpha, "Fn": F / jnp.cos(alpha)}
+
+    def profile(self, n: int = 180) -> np.ndarray:
+        """The cam's profile in its own frame, (n, 2) [length], at the frame angle 0 of the
+        rough start: the pitch curve moved in by the roller (knife-edge: the pitch curve),
+        or the envelope of the flat face's lines."""
+        th = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
+        s = np.asarray(jax.vmap(self.law)(jnp.asarray(th)))
+        u = np.asarray(self.u, dtype=float)
+        # the follower's direction seen from the cam turned by theta: A(-theta) u
+        c, sn = np.cos(th), np.sin(th)
+        dirs = np.stack([c * u[0] + sn * u[1], -sn * u[0] + c * u[1]], axis=1)
+        pitch = (float(self.base) + s)[:, None] * dirs
+        if self.follower_type == "flat":  # envelope of the faces: (b + s) w + s' w_perp
+            ds = np.gradient(s, th, edge_order=2)
+            perp = np.stack([-dirs[:, 1], dirs[:, 0]], axis=1)
+            return pitch - ds[:, None] * perp
+        if self.follower_type == "roller":
+            dp = np.gradient(pitch, th, axis=0, edge_order=2)
+            normal = np.stack([dp[:, 1], -dp[:, 0]], axis=1)
+            normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+            outward = np.sign(np.sum(normal * pitch, axis=1, keepdims=True))
+            return pitch - float(self.roller) * outward * normal
+        return pitch
+
+    def drawing(self):
+        out = {"shapes": [(self.bi, np.asarray(self.si) + self.profile())]}
+        if self.follower_type == "roller":
+            out["circles"] = [(self.bj, self.sj, self.roller)]
+        out["pins"] = [(self.bj, self.sj)]
+        return out
+
+
+CAM_TYPES: dict[str, type[Joint]] = {"cam_follower": CamFollower}

@@ -1,0 +1,333 @@
+"""Joints of bodies that touch along pitch curves: gear pairs, rack and pinion, a disk rolling
+on a line, two disks rolling on each other (all without slipping).
+
+No slip is written at the position level on the angle ``theta`` of the line of centres, so
+that the constraint force is the physical contact force: for two wheels of pitch radii
+``R_i``, ``R_j`` whose centres are ``d = c_j - c_i`` apart (``e = d / |d|``,
+``t = z x e``), the pitch points' tangential velocities match when
+``R_i (phi_i - theta) + s R_j (phi_j - theta) = const`` (``s = +1`` external, ``-1``
+internal with body i the ring), whose Jacobian gives body j a force ``lambda t`` at the pitch
+point (Willis: ``(w_j - w_c) / (w_i - w_c) = -s R_i / R_j`` for centres fixed on a carrier
+``c``). ``theta`` is measured from the line of centres at the bodies' rough start ``q0`` in
+the carrier's frame, so it is continuous while the line of centres turns less than half a turn
+relative to the carrier from there (always, for centres fixed on it). The constants of the
+equations come from the bodies' ``q0``: give the bodies the angles at which their teeth (or
+marks) mesh. Lines (rack, rolling track) are straight, fixed in a body (or the ground).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ModelError
+from ._element import Resolver, moving, static_direction
+from ._geometry import GROUND, angle, cross, point, rot, vector
+from ._joints import _UNBOUND, Joint, _f64
+from ._validate import finite
+
+
+def _start(r: Resolver, b: int, s) -> tuple[np.ndarray, float]:
+    """Global position of body point ``s`` and the body's angle at the rough start ``q0``."""
+    s = np.asarray(s, dtype=float)
+    if b == GROUND:
+        return s, 0.0
+    x, y, phi = (float(v) for v in np.asarray(r._body_objs[b].q0))
+    c, sn = math.cos(phi), math.sin(phi)
+    return np.array([x + c * s[0] - sn * s[1], y + sn * s[0] + c * s[1]]), phi
+
+
+def _wrap(a: float) -> float:
+    return (a + math.pi) % (2 * math.pi) - math.pi
+
+
+class _Wheels(Joint):
+    """Two wheels (pitch circles of radii ``radius_i``, ``radius_j`` about body points
+    ``center_i``, ``center_j``) meshing or rolling, on a carrier body (default the ground)."""
+
+    body_i: str = eqx.field(static=True)
+    body_j: str = eqx.field(static=True)
+    radius_i: object = eqx.field(default=1.0, converter=_f64)
+    radius_j: object = eqx.field(default=1.0, converter=_f64)
+    internal: bool = eqx.field(static=True, default=False)
+    carrier: str = eqx.field(static=True, default="ground")
+    center_i: str | None = eqx.field(static=True, default=None)
+    center_j: str | None = eqx.field(static=True, default=None)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bc: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    si: object = eqx.field(default=None, kw_only=True)
+    sj: object = eqx.field(default=None, kw_only=True)
+    e0: object = eqx.field(default=None, kw_only=True)  # line of centres at q0, carrier frame
+    c0: object = eqx.field(default=None, kw_only=True)  # the no-slip constant [length*rad]
+    body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj", "bc")
+    generic_reaction: ClassVar[bool] = False
+
+    def __check_init__(self):
+        finite((self.radius_i, self.radius_j), "radius_i and radius_j", self.name, above=0.0)
+        if self.internal and not float(self.radius_i) > float(self.radius_j):
+            raise ModelError(
+                f"an internal pair needs body i as the ring, radius_i > radius_j (got "
+                f"{float(self.radius_i):g} and {float(self.radius_j):g})",
+                self.name,
+            )
+
+    @property
+    def _s(self) -> float:
+        return -1.0 if self.internal else 1.0
+
+    def bind(self, r: Resolver):
+        bi, si = r.point(self.center_i or self.body_i, self.name)
+        bj, sj = r.point(self.center_j or self.body_j, self.name)
+        bc = r.body(self.carrier, self.name)
+        if bi == bj:
+            raise ModelError("a wheel pair needs two different bodies", self.name)
+        ci, phi_i = _start(r, bi, si)
+        cj, phi_j = _start(r, bj, sj)
+        _, phi_c = _start(r, bc, np.zeros(2))
+        d = cj - ci
+        if not np.linalg.norm(d) > 0:
+            raise ModelError(
+                "the wheels' centres coincide at the start q0; place them apart "
+                "by the sum (external) or difference (internal) of the radii",
+                self.name,
+            )
+        theta = math.atan2(d[1], d[0])
+        c, s = math.cos(phi_c), math.sin(phi_c)
+        e0 = np.array([[c, s], [-s, c]]) @ (d / np.linalg.norm(d))
+        Ri, Rj = float(self.radius_i), float(self.radius_j)
+        c0 = Ri * (phi_i - theta) + self._s * Rj * (phi_j - theta)
+        return dataclasses.replace(
+            self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, e0=_f64(e0), c0=_f64(c0)
+        )
+
+    def body_indices(self):
+        return moving(self.bi, self.bj, self.bc)
+
+    def reaction_point(self):
+        return self.bj, self.sj
+
+    def _d(self, q):
+        return point(q, self.bj, self.sj) - point(q, self.bi, self.si)
+
+    def theta(self, q):
+        """Angle of the line of centres [rad], continuous from its start (see the module)."""
+        dc = rot(angle(q, self.bc)).T @ self._d(q)
+        e0 = self.e0
+        rel = jnp.arctan2(cross(e0, dc), jnp.dot(e0, dc))
+        return angle(q, self.bc) + jnp.arctan2(e0[1], e0[0]) + rel
+
+    def _no_slip(self, q):
+        th = self.theta(q)
+        return (
+            self.radius_i * (angle(q, self.bi) - th)
+            + self._s * self.radius_j * (angle(q, self.bj) - th)
+            - self.c0
+        )
+
+    def drawing(self):
+        return {"circles": [(self.bi, self.si, self.radius_i), (self.bj, self.sj, self.radius_j)]}
+
+
+class GearPair(_Wheels):
+    """A pair of spur gears (external, or internal with body i the ring gear), pitch radii
+    ``radius_i``, ``radius_j`` [length] about ``center_i``, ``center_j`` (default: the bodies'
+    origins), the centres held by other joints (pins on the ground or on a carrier).
+
+    Equation (1): no slip at the pitch point (see the module), so
+    ``(w_j - w_c) / (w_i - w_c) = -R_i / R_j`` (external) or ``+R_i / R_j`` (internal).
+    Result columns: ``{name}.Ft`` the tangential tooth force on gear j [force], along
+    ``t = z x e`` (``e``: from i's centre to j's); ``.Fn = Ft / cos(pressure_angle)``, the
+    force along the line of action; ``.Fr = |Ft| tan(pressure_angle)``, the radial force
+    pushing the gears apart (carried by the pins; the constraint itself transmits ``Ft``).
+    """
+
+    pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
+    n_equations: ClassVar[int] = 1
+    equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
+    contact_kinds: ClassVar[dict[str, str]] = {"Ft": "force", "Fn": "force", "Fr": "force"}
+
+    def __check_init__(self):
+        super().__check_init__()
+        finite(self.pressure_angle, "pressure_angle", self.name, at_least=0.0)
+        if not float(self.pressure_angle) < math.pi / 2:
+            raise ModelError("the pressure angle must be below 90 degrees", self.name)
+
+    def residual(self, q):
+        return self._no_slip(q)[None]
+
+    def contact(self, q, lam):
+        L = (self.radius_i + self._s * self.radius_j) / jnp.linalg.norm(self._d(q))
+        Ft = lam[0] * L
+        return {
+            "Ft": Ft,
+            "Fn": Ft / jnp.cos(self.pressure_angle),
+            "Fr": jnp.abs(Ft) * jnp.tan(self.pressure_angle),
+        }
+
+
+class RollingDisks(_Wheels):
+    """Two disks rolling on each other without slipping: external, or disk j inside the ring
+    of body i (``internal``). Equations (2): the centres ``R_i + R_j`` (or ``R_i - R_j``)
+    apart, and no slip. Result columns: ``{name}.N`` the normal force on disk j pushing it off
+    body i (positive while they press together) and ``{name}.T`` the tangential (friction)
+    force on j along ``t = z x e`` [force].
+    """
+
+    n_equations: ClassVar[int] = 2
+    equation_labels: ClassVar[tuple[str, ...]] = ("contact", "no_slip")
+    contact_kinds: ClassVar[dict[str, str]] = {"N": "force", "T": "force"}
+    #: The contact column that must stay positive (the bodies only press).
+    unilateral: ClassVar[str] = "N"
+
+    def residual(self, q):
+        gap = jnp.linalg.norm(self._d(q)) - (self.radius_i + self._s * self.radius_j)
+        return jnp.stack([gap, self._no_slip(q)])
+
+    def contact(self, q, lam):
+        L = (self.radius_i + self._s * self.radius_j) / jnp.linalg.norm(self._d(q))
+        return {"N": -self._s * lam[0], "T": lam[1] * L}
+
+
+class _OnLine(Joint):
+    """A wheel (body i, pitch radius ``radius`` about ``center``) on a straight line of body j
+    through ``line_point`` with direction ``axis`` (body j's frame); the wheel on the side of
+    the line it starts on (at ``q0``)."""
+
+    wheel: str = eqx.field(static=True)
+    line_point: str = eqx.field(static=True)
+    radius: object = eqx.field(default=1.0, converter=_f64)
+    axis: str | tuple[float, ...] = eqx.field(
+        static=True, default=(1.0, 0.0), converter=static_direction
+    )
+    center: str | None = eqx.field(static=True, default=None)
+    bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+    si: object = eqx.field(default=None, kw_only=True)
+    sj: object = eqx.field(default=None, kw_only=True)
+    u: object = eqx.field(default=None, kw_only=True)
+    side: float = eqx.field(static=True, default=1.0, kw_only=True)
+    c0: object = eqx.field(default=None, kw_only=True)
+    body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj")
+    generic_reaction: ClassVar[bool] = False
+
+    def __check_init__(self):
+        finite(self.radius, "radius", self.name, above=0.0)
+        if not isinstance(self.axis, str):
+            finite(self.axis, "axis", self.name)
+
+    def bind(self, r: Resolver):
+        bi, si = r.point(self.center or self.wheel, self.name)
+        bj, sj = r.point(self.line_point, self.name)
+        if bi == bj:
+            raise ModelError("the wheel and the line must be on two different bodies", self.name)
+        u = r.vector(self.axis, bj, self.name)
+        ci, phi_i = _start(r, bi, si)
+        pj, phi_j = _start(r, bj, sj)
+        c, s = math.cos(phi_j), math.sin(phi_j)
+        ug = np.array([[c, -s], [s, c]]) @ np.asarray(u)
+        n = np.array([-ug[1], ug[0]])
+        h = float(np.dot(ci - pj, n))
+        if abs(h) < 1e-12 * max(1.0, float(np.abs(ci).max())):
+            raise ModelError(
+                "the wheel's centre starts on the line; place it on one side, a radius away",
+                self.name,
+            )
+        side = 1.0 if h > 0 else -1.0
+        c0 = float(np.dot(ci - pj, ug)) + side * float(self.radius) * (phi_i - phi_j)
+        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u, side=side, c0=_f64(c0))
+
+    def body_indices(self):
+        return moving(self.bi, self.bj)
+
+    def reaction_point(self):
+        return self.bi, self.si
+
+    def _rel(self, q):
+        return point(q, self.bi, self.si) - point(q, self.bj, self.sj)
+
+    def _along(self, q):
+        """Position of the centre along the line and the no-slip residual."""
+        u = vector(q, self.bj, self.u)
+        x = jnp.dot(self._rel(q), u)
+        return x + self.side * self.radius * (angle(q, self.bi) - angle(q, self.bj)) - self.c0
+
+    def _normal(self, q):
+        u = vector(q, self.bj, self.u)
+        n = jnp.stack([-u[1], u[0]])
+        return jnp.dot(self._rel(q), n) - self.side * self.radius
+
+    def drawing(self):
+        out = {"circles": [(self.bi, self.si, self.radius)]}
+        if self.bj == GROUND:
+            out["guides"] = [(np.asarray(self.sj), np.asarray(self.u))]
+        return out
+
+
+class RackPinion(_OnLine):
+    """A rack (body j, its pitch line through ``line_point`` along ``axis``) and a pinion
+    (body i, pitch radius ``radius``), the pinion's centre held by other joints.
+
+    Equation (1): no slip, ``x + side R (phi_i - phi_j) = const`` with ``x`` the pinion
+    centre's position along the rack; the rack moves ``R`` per radian of the pinion.
+    Result columns: ``{name}.Ft`` the tooth force on the rack along ``axis`` [force],
+    ``.Fn = Ft / cos(pressure_angle)``, ``.Fr = |Ft| tan(pressure_angle)``.
+    """
+
+    pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
+    n_equations: ClassVar[int] = 1
+    equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
+    contact_kinds: ClassVar[dict[str, str]] = {"Ft": "force", "Fn": "force", "Fr": "force"}
+
+    def __check_init__(self):
+        super().__check_init__()
+        finite(self.pressure_angle, "pressure_angle", self.name, at_least=0.0)
+        if not float(self.pressure_angle) < math.pi / 2:
+            raise ModelError("the pressure angle must be below 90 degrees", self.name)
+
+    def residual(self, q):
+        return self._along(q)[None]
+
+    def contact(self, q, lam):
+        Ft = lam[0]
+        return {
+            "Ft": Ft,
+            "Fn": Ft / jnp.cos(self.pressure_angle),
+            "Fr": jnp.abs(Ft) * jnp.tan(self.pressure_angle),
+        }
+
+
+class RollingOnLine(_OnLine):
+    """A disk (body i, radius ``radius``) rolling without slipping on a straight line of body
+    j (a track, an incline: ``line_point``, ``axis``).
+
+    Equations (2): the centre a radius from the line, and no slip. Result columns:
+    ``{name}.N`` the normal force on the disk, away from the line (positive while it presses
+    on it), and ``{name}.T`` the friction force on the disk along ``axis`` [force]: rolling
+    needs a friction coefficient of at least ``|T| / N``.
+    """
+
+    n_equations: ClassVar[int] = 2
+    equation_labels: ClassVar[tuple[str, ...]] = ("contact", "no_slip")
+    contact_kinds: ClassVar[dict[str, str]] = {"N": "force", "T": "force"}
+    #: The contact column that must stay positive (the bodies only press).
+    unilateral: ClassVar[str] = "N"
+
+    def residual(self, q):
+        return jnp.stack([self._normal(q), self._along(q)])
+
+    def contact(self, q, lam):
+        return {"N": -self.side * lam[0], "T": -lam[1]}
+
+
+CONTACT_TYPES: dict[str, type[Joint]] = {
+    "gear_pair": GearPair,
+    "rolling_disks": RollingDisks,
+    "rack_pinion": RackPinion,
+    "rolling_on_line": RollingOnLine,
+}
