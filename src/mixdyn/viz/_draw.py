@@ -26,7 +26,7 @@ COLORS = (
 )
 
 
-def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 80) -> pathlib.Path:
+def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 100) -> pathlib.Path:
     """Write the animation ``data`` (see :func:`mixdyn.viz.animate.movie_data`) to ``path``:
     ``.gif`` (Pillow) or ``.mp4`` (ffmpeg).
 

@@ -176,7 +176,7 @@ def animate(
     trace=(),
     title: str | None = None,
     size: tuple[float, float] | None = None,
-    dpi: int = 80,
+    dpi: int = 100,
     forces=False,
 ) -> pathlib.Path:
     """Write an animation of a motion: ``.gif`` (Pillow), ``.mp4`` (needs ffmpeg) or
