@@ -292,3 +292,22 @@ def test_bad_contacts_in_files_are_refused_at_their_line(tmp_path, edit, words):
     path.write_text(text.replace(old, new, 1))
     res = CliRunner().invoke(app, ["check", str(path)])
     assert res.exit_code == 2 and words in res.output, res.output
+
+
+def test_a_disk_held_on_an_incline_statics():
+    """Statics: a disk held on a 30 degree incline by a torque: the normal force m g cos,
+    the friction m g sin up the slope, the holding torque its moment m g sin r."""
+    th, r, m = math.radians(30), 0.1, 2.0
+    model, _ = _incline(th, r, m)
+    model = md.Model(
+        bodies=model.bodies,
+        joints=model.joints,
+        drivers=[md.CoordinateDriver("hold", "disk", "phi", law=0.0)],
+        ground={"O": (0.0, 0.0)},
+        gravity=(0.0, -G),
+        units=md.SI,
+    )
+    res = md.statics(model)
+    np.testing.assert_allclose(res["roll.N"], m * G * math.cos(th), rtol=1e-12)
+    np.testing.assert_allclose(res["roll.T"], -m * G * math.sin(th), rtol=1e-12)
+    np.testing.assert_allclose(res["hold"], m * G * math.sin(th) * r, rtol=1e-12)

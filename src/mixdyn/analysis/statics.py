@@ -33,7 +33,13 @@ from ..errors import ConvergenceError
 from ..model import Model
 from ._assembly import length_scale
 from ._prepare import prepare_kinematic
-from ._reactions import driver_efforts, joint_reactions, reaction_columns, reaction_kinds
+from ._reactions import (
+    contact_columns,
+    driver_efforts,
+    joint_reactions,
+    reaction_columns,
+    reaction_kinds,
+)
 from .result import Result
 
 
@@ -204,6 +210,9 @@ def _result(model, c, prep, t, q, lam) -> Result:
     qj, lj = jnp.asarray(q), jnp.asarray(lam)
     R = np.asarray(_reactions(c, qj, jnp.asarray(t), lj))[None]
     extra = {k: np.asarray(v) for k, v in reaction_columns(c, R).items()}
+    extra.update(
+        {k: np.asarray(v)[None] for k, v in contact_columns(c, qj, lj[: c.m]).items()}
+    )
     powers = np.zeros((1, c.m))
     efforts = driver_efforts(c, np.asarray(lam)[None], powers, len(prep.drivers))
     kinds = reaction_kinds(c)
