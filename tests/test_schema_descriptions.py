@@ -66,8 +66,8 @@ PROPERTIES = {
     "OptimizeRunSpec": "kind max_iterations name objective run sense vary",
     # the statics run kind (issue 13)
     # gears, rack and pinion, rolling, cams (issue 13)
-    "CamFollowerSpec": "axis base cam center follower follower_type frame law name point "
-    "roller type",
+    "CamFollowerSpec": "axis base cam center follower follower_type frame law motion name pivot "
+    "point roller sense type",
     "GearPairSpec": "body_i body_j carrier center_i center_j internal name pressure_angle "
     "radius_i radius_j type",
     "RackPinionSpec": "axis center line_point name pressure_angle radius type wheel",
@@ -91,7 +91,7 @@ PROPERTIES = {
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
 # and optimize kinds, a plot's x column, the statics kind and output_units.
-STRIPPED_SHA256 = "fcb20a76a94f983f814d9995ca963ddff34ca6259d1073e553264f831fb145ea"
+STRIPPED_SHA256 = "b107533565b3cb08c719ec34472308ece710339223789b51da5407d9d43de7d5"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

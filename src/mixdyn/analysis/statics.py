@@ -210,9 +210,7 @@ def _result(model, c, prep, t, q, lam) -> Result:
     qj, lj = jnp.asarray(q), jnp.asarray(lam)
     R = np.asarray(_reactions(c, qj, jnp.asarray(t), lj))[None]
     extra = {k: np.asarray(v) for k, v in reaction_columns(c, R).items()}
-    extra.update(
-        {k: np.asarray(v)[None] for k, v in contact_columns(c, qj, lj[: c.m]).items()}
-    )
+    extra.update({k: np.asarray(v)[None] for k, v in contact_columns(c, qj, lj[: c.m]).items()})
     powers = np.zeros((1, c.m))
     efforts = driver_efforts(c, np.asarray(lam)[None], powers, len(prep.drivers))
     kinds = reaction_kinds(c)

@@ -739,11 +739,18 @@ class CamFollowerSpec(Spec):
     follower: Name
     """The follower's body."""
     law: LawSpec
-    """Displacement [length] as a law of the cam angle: an expression of ``theta`` [rad]
-    (``h/2*(1 - cos(theta))``), a polynomial or spline in ``theta`` [model units]."""
-    base: Scalar
+    """Displacement [length] (an oscillating follower: its angle [rad]) as a law of the cam
+    angle: an expression of ``theta`` [rad] (``h/2*(1 - cos(theta))``), a polynomial or spline
+    in ``theta`` [model units]."""
+    base: Scalar | None = None
     """Distance from the cam's centre to the follower's point at zero displacement [length]
-    (the prime circle: base circle plus roller)."""
+    (the prime circle: base circle plus roller); a translating follower needs it."""
+    motion: Literal["translating", "oscillating"] = "translating"
+    """``translating`` (default: along ``axis``) or ``oscillating`` (about ``pivot``)."""
+    pivot: Ref | None = None
+    """An oscillating follower's pivot, a point of ``frame``."""
+    sense: Literal[1, -1] = 1
+    """+1 if an oscillating follower's angle grows as the cam lifts it, -1 if it falls."""
     axis: Vec2 | Name = (0.0, 1.0)
     """Direction of the follower's motion away from the cam, in ``frame``'s frame. Default
     ``[0, 1]``."""
@@ -779,18 +786,35 @@ class CamFollowerSpec(Spec):
                 )
             src = _re.sub(r"\btheta\b", "t", src)
             law = src if isinstance(law, str) else law.model_copy(update={"expr": src})
-        base = b.scalar(self.base, "length", (*p, "base"))
+        oscillating = self.motion == "oscillating"
+        if oscillating and self.pivot is None:
+            b.fail(p, "an oscillating follower needs its pivot", "give pivot: frame.point")
+        if oscillating:
+            b.point(self.pivot, (*p, "pivot"))
+            if self.follower_type == "flat":
+                b.fail(
+                    (*p, "follower_type"),
+                    "a flat-faced follower here translates",
+                    "give knife or roller",
+                )
+        if not oscillating and self.base is None:
+            b.fail(p, "a translating follower needs its base distance", "give base: ...")
+        base = 1.0 if self.base is None else b.scalar(self.base, "length", (*p, "base"))
         roller = b.scalar(self.roller, "length", (*p, "roller"))
         if not base > 0:
             b.fail((*p, "base"), f"base {base:g} is not positive", "give a distance > 0")
-        if self.follower_type == "roller" and not 0 < roller < base:
+        if self.follower_type == "roller" and not 0 < roller < (math.inf if oscillating else base):
             b.fail((*p, "roller"), "a roller follower needs 0 < roller < base", "")
+        kind = "angle" if oscillating else "length"
         return b.m.CamFollower(
             self.name,
             self.cam,
             self.follower,
-            law=b.law(law, "length", (*p, "law")),
+            law=b.law(law, kind, (*p, "law")),
             base=base,
+            motion=self.motion,
+            pivot=self.pivot,
+            sense=float(self.sense),
             axis=b.axis(self.axis, f"{self.frame}.", (*p, "axis")),
             follower_type=self.follower_type,
             roller=roller,
@@ -814,12 +838,17 @@ class CamFollowerSpec(Spec):
             "cam": j.cam,
             "follower": j.follower,
             "law": law,
-            "base": float(j.base),
             "axis": d.axis(j.axis),
             "follower_type": j.follower_type,
             "roller": float(j.roller),
             "frame": j.frame,
+            "motion": j.motion,
+            "sense": int(j.sense),
         }
+        if j.motion == "translating":
+            out["base"] = float(j.base)
+        else:
+            out["pivot"] = j.pivot
         out.update({k: getattr(j, k) for k in ("center", "point") if getattr(j, k)})
         return cls(**out)
 

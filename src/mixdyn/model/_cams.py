@@ -1,4 +1,4 @@
-"""A cam and its translating follower (knife-edge, roller or flat-faced).
+"""A cam and its follower: translating (knife-edge, roller or flat-faced) or oscillating.
 
 The cam (body ``cam``) turns about its centre ``center``; the follower's point ``point`` (its
 knife edge, or its roller's centre) moves along the follower's axis ``axis`` (fixed in
@@ -21,6 +21,12 @@ can only push, so a run where ``F`` turns negative has lost contact and fails wi
 ``{name}.alpha`` [rad] (knife-edge and roller: ``atan((s' - e) / x)`` with ``x`` the
 follower point's distance along the axis and ``e`` its offset; flat-faced: 0) gives the
 normal contact force ``{name}.Fn = F / cos(alpha)``.
+
+An oscillating follower (``motion="oscillating"``) turns about ``pivot`` (a point of
+``frame``) by the law, an angle [rad]: ``phi_follower - phi_frame = psi0 + sense * s(theta)``
+(``psi0`` from the rough start; ``sense`` +1 if the follower's angle grows as the cam lifts
+it, -1 if it falls). Its column ``{name}.M`` is the cam's moment on the follower in the
+lifting sense [torque], > 0 while in contact (a run where it would pull fails the same way).
 """
 
 from __future__ import annotations
@@ -42,6 +48,7 @@ from ._laws import Law, as_law
 from ._validate import finite
 
 FOLLOWERS = ("knife", "roller", "flat")
+MOTIONS = ("translating", "oscillating")
 
 
 class CamFollower(Joint):
@@ -59,6 +66,10 @@ class CamFollower(Joint):
         frame: the body of the follower's guide (default the ground).
         center: the cam's centre, ``cam.point`` (default the cam's origin).
         point: the follower's point, ``follower.point`` (default its origin).
+        motion: ``"translating"`` (default) or ``"oscillating"`` (give ``pivot``; the law is
+            then an angle [rad]).
+        pivot: an oscillating follower's pivot, a point of ``frame``.
+        sense: +1 if an oscillating follower's angle grows as it lifts, -1 if it falls.
     """
 
     cam: str = eqx.field(static=True)
@@ -73,6 +84,12 @@ class CamFollower(Joint):
     frame: str = eqx.field(static=True, default="ground", kw_only=True)
     center: str | None = eqx.field(static=True, default=None, kw_only=True)
     point: str | None = eqx.field(static=True, default=None, kw_only=True)
+    motion: str = eqx.field(static=True, default="translating", kw_only=True)
+    pivot: str | None = eqx.field(static=True, default=None, kw_only=True)
+    sense: float = eqx.field(static=True, default=1.0, kw_only=True)
+    psi0: object = eqx.field(default=0.0, converter=_f64, kw_only=True)
+    draw0: tuple = eqx.field(static=True, default=(), kw_only=True)  # for profile()
+    sp: object = eqx.field(default=None, kw_only=True)
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bc: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
@@ -83,9 +100,17 @@ class CamFollower(Joint):
     generic_reaction: ClassVar[bool] = False
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("cam",)
-    contact_kinds: ClassVar[dict[str, str]] = {"F": "force", "alpha": "angle", "Fn": "force"}
-    #: The contact column that must stay positive (the cam only pushes).
-    unilateral: ClassVar[str] = "F"
+
+    @property
+    def contact_kinds(self) -> dict[str, str]:
+        if self.motion == "oscillating":
+            return {"M": "torque"}
+        return {"F": "force", "alpha": "angle", "Fn": "force"}
+
+    @property
+    def unilateral(self) -> str:
+        """The contact column that must stay positive (the cam only pushes)."""
+        return "M" if self.motion == "oscillating" else "F"
 
     def __check_init__(self):
         finite(self.base, "base", self.name, above=0.0)
@@ -97,7 +122,24 @@ class CamFollower(Joint):
             )
         if self.follower_type == "roller" and not float(self.roller) > 0:
             raise ModelError("a roller follower needs its roller's radius > 0", self.name)
-        if float(self.roller) >= float(self.base):
+        if self.motion not in MOTIONS:
+            raise ModelError(
+                f"motion must be one of {', '.join(MOTIONS)}, got {self.motion!r}", self.name
+            )
+        if self.motion == "oscillating":
+            if self.pivot is None:
+                raise ModelError(
+                    "an oscillating follower needs its pivot (a point of the frame)", self.name
+                )
+            if self.sense not in (1.0, -1.0):
+                raise ModelError("sense must be +1 or -1", self.name)
+            if self.follower_type == "flat":
+                raise ModelError(
+                    "a flat-faced follower here translates; give knife or roller "
+                    "for an oscillating one",
+                    self.name,
+                )
+        elif float(self.roller) >= float(self.base):
             raise ModelError("the roller must be smaller than the base distance", self.name)
 
     def bind(self, r: Resolver):
@@ -111,7 +153,30 @@ class CamFollower(Joint):
                 self.name,
             )
         u = r.vector(self.axis, bc, self.name)
-        return dataclasses.replace(self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, u=u)
+        extra = {}
+        if self.motion == "oscillating":
+            from ._contacts import _start
+
+            b, sp = r.point(self.pivot, self.name)
+            if b != bc:
+                raise ModelError(
+                    f"the pivot {self.pivot!r} must be a point of the frame {self.frame!r}",
+                    self.name,
+                )
+            _, phi_c = _start(r, bc, np.zeros(2))
+            _, phi_i = _start(r, bi, np.zeros(2))
+            _, phi_j = _start(r, bj, np.zeros(2))
+            s0 = float(self.law(jnp.asarray(phi_i - phi_c)))
+            center, _ = _start(r, bi, si)
+            pivot, _ = _start(r, bc, sp)
+            pt, _ = _start(r, bj, sj)
+            draw0 = (*(pivot - center), *(pt - pivot), phi_i - phi_c, s0)
+            extra = {
+                "sp": sp,
+                "psi0": _f64(phi_j - phi_c - self.sense * s0),
+                "draw0": tuple(float(v) for v in draw0),
+            }
+        return dataclasses.replace(self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, u=u, **extra)
 
     def body_indices(self):
         return moving(self.bi, self.bj, self.bc)
@@ -129,10 +194,15 @@ class CamFollower(Joint):
         return jnp.dot(d, u), cross(u, d)  # along the axis, offset (to the axis' left)
 
     def residual(self, q):
+        if self.motion == "oscillating":
+            psi = angle(q, self.bj) - angle(q, self.bc)
+            return (psi - self.psi0 - self.sense * self.law(self.theta(q)))[None]
         x, _ = self._geometry(q)
         return (x - self.base - self.law(self.theta(q)))[None]
 
     def contact(self, q, lam):
+        if self.motion == "oscillating":
+            return {"M": -self.sense * lam[0]}
         F = -lam[0]
         if self.follower_type == "flat":
             alpha = jnp.zeros_like(F)
@@ -148,11 +218,23 @@ class CamFollower(Joint):
         or the envelope of the flat face's lines."""
         th = np.linspace(0.0, 2 * math.pi, n, endpoint=False)
         s = np.asarray(jax.vmap(self.law)(jnp.asarray(th)))
-        u = np.asarray(self.u, dtype=float)
-        # the follower's direction seen from the cam turned by theta: A(-theta) u
         c, sn = np.cos(th), np.sin(th)
-        dirs = np.stack([c * u[0] + sn * u[1], -sn * u[0] + c * u[1]], axis=1)
-        pitch = (float(self.base) + s)[:, None] * dirs
+
+        def to_cam(v):  # global vectors (n, 2) seen from the cam turned by theta: A(-theta) v
+            return np.stack([c * v[:, 0] + sn * v[:, 1], -sn * v[:, 0] + c * v[:, 1]], axis=1)
+
+        if self.motion == "oscillating":
+            px, py, ax, ay, _, s0 = self.draw0
+            dpsi = self.sense * (s - s0)
+            arm = np.stack(
+                [np.cos(dpsi) * ax - np.sin(dpsi) * ay, np.sin(dpsi) * ax + np.cos(dpsi) * ay],
+                axis=1,
+            )
+            pitch = to_cam(np.array([px, py]) + arm)
+        else:
+            u = np.broadcast_to(np.asarray(self.u, dtype=float), (n, 2))
+            dirs = to_cam(u)
+            pitch = (float(self.base) + s)[:, None] * dirs
         if self.follower_type == "flat":  # envelope of the faces: (b + s) w + s' w_perp
             ds = np.gradient(s, th, edge_order=2)
             perp = np.stack([-dirs[:, 1], dirs[:, 0]], axis=1)
