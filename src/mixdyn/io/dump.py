@@ -216,70 +216,19 @@ class _Describer:
         return a if isinstance(a, str) else tuple(float(x) for x in a)
 
     def driver(self, d):
-        law = self.law(d.law, d.name)
-        if isinstance(d, m.CoordinateDriver):
-            return s.CoordinateDriverSpec(
-                type="coordinate", name=d.name, coordinate=f"{d.body}.{d.coordinate}", law=law
-            )
-        if isinstance(d, m.PointDriver):
-            if not isinstance(d.point, str):
-                raise ModelError("a point given by coordinates cannot be written", d.name)
-            return s.PointDriverSpec(
-                type="point", name=d.name, point=d.point, coordinate=d.coordinate, law=law
-            )
-        if isinstance(d, m.RelativeAngleDriver):
-            return s.RelativeAngleDriverSpec(
-                type="relative_angle", name=d.name, body_i=d.body_i, body_j=d.body_j, law=law
-            )
-        if isinstance(d, m.DistanceDriver):
-            return s.DistanceDriverSpec(
-                type="distance", name=d.name, point_i=d.point_i, point_j=d.point_j, law=law
-            )
-        raise ModelError(f"a {type(d).__name__} driver cannot be written to a file", d.name)
+        spec = s.DRIVER_SPECS.get(type(d).__name__)
+        if spec is None:
+            raise ModelError(f"a {type(d).__name__} driver cannot be written to a file", d.name)
+        return spec.from_element(d, self)
 
     def force(self, f):
-        if isinstance(f, m.PointForce):
-            return s.PointForceSpec(
-                type="point_force",
-                name=f.name,
-                point=f.point,
-                along=tuple(float(x) for x in f.along),
-                frame=f.frame,
-                law=self.law(f.law, f.name),
+        spec = s.FORCE_SPECS.get(type(f).__name__)
+        if spec is None:
+            raise ModelError(
+                f"a {type(f).__name__} force (a Python function) cannot be written to a file",
+                f.name,
             )
-        if isinstance(f, m.Torque):
-            return s.TorqueSpec(
-                type="torque",
-                name=f.name,
-                body=f.body,
-                law=self.law(f.law, f.name),
-                reaction=f.reaction,
-            )
-        if isinstance(f, m.SpringDamper):
-            return s.SpringDamperSpec(
-                type="spring_damper",
-                name=f.name,
-                point_i=f.point_i,
-                point_j=f.point_j,
-                stiffness=_f(f.stiffness),
-                damping=_f(f.damping),
-                free_length=_f(f.free_length),
-                actuator=self.law(f.actuator, f.name),
-            )
-        if isinstance(f, m.RotarySpringDamper):
-            return s.RotarySpringDamperSpec(
-                type="rotary_spring_damper",
-                name=f.name,
-                body_i=f.body_i,
-                body_j=f.body_j,
-                stiffness=_f(f.stiffness),
-                damping=_f(f.damping),
-                free_angle=_f(f.free_angle),
-                actuator=self.law(f.actuator, f.name),
-            )
-        raise ModelError(
-            f"a {type(f).__name__} force (a Python function) cannot be written to a file", f.name
-        )
+        return spec.from_element(f, self)
 
 
 def describe(model: m.Model, runs=()) -> s.ModelFile:

@@ -672,80 +672,10 @@ class Builder:
 
     def driver(self, d, p) -> m.Driver:
         """A driver from its description at path ``p`` (also used for prescribed motions)."""
-        p = tuple(p)
-        if isinstance(d, s.CoordinateDriverSpec):
-            body, coord = self.coordinate(d.coordinate, (*p, "coordinate"))
-            kind = "angle" if coord == "phi" else "length"
-            return m.CoordinateDriver(d.name, body, coord, law=self.law(d.law, kind, (*p, "law")))
-        if isinstance(d, s.PointDriverSpec):
-            self.point(d.point, (*p, "point"), ground=False)
-            return m.PointDriver(
-                d.name, d.point, d.coordinate, law=self.law(d.law, "length", (*p, "law"))
-            )
-        if isinstance(d, s.RelativeAngleDriverSpec):
-            self.body(d.body_i, (*p, "body_i"))
-            self.body(d.body_j, (*p, "body_j"))
-            if d.body_i == d.body_j:
-                self.fail(p, "body_i and body_j are the same body", "name two different bodies")
-            return m.RelativeAngleDriver(
-                d.name, d.body_i, d.body_j, law=self.law(d.law, "angle", (*p, "law"))
-            )
-        if isinstance(d, s.DistanceDriverSpec):
-            self._two_points(p, d)
-            return m.DistanceDriver(
-                d.name, d.point_i, d.point_j, law=self.law(d.law, "length", (*p, "law"))
-            )
-        raise AssertionError(type(d))  # pragma: no cover
+        return d.build(self, tuple(p))
 
     def _force(self, i, f) -> m.ForceElement:
-        p = ("forces", i)
-        if isinstance(f, s.PointForceSpec):
-            self.point(f.point, (*p, "point"), ground=False)
-            return m.PointForce(
-                f.name,
-                f.point,
-                along=self.direction(f.along, (*p, "along")),
-                law=self.law(f.law, "force", (*p, "law"), state=True),
-                frame=f.frame,
-            )
-        if isinstance(f, s.TorqueSpec):
-            self.body(f.body, (*p, "body"), ground=False)
-            if f.reaction is not None:
-                self.body(f.reaction, (*p, "reaction"))
-                if f.reaction == f.body:
-                    self.fail((*p, "reaction"), "the reaction acts on the same body", "")
-            return m.Torque(
-                f.name,
-                f.body,
-                law=self.law(f.law, "torque", (*p, "law"), state=True),
-                reaction=None if f.reaction in (None, "ground") else f.reaction,
-            )
-        if isinstance(f, s.SpringDamperSpec):
-            self._two_points(p, f)
-            return m.SpringDamper(
-                f.name,
-                f.point_i,
-                f.point_j,
-                stiffness=self.scalar(f.stiffness, "stiffness", (*p, "stiffness")),
-                damping=self.scalar(f.damping, "damping", (*p, "damping")),
-                free_length=self.scalar(f.free_length, "length", (*p, "free_length")),
-                actuator=self.law(f.actuator, "force", (*p, "actuator"), state=True),
-            )
-        if isinstance(f, s.RotarySpringDamperSpec):
-            self.body(f.body_i, (*p, "body_i"))
-            self.body(f.body_j, (*p, "body_j"))
-            if f.body_i == f.body_j:
-                self.fail(p, "body_i and body_j are the same body", "name two different bodies")
-            return m.RotarySpringDamper(
-                f.name,
-                f.body_i,
-                f.body_j,
-                stiffness=self.scalar(f.stiffness, "rotational_stiffness", (*p, "stiffness")),
-                damping=self.scalar(f.damping, "rotational_damping", (*p, "damping")),
-                free_angle=self.scalar(f.free_angle, "angle", (*p, "free_angle")),
-                actuator=self.law(f.actuator, "torque", (*p, "actuator"), state=True),
-            )
-        raise AssertionError(type(f))  # pragma: no cover
+        return f.build(self, ("forces", i))
 
 
 def _per_time(dim, k: int) -> tuple[int, int, int]:

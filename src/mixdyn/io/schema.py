@@ -358,22 +358,35 @@ class BodySpec(Spec):
     ``axis``)."""
 
 
-#: The joint registry: a joint kind is one model class (``mixdyn.model``) and one spec class
-#: here, registered with :func:`joint_kind`; the spec builds the element (``build``) and
-#: describes one (``from_element``). Loading, writing back and the schema's ``joints`` union
-#: read this registry; nothing else in ``io`` names a joint kind.
+#: The element registries: an element kind (joint, driver, force) is one model class
+#: (``mixdyn.model``) and one spec class here, registered with :func:`element_kind`; the spec
+#: builds the element (``build``) and describes one (``from_element``). Loading, writing back
+#: and the schema's ``joints``, ``drivers`` and ``forces`` unions read these registries;
+#: nothing else in ``io`` names an element kind.
 JOINT_SPECS: dict[str, type] = {}
+
+
+#: The driver and force registries, as :data:`JOINT_SPECS`.
+DRIVER_SPECS: dict[str, type] = {}
+FORCE_SPECS: dict[str, type] = {}
+
+
+def element_kind(model_class: str, registry: dict):
+    """Register an element spec class (``build``, ``from_element``) for the model class named
+    ``model_class`` in ``registry`` (:data:`JOINT_SPECS`, :data:`DRIVER_SPECS`,
+    :data:`FORCE_SPECS`)."""
+
+    def register(cls):
+        cls.element_class = model_class
+        registry[model_class] = cls
+        return cls
+
+    return register
 
 
 def joint_kind(model_class: str):
     """Register a joint spec class for the model class named ``model_class``."""
-
-    def register(cls):
-        cls.element_class = model_class
-        JOINT_SPECS[model_class] = cls
-        return cls
-
-    return register
+    return element_kind(model_class, JOINT_SPECS)
 
 
 class _TwoPointJoint(Spec):
@@ -860,6 +873,7 @@ JointSpec = Annotated[
 """Any registered joint kind (:data:`JOINT_SPECS`), told apart by ``type``."""
 
 
+@element_kind("CoordinateDriver", DRIVER_SPECS)
 class CoordinateDriverSpec(Spec):
     """Prescribes a body coordinate, ``coordinate: crank.phi``."""
 
@@ -873,7 +887,18 @@ class CoordinateDriverSpec(Spec):
     """The coordinate as a law of time, in length or rad, e.g. ``2*pi*t`` or ``{expr: 360*t,
     unit: deg}``."""
 
+    def build(self, b, p):
+        body, coord = b.coordinate(self.coordinate, (*p, "coordinate"))
+        kind = "angle" if coord == "phi" else "length"
+        return b.m.CoordinateDriver(self.name, body, coord, law=b.law(self.law, kind, (*p, "law")))
 
+    @classmethod
+    def from_element(cls, e, d):
+        law = d.law(e.law, e.name)
+        return cls(type="coordinate", name=e.name, coordinate=f"{e.body}.{e.coordinate}", law=law)
+
+
+@element_kind("PointDriver", DRIVER_SPECS)
 class PointDriverSpec(Spec):
     """Prescribes the global ``x`` or ``y`` coordinate of a body point."""
 
@@ -888,7 +913,22 @@ class PointDriverSpec(Spec):
     law: LawSpec
     """The coordinate [length] as a law of time, e.g. ``"10*sin(pi*t)"``."""
 
+    def build(self, b, p):
+        b.point(self.point, (*p, "point"), ground=False)
+        law = b.law(self.law, "length", (*p, "law"))
+        return b.m.PointDriver(self.name, self.point, self.coordinate, law=law)
 
+    @classmethod
+    def from_element(cls, e, d):
+        if not isinstance(e.point, str):
+            from ..errors import ModelError
+
+            raise ModelError("a point given by coordinates cannot be written", e.name)
+        law = d.law(e.law, e.name)
+        return cls(type="point", name=e.name, point=e.point, coordinate=e.coordinate, law=law)
+
+
+@element_kind("RelativeAngleDriver", DRIVER_SPECS)
 class RelativeAngleDriverSpec(Spec):
     """Prescribes the angle ``phi_j - phi_i`` of body j relative to body i."""
 
@@ -903,7 +943,21 @@ class RelativeAngleDriverSpec(Spec):
     law: LawSpec
     """The angle ``phi_j - phi_i`` [rad] as a law of time, e.g. ``{expr: 90*t, unit: deg}``."""
 
+    def build(self, b, p):
+        b.body(self.body_i, (*p, "body_i"))
+        b.body(self.body_j, (*p, "body_j"))
+        if self.body_i == self.body_j:
+            b.fail(p, "body_i and body_j are the same body", "name two different bodies")
+        law = b.law(self.law, "angle", (*p, "law"))
+        return b.m.RelativeAngleDriver(self.name, self.body_i, self.body_j, law=law)
 
+    @classmethod
+    def from_element(cls, e, d):
+        law = d.law(e.law, e.name)
+        return cls(type="relative_angle", name=e.name, body_i=e.body_i, body_j=e.body_j, law=law)
+
+
+@element_kind("DistanceDriver", DRIVER_SPECS)
 class DistanceDriverSpec(Spec):
     """Prescribes the distance between two points (a linear actuator)."""
 
@@ -918,13 +972,25 @@ class DistanceDriverSpec(Spec):
     law: LawSpec
     """The distance [length] as a law of time, e.g. ``100 + 20*t``."""
 
+    def build(self, b, p):
+        b._two_points(p, self)
+        law = b.law(self.law, "length", (*p, "law"))
+        return b.m.DistanceDriver(self.name, self.point_i, self.point_j, law=law)
+
+    @classmethod
+    def from_element(cls, e, d):
+        law = d.law(e.law, e.name)
+        return cls(type="distance", name=e.name, point_i=e.point_i, point_j=e.point_j, law=law)
+
 
 DriverSpec = Annotated[
-    CoordinateDriverSpec | PointDriverSpec | RelativeAngleDriverSpec | DistanceDriverSpec,
+    functools.reduce(operator.or_, DRIVER_SPECS.values()),
     Field(discriminator="type"),
 ]
+"""Any registered driver kind (:data:`DRIVER_SPECS`), told apart by ``type``."""
 
 
+@element_kind("PointForce", FORCE_SPECS)
 class PointForceSpec(Spec):
     """A force at a body point along a fixed direction."""
 
@@ -944,7 +1010,26 @@ class PointForceSpec(Spec):
     """Magnitude [force] along ``along``: a law of time, which may also use body states
     (``-c*slider.vx``). Default 0."""
 
+    def build(self, b, p):
+        b.point(self.point, (*p, "point"), ground=False)
+        return b.m.PointForce(
+            self.name,
+            self.point,
+            along=b.direction(self.along, (*p, "along")),
+            law=b.law(self.law, "force", (*p, "law"), state=True),
+            frame=self.frame,
+        )
 
+    @classmethod
+    def from_element(cls, e, d):
+        along = tuple(float(x) for x in e.along)
+        law = d.law(e.law, e.name)
+        return cls(
+            type="point_force", name=e.name, point=e.point, along=along, frame=e.frame, law=law
+        )
+
+
+@element_kind("Torque", FORCE_SPECS)
 class TorqueSpec(Spec):
     """A torque on a body (counter-clockwise positive), optionally reacting on a second body."""
 
@@ -961,7 +1046,26 @@ class TorqueSpec(Spec):
     """A body that receives the opposite torque (e.g. a motor housing); default none
     (``ground``)."""
 
+    def build(self, b, p):
+        b.body(self.body, (*p, "body"), ground=False)
+        if self.reaction is not None:
+            b.body(self.reaction, (*p, "reaction"))
+            if self.reaction == self.body:
+                b.fail((*p, "reaction"), "the reaction acts on the same body", "")
+        return b.m.Torque(
+            self.name,
+            self.body,
+            law=b.law(self.law, "torque", (*p, "law"), state=True),
+            reaction=None if self.reaction in (None, "ground") else self.reaction,
+        )
 
+    @classmethod
+    def from_element(cls, e, d):
+        law = d.law(e.law, e.name)
+        return cls(type="torque", name=e.name, body=e.body, law=law, reaction=e.reaction)
+
+
+@element_kind("SpringDamper", FORCE_SPECS)
 class SpringDamperSpec(Spec):
     """A translational spring-damper-actuator between two points."""
 
@@ -984,7 +1088,33 @@ class SpringDamperSpec(Spec):
     """Actuator force [force] pushing the points apart: a law of time, which may also use body
     states. Default 0."""
 
+    def build(self, b, p):
+        b._two_points(p, self)
+        return b.m.SpringDamper(
+            self.name,
+            self.point_i,
+            self.point_j,
+            stiffness=b.scalar(self.stiffness, "stiffness", (*p, "stiffness")),
+            damping=b.scalar(self.damping, "damping", (*p, "damping")),
+            free_length=b.scalar(self.free_length, "length", (*p, "free_length")),
+            actuator=b.law(self.actuator, "force", (*p, "actuator"), state=True),
+        )
 
+    @classmethod
+    def from_element(cls, e, d):
+        return cls(
+            type="spring_damper",
+            name=e.name,
+            point_i=e.point_i,
+            point_j=e.point_j,
+            stiffness=float(e.stiffness),
+            damping=float(e.damping),
+            free_length=float(e.free_length),
+            actuator=d.law(e.actuator, e.name),
+        )
+
+
+@element_kind("RotarySpringDamper", FORCE_SPECS)
 class RotarySpringDamperSpec(Spec):
     """A rotational spring-damper-actuator between two bodies (either may be ``ground``)."""
 
@@ -1008,11 +1138,40 @@ class RotarySpringDamperSpec(Spec):
     """Actuator torque [torque] on body j (opposite on body i): a law of time, which may also use
     body states. Default 0."""
 
+    def build(self, b, p):
+        b.body(self.body_i, (*p, "body_i"))
+        b.body(self.body_j, (*p, "body_j"))
+        if self.body_i == self.body_j:
+            b.fail(p, "body_i and body_j are the same body", "name two different bodies")
+        return b.m.RotarySpringDamper(
+            self.name,
+            self.body_i,
+            self.body_j,
+            stiffness=b.scalar(self.stiffness, "rotational_stiffness", (*p, "stiffness")),
+            damping=b.scalar(self.damping, "rotational_damping", (*p, "damping")),
+            free_angle=b.scalar(self.free_angle, "angle", (*p, "free_angle")),
+            actuator=b.law(self.actuator, "torque", (*p, "actuator"), state=True),
+        )
+
+    @classmethod
+    def from_element(cls, e, d):
+        return cls(
+            type="rotary_spring_damper",
+            name=e.name,
+            body_i=e.body_i,
+            body_j=e.body_j,
+            stiffness=float(e.stiffness),
+            damping=float(e.damping),
+            free_angle=float(e.free_angle),
+            actuator=d.law(e.actuator, e.name),
+        )
+
 
 ForceSpec = Annotated[
-    PointForceSpec | TorqueSpec | SpringDamperSpec | RotarySpringDamperSpec,
+    functools.reduce(operator.or_, FORCE_SPECS.values()),
     Field(discriminator="type"),
 ]
+"""Any registered force kind (:data:`FORCE_SPECS`), told apart by ``type``."""
 
 
 class AssemblySpec(Spec):
