@@ -41,6 +41,7 @@ def test_a_known_point_force_and_its_power_in_the_paper_mechanism():
     assert res.units()["T3"] == "mN*mm" and res.units()["F1.power"] == "µW"
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_unknown_forces_keep_their_own_columns():
     """In a mixed run the unknown F1 is the solved magnitude (not the law): one column each."""
     model = paper_under_loads()

@@ -40,6 +40,7 @@ def _check_gradient(f, th0, rel=1e-6):
     assert np.all(np.abs(fd) > 1e-6)  # every number moves the slider
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 @pytest.mark.timeout(600)
 def test_projection_gradient_against_finite_differences(paper):
     f, th0 = md.differentiable(paper, TS, PARAMS, rtol=1e-12, atol=1e-12)

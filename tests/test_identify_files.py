@@ -63,6 +63,7 @@ def _write(tmp_path, runs=IDENTIFY, data=None):
     return path
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_noise_free_velocities_give_the_damper_back(tmp_path):
     out = tmp_path / "out"
     res = CliRunner().invoke(app, ["run", str(_write(tmp_path)), "--out", str(out)])

@@ -359,6 +359,7 @@ def test_partitioning_agrees():
     _agree(s.qd, d.qd, "velocities", 1e-10)
 
 
+@pytest.mark.slow  # a long validation run (issue 12: the README's command within 6 min); CI runs it
 def test_forward_projection_chain_agrees():
     """Adaptive Tsit5 with projection (the default) on an 8-link pendulum chain: positions,
     velocities, accelerations and reactions."""
