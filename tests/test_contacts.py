@@ -277,7 +277,7 @@ def test_the_gear_train_file_and_its_round_trip():
         (("radius_i: R1, radius_j: R2}", "radius_i: -1, radius_j: R2}"), "not positive"),
         (("body_j: idler, radius_i: R1", "body_j: idlr, radius_i: R1"), "unknown body 'idlr'"),
         (("radius_j: R2}", "radius_j: R2, internal: true}"), "radius_i > radius_j"),
-        (("forces: [O3, guide]", "forces: [mesh12]"), "a contact: it has no reaction arrow"),
+        (("forces: [mesh23, rack_mesh]", "forces: [mesh99]"), "neither a joint nor a point"),
     ],
 )
 def test_bad_contacts_in_files_are_refused_at_their_line(tmp_path, edit, words):
@@ -311,3 +311,28 @@ def test_a_disk_held_on_an_incline_statics():
     np.testing.assert_allclose(res["roll.N"], m * G * math.cos(th), rtol=1e-12)
     np.testing.assert_allclose(res["roll.T"], -m * G * math.sin(th), rtol=1e-12)
     np.testing.assert_allclose(res["hold"], m * G * math.sin(th) * r, rtol=1e-12)
+
+
+def test_contact_forces_drawn_as_arrows_where_they_act():
+    """The tooth force of a mesh at its pitch point, along the tangent; a rolling disk's
+    contact force at the contact point, N along the normal and T along the incline."""
+    from mixdyn.viz.arrows import force_arrows
+
+    model, R = train(md.Ramp(0.0, 12.0), load=-0.8)
+    res = md.inverse(model, np.linspace(0, 1, 5))
+    (a,) = force_arrows(res, ["m23"])
+    x2 = R[0] + R[1]
+    np.testing.assert_allclose(a["at"], np.tile([x2 + R[1], 0.0], (5, 1)), atol=1e-12)
+    np.testing.assert_allclose(a["F"][:, 0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(a["F"][:, 1], res["m23.Ft"], rtol=1e-12)
+    th = math.radians(30)
+    model, u = _incline(th)
+    roll = md.forward(model, np.linspace(0, 0.2, 3), rtol=1e-10, atol=1e-12)
+    (b,) = force_arrows(roll, ["roll"])
+    n = np.array([math.sin(th), math.cos(th)])
+    centre = np.stack([roll["disk.x"], roll["disk.y"]], axis=1)
+    np.testing.assert_allclose(b["at"], centre - 0.1 * n, atol=1e-12)
+    F = roll["roll.N"][:, None] * n + roll["roll.T"][:, None] * np.asarray(u)
+    np.testing.assert_allclose(b["F"], F, atol=1e-12)
+    # the ground pushes the disk up with m g cos, and holds it back with m g sin / 3
+    np.testing.assert_allclose(b["F"] @ n, 2.0 * G * math.cos(th), rtol=1e-9)

@@ -186,15 +186,19 @@ def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
     from .._hints import did_you_mean
     from ..model import PointForce
 
-    known = [j.name for j in runner.model.joints if j.generic_reaction]
+    known = [j.name for j in runner.model.joints]
     known += [f.name for f in runner.model.forces if isinstance(f, PointForce)]
-    contacts = {j.name: j for j in runner.model.joints if not j.generic_reaction}
+    contacts = {
+        j.name: j
+        for j in runner.model.joints
+        if not j.generic_reaction and getattr(j, "motion", "") == "oscillating"
+    }
     for k, name in enumerate(forces):
         if name in contacts:
             cols = ", ".join(f"{name}.{c}" for c in contacts[name].contact_kinds)
             runner.fail(
                 (*path, k),
-                f"{name!r} is a contact: it has no reaction arrow",
+                f"{name!r} acts by a moment: it has no arrow",
                 f"plot its contact forces instead ({cols})",
             )
         if name not in known:

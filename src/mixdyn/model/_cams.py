@@ -212,6 +212,18 @@ class CamFollower(Joint):
             alpha = jnp.arctan2(ds - e, x)
         return {"F": F, "alpha": alpha, "Fn": F / jnp.cos(alpha)}
 
+    def arrow(self, q, cols):
+        """The cam's push on a translating follower, along its axis at the follower's point
+        (an oscillating follower's moment has no arrow: None)."""
+        if self.motion == "oscillating":
+            return None
+
+        def geo(qq):
+            return point(qq, self.bj, self.sj), vector(qq, self.bc, self.u)
+
+        P, u = (np.asarray(a) for a in jax.vmap(geo)(jnp.asarray(q)))
+        return P, np.asarray(cols[f"{self.name}.F"])[:, None] * u
+
     def profile(self, n: int = 180) -> np.ndarray:
         """The cam's profile in its own frame, (n, 2) [length], at the frame angle 0 of the
         rough start: the pitch curve moved in by the roller (knife-edge: the pitch curve),

@@ -22,6 +22,7 @@ import math
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -132,6 +133,22 @@ class _Wheels(Joint):
 
     def drawing(self):
         return {"circles": [(self.bi, self.si, self.radius_i), (self.bj, self.sj, self.radius_j)]}
+
+    def _frame(self, q):
+        """The pitch point (2,) and the unit vectors ``e`` (i's centre to j's) and ``t``."""
+        d = self._d(q)
+        e = d / jnp.linalg.norm(d)
+        return point(q, self.bi, self.si) + self.radius_i * e, e, jnp.stack([-e[1], e[0]])
+
+    def arrow(self, q, cols):
+        P, e, t = jax.vmap(self._frame)(jnp.asarray(q))
+        if "Ft" in self.contact_kinds:
+            F = np.asarray(cols[f"{self.name}.Ft"])[:, None] * np.asarray(t)
+        else:
+            N = np.asarray(cols[f"{self.name}.N"])[:, None]
+            T = np.asarray(cols[f"{self.name}.T"])[:, None]
+            F = N * self._s * np.asarray(e) + T * np.asarray(t)
+        return np.asarray(P), F
 
 
 class GearPair(_Wheels):
@@ -261,6 +278,21 @@ class _OnLine(Joint):
         u = vector(q, self.bj, self.u)
         n = jnp.stack([-u[1], u[0]])
         return jnp.dot(self._rel(q), n) - self.side * self.radius
+
+    def _contact_point(self, q):
+        u = vector(q, self.bj, self.u)
+        n = jnp.stack([-u[1], u[0]])
+        return point(q, self.bi, self.si) - self.side * self.radius * n, u, n
+
+    def arrow(self, q, cols):
+        """The force on the wheel at its contact point."""
+        P, u, n = (np.asarray(a) for a in jax.vmap(self._contact_point)(jnp.asarray(q)))
+        if "Ft" in self.contact_kinds:  # the rack's tooth force, on the pinion: -Ft u
+            F = -np.asarray(cols[f"{self.name}.Ft"])[:, None] * u
+        else:
+            N = np.asarray(cols[f"{self.name}.N"])[:, None]
+            F = N * self.side * n + np.asarray(cols[f"{self.name}.T"])[:, None] * u
+        return P, F
 
     def drawing(self):
         out = {"circles": [(self.bi, self.si, self.radius)]}

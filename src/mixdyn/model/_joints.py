@@ -61,6 +61,12 @@ class Joint(Element):
         multipliers of its equations ``lam`` (n_equations,)."""
         return {}
 
+    def arrow(self, q, cols: dict):
+        """A contact joint's force as an arrow: ``(at, F)``, the point (N, 2) [length] and
+        the force (N, 2) [force] on its body j (or its wheel), from the coordinates ``q``
+        (N, nq) and the result's columns; None for joints drawn by their reaction."""
+        return None
+
     def drawing(self) -> dict:
         """What an animation draws of the joint: ``pins`` [(body, body point)], ``guides``
         [(ground point, direction)] (lines fixed on the ground), ``circles`` [(body, body

@@ -32,7 +32,9 @@ def force_arrows(result, names=True) -> list[dict]:
     Args:
         result: a :class:`mixdyn.Result` of a forward, inverse or mixed run.
         names: ``True`` for every joint's reaction and every point force; or the names of
-            joints (their reaction on body j, at the joint) and of point forces.
+            joints (their reaction on body j, at the joint; a contact's force at its contact
+            point: a gear's tooth force on gear j, a rolling disk's or a pinion's force on the
+            wheel, a cam's push on its follower) and of point forces.
 
     Returns:
         Per arrow: ``name``, ``color``, ``at`` (N, 2) [length], ``F`` (N, 2) [force] and
@@ -47,13 +49,29 @@ def force_arrows(result, names=True) -> list[dict]:
         raise ValueError(
             "a kinematic result has no forces to draw; run an inverse, forward or mixed analysis"
         )
-    joints = {j.name: j for j in model.joints if j.generic_reaction}
+    joints = {j.name: j for j in model.joints}
     forces = {f.name: f for f in model.forces if isinstance(f, PointForce)}
     wanted = list(joints) + list(forces) if names is True else list(names)
     cols, units = result.columns(), result.units()
     q = np.asarray(result.q)
     out = []
     for k, name in enumerate(wanted):
+        if name in joints and not joints[name].generic_reaction:  # a contact's own arrow
+            drawn = joints[name].arrow(q, cols)
+            if drawn is None:
+                continue
+            at, F = drawn
+            key = next(iter(joints[name].contact_kinds))
+            out.append(
+                {
+                    "name": name,
+                    "color": COLORS[(k + 3) % len(COLORS)],
+                    "at": at,
+                    "F": np.asarray(F, dtype=float),
+                    "unit": units[f"{name}.{key}"],
+                }
+            )
+            continue
         if name in joints:
             if f"{name}.Fx" not in cols:
                 continue
