@@ -47,6 +47,26 @@ def _wrap(a: float) -> float:
     return (a + math.pi) % (2 * math.pi) - math.pi
 
 
+#: The tooth-force columns of a mesh (gears, rack) and their kinds.
+TOOTH_KINDS = {"Ft": "force", "Fn": "force", "Fr": "force"}
+
+
+def _check_pressure_angle(joint) -> None:
+    finite(joint.pressure_angle, "pressure_angle", joint.name, at_least=0.0)
+    if not float(joint.pressure_angle) < math.pi / 2:
+        raise ModelError("the pressure angle must be below 90 degrees", joint.name)
+
+
+def _tooth(Ft, pressure_angle) -> dict:
+    """A mesh's columns from its tangential tooth force ``Ft``: the force along the line of
+    action ``Fn`` and the radial (separating) force ``Fr``."""
+    return {
+        "Ft": Ft,
+        "Fn": Ft / jnp.cos(pressure_angle),
+        "Fr": jnp.abs(Ft) * jnp.tan(pressure_angle),
+    }
+
+
 class _Wheels(Joint):
     """Two wheels (pitch circles of radii ``radius_i``, ``radius_j`` about body points
     ``center_i``, ``center_j``) meshing or rolling, on a carrier body (default the ground)."""
@@ -167,25 +187,18 @@ class GearPair(_Wheels):
     pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
-    contact_kinds: ClassVar[dict[str, str]] = {"Ft": "force", "Fn": "force", "Fr": "force"}
+    contact_kinds: ClassVar[dict[str, str]] = TOOTH_KINDS
 
     def __check_init__(self):
         super().__check_init__()
-        finite(self.pressure_angle, "pressure_angle", self.name, at_least=0.0)
-        if not float(self.pressure_angle) < math.pi / 2:
-            raise ModelError("the pressure angle must be below 90 degrees", self.name)
+        _check_pressure_angle(self)
 
     def residual(self, q):
         return self._no_slip(q)[None]
 
     def contact(self, q, lam):
         L = (self.radius_i + self._s * self.radius_j) / jnp.linalg.norm(self._d(q))
-        Ft = lam[0] * L
-        return {
-            "Ft": Ft,
-            "Fn": Ft / jnp.cos(self.pressure_angle),
-            "Fr": jnp.abs(Ft) * jnp.tan(self.pressure_angle),
-        }
+        return _tooth(lam[0] * L, self.pressure_angle)
 
 
 class RollingDisks(_Wheels):
@@ -314,24 +327,17 @@ class RackPinion(_OnLine):
     pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
-    contact_kinds: ClassVar[dict[str, str]] = {"Ft": "force", "Fn": "force", "Fr": "force"}
+    contact_kinds: ClassVar[dict[str, str]] = TOOTH_KINDS
 
     def __check_init__(self):
         super().__check_init__()
-        finite(self.pressure_angle, "pressure_angle", self.name, at_least=0.0)
-        if not float(self.pressure_angle) < math.pi / 2:
-            raise ModelError("the pressure angle must be below 90 degrees", self.name)
+        _check_pressure_angle(self)
 
     def residual(self, q):
         return self._along(q)[None]
 
     def contact(self, q, lam):
-        Ft = lam[0]
-        return {
-            "Ft": Ft,
-            "Fn": Ft / jnp.cos(self.pressure_angle),
-            "Fr": jnp.abs(Ft) * jnp.tan(self.pressure_angle),
-        }
+        return _tooth(lam[0], self.pressure_angle)
 
 
 class RollingOnLine(_OnLine):
