@@ -26,6 +26,7 @@ import numpy as np
 from ..model import Model
 from ._draw import COLORS
 from .arrows import arrow_scale, force_arrows
+from .scene import Scene, _frames, _motion
 
 
 def seconds_per_time_unit(model: Model) -> float:
@@ -116,8 +117,6 @@ def html(
     Returns:
         The path written.
     """
-    from .animate import Scene, _frames, _motion
-
     model, ts, qs = _motion(result, model, t, q)
     idx = np.arange(len(ts)) if frames is None else _frames(len(ts), frames)
     scene = Scene(model, qs[idx], trace)
