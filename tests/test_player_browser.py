@@ -139,3 +139,22 @@ def test_player_plays_on_opening_and_refuses_forces_without_them(motion, tmp_pat
     kinematic = md.kinematic(slider_crank(), np.linspace(0, 1, 5))
     with pytest.raises(ValueError, match="no forces"):
         html(kinematic, tmp_path / "r.html", forces=True)
+
+
+@pytest.mark.parametrize("unit", ["s", "ms", "min", "h", "us"])
+def test_real_time_playback_knows_the_time_unit(unit):
+    """The player's real-time clock: seconds per model time unit, the fast table against
+    pint."""
+    from mixdyn.io.quantities import factor
+    from mixdyn.viz.player import seconds_per_time_unit
+
+    model = slider_crank()
+    model = md.Model(
+        bodies=model.bodies,
+        joints=model.joints,
+        drivers=model.drivers,
+        units=md.UnitSystem("m", "kg", unit),
+    )
+    assert seconds_per_time_unit(model) == pytest.approx(
+        1.0 / factor("s", "time", model.units), rel=1e-15
+    )
