@@ -336,3 +336,31 @@ def test_contact_forces_drawn_as_arrows_where_they_act():
     np.testing.assert_allclose(b["F"], F, atol=1e-12)
     # the ground pushes the disk up with m g cos, and holds it back with m g sin / 3
     np.testing.assert_allclose(b["F"] @ n, 2.0 * G * math.cos(th), rtol=1e-9)
+
+
+@pytest.mark.slow  # reverse mode through the integrator compiles for ~30 s; CI runs it
+def test_gear_train_is_differentiable():
+    """The motor torque of a train driven harmonically, as a JAX function of the gears'
+    inertias (md.differentiable, inverse): T = (I1 + I2 (R1/R2)^2 + I3 (R1/R3)^2) alpha1
+    (+ the load's share), so dT/dI3 = (R1/R3)^2 alpha1 exactly; and the forward run's final
+    speed of gear 3 against central differences in I3."""
+    import jax
+
+    model, R = train(md.Harmonic(0.8, 5.0), load=-0.2)
+    t = np.linspace(0, 1, 6)
+    f, th0 = md.differentiable(model, t, ["g3.inertia", "g2.inertia"], analysis="inverse")
+    J = np.asarray(jax.jacrev(lambda th: f(th)["motor"])(th0))
+    alpha1 = -0.8 * 25.0 * np.sin(5.0 * t)
+    np.testing.assert_allclose(J[:, 0], (R[0] / R[2]) ** 2 * alpha1, atol=1e-12)
+    np.testing.assert_allclose(J[:, 1], (R[0] / R[1]) ** 2 * alpha1, atol=1e-12)
+    # forward: the free train under the load alone, w1' = L k / I_eq (k = R1/R3, I_eq the
+    # inertia seen by gear 1), so d(w3(T))/dI3 = -L k^4 T / I_eq^2
+    free, _ = train(load=-0.2)
+    T = 0.2
+    g, p0 = md.differentiable(
+        free, np.linspace(0, T, 3), ["g3.inertia"], qd0={"g1.phi": 20.0}, rtol=1e-11, atol=1e-13
+    )
+    d = float(jax.grad(lambda th: g(th)["qd"][-1, 8])(p0)[0])
+    k = R[0] / R[2]
+    I_eq = 2e-4 + 4e-4 * (R[0] / R[1]) ** 2 + 6e-4 * k**2
+    assert d == pytest.approx(0.2 * k**4 * T / I_eq**2, rel=1e-7)
