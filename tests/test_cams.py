@@ -243,7 +243,9 @@ def test_the_rocker_example_file():
 
     path = pathlib.Path(__file__).resolve().parent.parent / "examples" / "cam_rocker.yaml"
     spec = mio.read(path)
-    res = mio.execute(spec)["inverse"]
+    # two and a half turns: the law, given over one turn, is read within each turn
+    longer = path.read_text().replace("span: [0, 0.5], n: 181", "span: [0, 1.25], n: 451")
+    res = mio.execute(mio.reads(longer))["inverse"]
     th = np.mod(res["cam.phi"], 2 * np.pi)
     b = math.radians(15)
     rise = th / np.pi - np.sin(2 * th) / (2 * np.pi)
@@ -253,3 +255,16 @@ def test_the_rocker_example_file():
     assert mio.reads(mio.dumps(spec)) == spec
     again = mio.build(mio.reads(mio.dumps(mio.build(spec))))
     assert again.joints[2].motion == "oscillating" and again.joints[2].sense == -1.0
+
+
+def test_a_cam_given_by_samples():
+    """A cam profile given by 73 samples of its displacement over a turn (a periodic cubic
+    spline through them): the follower follows the harmonic law the samples came from, to the
+    spline's accuracy (under 0.2 micrometres at 5 degree spacing), over two turns."""
+    th = np.linspace(0, 2 * np.pi, 73)
+    law = md.Spline(th, H / 2 * (1 - np.cos(th)), bc_type="periodic")
+    w = 5.0
+    t = np.linspace(0, 4 * math.pi / w, 97)
+    res = md.kinematic(cam_model(law, w, spring=False), t)
+    np.testing.assert_allclose(res["follower.y"], BASE + H / 2 * (1 - np.cos(w * t)), atol=2e-7)
+    np.testing.assert_allclose(res["follower.vy"], H / 2 * w * np.sin(w * t), atol=2e-5)

@@ -4,8 +4,9 @@ The cam (body ``cam``) turns about its centre ``center``; the follower's point `
 knife edge, or its roller's centre) moves along the follower's axis ``axis`` (fixed in
 ``frame``, default the ground; the follower's guide, a translational joint, is a joint of its
 own). The cam is designed by its displacement diagram: the follower's displacement
-``s(theta)`` [length] as a law of the cam angle ``theta = phi_cam - phi_frame`` [rad] (any
-law: harmonic, cycloidal by an expression, polynomial, spline through samples), so
+``s(theta)`` [length] as a law of the cam angle ``theta = phi_cam - phi_frame`` [rad], read
+within the turn (``theta mod 2 pi``: give it over one turn; any law: harmonic, cycloidal by
+an expression, polynomial, spline through samples), so
 
     (P_follower - C_cam) . u - (base + s(theta)) = 0        (1 equation)
 
@@ -188,6 +189,11 @@ class CamFollower(Joint):
         """The cam angle relative to the frame [rad]."""
         return angle(q, self.bi) - angle(q, self.bc)
 
+    def turn(self, q):
+        """The cam angle within its turn, ``theta mod 2 pi`` [rad]: a cam's law is read once
+        per turn, so a law given over one turn (a spline, a ``where``) serves every turn."""
+        return jnp.mod(self.theta(q), 2 * jnp.pi)
+
     def _geometry(self, q):
         u = vector(q, self.bc, self.u)
         d = point(q, self.bj, self.sj) - point(q, self.bi, self.si)
@@ -196,9 +202,9 @@ class CamFollower(Joint):
     def residual(self, q):
         if self.motion == "oscillating":
             psi = angle(q, self.bj) - angle(q, self.bc)
-            return (psi - self.psi0 - self.sense * self.law(self.theta(q)))[None]
+            return (psi - self.psi0 - self.sense * self.law(self.turn(q)))[None]
         x, _ = self._geometry(q)
-        return (x - self.base - self.law(self.theta(q)))[None]
+        return (x - self.base - self.law(self.turn(q)))[None]
 
     def contact(self, q, lam):
         if self.motion == "oscillating":
@@ -208,7 +214,7 @@ class CamFollower(Joint):
             alpha = jnp.zeros_like(F)
         else:
             x, e = self._geometry(q)
-            ds = jax.jvp(self.law, (self.theta(q),), (jnp.ones_like(F),))[1]
+            ds = jax.jvp(self.law, (self.turn(q),), (jnp.ones_like(F),))[1]
             alpha = jnp.arctan2(ds - e, x)
         return {"F": F, "alpha": alpha, "Fn": F / jnp.cos(alpha)}
 
