@@ -224,3 +224,26 @@ def test_latin_hypercube_samples_each_stratum_once():
         md.latin_hypercube(4, **{"slider.mass": (1.0, 1.0)})
     with pytest.raises(md.ModelError, match="whole number"):
         md.latin_hypercube(0, **{"slider.mass": (1.0, 2.0)})
+
+
+def test_a_sweep_as_a_labelled_array(tmp_path):
+    """Sweep.dataset(): a variable per column on (member, t), the varied numbers and the
+    members' status as coordinates, units in attrs; equal to the long table; written to
+    NetCDF and read back equal."""
+    xr = pytest.importorskip("xarray")
+    from fixtures import slider_crank
+
+    model = slider_crank()
+    t = np.linspace(0, 1, 5)
+    sw = md.sweep(model, t, vary={"slider.mass": [1.0, 2.0, 3.0]}, analysis="inverse")
+    ds = sw.dataset(["motor", "slider.x"], output_units={"torque": "N*mm"})
+    assert ds["motor"].dims == ("member", "t") and ds.sizes == {"member": 3, "t": 5}
+    np.testing.assert_array_equal(ds["slider.mass"], [1.0, 2.0, 3.0])
+    assert list(ds["status"].values) == ["ok"] * 3
+    for i in range(3):
+        np.testing.assert_allclose(ds["motor"][i], 1000 * sw[i]["motor"], rtol=1e-14)
+    assert ds["motor"].attrs["units"] == "N*mm" and ds["slider.x"].attrs["units"] == "m"
+    path = tmp_path / "sweep.nc"
+    ds.to_netcdf(path, engine="scipy")
+    back = xr.load_dataset(path, engine="scipy")
+    np.testing.assert_array_equal(back["motor"].values, ds["motor"].values)

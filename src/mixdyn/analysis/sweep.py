@@ -267,6 +267,50 @@ class Sweep:
         out.attrs["units"] = units
         return out
 
+    def dataset(self, columns: Sequence[str] = (), output_units: dict | None = None):
+        """The sweep as a labelled N-dimensional array: an xarray ``Dataset`` with a variable
+        per result column on the dimensions ``(member, t)``, the varied numbers and each
+        member's ``status`` (``ok`` or its error's class) as coordinates along ``member``,
+        and every variable's unit in its ``attrs["units"]`` (in ``output_units`` as
+        :meth:`table`). A failed member's values are NaN. Write it with ``ds.to_netcdf(path)``
+        (NetCDF) or ``ds.to_zarr(path)``. Needs xarray (``pip install 'mixdyn[xarray]'``).
+
+        Raises:
+            ValueError: no member succeeded (nothing gives the output times and columns).
+        """
+        import xarray as xr
+
+        from .result import in_units
+
+        first = next((r for r in self.results if r is not None), None)
+        if first is None:
+            raise ValueError("no member of the sweep succeeded: there is nothing to label")
+        cols0, units = in_units(first, first.columns(), first.units(), output_units)
+        names = [c for c in (columns or cols0) if c != "t"]
+        for c in names:
+            if c not in cols0:
+                first[c]  # the error names the columns close to it
+        n, nt = len(self.results), len(first.t)
+        data = {c: np.full((n, nt), np.nan) for c in names}
+        for i, res in enumerate(self.results):
+            if res is not None:
+                cols, _ = in_units(res, res.columns(), res.units(), output_units)
+                for c in names:
+                    data[c][i] = cols[c]
+        coords = {
+            "member": np.arange(n),
+            "t": ("t", np.asarray(cols0["t"]), {"units": units["t"]}),
+            "status": ("member", [type(self.errors[i]).__name__ if i in self.errors else "ok"
+                                  for i in range(n)]),
+        }  # fmt: skip
+        if self.parameters and all(np.ndim(v) == 0 for v in self.parameters[0].values()):
+            for name in self.parameters[0]:
+                coords[name] = ("member", np.array([float(p[name]) for p in self.parameters]))
+        variables = {c: (("member", "t"), data[c], {"units": units.get(c, "")}) for c in names}
+        return xr.Dataset(
+            variables, coords=coords, attrs={"model": first.model.name, "analysis": first.kind}
+        )
+
 
 Outcome = tuple[Result | None, MixdynError | None]
 
