@@ -197,6 +197,47 @@ def test_near_singular_reports_and_damps(chain, path):
     assert np.all(np.isfinite(y))
 
 
+def _batched_operator(path, c, v, batched):
+    if path == "banded":
+        return BandedJacobian(c.for_batch() if batched else c, v)
+    return DenseJacobian(BandedJacobian(c, v).dense(), c.rank, batched)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("singular", [(), (1,), (0, 2)], ids=["none", "one", "two"])
+def test_batched_guard_equals_the_member_by_member_guard(chain, path, singular):
+    """A sweep's guard (decided once per batch, ``custom_vmap``) gives each member of a
+    ``vmap`` what the member's own guard gives it alone: the LU solve where regular, the damped
+    SVD solve where near-singular (checked against NumPy's SVD there)."""
+    c, v = chain
+    rows, cols = c.coo()
+    rng = np.random.default_rng(8)
+    values, rhs = [], []
+    for k in range(4):
+        J = _dense_np(c, v * (1 + 0.1 * k))
+        if k in singular:
+            J[0] = J[1] + 1e-9 * J[0]
+        values.append(J[rows, cols])
+        rhs.append(rng.normal(size=c.m))
+    V, B = jnp.asarray(np.array(values)), jnp.asarray(np.array(rhs))
+    W = jnp.ones(c.nq)
+
+    def solve(batched):
+        return lambda v, b: _batched_operator(path, c, v, batched).schur(W, guard=True).solve(b)
+
+    together = np.asarray(jax.jit(jax.vmap(solve(True)))(V, B))
+    alone = np.array([np.asarray(solve(False)(V[k], B[k])) for k in range(4)])
+    np.testing.assert_allclose(together, alone, rtol=1e-12, atol=1e-12 * np.abs(alone).max())
+    for k in singular:
+        J = _dense_np(c, V[k])
+        U, s, Vt = np.linalg.svd(J @ J.T)
+        ref = Vt.T @ (s / (s**2 + (SINGULAR_DAMPING * s[0]) ** 2) * (U.T @ np.asarray(B[k])))
+        np.testing.assert_allclose(together[k], ref, rtol=1e-5, atol=1e-8 * np.abs(ref).max())
+    # unbatched (one member), the batched operator is the plain guard
+    one = np.asarray(jax.jit(solve(True))(V[0], B[0]))
+    np.testing.assert_allclose(one, alone[0], rtol=1e-12, atol=1e-12 * np.abs(alone[0]).max())
+
+
 def _fd_grad(fun, x, h=1e-6):
     x = np.asarray(x, dtype=float)
     g = np.zeros_like(x)

@@ -191,6 +191,12 @@ def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
     return members
 
 
+def for_batch(problem):
+    """``problem`` solved in a sweep's one vectorized program: its guard at singular
+    positions decides once per batch (:meth:`~mixdyn.equations.Constraints.for_batch`)."""
+    return eqx.tree_at(lambda p: p.c, problem, problem.c.for_batch())
+
+
 def _integrate_batch(method: str, batch_size: int, problems, ts, q0, qd0, options):
     """The trajectories of a batch of cases of one structure (leading axis: the member)."""
     integrate_one = INTEGRATORS[method]
@@ -353,7 +359,7 @@ def _batched(cases: list[Case], batch_size: int) -> list[Outcome]:
     trajs = _integrate_batch_jit(
         first.options.method,
         int(min(batch_size, len(cases))),
-        jax.tree.map(stack, *[c.problem for c in cases]),
+        jax.tree.map(stack, *[for_batch(c.problem) for c in cases]),
         np.asarray(first.ts, dtype=np.float64),
         stack(*[c.q0 for c in cases]),
         stack(*[c.qd0 for c in cases]),

@@ -49,6 +49,9 @@ class Constraints(eqx.Module):
         active: indices of the rows kept (redundant rows dropped), static.
         labels: a label per row of the full set (``"A.x"``, ``"crank_angle"``), static.
         nq: number of coordinates.
+        batched: whether this set is solved in a sweep's one vectorized program: the guard at
+            singular positions then decides once per batch
+            (:func:`~mixdyn.linalg._dense.guarded`), static.
     """
 
     joints: tuple[Joint, ...]
@@ -59,8 +62,18 @@ class Constraints(eqx.Module):
     nq: int = eqx.field(static=True)
     rank: int | None = eqx.field(static=True)
     linear_solver: str = eqx.field(static=True)
+    batched: bool = eqx.field(static=True)
 
-    def __init__(self, joints, drivers, nq: int, active=None, rank=None, linear_solver="dense"):
+    def __init__(
+        self,
+        joints,
+        drivers,
+        nq: int,
+        active=None,
+        rank=None,
+        linear_solver="dense",
+        batched: bool = False,
+    ):
         self.joints = tuple(joints)
         self.drivers = tuple(drivers)
         labels, owners = [], []
@@ -76,6 +89,7 @@ class Constraints(eqx.Module):
         self.active = tuple(range(len(labels))) if active is None else tuple(int(i) for i in active)
         self.rank = None if rank is None or rank == len(self.active) else int(rank)
         self.linear_solver = self._resolve_solver(linear_solver)
+        self.batched = bool(batched)
 
     def _resolve_solver(self, linear_solver: str) -> str:
         if linear_solver not in LINEAR_SOLVERS:
@@ -106,7 +120,12 @@ class Constraints(eqx.Module):
     def with_active(self, active) -> Constraints:
         """The same set keeping only rows ``active`` (indices into the full set)."""
         return Constraints(
-            self.joints, self.drivers, self.nq, active, linear_solver=self.linear_solver
+            self.joints,
+            self.drivers,
+            self.nq,
+            active,
+            linear_solver=self.linear_solver,
+            batched=self.batched,
         )
 
     def with_rank(self, rank: int) -> Constraints:
@@ -114,13 +133,25 @@ class Constraints(eqx.Module):
         it becomes a least-squares (truncated SVD) solve, robust wherever the redundancy moves
         from row to row (a parallelogram passing through its singular positions)."""
         return Constraints(
-            self.joints, self.drivers, self.nq, None, rank, linear_solver=self.linear_solver
+            self.joints,
+            self.drivers,
+            self.nq,
+            None,
+            rank,
+            linear_solver=self.linear_solver,
+            batched=self.batched,
         )
 
     def with_linear_solver(self, linear_solver: str) -> Constraints:
         """The same set solved by ``linear_solver`` (``"dense"``, ``"sparse"``, ``"auto"``)."""
         return Constraints(
-            self.joints, self.drivers, self.nq, self.active, self.rank, linear_solver
+            self.joints, self.drivers, self.nq, self.active, self.rank, linear_solver, self.batched
+        )
+
+    def for_batch(self) -> Constraints:
+        """The same set, solved in a sweep's one vectorized program (:attr:`batched`)."""
+        return Constraints(
+            self.joints, self.drivers, self.nq, self.active, self.rank, self.linear_solver, True
         )
 
     def solve(self, A, b, extra_rank: int = 0):
@@ -291,7 +322,7 @@ class Constraints(eqx.Module):
         :meth:`jacobian_values`). Every solve with ``Phi_q`` goes through its methods."""
         if self.linear_solver == "sparse":
             return BandedJacobian(self, self.jacobian_values(q, t))
-        return DenseJacobian(self.phi_q(q, t), self.rank)
+        return DenseJacobian(self.phi_q(q, t), self.rank, self.batched)
 
     def matvec(self, values, x) -> jax.Array:
         """``Phi_q x`` from the sparse values."""
@@ -511,7 +542,7 @@ class _Key:
     def __init__(self, c: Constraints):
         self.c = c
         self.static = c._static()
-        self.id = (id(self.static), c.active, c.rank, c.nq, c.linear_solver)
+        self.id = (id(self.static), c.active, c.rank, c.nq, c.linear_solver, c.batched)
 
     def __hash__(self):
         return hash(self.id)

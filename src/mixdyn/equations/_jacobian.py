@@ -139,10 +139,13 @@ class DenseJacobian(JacobianOperator):
     Attributes:
         J: (m, n) the matrix.
         rank_: the rank when rows are redundant, else None (static).
+        batched: whether the guard at singular positions decides once per batch (a sweep's
+            one program; :func:`~mixdyn.linalg._dense.guarded`), static.
     """
 
     J: jax.Array
     rank_: int | None = eqx.field(static=True, default=None)
+    batched: bool = eqx.field(static=True, default=False)
 
     @property
     def shape(self):
@@ -171,7 +174,7 @@ class DenseJacobian(JacobianOperator):
             S = S + shift * jnp.eye(S.shape[0])
         f = factor_ranked(S, self.rank)
         if guard and self.rank is None and S.shape[0]:
-            return guarded(f, lambda: S)
+            return guarded(f, lambda: S, batched=self.batched)
         return f
 
     def min_norm(self, W=None, shift=None, refine=0, guard=False):
@@ -184,7 +187,7 @@ class DenseJacobian(JacobianOperator):
             S = S + shift * jnp.eye(S.shape[0])
         f = factor_ranked(S, self.rank)
         if guard and self.rank is None and S.shape[0]:
-            f = guarded(f, lambda: S)
+            f = guarded(f, lambda: S, batched=self.batched)
         return Factor(lambda b: WJt @ f.solve(b), jnp.sqrt(f.ratio))
 
     def solver(self, refine=0):
@@ -215,7 +218,7 @@ class DenseJacobian(JacobianOperator):
         S = C @ WG
         f = factor_ranked(S, self.rank)
         if self.rank is None and m:
-            f = guarded(f, lambda: S)
+            f = guarded(f, lambda: S, batched=self.batched)
 
         def solve(r1, r2):
             mu = f.solve(C @ (W * r1) - r2)
@@ -301,7 +304,7 @@ class BandedJacobian(JacobianOperator):
 
             f = Factor(solve, ratio)
         if guard and c.m:
-            return guarded(f, lambda: self.schur_matrix(W), self.rank)
+            return guarded(f, lambda: self.schur_matrix(W), self.rank, c.batched)
         return f
 
     def solver(self, refine=0):
@@ -374,7 +377,7 @@ class BandedJacobian(JacobianOperator):
             G = jnp.concatenate([C[:mk].T, -B], axis=1)
             return C @ (W[:, None] * G)
 
-        f = guarded(Factor(woodbury, ratio), dense_S, self.rank)
+        f = guarded(Factor(woodbury, ratio), dense_S, self.rank, self.c.batched)
 
         def g_times(mu):
             lam = jnp.concatenate([mu[:mk], jnp.zeros(p, mu.dtype)])
