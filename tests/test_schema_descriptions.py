@@ -31,6 +31,7 @@ PROPERTIES = {
     "HermiteSpec": "hermite",
     "InverseRunSpec": "animation drivers hold initial kind linear_solver name "
     "options outputs plots prescribed time velocities",
+    "JointFrictionSpec": "joint mu name radius type v_stick",
     "KinematicRunSpec": "animation drivers hold initial kind linear_solver max_iter "
     "name outputs plots prescribed time tol velocities",
     "MixedRunSpec": "animation atol drivers dt hold independent initial kind linear_solver method "
@@ -91,7 +92,7 @@ PROPERTIES = {
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
 # and optimize kinds, a plot's x column, the statics kind and output_units.
-STRIPPED_SHA256 = "b107533565b3cb08c719ec34472308ece710339223789b51da5407d9d43de7d5"
+STRIPPED_SHA256 = "d29016866fd84979cd479976a78a3f72b51b4a2d09d9f4ea1ff55709c61cd10a"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

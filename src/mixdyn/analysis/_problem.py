@@ -24,7 +24,9 @@ import jax.scipy.linalg as jsl
 import numpy as np
 
 from ..equations import Constraints, applied_forces, force_directions, potential_energy
+from ..equations import _friction as fr
 from ..equations._jacobian import JacobianOperator
+from ..errors import ModelError
 from ..linalg import lu_solve_checked, min_pivot
 from ..model import Model
 
@@ -96,6 +98,12 @@ class Problem(eqx.Module):
         self.j_index = tuple(int(i) for i in j_index)
         self.i_index = tuple(int(i) for i in i_index)
         self.collocated = tuple(int(i) for i in collocated)
+        if solver == "partition" and fr.friction_elements(model):
+            raise ModelError(
+                "joint friction needs the augmented acceleration solver, not the partition "
+                "method; use solver='augmented'",
+                fr.friction_elements(model)[0].name,
+            )
 
     @property
     def p(self) -> int:
@@ -150,7 +158,60 @@ class Problem(eqx.Module):
             return self._partition(q, qd, t, J.dense(), gam, Q)
         solve, ratio = self.kkt(q, qd, t, J)
         qdd, mu = solve(Q, gam)
+        if self.friction:
+            qdd, mu, _ = self._with_friction(q, qd, t, solve, qdd, mu)
         return qdd, mu, ratio
+
+    # ------------------------------------------------------------------ joint friction
+    @property
+    def friction(self) -> tuple:
+        """The model's joint-friction elements (static)."""
+        return fr.friction_elements(self.model)
+
+    def _with_friction(self, q, qd, t, solve, qdd0, mu0):
+        """Accelerations and multipliers with the joint friction forces, from the KKT
+        solve factorized once (:mod:`mixdyn.equations._friction`); and the friction record
+        ``(f, normal, limit, v, D)``."""
+        elements = self.friction
+        pos = fr.rows(self.model, self.c, elements)
+        D = fr.directions(self.model, elements, q)  # (nq, nf)
+        v = D.T @ qd
+        dd = jax.jvp(lambda qq: fr.directions(self.model, elements, qq).T @ qd, (q,), (qd,))[1]
+        zeros = jnp.zeros(mu0.shape[0], qdd0.dtype)
+        cols = [solve(D[:, k], zeros) for k in range(D.shape[1])]
+        A = jnp.stack([x for x, _ in cols], axis=1)
+        Mu_f = jnp.stack([m for _, m in cols], axis=1)
+        H = D.T @ A
+        a0 = D.T @ qdd0 + dd
+        h_free = jnp.sum(D**2 * self.Minv[:, None], axis=0)
+        f, _ = fr.solve_friction(elements, pos, v, a0, H, mu0, Mu_f, h_free)
+        mu = mu0 + Mu_f @ f
+        lim, normal = fr.limits(elements, pos, mu)
+        return qdd0 + A @ f, mu, (f, normal, lim, v, D)
+
+    def friction_state(self, q, qd, t):
+        """``(f, normal, limit, v, D)`` at one state: the friction forces (nf,) [force or
+        torque], normal reactions [force], limits, relative speeds and directions (nq, nf)."""
+        c = self.c
+        J = c.jacobian(q, t)
+        solve, _ = self.kkt(q, qd, t, J)
+        qdd, mu = solve(self.known_forces(q, qd, t), c.gamma(q, qd, t))
+        return self._with_friction(q, qd, t, solve, qdd, mu)[2]
+
+    def friction_columns(self, q, qd, t) -> dict:
+        """The friction elements' result columns at one state: ``name`` (the friction
+        force or torque), ``name.normal``, ``name.limit``, ``name.speed``, ``name.power``."""
+        if not self.friction:
+            return {}
+        f, normal, lim, v, _ = self.friction_state(q, qd, t)
+        out = {}
+        for k, e in enumerate(self.friction):
+            out[e.name] = f[k]
+            out[f"{e.name}.normal"] = normal[k]
+            out[f"{e.name}.limit"] = lim[k]
+            out[f"{e.name}.speed"] = v[k]
+            out[f"{e.name}.power"] = f[k] * v[k]
+        return out
 
     def stages(self, q, qd, t) -> Stages:
         """The state record of ``(q, qd, t)`` filled stage by stage (positions: ``Phi`` and
@@ -220,6 +281,9 @@ class Problem(eqx.Module):
         ``(M qdd - Q) . qd``.
         """
         Q = self.known_forces(q, qd, t)
+        if self.friction:  # dissipated by the joints' friction: a non-conservative force
+            f, _, _, _, D = self.friction_state(q, qd, t)
+            Q = Q + D @ f
         dV = jax.grad(lambda qq: potential_energy(self.model, qq))(q)
         p_nc = jnp.dot(Q + dV, qd)
         p_c = jnp.dot(self.model.mass_diagonal * qdd - Q, qd)

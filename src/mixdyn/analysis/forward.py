@@ -13,6 +13,7 @@ from ._simulate import (
     ENERGY_TOL,
     Case,
     output_times,
+    refuse_friction_in,
     require_masses,
     run_options,
     simulate,
@@ -131,6 +132,7 @@ def forward_case(
     checked options, consistent start and equations, not yet integrated."""
     ts = output_times(t)
     opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
+    refuse_friction_in(model, opts.method)
     require_masses(model)
     if prepared is None:
         prep = prepare_dynamic(

@@ -35,6 +35,7 @@ from ._simulate import (
     ENERGY_TOL,
     Case,
     output_times,
+    refuse_friction_in,
     require_masses,
     run_options,
     simulate,
@@ -474,6 +475,7 @@ def mixed_case(
     options, solvability, consistent start and equations, not yet integrated."""
     ts = output_times(t)
     opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
+    refuse_friction_in(model, opts.method)
     problem, q, qd, prescribed = _setup(
         model,
         float(ts[0]),

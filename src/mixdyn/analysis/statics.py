@@ -29,6 +29,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import applied_forces
+from ..equations._friction import check_supported
 from ..errors import ConvergenceError
 from ..model import Model
 from ._assembly import length_scale
@@ -119,6 +120,7 @@ def statics(
         ConvergenceError: no equilibrium reached (a load no position can balance, e.g. an
             unbalanced constant force on a free slider).
     """
+    check_supported(model, "statics (an equilibrium with friction is a set, not a point)")
     prep = prepare_kinematic(
         model, float(t), q0=q0, hold=hold, balanced=False, linear_solver="dense"
     )

@@ -1065,6 +1065,50 @@ class TorqueSpec(Spec):
         return cls(type="torque", name=e.name, body=e.body, law=law, reaction=e.reaction)
 
 
+@element_kind("JointFriction", FORCE_SPECS)
+class JointFrictionSpec(Spec):
+    """Coulomb friction in a revolute, translational or pin-in-slot joint, with stick and slip
+    (the force from the joint's reaction: ``mu |N|`` along a slide, ``mu radius |R|`` about
+    a pin)."""
+
+    type: Literal["joint_friction"]
+    """Force type: ``joint_friction``."""
+    name: Name
+    """Unique name of the friction element (its result columns: the friction force or torque,
+    ``.normal``, ``.limit``, ``.speed``, ``.power``)."""
+    joint: Name
+    """The joint with friction: a revolute, translational or pin-in-slot joint."""
+    mu: Scalar
+    """Coulomb friction coefficient [1], >= 0."""
+    radius: Scalar = 0.0
+    """Pin radius [length], for a revolute joint: the friction torque is ``mu radius |R|``."""
+    v_stick: Scalar = 1e-6
+    """Stick band [velocity, or angular velocity for a revolute joint]: below this relative
+    speed the joint sticks while the friction can hold it. Default 1e-6 in the model's units."""
+
+    def build(self, b, p):
+        rotary = any(j.name == self.joint and j.type == "revolute" for j in b.spec.joints)
+        speed = "angular_velocity" if rotary else "velocity"
+        return b.m.JointFriction(
+            self.name,
+            self.joint,
+            mu=b.scalar(self.mu, "dimensionless", (*p, "mu")),
+            radius=b.scalar(self.radius, "length", (*p, "radius")),
+            v_stick=b.scalar(self.v_stick, speed, (*p, "v_stick")),
+        )
+
+    @classmethod
+    def from_element(cls, e, d):
+        return cls(
+            type="joint_friction",
+            name=e.name,
+            joint=e.joint,
+            mu=float(e.mu),
+            radius=float(e.radius),
+            v_stick=float(e.v_stick),
+        )
+
+
 @element_kind("SpringDamper", FORCE_SPECS)
 class SpringDamperSpec(Spec):
     """A translational spring-damper-actuator between two points."""

@@ -21,6 +21,7 @@ from ._forces import (
     StateFunction,
     Torque,
 )
+from ._friction import JointFriction
 from ._joints import JOINT_TYPES, Distance, Joint, PinInSlot, Revolute, Translational, Weld
 from ._laws import (
     Constant,
@@ -56,6 +57,7 @@ __all__ = [
     "Ground",
     "Harmonic",
     "Joint",
+    "JointFriction",
     "Law",
     "Model",
     "PiecewisePolynomial",

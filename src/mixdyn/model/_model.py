@@ -96,7 +96,10 @@ class Model(eqx.Module):
         self.bodies = bodies
         self.joints = tuple(j.bind(r) for j in joints)
         self.drivers = tuple(d.bind(r) for d in drivers)
-        self.forces = tuple(f.bind(r) for f in forces)
+        self.forces = tuple(
+            f.bind(r).with_joint(self.joints) if hasattr(f, "with_joint") else f.bind(r)
+            for f in forces
+        )
         self.ground = ground
         try:
             g = np.asarray(gravity, dtype=float)

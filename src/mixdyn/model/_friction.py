@@ -1,0 +1,112 @@
+"""Coulomb friction in a revolute or translational joint.
+
+The friction force depends on the joint's reaction, which the analysis computes together with
+the accelerations: the element holds the coefficients, the analysis evaluates it
+(:mod:`mixdyn.equations._friction`).
+
+- Revolute joint: a friction torque of at most ``mu * radius * |R|`` between the two bodies
+  (``R`` the reaction force of the pin, ``radius`` the pin's radius [length]).
+- Translational joint (and pin in slot): a friction force of at most ``mu * |N|`` along the
+  axis (``N`` the normal reaction; the reaction moment's share, which depends on the slider's
+  length, is not included).
+
+Stick and slip (Karnopp's model): while the relative speed is below ``v_stick`` the joint
+sticks: the friction force is the one that keeps the relative acceleration zero, as long as
+it stays within the limit; past the limit, or above ``v_stick``, the joint slips with the
+limit force opposing the motion. The one regularization is that band: a joint that comes to a
+stop inside it keeps its speed there (at most ``v_stick``) instead of zero.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..errors import ModelError
+from ._element import Resolver
+from ._forces import ForceElement, _f64
+from ._validate import finite
+
+
+class JointFriction(ForceElement):
+    """Coulomb friction in the revolute or translational joint named ``joint``.
+
+    Args:
+        name: unique name.
+        joint: the joint's name (a revolute, translational or pin-in-slot joint).
+        mu: the friction coefficient (>= 0) [1].
+        radius: the pin's radius, for a revolute joint [length].
+        v_stick: the stick band: a relative speed below it sticks [velocity, or angular
+            velocity for a revolute joint].
+    """
+
+    joint: str = eqx.field(static=True)
+    mu: jax.Array = eqx.field(default=0.0, converter=_f64)
+    radius: jax.Array = eqx.field(default=0.0, converter=_f64)
+    v_stick: jax.Array = eqx.field(default=1e-6, converter=_f64)
+    #: Whether the joint is revolute (a friction torque), set when the model is built.
+    rotary: bool = eqx.field(static=True, default=False, kw_only=True)
+    #: The element is evaluated by the analysis, with the reactions.
+    needs_reactions: ClassVar[bool] = True
+
+    def __check_init__(self):
+        finite((self.mu, self.radius, self.v_stick), "mu, radius and v_stick", self.name)
+        if jnp.any(jnp.asarray(self.mu) < 0) or jnp.any(jnp.asarray(self.radius) < 0):
+            raise ModelError("mu and radius must be >= 0", self.name)
+        if jnp.any(jnp.asarray(self.v_stick) <= 0):
+            raise ModelError("v_stick must be > 0 (the stick band's half-width)", self.name)
+
+    def bind(self, r: Resolver):
+        return self
+
+    def with_joint(self, joints) -> JointFriction:
+        """The element checked against the model's bound ``joints``: its joint exists and is
+        revolute, translational or a pin in a slot."""
+        from ._joints import Revolute, Translational
+
+        for j in joints:
+            if j.name == self.joint:
+                if isinstance(j, Revolute):
+                    if float(jnp.max(self.radius)) <= 0 and float(jnp.max(self.mu)) > 0:
+                        raise ModelError(
+                            f"friction in revolute joint {self.joint!r} needs the pin's radius "
+                            "(radius > 0): the friction torque is mu * radius * |reaction|",
+                            self.name,
+                        )
+                    return dataclasses.replace(self, rotary=True)
+                if isinstance(j, Translational):
+                    return dataclasses.replace(self, rotary=False)
+                raise ModelError(
+                    f"joint {self.joint!r} is a {type(j).__name__}: friction is modelled in "
+                    "revolute, translational and pin-in-slot joints",
+                    self.name,
+                )
+        known = ", ".join(j.name for j in joints) or "(none)"
+        raise ModelError(f"no joint {self.joint!r}; joints: {known}", self.name)
+
+    def body_indices(self):
+        return ()
+
+    def generalized(self, q, qd, t, nq):
+        """Zero: the friction force is the analysis' (it needs the reactions)."""
+        return jnp.zeros(nq)
+
+    @property
+    def magnitude_kind(self):
+        return "torque" if self.rotary else "force"
+
+    @property
+    def output_kinds(self):
+        return {
+            "": self.magnitude_kind,
+            "normal": "force",
+            "limit": self.magnitude_kind,
+            "speed": "angular_velocity" if self.rotary else "velocity",
+        }
+
+
+__all__ = ["JointFriction"]
