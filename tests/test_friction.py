@@ -205,3 +205,22 @@ def test_friction_is_refused_where_it_is_not_modelled():
         md.forward(model, TS, method="generalized-alpha")
     with pytest.raises(md.ModelError, match="statics"):
         md.statics(model)
+
+
+def test_a_block_thrown_up_an_incline_stops_and_sticks():
+    """Slip, then stick: launched up the incline at v0 it decelerates at g (sin + mu cos),
+    stops at v0 / a, and (below the friction angle) stays: within the stick band's creep."""
+    theta, mu, v0 = 0.2, 0.3, 1.0
+    c, s = math.cos(theta), math.sin(theta)
+    model = incline(theta, mu)
+    qd0 = (-v0 * c, v0 * s, 0.0)  # up the slope (the axis points down it)
+    t = np.linspace(0.0, 1.0, 51)
+    r = md.forward(model, t, qd0=qd0, rtol=1e-10, atol=1e-12)
+    a = G * (s + mu * c)
+    t_stop = v0 / a
+    up = v0 * np.minimum(t, t_stop) - 0.5 * a * np.minimum(t, t_stop) ** 2
+    d = np.hypot(r.q[:, 0], r.q[:, 1])
+    creep = 1e-6 * (t[-1] - t_stop)  # v_stick (1e-6 m/s) at most, after the stop
+    np.testing.assert_allclose(d, up, atol=1e-8 + creep)
+    speed = np.asarray(r.table()["friction.speed"])
+    assert np.all(np.abs(speed[t > t_stop + 0.02]) <= 1e-6)
