@@ -268,3 +268,52 @@ def test_a_cam_given_by_samples():
     res = md.kinematic(cam_model(law, w, spring=False), t)
     np.testing.assert_allclose(res["follower.y"], BASE + H / 2 * (1 - np.cos(w * t)), atol=2e-7)
     np.testing.assert_allclose(res["follower.vy"], H / 2 * w * np.sin(w * t), atol=2e-5)
+
+
+def test_an_oscillating_flat_faced_follower_touches_its_cam_profile():
+    """An arm pivoted at P whose flat underside (through the face point, normal up) rides on
+    the cam, swinging by beta/2 (1 - cos theta): at every cam angle the face's line, placed
+    by the arm's rotation about P (independent of the envelope the profile is drawn from),
+    touches the drawn profile and has all of it on the cam's side."""
+    beta, base = 0.1, 0.04
+    model = md.Model(
+        bodies=[
+            md.Body("cam", 1.0, 1e-3, q0=(0, 0, 0)),
+            md.Body("arm", 0.2, 2e-3, q0=(0.1, 0.06, 0.0), points={"face": (-0.1, -0.02)}),
+        ],
+        ground={"O": (0.0, 0.0), "P": (0.1, 0.06)},
+        joints=[
+            md.Revolute("O", "ground.O", "cam"),
+            md.Revolute("P", "ground.P", "arm"),
+            md.CamFollower(
+                "pair",
+                "cam",
+                "arm",
+                law=md.FunctionLaw(lambda th: beta / 2 * (1 - jnp_cos(th))),
+                motion="oscillating",
+                pivot="ground.P",
+                sense=-1.0,  # lifting the face turns the arm clockwise
+                point="arm.face",
+                follower_type="flat",
+                axis=(0.0, 1.0),
+                base=base,
+            ),
+        ],
+        drivers=[md.CoordinateDriver("motor", "cam", "phi", law=md.Ramp(0.0, 1.0))],
+        units=md.SI,
+    )
+    pair = model.joints[2]
+    prof = pair.profile(720)
+    P, F0, n0 = np.array([0.1, 0.06]), np.array([0.0, 0.04]), np.array([0.0, 1.0])
+    worst_side, worst_touch = 0.0, 0.0
+    for th in np.linspace(0.0, 2 * math.pi, 97):
+        dpsi = -beta / 2 * (1 - math.cos(th))
+        R = np.array([[math.cos(dpsi), -math.sin(dpsi)], [math.sin(dpsi), math.cos(dpsi)]])
+        F, n = P + R @ (F0 - P), R @ n0
+        back = np.array([[math.cos(th), math.sin(th)], [-math.sin(th), math.cos(th)]])
+        d = prof @ (back @ n) - (back @ F) @ (back @ n)  # signed distance to the face
+        worst_side = max(worst_side, float(d.max()))
+        worst_touch = max(worst_touch, float(np.abs(d).min()))
+    assert worst_side < 2e-6 * base and worst_touch < 2e-5 * base
+    # the swing lifts the face: the profile reaches beyond the base circle
+    assert np.linalg.norm(prof, axis=1).max() > base * 1.05

@@ -13,7 +13,8 @@ an expression, polynomial, spline through samples), so
 with ``u`` the axis and ``base`` the distance at ``s = 0`` (the prime circle's radius:
 the base circle's plus the roller's). The knife-edge, roller and flat-faced followers share
 this motion; the cam profile that produces it differs (drawn by the animation: the pitch
-curve minus the roller, or the envelope of the flat face).
+curve minus the roller, or the envelope of the flat face; an oscillating follower's flat face
+is the line through its point whose normal is ``axis`` at the start, turning with it).
 
 The multiplier gives the force along the axis with which the cam pushes the follower,
 ``{name}.F`` [force] (the contact's component along the axis; > 0 while in contact): the cam
@@ -134,12 +135,6 @@ class CamFollower(Joint):
                 )
             if self.sense not in (1.0, -1.0):
                 raise ModelError("sense must be +1 or -1", self.name)
-            if self.follower_type == "flat":
-                raise ModelError(
-                    "a flat-faced follower here translates; give knife or roller "
-                    "for an oscillating one",
-                    self.name,
-                )
         elif float(self.roller) >= float(self.base):
             raise ModelError("the roller must be smaller than the base distance", self.name)
 
@@ -249,6 +244,16 @@ class CamFollower(Joint):
                 axis=1,
             )
             pitch = to_cam(np.array([px, py]) + arm)
+            if self.follower_type == "flat":  # the face's normal turns with the follower
+                u0 = np.asarray(self.u, dtype=float)
+                n_glob = np.stack(
+                    [
+                        np.cos(dpsi) * u0[0] - np.sin(dpsi) * u0[1],
+                        np.sin(dpsi) * u0[0] + np.cos(dpsi) * u0[1],
+                    ],
+                    axis=1,
+                )
+                return _envelope(to_cam(n_glob), pitch, th)
         else:
             u = np.broadcast_to(np.asarray(self.u, dtype=float), (n, 2))
             dirs = to_cam(u)
@@ -271,6 +276,17 @@ class CamFollower(Joint):
             out["circles"] = [(self.bj, self.sj, self.roller)]
         out["pins"] = [(self.bj, self.sj)]
         return out
+
+
+def _envelope(n, pitch, th) -> np.ndarray:
+    """The envelope (k, 2) of the lines ``n_k . x = n_k . pitch_k`` over the cam angles
+    ``th`` (k,): per angle the point on the line where it touches the next (``[n; n'] x =
+    [h; h']``, derivatives by second-order differences)."""
+    h = np.sum(n * pitch, axis=1)
+    dn = np.gradient(n, th, axis=0, edge_order=2)
+    dh = np.gradient(h, th, edge_order=2)
+    A = np.stack([n, dn], axis=1)  # (k, 2, 2): rows n and n'
+    return np.linalg.solve(A, np.stack([h, dh], axis=1)[..., None])[..., 0]
 
 
 CAM_TYPES: dict[str, type[Joint]] = {"cam_follower": CamFollower}
