@@ -224,3 +224,17 @@ def test_a_block_thrown_up_an_incline_stops_and_sticks():
     np.testing.assert_allclose(d, up, atol=1e-8 + creep)
     speed = np.asarray(r.table()["friction.speed"])
     assert np.all(np.abs(speed[t > t_stop + 0.02]) <= 1e-6)
+
+
+def test_a_slides_friction_is_drawn_against_the_motion_at_its_limit():
+    from mixdyn.viz.arrows import force_arrows
+
+    theta, mu, m = 0.5, 0.3, 2.0
+    r = md.forward(incline(theta, mu, m), TS, rtol=1e-10, atol=1e-12)
+    (arrow,) = force_arrows(r, ["friction"])
+    F = arrow["F"][1:]
+    v = np.asarray(r.qd)[1:, :2]
+    np.testing.assert_allclose(np.hypot(F[:, 0], F[:, 1]), mu * m * G * math.cos(theta), rtol=1e-12)
+    cosang = np.sum(F * v, axis=1) / np.hypot(F[:, 0], F[:, 1]) / np.hypot(v[:, 0], v[:, 1])
+    np.testing.assert_allclose(cosang, -1.0, atol=1e-12)
+    np.testing.assert_allclose(arrow["at"], np.asarray(r.q)[:, :2], atol=1e-12)

@@ -29,6 +29,9 @@ def _place(q: np.ndarray, b: int, s) -> np.ndarray:
 def force_arrows(result, names=True) -> list[dict]:
     """The forces of a result as arrows.
 
+    A translational joint's friction (:class:`~mixdyn.model.JointFriction`) is drawn on body j
+    at the joint's point, along the slide; a pin's friction torque has no arrow.
+
     Args:
         result: a :class:`mixdyn.Result` of a forward, inverse or mixed run.
         names: ``True`` for every joint's reaction and every point force; or the names of
@@ -51,7 +54,9 @@ def force_arrows(result, names=True) -> list[dict]:
         )
     joints = {j.name: j for j in model.joints}
     forces = {f.name: f for f in model.forces if isinstance(f, PointForce)}
-    wanted = list(joints) + list(forces) if names is True else list(names)
+    # joint friction along a slide (a pin's friction torque has no arrow)
+    slides = {f.name: f for f in model.forces if getattr(f, "needs_reactions", False)}
+    wanted = list(joints) + list(forces) + list(slides) if names is True else list(names)
     cols, units = result.columns(), result.units()
     q = np.asarray(result.q)
     out = []
@@ -78,6 +83,19 @@ def force_arrows(result, names=True) -> list[dict]:
             b, s = joints[name].reaction_point()
             F = np.stack([cols[f"{name}.Fx"], cols[f"{name}.Fy"]], axis=-1)
             unit = units[f"{name}.Fx"]
+        elif name in slides:
+            f = slides[name]
+            if f.rotary or name not in cols:
+                continue
+            j = joints[f.joint]
+            b, s = j.bj, j.sj  # on body j at its point, along the axis turning with body i
+            u = np.asarray(j.u, dtype=float)
+            if j.bi >= 0:
+                phi = q[:, 3 * j.bi + 2]
+                c, sn = np.cos(phi), np.sin(phi)
+                u = np.stack([c * u[0] - sn * u[1], sn * u[0] + c * u[1]], axis=-1)
+            F = np.asarray(cols[name])[:, None] * u
+            unit = units[name]
         elif name in forces:
             f = forces[name]
             if name not in cols:
@@ -94,8 +112,8 @@ def force_arrows(result, names=True) -> list[dict]:
             from .._hints import did_you_mean
 
             raise ValueError(
-                f"cannot draw the force {name!r}: it is neither a joint nor a point force; "
-                + did_you_mean(name, [*joints, *forces])
+                f"cannot draw the force {name!r}: it is neither a joint, a point force nor "
+                "a slide's friction; " + did_you_mean(name, [*joints, *forces, *slides])
             )
         out.append(
             {
