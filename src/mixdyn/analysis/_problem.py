@@ -305,12 +305,30 @@ class Problem(eqx.Module):
             q = q - c.jacobian(q, t).min_norm(Minv, guard=True).solve(r)
             return q, c(q, t)
 
+        def far(r):
+            return jnp.max(jnp.abs(r), initial=0.0) > tol
+
+        if c.batched:
+            # A sweep's one program (not differentiated): under ``vmap`` a ``lax.cond`` runs
+            # its branch for every member, so the loop of static length would make all
+            # ``iters`` Newton steps; this loop stops once every member is closed (usually
+            # after one step).
+            def go_on(state):
+                k, _, r = state
+                return (k < iters) & far(r)
+
+            def step(state):
+                k, q, r = state
+                return (k + 1, *newton(q, r))
+
+            _, q, r = jax.lax.while_loop(go_on, step, (0, q, c(q, t)))
+            return q, jnp.max(jnp.abs(r), initial=0.0)
+
         def body(_, state):
             q, r = state
-            far = jnp.max(jnp.abs(r), initial=0.0) > tol
             # a branch taken only while far (one Newton step after most integration steps);
             # a loop of static length, which reverse-mode differentiation goes through
-            return jax.lax.cond(far, newton, lambda q, r: (q, r), q, r)
+            return jax.lax.cond(far(r), newton, lambda q, r: (q, r), q, r)
 
         q, r = jax.lax.fori_loop(0, iters, body, (q, c(q, t)))
         return q, jnp.max(jnp.abs(r), initial=0.0)
