@@ -139,6 +139,33 @@ def test_a_members_input_error_names_the_member(paper):
     assert "member 1 of the sweep" in "".join(getattr(err.value, "__notes__", []))
 
 
+def test_members_varying_only_masses_and_forces_share_one_set_up(paper, monkeypatch):
+    """Masses, inertias and forces do not enter a forward run's start: the sweep sets up the
+    nominal model once (the members still equal their single runs:
+    ``test_forward_members_equal_single_runs`` varies exactly these); a varied start is set
+    up member by member."""
+    import importlib
+
+    sweep_module = importlib.import_module("mixdyn.analysis.sweep")
+
+    assert sweep_module.shares_start(paper, {"slider.mass": [1], "F1.law.amplitude": [1]})
+    assert sweep_module.shares_start(paper, {"crank.inertia": [1]})
+    assert not sweep_module.shares_start(paper, {"crank.q0": [[0, 0, 0]]})
+    assert not sweep_module.shares_start(paper, {})
+    calls = []
+    real = sweep_module.ANALYSES["forward"]
+
+    def counting(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setitem(sweep_module.ANALYSES, "forward", counting)
+    sw = md.sweep(paper, TS[:6], vary={"slider.mass": [0.01, 0.02, 0.03]}, **OPTS)
+    assert len(calls) == 1 and not sw.errors and {"setup", "total"} <= set(sw.seconds)
+    single = md.forward(vary_models(paper, {"slider.mass": [0.03]})[0], TS[:6], **OPTS)
+    _same(sw[2], single)
+
+
 @pytest.mark.slow  # starts two worker processes (20 s here); CI runs it
 @pytest.mark.timeout(600)
 def test_a_dask_cluster_sweep_equals_the_in_process_one(paper):

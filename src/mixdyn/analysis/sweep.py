@@ -36,7 +36,7 @@ import numpy as np
 from .._compile import cached_jit
 from ..errors import MixdynError, ModelError
 from ..model import Model
-from ._simulate import Case, finish, integrate
+from ._simulate import Case, finish, integrate, require_masses
 from .forward import forward_case
 from .integrators import INTEGRATORS
 from .inverse import inverse
@@ -156,6 +156,28 @@ def _leaf_getter(model: Model, path: str):
     return get, tuple(np.shape(obj))
 
 
+#: The bodies' fields that do not enter the kinematics (a forward run's start).
+_INERTIAL = ("mass", "inertia")
+
+
+def shares_start(model: Model, vary: Mapping[str, Sequence]) -> bool:
+    """Whether every path of ``vary`` names a number that does not enter a forward run's
+    start (the consistent positions and velocities, the constraint set): a body's mass or
+    inertia, or any number of a force element. Such members share the nominal model's
+    set-up, made once (:func:`run_members`)."""
+    forces = {f.name for f in model.forces}
+    bodies = {b.name for b in model.bodies}
+    for path in vary:
+        head, _, rest = path.partition(".")
+        field = rest.split(".")[0]
+        if head in forces:
+            continue
+        if head in bodies and field in _INERTIAL:
+            continue
+        return False
+    return bool(vary)
+
+
 def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
     """The member models of ``vary`` (path -> (B,) or (B, ...) values, one row per member):
     ``model`` with the named numbers replaced, member by member."""
@@ -228,7 +250,9 @@ class Sweep:
         results: per member its :class:`~mixdyn.Result`, or None where it failed.
         errors: member index -> the named error of a failed member.
         parameters: member index -> the varied values (path -> value), empty for ``models=``.
-        seconds: wall time of the set-up, the batched integration and the finishing [s].
+        seconds: wall times [s]: ``total``; in process also ``setup`` (every member's start;
+            one shared start when only masses, inertias and forces vary) and, on the
+            vectorized path, ``integration`` (the one program) and ``finishing``.
     """
 
     results: list[Result | None]
@@ -350,9 +374,10 @@ def _in_threads(work: Callable[[int], Outcome], indices: list[int], threads: int
         return [first, *pool.map(run, rest)]
 
 
-def _batched(cases: list[Case], batch_size: int) -> list[Outcome]:
+def _batched(cases: list[Case], batch_size: int, seconds: dict | None = None) -> list[Outcome]:
     """The members integrated by one program (``batch_size`` at a time vectorized), then
-    finished one by one."""
+    finished one by one (``seconds``: filled with the times of both)."""
+    clock = time.perf_counter()
     if batch_size < 1:
         raise ModelError(f"batch_size must be >= 1, got {batch_size}", "batch_size")
     first = cases[0]
@@ -366,7 +391,13 @@ def _batched(cases: list[Case], batch_size: int) -> list[Outcome]:
         stack(*[c.qd0 for c in cases]),
         first.options.as_argument(),
     )
-    return [_finish(c, jax.tree.map(lambda x, i=i: x[i], trajs)) for i, c in enumerate(cases)]
+    trajs = jax.block_until_ready(trajs)
+    middle = time.perf_counter()
+    done = [_finish(c, jax.tree.map(lambda x, i=i: x[i], trajs)) for i, c in enumerate(cases)]
+    if seconds is not None:
+        seconds["integration"] = middle - clock
+        seconds["finishing"] = time.perf_counter() - middle
+    return done
 
 
 def _input_error(err: ModelError, i: int, describe: str) -> ModelError:
@@ -385,6 +416,8 @@ def run_members(
     on_member: Callable[[int], None] | None = None,
     describe: Callable[[int], str] = lambda i: "",
     offset: int = 0,
+    same_start: bool = False,
+    seconds: dict | None = None,
 ) -> list[Outcome]:
     """Each member's ``(Result, None)`` or ``(None, its numerical error)``, in order.
 
@@ -397,6 +430,11 @@ def run_members(
         on_member: called with a member's index when it is done (from any thread).
         describe: member index -> words naming it in an error (its varied values).
         offset: the sweep's index of ``members[0]`` (a chunk of a larger sweep), for errors.
+        same_start: the members differ only in numbers that do not enter a forward run's
+            start (:func:`shares_start`): the first member is set up and the others take its
+            start and constraint set with their own model (their masses checked).
+        seconds: if given, filled with the wall time of the set-up, the integration and the
+            finishing [s].
 
     Raises:
         ModelError: a member's input error (named with its index), or members of different
@@ -423,15 +461,29 @@ def run_members(
     setup = ANALYSES[analysis]
     cases: dict[int, Case] = {}
     outcomes: dict[int, Outcome] = {}
+    clock = time.perf_counter()
+    shared = same_start and analysis == "forward"
     for i, m in enumerate(members):
         try:
-            cases[i] = setup(m, t, **kwargs_of(i))
+            if shared and cases:
+                require_masses(m)
+                first = cases[next(iter(cases))]
+                problem = eqx.tree_at(lambda p: p.model, first.problem, m)
+                cases[i] = dataclasses.replace(first, problem=problem)
+            elif shared and outcomes:  # the shared start could not be made
+                outcomes[i] = outcomes[next(iter(outcomes))]
+                if on_member is not None:
+                    on_member(i)
+            else:
+                cases[i] = setup(m, t, **kwargs_of(i))
         except ModelError as err:
             raise _input_error(err, offset + i, describe(i)) from None
         except MixdynError as err:  # a start that cannot be made: this member fails
             outcomes[i] = (None, err)
             if on_member is not None:
                 on_member(i)
+    if seconds is not None:
+        seconds["setup"] = time.perf_counter() - clock
     if cases:
         k0 = next(iter(cases))
         first = cases[k0]
@@ -449,7 +501,7 @@ def run_members(
                 lambda i: _finish(cases[i], integrate(cases[i])), order, threads, on_member
             )
         else:
-            done = _batched([cases[i] for i in order], batch_size or _default_batch_size())
+            done = _batched([cases[i] for i in order], batch_size or _default_batch_size(), seconds)
             if on_member is not None:
                 for i in order:
                     on_member(i)
@@ -573,6 +625,7 @@ def sweep(
         results = [r for r, _ in outcomes]
         errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
         return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
+    seconds: dict[str, float] = {}
     outcomes = run_members(
         members,
         t,
@@ -582,10 +635,13 @@ def sweep(
         threads=threads,
         on_member=on_member,
         describe=lambda i: _describe(params, i),
+        same_start=models is None and shares_start(model, vary or {}),
+        seconds=seconds,
     )
     results = [r for r, _ in outcomes]
     errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
-    return Sweep(results, errors, params, {"total": time.perf_counter() - started})
+    seconds["total"] = time.perf_counter() - started
+    return Sweep(results, errors, params, seconds)
 
 
 def _describe(params, i) -> str:
