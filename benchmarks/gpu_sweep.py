@@ -17,7 +17,10 @@ per batch in a sweep (the default). Diagnostics: ``--variant select`` guards mem
 member: the program before the any-member guard); ``--variant nofallback`` removes the guard
 (the floor).
 
-Run: ``python benchmarks/gpu_sweep.py 1024 10000 [--variant default|nofallback]``
+``--full 1000 10000`` also times the whole ``md.sweep`` of that many members (set-up,
+integration and finishing into Results, from ``Sweep.seconds``).
+
+Run: ``python benchmarks/gpu_sweep.py 1024 10000 [--variant default|nofallback] [--full N]``
 (``MIXDYN_NO_CACHE=1`` for a variant other than the default: programs are cached by structure).
 """
 
@@ -39,6 +42,7 @@ def main() -> None:
     ap.add_argument("--variant", default="default", choices=["default", "select", "nofallback"])
     ap.add_argument("--batch-size", type=int, default=0, help="0: all members at once")
     ap.add_argument("--method", default="projection")
+    ap.add_argument("--full", nargs="*", type=int, default=[], help="whole md.sweep of these")
     a = ap.parse_args()
 
     import equinox as eqx
@@ -131,7 +135,22 @@ def main() -> None:
             f"{n / (t2 - t1):,.0f} |" + ("" if ok == n else f" ({n - ok} failed)"),
             flush=True,
         )
-    del md
+    if a.full:
+        print("whole md.sweep (set-up, integration, finishing into Results), second call:")
+        print("| members | total s | set-up s | integration s | finishing s | ms per member |")
+        print("|---|---|---|---|---|---|")
+        for n in a.full:
+            mass, amp = members(n)
+            vary = {"slider.mass": mass, "F1.law.amplitude": amp}
+            md.sweep(model, ts, vary=vary, batch_size=n, **opts)
+            sw = md.sweep(model, ts, vary=vary, batch_size=n, **opts)
+            sec = sw.seconds
+            print(
+                f"| {n} | {sec['total']:.2f} | {sec['setup']:.2f} | {sec['integration']:.2f} "
+                f"| {sec['finishing']:.2f} | {1e3 * sec['total'] / n:.3f} |"
+                + (f" ({len(sw.errors)} failed)" if sw.errors else ""),
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

@@ -84,7 +84,9 @@ def _post_arrays(problem: Problem, ts, Q, QD):
     multipliers' powers, energies ``[T, V, T + V]`` and the constraint violation.
 
     ``lax.map`` (one time after the other), not ``vmap``: under ``vmap`` the fallback of the
-    acceleration solve at singular positions (a ``lax.cond``) would run at every time.
+    acceleration solve at singular positions (a ``lax.cond``) would run at every time. A
+    sweep vectorizes this over its members (their constraint sets marked ``batched``: the
+    fallback decided once per batch).
     On the sparse path everything comes from the constraints' sparse form: no dense
     ``Phi_q``.
     """
@@ -106,13 +108,16 @@ def _post_arrays(problem: Problem, ts, Q, QD):
     return jax.lax.map(one, (Q, QD, ts))
 
 
-def _post(problem: Problem, ts, Q, QD, n_drivers: int):
+def _post(problem: Problem, ts, Q, QD, n_drivers: int, arrays=None):
     """Accelerations, multipliers and pivot ratios (N, ...) at the output times ``ts`` of the
     states ``Q``, ``QD`` (N, nq), and the result columns in physical terms (NumPy arrays):
     reactions, driver efforts and powers, ``lambda.*``, unknown forces and their powers,
-    energies and the constraint violation."""
+    energies and the constraint violation (``arrays``: :func:`_post_arrays`' output if
+    already computed, e.g. for a whole sweep at once)."""
     c = problem.c
-    qdd, mu, ratio, R, powers, E, viol, forces = _post_arrays(problem, ts, Q, QD)
+    if arrays is None:
+        arrays = _post_arrays(problem, ts, Q, QD)
+    qdd, mu, ratio, R, powers, E, viol, forces = arrays
     mu, R, powers, E = (np.asarray(a) for a in (mu, R, powers, E))
     out = reaction_columns(c, R)
     out.update({k: np.asarray(v) for k, v in forces.items()})
@@ -349,15 +354,18 @@ def integrate(case: Case, progress=None):
         )
 
 
-def finish(case: Case, traj) -> Result:
+def finish(case: Case, traj, arrays=None) -> Result:
     """The result of ``case`` from its trajectory ``traj``, in physical terms; a failed or
-    unbalanced run raises its named error (:class:`~mixdyn.errors.NumericalError`)."""
+    unbalanced run raises its named error (:class:`~mixdyn.errors.NumericalError`).
+    ``arrays``: the post-processing's arrays (:func:`_post_arrays`) if already computed."""
     problem, ts, options = case.problem, case.ts, case.options
     method = options.method
     if int(traj.status) != 0:
         _raise_failure(problem, traj, ts, method)
     Q, QD, W = np.asarray(traj.q), np.asarray(traj.qd), np.asarray(traj.w)
-    qdd, _, ratio, cols = _post(problem, np.asarray(ts, dtype=np.float64), Q, QD, case.n_drivers)
+    qdd, _, ratio, cols = _post(
+        problem, np.asarray(ts, dtype=np.float64), Q, QD, case.n_drivers, arrays
+    )
     extra = {k: np.asarray(v) for k, v in cols.items()}
     extra["work.nonconservative"] = W[:, 0]
     extra["work.constraints"] = W[:, 1]
