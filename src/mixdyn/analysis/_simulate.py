@@ -261,7 +261,7 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
     Wn, Wc = extra["work.nonconservative"], extra["work.constraints"]
     bal = (T + V) - (T[0] + V[0]) - Wn - Wc
     span = float(ts[-1] - ts[0])
-    mass = float(np.sum(np.asarray(problem.model.mass_diagonal)[::3]))
+    mass = float(sum(np.asarray(b.mass) for b in problem.model.bodies))
     rest = mass * (length_scale(problem.model) / span) ** 2
     scale = max(np.ptp(T), np.ptp(V), np.max(np.abs(Wn)), np.max(np.abs(Wc)), rest, 1e-300)
     rel = np.abs(bal) / scale

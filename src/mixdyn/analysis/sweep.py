@@ -232,16 +232,18 @@ def for_batch(problem):
     return eqx.tree_at(lambda p: p.c, problem, problem.c.for_batch())
 
 
-def with_model(problem, model: Model):
-    """``problem`` with ``model`` (of the same structure) in place of its own: its leaves
-    are the model's followed by the constraint set's (one unflatten; ``eqx.tree_at`` takes
-    2.5 ms)."""
+def model_swapper(problem):
+    """A function ``model -> problem`` with that model (of the same structure) in place of
+    ``problem``'s own: the problem's leaves are the model's followed by the constraint set's,
+    read once here (one unflatten a member; ``eqx.tree_at`` takes 2.5 ms)."""
     c_leaves = jax.tree_util.tree_leaves(problem.c)
-    m_leaves = jax.tree_util.tree_leaves(model)
     treedef = jax.tree_util.tree_structure(problem)
-    if treedef.num_leaves != len(m_leaves) + len(c_leaves):  # pragma: no cover - a new field
-        return eqx.tree_at(lambda p: p.model, problem, model)
-    return jax.tree_util.tree_unflatten(treedef, m_leaves + c_leaves)
+    n_model = len(jax.tree_util.tree_leaves(problem.model))
+    if treedef.num_leaves != n_model + len(c_leaves):  # pragma: no cover - a new field
+        return lambda model: eqx.tree_at(lambda p: p.model, problem, model)
+    return lambda model: jax.tree_util.tree_unflatten(
+        treedef, jax.tree_util.tree_leaves(model) + c_leaves
+    )
 
 
 def _integrate_batch(method: str, batch_size: int, problems, ts, q0, qd0, options):
@@ -414,6 +416,16 @@ def _in_threads(work: Callable[[int], Outcome], indices: list[int], threads: int
         return [first, *pool.map(run, rest)]
 
 
+def _stack_column(col) -> np.ndarray:
+    """One leaf of every member stacked (leading axis: the member); a leaf that is the same
+    object in every member (a shared start's constraint set, the numbers not varied) is read
+    once and broadcast: on an accelerator each read is a transfer."""
+    if all(x is col[0] for x in col):
+        a = np.asarray(col[0])
+        return np.broadcast_to(a, (len(col), *a.shape))
+    return np.stack([np.asarray(x) for x in col])
+
+
 def _batched(cases: list[Case], batch_size: int, seconds: dict | None = None) -> list[Outcome]:
     """The members integrated by one program (``batch_size`` at a time vectorized), then
     finished one by one (``seconds``: filled with the times of both)."""
@@ -426,7 +438,7 @@ def _batched(cases: list[Case], batch_size: int, seconds: dict | None = None) ->
     treedef = jax.tree_util.tree_structure(for_batch(first.problem))
     rows = [jax.tree_util.tree_leaves(c.problem) for c in cases]
     problems = jax.tree_util.tree_unflatten(
-        treedef, [np.stack([np.asarray(x) for x in col]) for col in zip(*rows, strict=True)]
+        treedef, [_stack_column(col) for col in zip(*rows, strict=True)]
     )
     stack = lambda *xs: np.stack([np.asarray(x) for x in xs])  # noqa: E731
     ts = np.asarray(first.ts, dtype=np.float64)
@@ -516,12 +528,14 @@ def run_members(
     outcomes: dict[int, Outcome] = {}
     clock = time.perf_counter()
     shared = same_start and analysis == "forward"
+    swap = None
     for i, m in enumerate(members):
         try:
             if shared and cases:
                 require_masses(m)
                 first = cases[next(iter(cases))]
-                cases[i] = dataclasses.replace(first, problem=with_model(first.problem, m))
+                swap = swap or model_swapper(first.problem)
+                cases[i] = dataclasses.replace(first, problem=swap(m))
             elif shared and outcomes:  # the shared start could not be made
                 outcomes[i] = outcomes[next(iter(outcomes))]
                 if on_member is not None:
