@@ -440,15 +440,14 @@ def _batched(cases: list[Case], batch_size: int, seconds: dict | None = None) ->
     problems = jax.tree_util.tree_unflatten(
         treedef, [_stack_column(col) for col in zip(*rows, strict=True)]
     )
-    stack = lambda *xs: np.stack([np.asarray(x) for x in xs])  # noqa: E731
     ts = np.asarray(first.ts, dtype=np.float64)
     trajs = _integrate_batch_jit(
         first.options.method,
         int(min(batch_size, len(cases))),
         problems,
         ts,
-        stack(*[c.q0 for c in cases]),
-        stack(*[c.qd0 for c in cases]),
+        _stack_column([c.q0 for c in cases]),
+        _stack_column([c.qd0 for c in cases]),
         first.options.as_argument(),
     )
     trajs = jax.tree.map(np.asarray, trajs)
