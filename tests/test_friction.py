@@ -238,3 +238,30 @@ def test_a_slides_friction_is_drawn_against_the_motion_at_its_limit():
     cosang = np.sum(F * v, axis=1) / np.hypot(F[:, 0], F[:, 1]) / np.hypot(v[:, 0], v[:, 1])
     np.testing.assert_allclose(cosang, -1.0, atol=1e-12)
     np.testing.assert_allclose(arrow["at"], np.asarray(r.q)[:, :2], atol=1e-12)
+
+
+@pytest.mark.slow  # compiles a reverse-mode run and a vectorized sweep (~40 s); CI runs it
+def test_friction_is_differentiable_and_sweeps_equal_single_runs():
+    """The sliding block's distance d = g (sin - mu cos) t^2 / 2: its derivative with respect to
+    mu through a run (reverse mode) is -g cos t^2 / 2; a vectorized sweep over mu equals the
+    single runs and sticks where mu > tan(theta)."""
+    import jax
+
+    theta, m = 0.5, 2.0
+    f, mu0 = md.differentiable(incline(theta, 0.3, m), TS, ["friction.mu"], rtol=1e-10, atol=1e-12)
+
+    def distance(p):
+        q = f(p)["q"][-1]
+        return jax.numpy.hypot(q[0], q[1])
+
+    g = float(jax.grad(distance)(mu0)[0])
+    np.testing.assert_allclose(g, -G * math.cos(theta) * TS[-1] ** 2 / 2, rtol=1e-7)
+    mus = [0.2, 0.4, 0.7]  # tan(0.5) = 0.546: the last sticks
+    sw = md.sweep(
+        incline(theta, 0.3, m), TS, vary={"friction.mu": mus}, batch_size=3, rtol=1e-10, atol=1e-12
+    )
+    assert not sw.errors
+    for k, mu in enumerate(mus):
+        d = np.hypot(sw[k].q[-1, 0], sw[k].q[-1, 1])
+        a = max(G * (math.sin(theta) - mu * math.cos(theta)), 0.0)
+        np.testing.assert_allclose(d, 0.5 * a * TS[-1] ** 2, rtol=1e-9, atol=1e-12)
