@@ -142,6 +142,27 @@ def test_the_command_line_writes_the_tables_and_figures(tmp_path):
     assert not (out / "forward").exists()  # the swept run is not run for itself
 
 
+def test_netcdf_holds_the_sweep_as_a_labelled_array(tmp_path):
+    """``--netcdf``: sweep.nc, a variable per column on (member, t), the file's varied
+    parameters and the status as coordinates, equal to the long table."""
+    xr = pytest.importorskip("xarray")
+    path = _file(tmp_path, MODEL + BASE + SWEEP)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(
+        app, ["run", str(path), "--out", str(out), "--run", "sweep", "--netcdf"]
+    )
+    assert res.exit_code == 0, res.output
+    ds = xr.load_dataset(out / "sweep" / "sweep.nc", engine="scipy")
+    table = pd.read_csv(out / "sweep" / "table.csv")
+    assert ds["slider.x"].dims == ("member", "t") and ds.sizes == {"member": 4, "t": 21}
+    np.testing.assert_array_equal(ds["F0"].values, [8, 8, 12.5, 12.5])
+    assert list(ds["status"].values) == ["ok"] * 4
+    for k in range(4):
+        rows = table[table["member"] == k]
+        np.testing.assert_allclose(ds["slider.x"].values[k], rows["slider.x"], rtol=1e-15)
+    assert ds["slider.x"].attrs["units"] == "mm"
+
+
 def test_a_failed_member_is_named_and_the_others_written(tmp_path):
     """A member whose run needs more steps than allowed: exit 1 naming it, its cause and
     time; every member's outcome in members.csv, the others' rows in the long table."""

@@ -410,6 +410,14 @@ def run(
         typer.Option("--out", "-o", help="Output folder; each run writes OUT/NAME/."),
     ] = pathlib.Path("out"),
     parquet: Annotated[bool, typer.Option("--parquet", help="Also write results.parquet.")] = False,
+    netcdf: Annotated[
+        bool,
+        typer.Option(
+            "--netcdf",
+            help="Also write each sweep as sweep.nc: a labelled array on (member, t) with the "
+            "varied numbers as coordinates (needs xarray: pip install mixdyn[xarray]).",
+        ),
+    ] = False,
     figures: Annotated[
         bool,
         typer.Option(
@@ -436,10 +444,19 @@ def run(
 
     # The programs this job used last time are read from the cache beside the checks below.
     with _compile.job(f"run:{pathlib.Path(file).resolve()}:{','.join(runs or ())}"):
-        _run(file, runs, out, parquet, figures, progress)
+        _run(file, runs, out, parquet, figures, progress, netcdf)
 
 
-def _run(file, runs, out, parquet, figures, progress):
+def _run(file, runs, out, parquet, figures, progress, netcdf=False):
+    if netcdf:
+        import importlib.util
+
+        if importlib.util.find_spec("xarray") is None:
+            _fail(
+                2,
+                "mixdyn: --netcdf needs xarray, which is not installed; "
+                "pip install 'mixdyn[xarray]' (or leave --netcdf out)",
+            )
     with _guard(file):
         from .io import Runner, read
 
@@ -476,7 +493,9 @@ def _run(file, runs, out, parquet, figures, progress):
         else:
             mode = "steps" if progress else "off"
         failed: list = []  # sweeps with failed members
-        written = _execute(runner, plans, out, parquet, figures, painter, mode, file, failed)
+        written = _execute(
+            runner, plans, out, parquet, figures, painter, mode, file, failed, netcdf
+        )
         _say(f"wrote {len(written)} file(s) under {_esc(out)}")
         if failed:
             plan, res = failed[0]
@@ -493,7 +512,7 @@ def _run(file, runs, out, parquet, figures, progress):
             )
 
 
-def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=None):
+def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=None, netcdf=False):
     """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
     ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
 
@@ -617,6 +636,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
             result,
             folder,
             parquet=parquet,
+            netcdf=netcdf,
             settings=run_settings(plan.spec),
             extra={
                 "file": str(file),

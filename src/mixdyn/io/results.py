@@ -187,6 +187,7 @@ def _refuse_non_finite(table: np.ndarray, names: list[str]) -> None:
 MEMBERS_CSV = "members.csv"
 TABLE_CSV = "table.csv"
 TABLE_PARQUET = "table.parquet"
+SWEEP_NC = "sweep.nc"
 
 
 def write_sweep(
@@ -194,13 +195,16 @@ def write_sweep(
     folder,
     *,
     parquet: bool = False,
+    netcdf: bool = False,
     settings: dict | None = None,
     extra: dict | None = None,
 ) -> list[pathlib.Path]:
     """Write a sweep run's result (:class:`mixdyn.io.sweeps.FileSweep`) to ``folder``:
     ``members.csv`` (a row per member: index, varied values, status, error, summaries),
-    ``table.csv`` (and ``table.parquet``: a row per member and output time) and
-    ``meta.json`` (units, settings, counts, timings).
+    ``table.csv`` (and ``table.parquet``: a row per member and output time), with
+    ``netcdf`` ``sweep.nc`` (the table's columns as a labelled array on (member, t), the
+    varied numbers and the status as coordinates, units in attributes; NetCDF 3 through
+    SciPy) and ``meta.json`` (units, settings, counts, timings).
 
     Returns:
         The files written.
@@ -218,6 +222,12 @@ def write_sweep(
         path = folder / TABLE_PARQUET
         system = None if model is None else _unit_system(model.units)
         _write_parquet(table, path, dict(sweep.units), system)
+        written.append(path)
+    if netcdf:
+        path = folder / SWEEP_NC
+        tmp = path.with_suffix(".nc.tmp")
+        sweep.dataset().to_netcdf(tmp, engine="scipy")
+        os.replace(tmp, path)
         written.append(path)
     meta = {
         "mixdyn_version": __version__,

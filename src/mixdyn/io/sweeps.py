@@ -116,6 +116,15 @@ class FileSweep:
         data.update(self.summaries)
         return pd.DataFrame(data)
 
+    def dataset(self):
+        """The table's columns as an ``xarray.Dataset`` on (member, t) with the varied numbers
+        and the status as coordinates, in the file's ``output_units``
+        (:meth:`mixdyn.analysis.sweep.Sweep.dataset`)."""
+        ds = self.sweep.dataset(self.plan.spec_outputs, self.output_units)
+        return ds.assign_coords(
+            {name: ("member", np.asarray(v, dtype=float)) for name, v in self.plan.values.items()}
+        )
+
     def table(self):
         """The long table: a row per member and output time, with the member index, its
         varied values, ``t`` and the ``outputs`` columns (failed members have no rows)."""
