@@ -273,18 +273,25 @@ class Problem(eqx.Module):
             Gqd = jnp.concatenate([Gqd, -(B.T @ qd)])
         return -Gqd * mu
 
-    def work_rates(self, q, qd, t, qdd):
+    def work_rates(self, q, qd, t, qdd, mu=None):
         """``[P_nonconservative_applied, P_constraints_and_unknowns]`` (2,) [power].
 
         By the equations of motion the constraint forces (joints, drivers, unknown forces) on
         the bodies are ``-G mu = M qdd - Q``, so their power needs no Jacobian:
-        ``(M qdd - Q) . qd``.
+        ``(M qdd - Q) . qd``. With joint friction, whose forces are part of ``Q`` but are
+        solved with the accelerations, the multipliers ``mu`` of the same state (if given)
+        give the constraints' power ``-(G mu) . qd`` directly and the applied forces' the
+        rest, ``(M qdd + dV/dq) . qd`` less it: no second solve for the friction.
         """
+        dV = jax.grad(lambda qq: potential_energy(self.model, qq))(q)
+        if self.friction and mu is not None:
+            p_c = jnp.sum(self.powers(q, qd, t, mu))
+            p_nc = jnp.dot(self.model.mass_diagonal * qdd + dV, qd) - p_c
+            return jnp.stack([p_nc, p_c])
         Q = self.known_forces(q, qd, t)
         if self.friction:  # dissipated by the joints' friction: a non-conservative force
             f, _, _, _, D = self.friction_state(q, qd, t)
             Q = Q + D @ f
-        dV = jax.grad(lambda qq: potential_energy(self.model, qq))(q)
         p_nc = jnp.dot(Q + dV, qd)
         p_c = jnp.dot(self.model.mass_diagonal * qdd - Q, qd)
         return jnp.stack([p_nc, p_c])

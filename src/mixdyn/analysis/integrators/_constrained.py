@@ -66,8 +66,8 @@ def equations_of_motion(problem, *stabilization):
     @jax.jit
     def f(t, y, args):
         q, qd, _ = y
-        qdd, _, _ = problem.accelerations(q, qd, t, *stabilization)
-        return (qd, qdd, problem.work_rates(q, qd, t, qdd))
+        qdd, mu, _ = problem.accelerations(q, qd, t, *stabilization)
+        return (qd, qdd, problem.work_rates(q, qd, t, qdd, mu))
 
     return f
 

@@ -151,8 +151,8 @@ def partitioning(
         v, vd, _ = z
         q_ref, qd_ref, D, I, t_ref = args
         q, qd, _ = _complete(problem, q_ref + qd_ref * (t - t_ref), D, I, v, vd, t, tol)
-        qdd, _, _ = problem.accelerations(q, qd, t)
-        return (vd, qdd[I], problem.work_rates(q, qd, t, qdd))
+        qdd, mu, _ = problem.accelerations(q, qd, t)
+        return (vd, qdd[I], problem.work_rates(q, qd, t, qdd, mu))
 
     f_full = cs.equations_of_motion(problem)  # diffeqsolve's term (checked, not stepped)
     dt_min = cs.DT_MIN * jnp.maximum(jnp.max(jnp.abs(ts)), 1.0)
