@@ -265,3 +265,22 @@ def test_friction_is_differentiable_and_sweeps_equal_single_runs():
         d = np.hypot(sw[k].q[-1, 0], sw[k].q[-1, 1])
         a = max(G * (math.sin(theta) - mu * math.cos(theta)), 0.0)
         np.testing.assert_allclose(d, 0.5 * a * TS[-1] ** 2, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize(
+    "forces, code, words",
+    [("[hold1, hold2]", 0, "ok"), ("[hold1, pin_friction]", 2, "friction torque: it has no arrow")],
+)
+def test_a_files_animation_draws_a_slides_friction_not_a_pins(tmp_path, forces, code, words):
+    import pathlib
+
+    from typer.testing import CliRunner
+
+    from mixdyn.cli import app
+
+    example = pathlib.Path(__file__).resolve().parent.parent / "examples" / "friction.yaml"
+    text = example.read_text().replace("forces: true}", f"forces: {forces}}}")
+    path = tmp_path / "friction.yaml"
+    path.write_text(text)
+    res = CliRunner().invoke(app, ["check", str(path)])
+    assert res.exit_code == code and words in res.output

@@ -188,6 +188,8 @@ def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
 
     known = [j.name for j in runner.model.joints]
     known += [f.name for f in runner.model.forces if isinstance(f, PointForce)]
+    friction = {f.name: f for f in runner.model.forces if getattr(f, "needs_reactions", False)}
+    known += [name for name, f in friction.items() if not f.rotary]
     contacts = {
         j.name: j
         for j in runner.model.joints
@@ -200,6 +202,12 @@ def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
                 (*path, k),
                 f"{name!r} acts by a moment: it has no arrow",
                 f"plot its contact forces instead ({cols})",
+            )
+        if name in friction and friction[name].rotary:
+            runner.fail(
+                (*path, k),
+                f"{name!r} is a pin's friction torque: it has no arrow",
+                f"plot its column instead ({name})",
             )
         if name not in known:
             runner.fail(

@@ -44,8 +44,8 @@ def force_arrows(result, names=True) -> list[dict]:
         ``unit`` (the force's unit).
 
     Raises:
-        ValueError: a kinematic result (no forces), or a name that is neither a joint nor a
-            point force of the model.
+        ValueError: a kinematic result (no forces), or a name that is neither a joint, a
+            point force nor a slide's friction of the model.
     """
     model = result.model
     if result.kind == "kinematic":
