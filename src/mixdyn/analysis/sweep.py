@@ -277,10 +277,11 @@ _post_batch_jit = cached_jit(_post_batch)
 
 @functools.cache
 def _default_batch_size() -> int | None:
-    """None on a CPU: member by member, each by the single run's program, from a thread per
-    core (measured on the paper's model, 2 cores: 17.6 ms a member so, 21.5 ms in one
-    vectorized program); 1024 on an accelerator (an H200: 0.54 ms a member at 1,024,
-    0.13 ms at 10,000; ``benchmarks/gpu_sweep.py``)."""
+    """None on a CPU: member by member, each by the single run's program (compiled once for
+    every sweep), from a thread per core (measured on the paper's model, 2 cores, 128
+    members: 13.4 ms a member so; 8.4 ms in one vectorized program, but that program is
+    compiled per number of members, ~10 s the first time); 1024 on an accelerator (an H200:
+    0.45 ms a member at 1,024, 0.10 ms at 10,000; ``benchmarks/gpu_sweep.py``)."""
     return None if jax.default_backend() == "cpu" else 1024
 
 
@@ -636,8 +637,9 @@ def sweep(
         batch_size: None (default): on a CPU member by member, each by the single run's
             program (compiled once), from ``threads`` threads; on an accelerator 1024. A
             number (forward and mixed sweeps): every member integrated by one program,
-            ``batch_size`` members at a time vectorized (``vmap``) (on a CPU 3-4 times slower
-            a member: measured in ``benchmarks/sweep.py``).
+            ``batch_size`` members at a time vectorized (``vmap``): on a CPU faster once
+            compiled (8.4 ms a member against 13.4 ms member by member, 128 members of the
+            paper's model; ``benchmarks/sweep.py``), but compiled per number of members.
         threads: threads of the member-by-member path (default: one per core).
         client: a Dask ``distributed.Client``: the members run on its workers (each sets up
             and runs its chunk member by member; a local cluster,
