@@ -284,3 +284,30 @@ def test_a_files_animation_draws_a_slides_friction_not_a_pins(tmp_path, forces, 
     path.write_text(text)
     res = CliRunner().invoke(app, ["check", str(path)])
     assert res.exit_code == code and words in res.output
+
+
+def test_a_mixed_run_recovers_the_push_that_overcomes_friction():
+    """Mixed dynamics: the block is prescribed up the incline at a = 1 m/s^2 from rest and the
+    push along the slope is unknown: P = m (a + g sin + mu g cos), friction included (from
+    t = 0, where the prescribed motion is about to go up)."""
+    theta, mu, m, a = 0.3, 0.25, 2.0, 1.0
+    c, s = math.cos(theta), math.sin(theta)
+    model = incline(theta, mu, m).replace(
+        forces=[
+            md.JointFriction("friction", "slide", mu=mu),
+            md.PointForce("push", "block", along=(-c, s), law=0.0),
+        ]
+    )
+    t = np.linspace(0.0, 1.0, 11)
+    law = md.Polynomial([0.0, 0.0, -0.5 * a * c])  # x(t) of the block going up (axis: down)
+    res = md.mixed(
+        model,
+        t,
+        prescribed=[md.CoordinateDriver("up", "block", "x", law=law)],
+        unknown=["push"],
+        solver="augmented",
+        rtol=1e-10,
+        atol=1e-12,
+    )
+    np.testing.assert_allclose(res["push"], m * (a + G * s + mu * G * c), rtol=1e-8)
+    np.testing.assert_allclose(res["friction.normal"], m * G * c, rtol=1e-8)
