@@ -280,9 +280,16 @@ def _default_batch_size() -> int | None:
     """None on a CPU: member by member, each by the single run's program (compiled once for
     every sweep), from a thread per core (measured on the paper's model, 2 cores, 128
     members: 13.4 ms a member so; 8.4 ms in one vectorized program, but that program is
-    compiled per number of members, ~10 s the first time); 1024 on an accelerator (an H200:
-    0.45 ms a member at 1,024, 0.10 ms at 10,000; ``benchmarks/gpu_sweep.py``)."""
-    return None if jax.default_backend() == "cpu" else 1024
+    compiled per number of members, ~10 s the first time); on an accelerator
+    :data:`ACCELERATOR_BATCH` (an H200, the paper's model: 0.45 ms a member in a batch of
+    1,024, 0.10 ms of 10,000, 0.08-0.09 ms of 30,000 to 100,000; ``benchmarks/gpu_sweep.py``)."""
+    return None if jax.default_backend() == "cpu" else ACCELERATOR_BATCH
+
+
+#: Members vectorized at a time on an accelerator by default: wider batches cost less a member
+#: up to ~30,000 (each loop iteration's fixed cost is shared), then no more; ~65 kB of outputs
+#: a member of the paper's model (201 times), ~2 GB for a full batch.
+ACCELERATOR_BATCH = 32768
 
 
 @dataclasses.dataclass
@@ -635,7 +642,8 @@ def sweep(
             structure (the same bodies, elements and kinds of laws; any numbers).
         analysis: ``"forward"`` (default), ``"mixed"``, ``"kinematic"`` or ``"inverse"``.
         batch_size: None (default): on a CPU member by member, each by the single run's
-            program (compiled once), from ``threads`` threads; on an accelerator 1024. A
+            program (compiled once), from ``threads`` threads; on an accelerator up to
+            :data:`ACCELERATOR_BATCH` (32,768) members at a time. A
             number (forward and mixed sweeps): every member integrated by one program,
             ``batch_size`` members at a time vectorized (``vmap``): on a CPU faster once
             compiled (8.4 ms a member against 13.4 ms member by member, 128 members of the
