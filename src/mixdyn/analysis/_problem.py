@@ -26,7 +26,6 @@ import numpy as np
 from ..equations import Constraints, applied_forces, force_directions, potential_energy
 from ..equations import _friction as fr
 from ..equations._jacobian import JacobianOperator
-from ..errors import ModelError
 from ..linalg import lu_solve_checked, min_pivot
 from ..model import Model
 
@@ -53,6 +52,7 @@ class Stages(NamedTuple):
         phi: (m,) constraint residuals ``Phi(q, t)``.
         J: the operator ``Phi_q(q, t)`` of the set's path.
         qdd: (nq,) accelerations; mu: (m,) multipliers; ratio: the pivot ratio of the solve.
+        friction: the joint friction's ``(f, normal, limit, v, D)`` of the same solve, or None.
     """
 
     q: jax.Array
@@ -63,6 +63,7 @@ class Stages(NamedTuple):
     qdd: jax.Array
     mu: jax.Array
     ratio: jax.Array
+    friction: tuple | None = None
 
 
 class Problem(eqx.Module):
@@ -98,12 +99,8 @@ class Problem(eqx.Module):
         self.j_index = tuple(int(i) for i in j_index)
         self.i_index = tuple(int(i) for i in i_index)
         self.collocated = tuple(int(i) for i in collocated)
-        if solver == "partition" and fr.friction_elements(model):
-            raise ModelError(
-                "joint friction needs the augmented acceleration solver, not the partition "
-                "method; use solver='augmented'",
-                fr.friction_elements(model)[0].name,
-            )
+        if solver == "partition":
+            fr.check_supported(model, "the partition method", "use solver='augmented'")
 
     @property
     def p(self) -> int:
@@ -162,6 +159,17 @@ class Problem(eqx.Module):
             qdd, mu, _ = self._with_friction(q, qd, t, solve, qdd, mu)
         return qdd, mu, ratio
 
+    def _accelerations_and_friction(self, q, qd, t, J):
+        """As :meth:`accelerations` at ``(q, t)`` with the operator ``J``, and the joint
+        friction's record ``(f, normal, limit, v, D)`` of the same solve (None without
+        friction)."""
+        if not self.friction:
+            return (*self.accelerations(q, qd, t, J=J), None)
+        solve, ratio = self.kkt(q, qd, t, J)
+        qdd, mu = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
+        qdd, mu, record = self._with_friction(q, qd, t, solve, qdd, mu)
+        return qdd, mu, ratio, record
+
     # ------------------------------------------------------------------ joint friction
     @property
     def friction(self) -> tuple:
@@ -174,9 +182,10 @@ class Problem(eqx.Module):
         ``(f, normal, limit, v, D)``."""
         elements = self.friction
         pos = fr.rows(self.model, self.c, elements)
-        D = fr.directions(self.model, elements, q)  # (nq, nf)
+        # D (nq, nf) and its rate along the motion, in one pass: dd = qd^T (dD/dq) qd
+        D, D_rate = jax.jvp(lambda qq: fr.directions(self.model, elements, qq), (q,), (qd,))
         v = D.T @ qd
-        dd = jax.jvp(lambda qq: fr.directions(self.model, elements, qq).T @ qd, (q,), (qd,))[1]
+        dd = D_rate.T @ qd
         zeros = jnp.zeros(mu0.shape[0], qdd0.dtype)
         cols = [solve(D[:, k], zeros) for k in range(D.shape[1])]
         A = jnp.stack([x for x, _ in cols], axis=1)
@@ -189,21 +198,13 @@ class Problem(eqx.Module):
         lim, normal = fr.limits(elements, pos, mu)
         return qdd0 + A @ f, mu, (f, normal, lim, v, D)
 
-    def friction_state(self, q, qd, t):
-        """``(f, normal, limit, v, D)`` at one state: the friction forces (nf,) [force or
-        torque], normal reactions [force], limits, relative speeds and directions (nq, nf)."""
-        c = self.c
-        J = c.jacobian(q, t)
-        solve, _ = self.kkt(q, qd, t, J)
-        qdd, mu = solve(self.known_forces(q, qd, t), c.gamma(q, qd, t))
-        return self._with_friction(q, qd, t, solve, qdd, mu)[2]
-
-    def friction_columns(self, q, qd, t) -> dict:
-        """The friction elements' result columns at one state: ``name`` (the friction
-        force or torque), ``name.normal``, ``name.limit``, ``name.speed``, ``name.power``."""
-        if not self.friction:
+    def friction_columns(self, record) -> dict:
+        """The friction elements' result columns at one state from its friction ``record``
+        (:attr:`Stages.friction`): ``name`` (the friction force or torque), ``name.normal``,
+        ``name.limit``, ``name.speed``, ``name.power``."""
+        if record is None:
             return {}
-        f, normal, lim, v, _ = self.friction_state(q, qd, t)
+        f, normal, lim, v, _ = record
         out = {}
         for k, e in enumerate(self.friction):
             out[e.name] = f[k]
@@ -219,8 +220,8 @@ class Problem(eqx.Module):
         evaluated once for everything that reads it (reactions, powers, checks)."""
         J = self.c.jacobian(q, t)
         phi = self.c(q, t)
-        qdd, mu, ratio = self.accelerations(q, qd, t, J=J)
-        return Stages(q, qd, t, phi, J, qdd, mu, ratio)
+        qdd, mu, ratio, friction = self._accelerations_and_friction(q, qd, t, J)
+        return Stages(q, qd, t, phi, J, qdd, mu, ratio, friction)
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""
@@ -288,10 +289,9 @@ class Problem(eqx.Module):
             p_c = jnp.sum(self.powers(q, qd, t, mu))
             p_nc = jnp.dot(self.model.mass_diagonal * qdd + dV, qd) - p_c
             return jnp.stack([p_nc, p_c])
+        if self.friction:  # the multipliers of this state, then as above
+            return self.work_rates(q, qd, t, qdd, self.accelerations(q, qd, t)[1])
         Q = self.known_forces(q, qd, t)
-        if self.friction:  # dissipated by the joints' friction: a non-conservative force
-            f, _, _, _, D = self.friction_state(q, qd, t)
-            Q = Q + D @ f
         p_nc = jnp.dot(Q + dV, qd)
         p_c = jnp.dot(self.model.mass_diagonal * qdd - Q, qd)
         return jnp.stack([p_nc, p_c])

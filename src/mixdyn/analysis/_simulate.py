@@ -12,6 +12,7 @@ import numpy as np
 
 from .._compile import cached_jit
 from ..equations import force_output_kinds, force_outputs, kinetic_energy, potential_energy
+from ..equations._friction import check_supported
 from ..errors import (
     EnergyBalanceError,
     ModelError,
@@ -55,14 +56,11 @@ ENERGY_TOL_RANGE = (1e-9, 1e-4)
 def refuse_friction_in(model: Model, method: str) -> None:
     """Joint friction is solved with the accelerations of the explicit integrators; the
     generalized-alpha method's Newton iteration does not include it (named input error)."""
-    from ..equations._friction import friction_elements
-
-    fr = friction_elements(model)
-    if fr and method == "generalized-alpha":
-        raise ModelError(
-            f"joint friction ({', '.join(f.name for f in fr)}) is not modelled by the "
-            "generalized-alpha method; use projection (the default), partitioning or baumgarte",
-            fr[0].name,
+    if method == "generalized-alpha":
+        check_supported(
+            model,
+            "the generalized-alpha method",
+            "use projection (the default), partitioning or baumgarte",
         )
 
 
@@ -102,7 +100,7 @@ def _post_arrays(problem: Problem, ts, Q, QD):
         viol = jnp.max(jnp.abs(st.phi)) if c.m else jnp.zeros(())
         forces = force_outputs(problem.model, q, qd, t, exclude=problem.unknown)
         forces.update(contact_columns(c, q, st.mu[: c.m]))
-        forces.update(problem.friction_columns(q, qd, t))
+        forces.update(problem.friction_columns(st.friction))
         return st.qdd, st.mu, st.ratio, R, powers, jnp.stack([T, V, T + V]), viol, forces
 
     return jax.lax.map(one, (Q, QD, ts))

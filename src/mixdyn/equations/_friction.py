@@ -38,14 +38,7 @@ SETTLED = 1e-8
 
 def friction_elements(model) -> tuple:
     """The model's friction elements (static)."""
-    return tuple(f for f in model.forces if getattr(f, "needs_reactions", False))
-
-
-def _joint(model, name):
-    for j in model.joints:
-        if j.name == name:
-            return j
-    raise ModelError(f"no joint {name!r}", name)
+    return tuple(f for f in model.forces if f.needs_reactions)
 
 
 def rows(model, c, elements) -> list[tuple[int, ...]]:
@@ -73,7 +66,7 @@ def relative_coordinates(model, elements, q) -> jax.Array:
     """``s(q)`` (nf,): each friction joint's relative coordinate [rad or length]."""
     out = []
     for f in elements:
-        j = _joint(model, f.joint)
+        j = model.element(f.joint)  # checked to be a joint when the model was built
         if f.rotary:
             out.append(angle(q, j.bj) - angle(q, j.bi))
         else:
@@ -134,13 +127,13 @@ def solve_friction(elements, positions, v, a0, H, mu0, Mu_f, h_free):
     return jnp.where(settled, f, jnp.nan), stick
 
 
-def check_supported(model, analysis: str) -> None:
+def check_supported(model, analysis: str, hint: str = "remove it for this analysis") -> None:
     """Refuse joint friction where it is not modelled (named input error)."""
     fr = friction_elements(model)
     if fr:
         raise ModelError(
-            f"joint friction ({', '.join(f.name for f in fr)}) is modelled in forward and "
-            f"mixed dynamics, not in {analysis}; remove it for this analysis",
+            f"joint friction ({', '.join(f.name for f in fr)}) is modelled in forward, mixed "
+            f"and inverse dynamics with the explicit integrators, not in {analysis}; {hint}",
             fr[0].name,
         )
 

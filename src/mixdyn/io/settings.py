@@ -188,7 +188,7 @@ def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
 
     known = [j.name for j in runner.model.joints]
     known += [f.name for f in runner.model.forces if isinstance(f, PointForce)]
-    friction = {f.name: f for f in runner.model.forces if getattr(f, "needs_reactions", False)}
+    friction = {f.name: f for f in runner.model.forces if f.needs_reactions}
     known += [name for name, f in friction.items() if not f.rotary]
     contacts = {
         j.name: j

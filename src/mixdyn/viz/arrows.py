@@ -55,7 +55,7 @@ def force_arrows(result, names=True) -> list[dict]:
     joints = {j.name: j for j in model.joints}
     forces = {f.name: f for f in model.forces if isinstance(f, PointForce)}
     # joint friction along a slide (a pin's friction torque has no arrow)
-    slides = {f.name: f for f in model.forces if getattr(f, "needs_reactions", False)}
+    slides = {f.name: f for f in model.forces if f.needs_reactions}
     wanted = list(joints) + list(forces) + list(slides) if names is True else list(names)
     cols, units = result.columns(), result.units()
     q = np.asarray(result.q)
