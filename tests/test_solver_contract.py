@@ -265,3 +265,51 @@ def test_gradients_match_finite_differences(chain, path, kind):
     g = np.asarray(jax.jit(jax.grad(fun))(v))
     scale = np.abs(g).max()  # central differences: rounding ~ 1e-16 |f| / h
     np.testing.assert_allclose(g, _fd_grad(jax.jit(fun), v), rtol=1e-5, atol=1e-8 * scale)
+
+
+@pytest.mark.parametrize("path", PATHS)
+@pytest.mark.parametrize("mixed", [False, True], ids=["forward", "mixed"])
+def test_kkt_solution_and_gradients(chain, path, mixed):
+    """The constrained-dynamics solve ``W^-1 x + G mu = r1``, ``C x = r2`` against NumPy's
+    dense solve of the whole matrix, and its gradient with respect to every input (the
+    matrix's values, the metric, the unknown forces' directions, both right-hand sides)
+    along random directions against central differences: the dense path differentiates it
+    implicitly (one more solve with the same factor), the banded path through its
+    factorization."""
+    c, v = chain
+    rng = np.random.default_rng(11)
+    n, m = c.nq, c.m
+    p = 2 if mixed else 0
+    W = rng.uniform(0.5, 2.0, size=n)
+    B = rng.normal(size=(n, p))
+    r1, r2 = rng.normal(size=n), rng.normal(size=m)
+    wx, wmu = rng.normal(size=n), rng.normal(size=m)
+    sizes = np.cumsum([v.size, n, n * p, n])
+
+    def split(z):
+        vals, W_, B_, r1_, r2_ = jnp.split(z, sizes)
+        return vals, W_, B_.reshape(n, p), r1_, r2_
+
+    def solve(z):
+        vals, W_, B_, r1_, r2_ = split(z)
+        kkt, _ = _operator(path, c, vals).kkt(W_, B_ if mixed else None)
+        return kkt(r1_, r2_)
+
+    z0 = jnp.concatenate([v, W, B.ravel(), r1, r2])
+    x, mu = (np.asarray(a) for a in jax.jit(solve)(z0))
+    C = _dense_np(c, v)
+    G = C.T if not mixed else np.concatenate([C[: m - p].T, -B], axis=1)
+    K = np.block([[np.diag(1.0 / W), G], [C, np.zeros((m, m))]])
+    ref = np.linalg.solve(K, np.concatenate([r1, r2]))
+    np.testing.assert_allclose(np.concatenate([x, mu]), ref, rtol=1e-9, atol=1e-10)
+
+    def fun(z):
+        x, mu = solve(z)
+        return jnp.dot(wx, x) + jnp.dot(wmu, mu)
+
+    # the gradient along random directions against central differences along them
+    g = np.asarray(jax.jit(jax.grad(fun))(z0))
+    run, h = jax.jit(fun), 1e-6
+    for d in rng.normal(size=(4, z0.size)):
+        fd = (float(run(z0 + h * d)) - float(run(z0 - h * d))) / (2 * h)
+        assert abs(g @ d - fd) <= 1e-6 * np.abs(g).sum(), (g @ d, fd)

@@ -302,43 +302,15 @@ class Problem(eqx.Module):
         ``iters`` Newton steps, none once ``max |Phi| <= tol`` [length] (usually one after an
         integration step, so the loop stops early rather than solving ``iters`` times).
 
+        Differentiated implicitly, as the exact projection (:func:`_projection_jvp`): the
+        tangent is projected onto the constraints' tangent space whether or not a Newton
+        step was taken (the derivative of a skipped step would be the identity, and its
+        drift off the tangent space is amplified near singular positions).
+
         Returns:
             ``(q (nq,), residual)``: the projected positions and ``max |Phi|`` there.
         """
-
-        c, Minv = self.c, self.Minv
-
-        def newton(q, r):
-            q = q - c.jacobian(q, t).min_norm(Minv, guard=True).solve(r)
-            return q, c(q, t)
-
-        def far(r):
-            return jnp.max(jnp.abs(r), initial=0.0) > tol
-
-        if c.batched:
-            # A sweep's one program (not differentiated): under ``vmap`` a ``lax.cond`` runs
-            # its branch for every member, so the loop of static length would make all
-            # ``iters`` Newton steps; this loop stops once every member is closed (usually
-            # after one step).
-            def go_on(state):
-                k, _, r = state
-                return (k < iters) & far(r)
-
-            def step(state):
-                k, q, r = state
-                return (k + 1, *newton(q, r))
-
-            _, q, r = jax.lax.while_loop(go_on, step, (0, q, c(q, t)))
-            return q, jnp.max(jnp.abs(r), initial=0.0)
-
-        def body(_, state):
-            q, r = state
-            # a branch taken only while far (one Newton step after most integration steps);
-            # a loop of static length, which reverse-mode differentiation goes through
-            return jax.lax.cond(far(r), newton, lambda q, r: (q, r), q, r)
-
-        q, r = jax.lax.fori_loop(0, iters, body, (q, c(q, t)))
-        return q, jnp.max(jnp.abs(r), initial=0.0)
+        return _projection(self, q, t, tol, iters=iters)
 
     def project_velocities(self, q, qd, t):
         """Mass-weighted least-norm projection of ``qd`` onto ``Phi_q qd + Phi_t = 0``.
@@ -351,3 +323,81 @@ class Problem(eqx.Module):
         J = self.c.jacobian(q, t)
         r = J.mv(qd) + self.c.phi_t(q, t)
         return qd - J.min_norm(self.Minv, guard=True).solve(r)
+
+
+def _newton_projection(p: Problem, q, t, tol, *, iters: int):
+    """The Newton iteration of :meth:`Problem.project_positions`."""
+    c, Minv = p.c, p.Minv
+
+    def newton(q, r):
+        q = q - c.jacobian(q, t).min_norm(Minv, guard=True).solve(r)
+        return q, c(q, t)
+
+    def far(r):
+        return jnp.max(jnp.abs(r), initial=0.0) > tol
+
+    if c.batched:
+        # A sweep's one program (not differentiated): under ``vmap`` a ``lax.cond`` runs
+        # its branch for every member, so the loop of static length would make all
+        # ``iters`` Newton steps; this loop stops once every member is closed (usually
+        # after one step).
+        def go_on(state):
+            k, _, r = state
+            return (k < iters) & far(r)
+
+        def step(state):
+            k, q, r = state
+            return (k + 1, *newton(q, r))
+
+        _, q, r = jax.lax.while_loop(go_on, step, (0, q, c(q, t)))
+        return q, jnp.max(jnp.abs(r), initial=0.0)
+
+    def body(_, state):
+        q, r = state
+        # a branch taken only while far (one Newton step after most integration steps)
+        return jax.lax.cond(far(r), newton, lambda q, r: (q, r), q, r)
+
+    q, r = jax.lax.fori_loop(0, iters, body, (q, c(q, t)))
+    return q, jnp.max(jnp.abs(r), initial=0.0)
+
+
+_projection = eqx.filter_custom_jvp(_newton_projection)
+
+
+@_projection.def_jvp
+def _projection_jvp(primals, tangents, *, iters):
+    """The derivative of the exact projection ``q* = P(q)`` at a point on the constraints:
+    from ``Phi(q*, t) = 0`` and ``q* - q = M^-1 Phi_q^T lambda`` (``lambda`` -> 0 there),
+
+        dq* = dq - M^-1 Phi_q^T S^-1 (Phi_q dq + Phi_t dt + Phi_p dp),
+
+    ``S = Phi_q M^-1 Phi_q^T``, ``Phi_p dp`` the constraints' change with the problem's own
+    numbers; one solve with the factor the Newton step uses, instead of the derivative of
+    the iteration (which drops the projector where the step is skipped)."""
+    p, q, t, tol = primals
+    dp, dq, dt, _ = tangents
+    qs, r = _projection(p, q, t, tol, iters=iters)
+    dyn, static = eqx.partition(p, eqx.is_inexact_array)
+    d_dyn = _tangent_or_zeros(None if dp is None else eqx.filter(dp, eqx.is_inexact_array), dyn)
+    dq = jnp.zeros_like(qs) if dq is None else dq
+    dt = jnp.zeros_like(t) if dt is None else dt
+
+    def residual(dyn, q, t):
+        return eqx.combine(dyn, static).c(q, t)
+
+    _, dphi = jax.jvp(residual, (dyn, qs, t), (d_dyn, dq, dt))
+    J = p.c.jacobian(qs, t)
+    dqs = dq - J.min_norm(p.Minv, guard=True).solve(dphi)
+    return (qs, r), (dqs, jnp.zeros_like(r))
+
+
+def _tangent_or_zeros(tangent, primal):
+    """``tangent`` with zeros for its symbolic zeros (None) where ``primal`` has arrays."""
+    if tangent is None:
+        return jax.tree.map(jnp.zeros_like, primal)
+    return jax.tree.map(
+        lambda d, x: x if x is None else (jnp.zeros_like(x) if d is None else d),
+        tangent,
+        primal,
+        is_leaf=lambda v: v is None,
+    )

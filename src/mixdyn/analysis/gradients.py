@@ -11,8 +11,9 @@ partitioning, Baumgarte; their inner Newton iterations have a fixed count), in t
 when the function is made:
 
 - ``derivatives="reverse"`` (default): ``jax.grad``, ``jax.jacrev``, ``jax.vjp``, through
-  diffrax's checkpointed adjoint; for a scalar of many numbers (measured,
-  ``benchmarks/gradient.py``: about 8.5 times the run for 11 numbers);
+  diffrax's checkpointed adjoint, the outputs in diffrax's write-only buffers; for a scalar
+  of many numbers (measured, ``benchmarks/gradient.py``: about 4.6 times the run for 11
+  numbers);
 - ``derivatives="forward"``: ``jax.jvp``, ``jax.jacfwd`` (diffrax's ``ForwardMode``); for
   many outputs of few numbers (a least-squares fit's Jacobian).
 
@@ -23,8 +24,11 @@ the numbers (the multipliers' solve, per output time, traced). A kinematic run d
 number of a body or force: refused.
 
 Generalized-alpha (its Newton iteration is a ``while_loop``) is refused. The derivative is that
-of the discrete solution (the step sizes held), which agrees with the exact sensitivity to the
-order of the tolerances (tested against central finite differences to 1e-6 at 1e-12).
+of the discrete solution with the step sizes held (the controller's choice is not
+differentiated, as in diffrax's PID controller), the linear solves and the position projection
+differentiated implicitly (as exact solves and an exact projection onto the constraints); it
+agrees with the exact sensitivity to the order of the tolerances (tested against central
+finite differences to 1e-6, through singular positions too).
 
 A run that fails inside ``f`` (step limit, step collapse, non-finite state) cannot raise
 there: its outputs are NaN, so that no finite wrong number or derivative comes out of it.

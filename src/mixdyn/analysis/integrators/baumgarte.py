@@ -31,7 +31,7 @@ def _solver_class():
 
 @eqx.filter_jit
 def baumgarte(
-    problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None, derivatives="reverse"
+    problem: Problem, ts, q0, qd0, options: Baumgarte, progress=None, derivatives=None
 ) -> Trajectory:
     """Integrate with fixed-step RK4 and Baumgarte stabilization.
 
@@ -43,8 +43,9 @@ def baumgarte(
             ``dt`` [time], shortened where needed to land on the output times; ``alpha``,
             ``beta`` [1/time]; ``max_steps``).
         progress: optional callback ``f(t)`` at each output time.
-        derivatives: ``"reverse"`` (default) or ``"forward"``: the mode of differentiation
-            the loop allows (:func:`~mixdyn.differentiable`).
+        derivatives: None (default: a run; reverse mode passes through it), ``"reverse"``
+            (a run made for reverse mode: outputs in diffrax's buffers) or ``"forward"``:
+            the mode of differentiation (:func:`~mixdyn.differentiable`).
     """
     from . import _constrained as cs
 

@@ -134,7 +134,7 @@ def _solver_class():
 
 @eqx.filter_jit
 def partitioning(
-    problem: Problem, ts, q0, qd0, options: Partitioning, progress=None, derivatives="reverse"
+    problem: Problem, ts, q0, qd0, options: Partitioning, progress=None, derivatives=None
 ) -> Trajectory:
     """Integrate the independent coordinates; solve the dependent ones by Newton.
 

@@ -46,7 +46,7 @@ def _solver_class():
 
 @eqx.filter_jit
 def projection(
-    problem: Problem, ts, q0, qd0, options: Projection, progress=None, derivatives="reverse"
+    problem: Problem, ts, q0, qd0, options: Projection, progress=None, derivatives=None
 ) -> Trajectory:
     """Integrate with an adaptive explicit RK method and project after every step.
 
@@ -58,8 +58,9 @@ def projection(
             tolerances, a fixed step ``dt``, the Runge–Kutta ``solver``, ``max_steps``,
             ``first_step``); the tolerances and first step may be arrays.
         progress: optional callback ``f(t)`` at each output time.
-        derivatives: ``"reverse"`` (default) or ``"forward"``: the mode of differentiation
-            the loop allows (:func:`~mixdyn.differentiable`).
+        derivatives: None (default: a run; reverse mode passes through it), ``"reverse"``
+            (a run made for reverse mode: outputs in diffrax's buffers) or ``"forward"``:
+            the mode of differentiation (:func:`~mixdyn.differentiable`).
     """
     from . import _constrained as cs
 
