@@ -10,9 +10,10 @@ import shutil
 import sys
 import tempfile
 
-# The CLI tests call the CLI in this process: keep them from turning on mixdyn's caches (its
-# exported traces, tested on their own in test_compile_cache.py) for every later test, and from
-# writing to the user's cache folder.
+# mixdyn's persistent caches (its exported traces and JAX's compiled programs) are off while
+# mixdyn is imported here (nothing written to the user's cache folder); pytest_configure turns
+# them on in the session's own folder, unless MIXDYN_NO_CACHE was set by whoever runs the tests.
+USER_NO_CACHE = os.environ.get("MIXDYN_NO_CACHE", "").strip() not in ("", "0")
 os.environ.setdefault("MIXDYN_NO_CACHE", "1")
 
 
@@ -38,6 +39,7 @@ import jax  # noqa: E402
 import pytest  # noqa: E402
 
 import mixdyn  # noqa: F401, E402  (enables float64)
+from mixdyn import _compile  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 
@@ -60,6 +62,26 @@ def pytest_configure(config):
     jax.config.update("jax_compilation_cache_dir", folder)
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    if not USER_NO_CACHE:
+        # mixdyn's exported traces in the same folder: a structure traced by one test (one
+        # worker, one session) is not traced again by the next; the CLI tests' runs and any
+        # process they start use it too
+        os.environ.pop("MIXDYN_NO_CACHE", None)
+        os.environ["MIXDYN_CACHE_DIR"] = folder
+        SESSION_CACHE["folder"] = _compile.set_cache(folder)
+
+
+#: The folder of mixdyn's caches for this session (None: off), restored after each test.
+SESSION_CACHE: dict = {"folder": None}
+
+
+@pytest.fixture(autouse=True)
+def _session_cache():
+    """Put mixdyn's caches back to the session's folder after a test that moved or turned
+    them off (the cache tests use folders of their own)."""
+    yield
+    if _compile.cache_folder() != SESSION_CACHE["folder"]:
+        _compile.set_cache(SESSION_CACHE["folder"] or False)
 
 
 #: Test modules whose module fixtures are long runs that most of their tests share: one xdist

@@ -1,8 +1,9 @@
 """Compiled once: traced programs kept per model structure (``mixdyn._compile``), in this
 process and across processes, and progress callbacks that do not force a new program.
 
-The other tests run with ``MIXDYN_NO_CACHE=1`` (conftest); the tests here that need the
-persistent cache turn it on in a temporary folder and off again, or run in a subprocess.
+The test session keeps mixdyn's caches in a folder of its own (conftest); the tests here
+point them at a fresh temporary folder (conftest puts the session's back after each test), or
+run in a subprocess.
 """
 
 from __future__ import annotations
