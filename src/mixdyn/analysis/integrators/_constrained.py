@@ -12,8 +12,8 @@ every step ends on the constraints.
   step-size controller; diffrax's own PID controller clipped to the output times leaves
   slivers of steps that end runs), or a fixed step landing on them too (:class:`FixedStep`).
 - Outputs: the state at the end of each step landing on an output time (the one put on the
-  constraints), collected in the solver state (:func:`solve` says why not ``SaveAt(ts)``);
-  the controller calls the progress callback there.
+  constraints), collected in the step-size controller's state (:func:`solve` says why not
+  ``SaveAt(ts)``); the controller calls the progress callback there.
 
 This module imports diffrax: it is imported when an integrator is traced, never by a run whose
 programs come from the persistent cache.
@@ -122,8 +122,8 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
             for a non-finite state).
         fixed: whether the step is fixed (no error estimate; a step that cannot be closed ends
             the run at once).
-        ts: (N,) output times [time]: a step ending on one stores its state there (in the
-            solver state: kept only if the step is accepted).
+        ts: (N,) output times [time] (the controller stores the state of a step ending on
+            one, :class:`Landing`).
     """
 
     solver: diffrax.AbstractSolver
@@ -133,13 +133,10 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
     #: The Runge–Kutta stages' loop, set by diffrax's ``ForwardMode`` adjoint to ``"lax"`` (so
     #: that ``jax.jvp`` passes it) and handed to the wrapped method; None: its default.
     scan_kind: str | None = eqx.field(default=None, kw_only=True)
-    #: Whether the solver state collects the outputs (else diffrax's ``SaveAt(ts)`` does,
-    #: :func:`solve`).
-    collect: bool = eqx.field(static=True, default=True, kw_only=True)
 
     term_structure = diffrax.AbstractTerm
-    # Outputs are gathered in the solver state at step ends (:func:`solve`): diffrax builds
-    # this per step but nothing evaluates it.
+    # Evaluated only by ``SaveAt(ts)`` in a run made for reverse mode (:func:`solve`), at
+    # step ends; otherwise diffrax builds it per step and nothing evaluates it.
     interpolation_cls = StepEnd
 
     # -- what each integrator defines
@@ -170,16 +167,14 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
         return self.solver.error_order(terms)
 
     def init(self, terms, t0, t1, y0, args):
-        N = self.ts.shape[0] if self.collect else 1
-        outs = jax.tree.map(lambda a: jnp.zeros((N, *a.shape), a.dtype).at[0].set(a), y0)
         worst = jnp.zeros((), jnp.result_type(t0))
-        return (self.initial_data(y0, t0), worst, outs, jnp.asarray(1))
+        return (self.initial_data(y0, t0), worst)
 
     def func(self, terms, t0, y0, args):
         return self.solver.func(terms, t0, y0, args)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
-        data, worst, outs, k = solver_state
+        data, worst = solver_state
         z0, inner_args = self.reduce(y0, data, t0)
         inner_terms = self.inner_terms(terms)
         rk = self.solver
@@ -208,13 +203,23 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
             y_err = jax.tree.map(lambda e: jnp.where(end, 0.0, e), y_err)
         data1 = jax.tree.map(keep, data1, data)
         worst = jnp.where(end, worst, jnp.maximum(worst, violation))
-        # The state at an output time (the controller lands there).
-        kk = jnp.minimum(k, self.ts.shape[0] - 1)
-        hit = ~end & (t1 == self.ts[kk])
-        if self.collect:
-            outs = jax.tree.map(lambda o, a: o.at[kk].set(jnp.where(hit, a, o[kk])), outs, y1)
         dense = dict(y0=y0, y1=y1)
-        return y1, y_err, dense, (data1, worst, outs, k + hit), result
+        return y1, y_err, dense, (data1, worst), result
+
+
+def _outputs(ts, y0, collect: bool):
+    """The outputs' buffer of a controller's state: ``y0`` in the first of ``N`` rows (one
+    row when the outputs are not collected there)."""
+    N = ts.shape[0] if collect else 1
+    return jax.tree.map(lambda a: jnp.zeros((N, *a.shape), a.dtype).at[0].set(a), y0)
+
+
+def _store(outs, k, y1, landed):
+    """``outs`` with row ``k`` set to ``y1`` where ``landed`` (one row written, not a
+    select over all of them: under ``vmap`` a select over every member's outputs at every
+    step was measured to cost 25% of a batch of 512)."""
+    k = jnp.minimum(k, jax.tree.leaves(outs)[0].shape[0] - 1)
+    return jax.tree.map(lambda o, a: o.at[k].set(jnp.where(landed, a, o[k])), outs, y1)
 
 
 def _land(ts, k, t, h):
@@ -228,24 +233,30 @@ def _land(ts, k, t, h):
 
 class FixedStep(diffrax.AbstractStepSizeController):
     """Steps of ``dt``, each shortened where needed to land on the next output time; the
-    progress callback called at each output time."""
+    progress callback called at each output time. Its state ``(k, outs)``: the next output
+    and the states at the output times (see :class:`Landing`)."""
 
     dt: jax.Array
     ts: jax.Array
     progress: object
+    collect: bool = eqx.field(static=True, default=True, kw_only=True)
 
     def wrap(self, direction):
         return self
 
     def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
-        return _land(self.ts, 1, t0, self.dt)[0], jnp.asarray(1)
+        k = jnp.asarray(1)
+        return _land(self.ts, 1, t0, self.dt)[0], (k, _outputs(self.ts, y0, self.collect))
 
-    def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, k):
+    def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, state):
+        k, outs = state
         landed = t1 == self.ts[jnp.minimum(k, self.ts.shape[0] - 1)]
         report_progress(self.progress, t1, landed)
+        if self.collect:
+            outs = _store(outs, k, y1_candidate, landed)
         k = k + landed
         next_t1, _ = _land(self.ts, k, t1, self.dt)
-        return True, t1, next_t1, False, k, diffrax.RESULTS.successful
+        return True, t1, next_t1, False, (k, outs), diffrax.RESULTS.successful
 
 
 class Landing(diffrax.AbstractAdaptiveStepSizeController):
@@ -266,6 +277,14 @@ class Landing(diffrax.AbstractAdaptiveStepSizeController):
         dt_min: a next step shorter than this ends the run (``dt_min_reached``) [time].
         norm: the error norm of a scaled error (a pytree shaped like the state).
         progress: None, or the run's :class:`~._common.Progress`.
+        collect: whether the state collects the outputs (else diffrax's ``SaveAt(ts)``
+            does: :func:`solve`).
+
+    Its state ``(h, k, outs)``: the step, the next output, and the states at the output
+    times, each written when an accepted step lands there. The controller holds them
+    because it alone knows whether a step is accepted: diffrax keeps or reverts the solver
+    state with a select over all of it at every step (under ``vmap``, over every member's
+    outputs), and leaves the controller's state to the controller.
     """
 
     rtol: jax.Array
@@ -275,15 +294,17 @@ class Landing(diffrax.AbstractAdaptiveStepSizeController):
     dt_min: jax.Array
     norm: Callable = eqx.field(static=True)
     progress: object = None
+    collect: bool = eqx.field(static=True, default=True, kw_only=True)
 
     def wrap(self, direction):
         return self
 
     def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
-        return _land(self.ts, 1, t0, self.h0)[0], (self.h0, jnp.asarray(1))
+        outs = _outputs(self.ts, y0, self.collect)
+        return _land(self.ts, 1, t0, self.h0)[0], (self.h0, jnp.asarray(1), outs)
 
     def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, state):
-        h, k = state
+        h, k, outs = state
 
         def scaled(a, b, e):
             return e / (self.atol + self.rtol * jnp.maximum(jnp.abs(a), jnp.abs(b)))
@@ -306,13 +327,15 @@ class Landing(diffrax.AbstractAdaptiveStepSizeController):
         landed = ok & (t1 == self.ts[jnp.minimum(k, self.ts.shape[0] - 1)])
         h_new = jnp.where(landed & (used < h), jnp.maximum(h_new, h), h_new)
         report_progress(self.progress, t1, landed)
+        if self.collect:
+            outs = _store(outs, k, y1_candidate, landed)
         k = k + landed
         next_t0 = jnp.where(ok, t1, t0)
         next_t1, _ = _land(self.ts, k, next_t0, h_new)
         result = diffrax.RESULTS.where(
             h_new < self.dt_min, diffrax.RESULTS.dt_min_reached, diffrax.RESULTS.successful
         )
-        return ok, next_t0, next_t1, False, (h_new, k), result
+        return ok, next_t0, next_t1, False, (h_new, k, outs), result
 
 
 def controller(ts, *, rtol, atol, norm: Callable | None, h0=None, dt=None, dt_min, progress):
@@ -357,14 +380,15 @@ ADJOINTS = {
 def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps, derivatives=None):
     """``diffeqsolve`` from the first to the last output time of ``solver.ts``.
 
-    The states at the output times are collected by the solver (its state holds them, kept
-    on accepted steps): diffrax's ``SaveAt(ts=...)`` checks traced output times with a host
-    callback, and a program with one is neither exported nor kept in the persistent cache
+    The states at the output times are collected by the step-size controller (its state
+    holds them, written when an accepted step lands on an output time: :class:`Landing`):
+    diffrax's ``SaveAt(ts=...)`` checks traced output times with a host callback, and a
+    program with one is neither exported nor kept in the persistent cache
     (:mod:`mixdyn._compile`); for the same reason the first step is the controller's, not
     ``dt0``. A run made to be reverse-differentiated (``derivatives="reverse"``,
     :func:`~mixdyn.differentiable`) saves them with ``SaveAt(ts)`` instead: there they are
     diffrax's write-only buffers, which the checkpoints of the adjoint do not copy (in the
-    solver state the checkpoints hold a copy of all of them at every step: measured, the
+    loop's state the checkpoints hold a copy of all of them at every step: measured, the
     paper model's gradient 8.6x the run against 6.5x).
 
     Returns:
@@ -376,11 +400,11 @@ def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps, de
     ts = solver.ts
     buffered = derivatives == "reverse"
     if buffered:
-        solver = dataclasses.replace(solver, collect=False)
+        step_controller = dataclasses.replace(step_controller, collect=False)
         subs = [diffrax.SubSaveAt(ts=ts), diffrax.SubSaveAt(t1=True)]
         saveat = diffrax.SaveAt(subs=subs, solver_state=True)
     else:
-        saveat = diffrax.SaveAt(t1=True, solver_state=True)
+        saveat = diffrax.SaveAt(t1=True, solver_state=True, controller_state=True)
     sol = diffrax.diffeqsolve(
         term,
         solver,
@@ -394,10 +418,12 @@ def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps, de
         throw=False,
         adjoint=ADJOINTS[derivatives](),
     )
-    _, worst, outs, _ = sol.solver_state
+    _, worst = sol.solver_state
     ys, t_end = sol.ys, sol.ts
     if buffered:
         (outs, ys), (_, t_end) = ys, t_end
+    else:
+        outs = sol.controller_state[-1]
     return (
         outs,
         sol.stats["num_accepted_steps"],
