@@ -72,9 +72,24 @@ def test_a_second_sweep_with_other_numbers_traces_nothing(paper):
     assert not sw.errors
 
 
-def test_mixed_members_equal_single_runs(paper):
+def test_mixed_members_equal_single_runs(paper, monkeypatch):
     """The paper's mixed run (F1 unknown, the slider's x prescribed) over the crank's torque:
-    each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2)."""
+    each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2). The
+    torque does not enter the start, and F1 is collocated with the slider's motion: the
+    members share one set-up (the unknown force's own numbers would not be shared)."""
+    import importlib
+
+    sweep_module = importlib.import_module("mixdyn.analysis.sweep")
+    assert sweep_module.shares_start(paper, {"T2.law.value": [1]}, unknown=["F1"])
+    assert not sweep_module.shares_start(paper, {"F1.law.amplitude": [1]}, unknown=["F1"])
+    calls = []
+    real = sweep_module.ANALYSES["mixed"]
+
+    def counting(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setitem(sweep_module.ANALYSES, "mixed", counting)
     fwd = md.forward(paper, TS, rtol=1e-10, atol=1e-10)
     kw = dict(
         prescribed=[md.prescribe(fwd, "slider.x")],
@@ -86,7 +101,7 @@ def test_mixed_members_equal_single_runs(paper):
     )
     vary = {"T2.law.value": [500.0, 520.0]}
     sw = md.sweep(paper, TS, vary=vary, analysis="mixed", **kw)
-    assert not sw.errors
+    assert not sw.errors and len(calls) == 1
     for i, m in enumerate(vary_models(paper, vary)):
         single = md.mixed(m, TS, **kw)
         assert np.max(np.abs(sw[i]["F1"] - single["F1"])) <= 1e-10 * 10.0

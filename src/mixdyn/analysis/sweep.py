@@ -2,7 +2,9 @@
 
 Each member of a dynamic sweep (forward, mixed) is set up like a single run (its options
 checked, its start made consistent, its mobility analysed: :func:`~.forward.forward_case`,
-:func:`~.mixed.mixed_case`); all members share one structure, hence one compiled program.
+:func:`~.mixed.mixed_case`), or, where the varied numbers do not enter the start (masses,
+inertias, force numbers: :func:`shares_start`), takes the first member's set-up with its own
+numbers; all members share one structure, hence one compiled program.
 On a CPU the members are integrated one by one by the single run's program, from a thread
 per core (XLA runs without the GIL); with a ``batch_size`` (the default on an accelerator)
 the members' equations are stacked and one program integrates the whole batch
@@ -160,12 +162,14 @@ def _leaf_getter(model: Model, path: str):
 _INERTIAL = ("mass", "inertia")
 
 
-def shares_start(model: Model, vary: Mapping[str, Sequence]) -> bool:
-    """Whether every path of ``vary`` names a number that does not enter a forward run's
-    start (the consistent positions and velocities, the constraint set): a body's mass or
-    inertia, or any number of a force element. Such members share the nominal model's
-    set-up, made once (:func:`run_members`)."""
-    forces = {f.name for f in model.forces}
+def shares_start(model: Model, vary: Mapping[str, Sequence], unknown: Sequence[str] = ()) -> bool:
+    """Whether every path of ``vary`` names a number that does not enter a forward or mixed
+    run's start (the consistent positions and velocities, the constraint set, a mixed run's
+    solvability): a body's mass or inertia, or any number of a force element but the
+    ``unknown`` forces of a mixed run (their geometry gives the directions the solvability
+    check reads). Such members share the nominal model's set-up, made once
+    (:func:`run_members`)."""
+    forces = {f.name for f in model.forces} - set(unknown)
     bodies = {b.name for b in model.bodies}
     for path in vary:
         head, _, rest = path.partition(".")
@@ -502,9 +506,12 @@ def run_members(
         on_member: called with a member's index when it is done (from any thread).
         describe: member index -> words naming it in an error (its varied values).
         offset: the sweep's index of ``members[0]`` (a chunk of a larger sweep), for errors.
-        same_start: the members differ only in numbers that do not enter a forward run's
-            start (:func:`shares_start`): the first member is set up and the others take its
-            start and constraint set with their own model (their masses checked).
+        same_start: the members differ only in numbers that do not enter a forward or mixed
+            run's start (:func:`shares_start`): the first member is set up and the others
+            take its start and constraint set with their own model (their masses checked). A
+            mixed run whose unknown forces are not collocated with its prescribed motions is
+            still set up member by member (its solvability, the rank of ``C M^-1 G``, may
+            depend on the masses).
         seconds: if given, filled with the wall time of the set-up, the integration and the
             finishing [s].
 
@@ -534,10 +541,15 @@ def run_members(
     cases: dict[int, Case] = {}
     outcomes: dict[int, Outcome] = {}
     clock = time.perf_counter()
-    shared = same_start and analysis == "forward"
+    shared = same_start and analysis in ("forward", "mixed")
     swap = None
     for i, m in enumerate(members):
         try:
+            if shared and cases and analysis == "mixed":
+                # collocated forces (the partition solver takes only those): the solvability
+                # is structural, not a matter of the masses
+                p0 = cases[next(iter(cases))].problem
+                shared = bool(p0.collocated) or p0.solver == "partition"
             if shared and cases:
                 require_masses(m)
                 first = cases[next(iter(cases))]
@@ -710,7 +722,10 @@ def sweep(
         threads=threads,
         on_member=on_member,
         describe=lambda i: _describe(params, i),
-        same_start=models is None and shares_start(model, vary or {}),
+        same_start=models is None
+        and shares_start(
+            model, vary or {}, kwargs.get("unknown", ()) if analysis == "mixed" else ()
+        ),
         seconds=seconds,
     )
     results = [r for r, _ in outcomes]
