@@ -123,12 +123,14 @@ class Problem(eqx.Module):
         return applied_forces(self.model, q, qd, t, exclude=self.unknown)
 
     # ------------------------------------------------------------------ accelerations
-    def kkt(self, q, qd, t, J=None):
+    def kkt(self, q, qd, t, J=None, implicit: bool = True):
         """The matrix ``[[M, G], [C, 0]]`` at one state, factorized once (through its Schur
         complement ``C M^-1 G``) by the constraint set's operator
         (:meth:`~mixdyn.equations._jacobian.JacobianOperator.kkt`: dense LU, banded
         Cholesky, or its Woodbury update for unknown forces of any direction); ``J`` the
-        operator at ``(q, t)`` if already built.
+        operator at ``(q, t)`` if already built; ``implicit``: differentiate the solves
+        implicitly (see the operator's ``kkt``; False for a loop of many solves with one
+        factor that is not differentiated).
 
         Returns:
             ``(solve, ratio)``: ``solve(r1 (nq,), r2 (m,)) -> (x (nq,), mu (m,))`` with
@@ -136,7 +138,7 @@ class Problem(eqx.Module):
         """
         J = self.c.jacobian(q, t) if J is None else J
         B = force_directions(self.model, self.unknown, q, qd, t) if self.p else None
-        return J.kkt(self.Minv, B, self.collocated)
+        return J.kkt(self.Minv, B, self.collocated, implicit)
 
     def accelerations(self, q, qd, t, alpha=None, beta=None, J=None):
         """``(qdd (nq,), mu (m,), pivot_ratio)`` at one state (``J``: the operator at

@@ -115,7 +115,7 @@ class JacobianOperator(eqx.Module):
         W = jnp.zeros(self.shape[1]).at[D].set(1.0)
         return self.min_norm(W, refine=1)
 
-    def kkt(self, W, B=None, collocated=()):
+    def kkt(self, W, B=None, collocated=(), implicit: bool = True):
         """The constrained-dynamics matrix at one state, factorized once through its Schur
         complement ``S = C W G``:
 
@@ -125,6 +125,10 @@ class JacobianOperator(eqx.Module):
         mixed problem) and ``B`` (n, p) the directions of the unknown forces (None: ``p = 0``,
         ``G = C^T``). ``collocated``: for each unknown force, the prescribed motion along whose
         gradient it acts, or ``()`` (see :class:`~mixdyn.analysis._problem.Problem`).
+
+        ``implicit``: differentiate the solves implicitly (the dense path; the solve then
+        factorizes inside each call, so a loop solving many times with one factor, such as
+        generalized-alpha's modified Newton, which is not differentiated, passes False).
 
         Returns:
             ``(solve, ratio)``: ``solve(r1 (n,), r2 (m,)) -> (x (n,), mu (m,))``, and the
@@ -207,7 +211,7 @@ class DenseJacobian(JacobianOperator):
         n = self.shape[1]
         return Factor(lambda b: jnp.zeros(n, self.J.dtype).at[D].set(f.solve(b)), ratio)
 
-    def kkt(self, W, B=None, collocated=()):
+    def kkt(self, W, B=None, collocated=(), implicit: bool = True):
         """LU of the dense ``S = C W G`` (any ``B``; a truncated SVD of the known rank with
         redundant rows). In forward dynamics ``G = C^T`` and ``mu = lambda``; in mixed
         dynamics ``G`` also holds ``-B``.
@@ -218,12 +222,14 @@ class DenseJacobian(JacobianOperator):
         C = self.J
         m = C.shape[0]
         G = C.T if B is None else jnp.concatenate([C[: m - B.shape[1]].T, -B], axis=1)
-        ratio = _kkt_factor(C, G, W, self.rank, self.batched)[0].ratio
+        f, WG = _kkt_factor(C, G, W, self.rank, self.batched)
+        if not implicit:
+            return functools.partial(_kkt_apply, f, WG, C, W), f.ratio
 
         def solve(r1, r2):
             return _kkt_solve(C, G, W, r1, r2, self.rank, self.batched)
 
-        return solve, ratio
+        return solve, f.ratio
 
 
 def _kkt_factor(C, G, W, rank, batched):
@@ -354,7 +360,7 @@ class BandedJacobian(JacobianOperator):
         E = jnp.zeros((self.c.m, len(rows))).at[rows, np.arange(len(rows))].set(1.0)
         return jax.vmap(self.rmv, in_axes=1, out_axes=1)(E)
 
-    def kkt(self, W, B=None, collocated=()):
+    def kkt(self, W, B=None, collocated=(), implicit: bool = True):
         """The banded block Cholesky factors of the symmetric ``C W C^T``: directly for
         ``p = 0`` and for collocated unknown forces (``B[:, a] = s_a Psi_q[b]^T``, so that
         ``G = C^T diag(1, -1/s)``), by a rank-``p`` Woodbury update for unknown forces of any
