@@ -123,14 +123,12 @@ class Problem(eqx.Module):
         return applied_forces(self.model, q, qd, t, exclude=self.unknown)
 
     # ------------------------------------------------------------------ accelerations
-    def kkt(self, q, qd, t, J=None, implicit: bool = True):
+    def kkt(self, q, qd, t, J=None):
         """The matrix ``[[M, G], [C, 0]]`` at one state, factorized once (through its Schur
         complement ``C M^-1 G``) by the constraint set's operator
         (:meth:`~mixdyn.equations._jacobian.JacobianOperator.kkt`: dense LU, banded
         Cholesky, or its Woodbury update for unknown forces of any direction); ``J`` the
-        operator at ``(q, t)`` if already built; ``implicit``: differentiate the solves
-        implicitly (see the operator's ``kkt``; False for a loop of many solves with one
-        factor that is not differentiated).
+        operator at ``(q, t)`` if already built.
 
         Returns:
             ``(solve, ratio)``: ``solve(r1 (nq,), r2 (m,)) -> (x (nq,), mu (m,))`` with
@@ -138,7 +136,7 @@ class Problem(eqx.Module):
         """
         J = self.c.jacobian(q, t) if J is None else J
         B = force_directions(self.model, self.unknown, q, qd, t) if self.p else None
-        return J.kkt(self.Minv, B, self.collocated, implicit)
+        return J.kkt(self.Minv, B, self.collocated)
 
     def accelerations(self, q, qd, t, alpha=None, beta=None, J=None):
         """``(qdd (nq,), mu (m,), pivot_ratio)`` at one state (``J``: the operator at

@@ -115,7 +115,7 @@ class JacobianOperator(eqx.Module):
         W = jnp.zeros(self.shape[1]).at[D].set(1.0)
         return self.min_norm(W, refine=1)
 
-    def kkt(self, W, B=None, collocated=(), implicit: bool = True):
+    def kkt(self, W, B=None, collocated=()):
         """The constrained-dynamics matrix at one state, factorized once through its Schur
         complement ``S = C W G``:
 
@@ -125,10 +125,6 @@ class JacobianOperator(eqx.Module):
         mixed problem) and ``B`` (n, p) the directions of the unknown forces (None: ``p = 0``,
         ``G = C^T``). ``collocated``: for each unknown force, the prescribed motion along whose
         gradient it acts, or ``()`` (see :class:`~mixdyn.analysis._problem.Problem`).
-
-        ``implicit``: differentiate the solves implicitly (the dense path; the solve then
-        factorizes inside each call, so a loop solving many times with one factor, such as
-        generalized-alpha's modified Newton, which is not differentiated, passes False).
 
         Returns:
             ``(solve, ratio)``: ``solve(r1 (n,), r2 (m,)) -> (x (n,), mu (m,))``, and the
@@ -211,23 +207,22 @@ class DenseJacobian(JacobianOperator):
         n = self.shape[1]
         return Factor(lambda b: jnp.zeros(n, self.J.dtype).at[D].set(f.solve(b)), ratio)
 
-    def kkt(self, W, B=None, collocated=(), implicit: bool = True):
+    def kkt(self, W, B=None, collocated=()):
         """LU of the dense ``S = C W G`` (any ``B``; a truncated SVD of the known rank with
         redundant rows). In forward dynamics ``G = C^T`` and ``mu = lambda``; in mixed
         dynamics ``G`` also holds ``-B``.
 
-        Differentiated implicitly (:func:`_kkt_solve`): the derivative of a solve is one
+        Differentiated implicitly (:func:`_kkt_implicit`): the derivative of a solve is one
         more solve with the same factor, not the derivative of the factorization (measured:
         the paper model's reverse-mode gradient 5.7x the run against 6.3x)."""
         C = self.J
         m = C.shape[0]
         G = C.T if B is None else jnp.concatenate([C[: m - B.shape[1]].T, -B], axis=1)
         f, WG = _kkt_factor(C, G, W, self.rank, self.batched)
-        if not implicit:
-            return functools.partial(_kkt_apply, f, WG, C, W), f.ratio
 
         def solve(r1, r2):
-            return _kkt_solve(C, G, W, r1, r2, self.rank, self.batched)
+            x, mu = jax.lax.stop_gradient(_kkt_apply(f, WG, C, W, r1, r2))
+            return _kkt_implicit(C, G, W, r1, r2, x, mu, self.rank, self.batched)
 
         return solve, f.ratio
 
@@ -249,21 +244,19 @@ def _kkt_apply(f, WG, C, W, r1, r2):
     return W * r1 - WG @ mu, mu
 
 
-@functools.partial(jax.custom_jvp, nondiff_argnums=(5, 6))
-def _kkt_solve(C, G, W, r1, r2, rank, batched):
-    """``(x, mu)`` with ``W^-1 x + G mu = r1``, ``C x = r2``; differentiated implicitly
-    (the tangent is one more solve with the same factor, not the derivative of the
-    factorization)."""
-    f, WG = _kkt_factor(C, G, W, rank, batched)
-    return _kkt_apply(f, WG, C, W, r1, r2)
+@functools.partial(jax.custom_jvp, nondiff_argnums=(7, 8))
+def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched):
+    """``(x, mu)``, the solution of ``W^-1 x + G mu = r1``, ``C x = r2`` (solved with the
+    factor made once, its own derivative stopped), differentiated implicitly: the tangent
+    is one more solve, not the derivative of the factorization."""
+    return x, mu
 
 
-@_kkt_solve.defjvp
-def _kkt_solve_jvp(rank, batched, primals, tangents):
-    C, G, W, r1, r2 = primals
-    dC, dG, dW, dr1, dr2 = tangents
+@_kkt_implicit.defjvp
+def _kkt_implicit_jvp(rank, batched, primals, tangents):
+    C, G, W, _, _, x, mu = primals
+    dC, dG, dW, dr1, dr2, _, _ = tangents
     f, WG = _kkt_factor(C, G, W, rank, batched)
-    x, mu = _kkt_apply(f, WG, C, W, r1, r2)
     # d(W^-1 x + G mu - r1) = 0, d(C x - r2) = 0
     a = dr1 + dW / (W * W) * x - dG @ mu
     b = dr2 - dC @ x
@@ -360,7 +353,7 @@ class BandedJacobian(JacobianOperator):
         E = jnp.zeros((self.c.m, len(rows))).at[rows, np.arange(len(rows))].set(1.0)
         return jax.vmap(self.rmv, in_axes=1, out_axes=1)(E)
 
-    def kkt(self, W, B=None, collocated=(), implicit: bool = True):
+    def kkt(self, W, B=None, collocated=()):
         """The banded block Cholesky factors of the symmetric ``C W C^T``: directly for
         ``p = 0`` and for collocated unknown forces (``B[:, a] = s_a Psi_q[b]^T``, so that
         ``G = C^T diag(1, -1/s)``), by a rank-``p`` Woodbury update for unknown forces of any

@@ -37,8 +37,6 @@ rate measured, it would not converge within half of ``max_newton`` iterations.
 
 from __future__ import annotations
 
-import functools
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -117,10 +115,8 @@ def _iteration_matrix(problem: Problem):
     at one state, factorized once (:meth:`Problem.kkt`: through its Schur complement
     ``C M^-1 G``, whose pivot ratio is ``ratio``; dense LU, the banded Cholesky factors or
     their Woodbury update, the damped SVD at a singular position); ``kkt(r1, r2)`` returns
-    ``(dqdd, dmu)`` solving ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]`` with that factor at
-    every Newton iteration (not differentiated implicitly: that solve would factorize again
-    at each call)."""
-    return functools.partial(problem.kkt, implicit=False)
+    ``(dqdd, dmu)`` solving ``[[M, G], [C, 0]] [dqdd; dmu] = [r1; r2]``."""
+    return problem.kkt
 
 
 @eqx.filter_jit
