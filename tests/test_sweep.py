@@ -4,6 +4,8 @@ index and cause without losing the others; bad input is refused before any compu
 
 from __future__ import annotations
 
+import importlib
+
 import numpy as np
 import pytest
 
@@ -72,24 +74,28 @@ def test_a_second_sweep_with_other_numbers_traces_nothing(paper):
     assert not sw.errors
 
 
-def test_mixed_members_equal_single_runs(paper, monkeypatch):
-    """The paper's mixed run (F1 unknown, the slider's x prescribed) over the crank's torque:
-    each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2). The
-    torque does not enter the start, and F1 is collocated with the slider's motion: the
-    members share one set-up (the unknown force's own numbers would not be shared)."""
-    import importlib
-
+def _count_setups(monkeypatch, analysis: str) -> list:
+    """A list that grows by one at each set-up of a member of a sweep of ``analysis``."""
     sweep_module = importlib.import_module("mixdyn.analysis.sweep")
-    assert sweep_module.shares_start(paper, {"T2.law.value": [1]}, unknown=["F1"])
-    assert not sweep_module.shares_start(paper, {"F1.law.amplitude": [1]}, unknown=["F1"])
-    calls = []
-    real = sweep_module.ANALYSES["mixed"]
+    calls, real = [], sweep_module.ANALYSES[analysis]
 
     def counting(*a, **k):
         calls.append(1)
         return real(*a, **k)
 
-    monkeypatch.setitem(sweep_module.ANALYSES, "mixed", counting)
+    monkeypatch.setitem(sweep_module.ANALYSES, analysis, counting)
+    return calls
+
+
+def test_mixed_members_equal_single_runs(paper, monkeypatch):
+    """The paper's mixed run (F1 unknown, the slider's x prescribed) over the crank's torque:
+    each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2). The
+    torque does not enter the start, and F1 is collocated with the slider's motion: the
+    members share one set-up (the unknown force's own numbers would not be shared)."""
+    sweep_module = importlib.import_module("mixdyn.analysis.sweep")
+    assert sweep_module.shares_start(paper, {"T2.law.value": [1]}, unknown=["F1"])
+    assert not sweep_module.shares_start(paper, {"F1.law.amplitude": [1]}, unknown=["F1"])
+    calls = _count_setups(monkeypatch, "mixed")
     fwd = md.forward(paper, TS, rtol=1e-10, atol=1e-10)
     kw = dict(
         prescribed=[md.prescribe(fwd, "slider.x")],
@@ -159,22 +165,13 @@ def test_members_varying_only_masses_and_forces_share_one_set_up(paper, monkeypa
     nominal model once (the members still equal their single runs:
     ``test_forward_members_equal_single_runs`` varies exactly these); a varied start is set
     up member by member."""
-    import importlib
-
     sweep_module = importlib.import_module("mixdyn.analysis.sweep")
 
     assert sweep_module.shares_start(paper, {"slider.mass": [1], "F1.law.amplitude": [1]})
     assert sweep_module.shares_start(paper, {"crank.inertia": [1]})
     assert not sweep_module.shares_start(paper, {"crank.q0": [[0, 0, 0]]})
     assert not sweep_module.shares_start(paper, {})
-    calls = []
-    real = sweep_module.ANALYSES["forward"]
-
-    def counting(*a, **k):
-        calls.append(1)
-        return real(*a, **k)
-
-    monkeypatch.setitem(sweep_module.ANALYSES, "forward", counting)
+    calls = _count_setups(monkeypatch, "forward")
     sw = md.sweep(paper, TS[:6], vary={"slider.mass": [0.01, 0.02, 0.03]}, **OPTS)
     assert len(calls) == 1 and not sw.errors and {"setup", "total"} <= set(sw.seconds)
     single = md.forward(vary_models(paper, {"slider.mass": [0.03]})[0], TS[:6], **OPTS)

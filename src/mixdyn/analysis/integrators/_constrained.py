@@ -222,6 +222,19 @@ def _store(outs, k, y1, landed):
     return jax.tree.map(lambda o, a: o.at[k].set(jnp.where(landed, a, o[k])), outs, y1)
 
 
+def _reached(controller, k, outs, t1, y1, accepted):
+    """At the end ``t1`` of a step of a controller (:class:`FixedStep`, :class:`Landing`):
+    ``(landed, k, outs)``: whether an accepted step landed on the next output time
+    ``ts[k]``, where the progress callback is called and ``y1`` stored, and the next
+    output's index."""
+    ts = controller.ts
+    landed = accepted & (t1 == ts[jnp.minimum(k, ts.shape[0] - 1)])
+    report_progress(controller.progress, t1, landed)
+    if controller.collect:
+        outs = _store(outs, k, y1, landed)
+    return landed, k + landed, outs
+
+
 def _land(ts, k, t, h):
     """The end of a step of ``h`` from ``t``, the next output time being ``ts[k]``: that
     output time if it is within ``h`` (to 1e-8 relative), so that no sliver of a step is left
@@ -249,12 +262,7 @@ class FixedStep(diffrax.AbstractStepSizeController):
         return _land(self.ts, 1, t0, self.dt)[0], (k, _outputs(self.ts, y0, self.collect))
 
     def adapt_step_size(self, t0, t1, y0, y1_candidate, args, y_error, error_order, state):
-        k, outs = state
-        landed = t1 == self.ts[jnp.minimum(k, self.ts.shape[0] - 1)]
-        report_progress(self.progress, t1, landed)
-        if self.collect:
-            outs = _store(outs, k, y1_candidate, landed)
-        k = k + landed
+        _, k, outs = _reached(self, *state, t1, y1_candidate, True)
         next_t1, _ = _land(self.ts, k, t1, self.dt)
         return True, t1, next_t1, False, (k, outs), diffrax.RESULTS.successful
 
@@ -323,13 +331,9 @@ class Landing(diffrax.AbstractAdaptiveStepSizeController):
         factor = jax.lax.stop_gradient(factor)
         used = t1 - t0
         h_new = used * jnp.where(ok, factor, jnp.minimum(factor, SAFETY))
+        landed, k, outs = _reached(self, k, outs, t1, y1_candidate, ok)
         # A step shortened to land on an output time does not shorten the next one.
-        landed = ok & (t1 == self.ts[jnp.minimum(k, self.ts.shape[0] - 1)])
         h_new = jnp.where(landed & (used < h), jnp.maximum(h_new, h), h_new)
-        report_progress(self.progress, t1, landed)
-        if self.collect:
-            outs = _store(outs, k, y1_candidate, landed)
-        k = k + landed
         next_t0 = jnp.where(ok, t1, t0)
         next_t1, _ = _land(self.ts, k, next_t0, h_new)
         result = diffrax.RESULTS.where(
