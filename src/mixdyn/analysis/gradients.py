@@ -12,7 +12,7 @@ when the function is made:
 
 - ``derivatives="reverse"`` (default): ``jax.grad``, ``jax.jacrev``, ``jax.vjp``, through
   diffrax's checkpointed adjoint, the outputs in diffrax's write-only buffers; for a scalar
-  of many numbers (measured, ``benchmarks/gradient.py``: about 4.6 times the run for 11
+  of many numbers (measured, ``benchmarks/gradient.py``: about 4.4 times the run for 11
   numbers);
 - ``derivatives="forward"``: ``jax.jvp``, ``jax.jacfwd`` (diffrax's ``ForwardMode``); for
   many outputs of few numbers (a least-squares fit's Jacobian).
