@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from mixdyn._xla import KEEP_ENV, SAFE_FLAGS
+from mixdyn._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, _known, flags_to_add
 
 SHOW = "import os, json; {pre}import mixdyn; print(json.dumps(os.environ.get('XLA_FLAGS')))"
 
@@ -38,7 +38,9 @@ def _parse(flags: str | None) -> dict[str, str]:
 
 @pytest.mark.timeout(300)
 def test_flags_are_added_and_the_users_are_kept():
-    assert _parse(_flags_after_import(None)) == SAFE_FLAGS
+    added = _parse(_flags_after_import(None))
+    assert added == flags_to_add()
+    assert SAFE_FLAGS.items() <= added.items()
     mine = "--xla_cpu_multi_thread_eigen=true --xla_dump_to=/tmp/nowhere"
     got = _parse(_flags_after_import(mine))
     assert got["--xla_cpu_multi_thread_eigen"] == "true"
@@ -52,3 +54,14 @@ def test_flags_are_added_and_the_users_are_kept():
 def test_nothing_is_added_once_jax_has_started():
     started = "import jax.numpy as jnp; jnp.ones(2).block_until_ready(); "
     assert _flags_after_import(None, pre=started) is None
+
+
+def test_optional_flags_are_added_only_where_jaxlib_knows_them():
+    """A flag name is looked up in jaxlib's libraries: one every XLA has is found, a made-up
+    one is not (XLA would abort the process on it), and the optional flags are added exactly
+    where found."""
+    real, fake = "--xla_cpu_multi_thread_eigen", "--xla_cpu_no_such_flag_in_any_xla"
+    assert _known([real, fake]) == {real}
+    optional = set(flags_to_add()) - set(SAFE_FLAGS)
+    assert optional == _known(list(IF_KNOWN))
+    assert flags_to_add(set(IF_KNOWN)).keys() == SAFE_FLAGS.keys()
