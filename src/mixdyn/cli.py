@@ -457,29 +457,34 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
                 "mixdyn: --netcdf needs xarray, which is not installed; "
                 "pip install 'mixdyn[xarray]' (or leave --netcdf out)",
             )
+    # The figures' worker starts first: its imports (matplotlib) overlap reading the file and
+    # the checks; it is closed again if the runs draw nothing.
+    painter = _Painter() if figures else None
     with _guard(file):
-        from .io import Runner, read
-
-        spec = read(file)
-        _require_size(spec, file)
-        runner = Runner(spec)
-        if not spec.runs:
-            from .io import FileError
-
-            raise FileError(
-                "the file has no runs", "runs", file=str(file), hint="add a runs: section"
-            )
-        plans = runner.order(runs or None)
-        _check_run_outputs(out, plans, figures, runner)
-        drawing = figures and any(
-            getattr(p.spec, "plots", None)
-            or runner.plots(p)
-            or getattr(p.spec, "animation", None) is not None
-            or p.spec.kind in ("identify", "optimize")
-            for p in plans
-        )
-        painter = _Painter() if drawing else None  # its imports overlap the checks
         try:
+            from .io import Runner, read
+
+            spec = read(file)
+            _require_size(spec, file)
+            runner = Runner(spec)
+            if not spec.runs:
+                from .io import FileError
+
+                raise FileError(
+                    "the file has no runs", "runs", file=str(file), hint="add a runs: section"
+                )
+            plans = runner.order(runs or None)
+            _check_run_outputs(out, plans, figures, runner)
+            drawing = figures and any(
+                getattr(p.spec, "plots", None)
+                or runner.plots(p)
+                or getattr(p.spec, "animation", None) is not None
+                or p.spec.kind in ("identify", "optimize")
+                for p in plans
+            )
+            if painter is not None and not drawing:
+                painter.close()
+                painter = None
             for plan in plans:  # fail fast on ill-posed runs, before any long computation
                 if plan.spec.kind != "kinematic":
                     runner.check_masses(plan)
