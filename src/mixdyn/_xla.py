@@ -7,9 +7,12 @@ nothing: the N = 40 four-bar, Dopri8 at 1e-9, took 12-16 s without it against 15
 
 A third, XLA CPU's MLIR fusion emitters, is turned off where the installed jaxlib knows the
 flag (:data:`IF_KNOWN`): the older LLVM-IR emitters compile mixdyn's programs about 30% faster
-(the paper example's 18 programs: 6.9-7.5 s against 9.6-10.4 s) and run them as fast or faster
-(``benchmarks/per_step.py`` cases 0.89-1.03 of the time). An unknown flag would abort the
-process, so the flag is added only when its name is found in jaxlib's library.
+(the paper example's 18 programs: 6.9-7.5 s against 9.6-10.4 s); small mechanisms run as
+fast or faster (``benchmarks/per_step.py``: 0.89-1.04 of the time), mid-sized ones up to ~10%
+slower (a 128-link chain 1.07-1.14, 256 links 0.97-1.05, the N = 40 four-bar 1.03-1.07).
+Where a long run of a large mechanism matters more than compiling, set
+``XLA_FLAGS=--xla_cpu_use_fusion_emitters=true``. An unknown flag would abort the process,
+so the flag is added only when its name is found in jaxlib's library.
 
 What they do not change: XLA's CPU runtime still runs one of mixdyn's programs on two threads
 (its execution thread and one of its pool), handing work to each other; two such processes
