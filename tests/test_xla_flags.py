@@ -3,6 +3,7 @@ the user's own values kept, nothing changed once JAX's backend has started."""
 
 from __future__ import annotations
 
+import importlib.metadata
 import json
 import os
 import subprocess
@@ -10,7 +11,7 @@ import sys
 
 import pytest
 
-from mixdyn._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, _known, flags_to_add
+from mixdyn._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, _known, _recent_jaxlib, flags_to_add
 
 SHOW = "import os, json; {pre}import mixdyn; print(json.dumps(os.environ.get('XLA_FLAGS')))"
 
@@ -61,7 +62,21 @@ def test_optional_flags_are_added_only_where_jaxlib_knows_them():
     one is not (XLA would abort the process on it), and the optional flags are added exactly
     where found."""
     real, fake = "--xla_cpu_multi_thread_eigen", "--xla_cpu_no_such_flag_in_any_xla"
-    assert _known([real, fake]) == {real}
+    assert _known([real, fake]) == ({real} if _recent_jaxlib() else set())
     optional = set(flags_to_add()) - set(SAFE_FLAGS)
     assert optional == _known(list(IF_KNOWN))
     assert flags_to_add(set(IF_KNOWN)).keys() == SAFE_FLAGS.keys()
+
+
+def test_an_older_jaxlib_is_not_searched(monkeypatch):
+    """Below :data:`RECENT_JAXLIB` no library is read and only the safe flags are added."""
+    import mixdyn._xla as x
+
+    monkeypatch.setattr(x, "_recent_jaxlib", lambda: False)
+    assert x._known(["--xla_cpu_multi_thread_eigen"]) == set()
+    assert x.flags_to_add() == SAFE_FLAGS
+    monkeypatch.undo()
+    monkeypatch.setattr(importlib.metadata, "version", lambda name: "0.5.3")
+    assert not x._recent_jaxlib()
+    monkeypatch.setattr(importlib.metadata, "version", lambda name: "0.10.2")
+    assert x._recent_jaxlib()

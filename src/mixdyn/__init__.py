@@ -8,8 +8,9 @@ Compiled programs (traced and compiled) are kept between processes in a cache fo
 compile them again: ``MIXDYN_NO_CACHE=1`` (read on import) or :func:`set_cache` turns that
 off (see :mod:`mixdyn._compile`).
 
-On import, mixdyn turns off two XLA CPU features (multi-threaded Eigen, which buys its small
-matrices nothing, and the concurrency-optimized scheduler, which hung a vmapped loop) unless
+On import, mixdyn turns off XLA CPU features (multi-threaded Eigen, which buys its small
+matrices nothing, the concurrency-optimized scheduler, which hung a vmapped loop, and where
+jaxlib knows the flag the MLIR fusion emitters, which compile ~30% slower) unless
 ``$XLA_FLAGS`` names them: see :mod:`mixdyn._xla`.
 """
 

@@ -54,6 +54,23 @@ def _backend_started() -> bool:
     return xla_bridge.backends_are_initialized()
 
 
+#: The oldest jaxlib whose library is searched for :data:`IF_KNOWN` (older ones are not: the
+#: search of a library that lacks a name reads all of it, ~0.2 s at each import).
+RECENT_JAXLIB = (0, 6)
+
+
+def _recent_jaxlib() -> bool:
+    import importlib.metadata
+    import re
+
+    try:
+        version = importlib.metadata.version("jaxlib")
+    except importlib.metadata.PackageNotFoundError:
+        return False
+    parts = tuple(int(x) for x in re.findall(r"\d+", version)[:2])
+    return parts >= RECENT_JAXLIB
+
+
 def _known(flags) -> set[str]:
     """The names among ``flags`` that the installed jaxlib's XLA library contains (read
     from its shared libraries, memory-mapped; a few milliseconds where the name is found)."""
@@ -62,7 +79,7 @@ def _known(flags) -> set[str]:
     import pathlib
 
     spec = importlib.util.find_spec("jaxlib")
-    if spec is None or not spec.submodule_search_locations:
+    if spec is None or not spec.submodule_search_locations or not _recent_jaxlib():
         return set()
     wanted = {name: name.lstrip("-").encode() for name in flags}
     found: set[str] = set()
