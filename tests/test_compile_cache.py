@@ -304,3 +304,17 @@ def test_a_lost_worker_leaves_the_figures_to_this_process(tmp_path):
         assert (tmp_path / "a.png").stat().st_size > 0
     finally:
         painter.close()
+
+
+def test_a_worker_with_nothing_to_draw_is_stopped_not_awaited():
+    """mixdyn run starts its figure worker before it knows whether the runs draw; when they
+    draw nothing the worker is stopped at once (killed while importing), not waited for."""
+    from mixdyn.cli import _Painter
+
+    painter = _Painter()
+    proc, folder = painter.proc, painter.tmp
+    assert proc is not None and proc.poll() is None
+    painter.abort()
+    assert painter.proc is None
+    assert proc.returncode is not None and proc.returncode < 0  # ended by a signal
+    assert not os.path.exists(folder)

@@ -483,7 +483,7 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
                 for p in plans
             )
             if painter is not None and not drawing:
-                painter.close()
+                painter.abort()  # nothing to draw
                 painter = None
             for plan in plans:  # fail fast on ill-posed runs, before any long computation
                 if plan.spec.kind != "kinematic":
@@ -491,7 +491,7 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
                 runner.mobility(plan)
         except BaseException:
             if painter is not None:
-                painter.close()
+                painter.abort()  # nothing was drawn yet
             raise
         if progress is None:
             mode = "runs" if sys.stderr.isatty() else "off"
@@ -870,6 +870,12 @@ class _Painter:
                 self.proc.kill()
             self.proc.wait()
             self.proc = None
+
+    def abort(self) -> None:
+        """Close without waiting for the worker (it may still be importing): for a run that
+        has nothing for it to draw."""
+        self._lose()
+        self.close()
 
     def close(self) -> None:
         import shutil
