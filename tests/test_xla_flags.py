@@ -3,7 +3,6 @@ the user's own values kept, nothing changed once JAX's backend has started."""
 
 from __future__ import annotations
 
-import importlib.metadata
 import json
 import os
 import subprocess
@@ -11,7 +10,7 @@ import sys
 
 import pytest
 
-from mixdyn._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, _known, _recent_jaxlib, flags_to_add
+from mixdyn._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, flags_to_add, jaxlib_version
 
 SHOW = "import os, json; {pre}import mixdyn; print(json.dumps(os.environ.get('XLA_FLAGS')))"
 
@@ -57,26 +56,16 @@ def test_nothing_is_added_once_jax_has_started():
     assert _flags_after_import(None, pre=started) is None
 
 
-def test_optional_flags_are_added_only_where_jaxlib_knows_them():
-    """A flag name is looked up in jaxlib's libraries: one every XLA has is found, a made-up
-    one is not (XLA would abort the process on it), and the optional flags are added exactly
-    where found."""
-    real, fake = "--xla_cpu_multi_thread_eigen", "--xla_cpu_no_such_flag_in_any_xla"
-    assert _known([real, fake]) == ({real} if _recent_jaxlib() else set())
-    optional = set(flags_to_add()) - set(SAFE_FLAGS)
-    assert optional == _known(list(IF_KNOWN))
-    assert flags_to_add(set(IF_KNOWN)).keys() == SAFE_FLAGS.keys()
-
-
-def test_an_older_jaxlib_is_not_searched(monkeypatch):
-    """Below :data:`RECENT_JAXLIB` no library is read and only the safe flags are added."""
-    import mixdyn._xla as x
-
-    monkeypatch.setattr(x, "_recent_jaxlib", lambda: False)
-    assert x._known(["--xla_cpu_multi_thread_eigen"]) == set()
-    assert x.flags_to_add() == SAFE_FLAGS
-    monkeypatch.undo()
-    monkeypatch.setattr(importlib.metadata, "version", lambda name: "0.5.3")
-    assert not x._recent_jaxlib()
-    monkeypatch.setattr(importlib.metadata, "version", lambda name: "0.10.2")
-    assert x._recent_jaxlib()
+def test_optional_flags_are_added_only_for_the_jaxlibs_checked():
+    """A flag of :data:`IF_KNOWN` is added for the jaxlib versions in which it was checked to
+    exist (XLA aborts the process on an unknown flag), not before nor after them, and never
+    where the user named it."""
+    flag = "--xla_cpu_use_fusion_emitters"
+    value, first, after = IF_KNOWN[flag]
+    assert flags_to_add(version=(0, 5, 0)) == SAFE_FLAGS  # unknown to jaxlib 0.5.0: tried
+    assert flags_to_add(version=first)[flag] == value
+    assert flags_to_add(version=(0, 10, 2))[flag] == value  # this project's jaxlib: tried
+    assert flags_to_add(version=after) == SAFE_FLAGS
+    assert flag not in flags_to_add({flag}, version=(0, 10, 2))
+    installed = jaxlib_version()
+    assert (flag in flags_to_add()) == (installed is not None and first <= installed < after)

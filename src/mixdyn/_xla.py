@@ -5,14 +5,15 @@ Two XLA CPU features are turned off: the concurrency-optimized scheduler (a vmap
 wedged in its thread pool, PyAutoFit issues 1528/1530; for mixdyn's small matrices it buys
 nothing: the N = 40 four-bar, Dopri8 at 1e-9, took 12-16 s without it against 15-21 s with it).
 
-A third, XLA CPU's MLIR fusion emitters, is turned off where the installed jaxlib knows the
+A third, XLA CPU's MLIR fusion emitters, is turned off where the installed jaxlib has the
 flag (:data:`IF_KNOWN`): the older LLVM-IR emitters compile mixdyn's programs about 30% faster
 (the paper example's 18 programs: 6.9-7.5 s against 9.6-10.4 s); small mechanisms run as
 fast or faster (``benchmarks/per_step.py``: 0.89-1.04 of the time), mid-sized ones up to ~10%
 slower (a 128-link chain 1.07-1.14, 256 links 0.97-1.05, the N = 40 four-bar 1.03-1.07).
 Where a long run of a large mechanism matters more than compiling, set
 ``XLA_FLAGS=--xla_cpu_use_fusion_emitters=true``. An unknown flag would abort the process,
-so the flag is added only when its name is found in jaxlib's library.
+so the flag is added only for the jaxlib versions in which it was checked (:data:`IF_KNOWN`;
+its name in the library is no proof: jaxlib 0.10 names flags it no longer takes).
 
 What they do not change: XLA's CPU runtime still runs one of mixdyn's programs on two threads
 (its execution thread and one of its pool), handing work to each other; two such processes
@@ -37,9 +38,12 @@ SAFE_FLAGS = {
     "--xla_cpu_enable_concurrency_optimized_scheduler": "false",
 }
 
-#: Flags added only where jaxlib's library names them (an unknown flag aborts XLA).
+#: Flags added only for the jaxlib versions in which they were checked to exist (an unknown
+#: flag aborts the process): name -> (value, first such version, first version not checked).
+#: ``--xla_cpu_use_fusion_emitters``: unknown to jaxlib 0.4.35 and 0.5.0; accepted by 0.6.0,
+#: 0.7.0, 0.8.0, 0.9.0 and 0.10.2 (each installed and started with it).
 IF_KNOWN = {
-    "--xla_cpu_use_fusion_emitters": "false",
+    "--xla_cpu_use_fusion_emitters": ("false", (0, 6), (0, 11)),
 }
 
 #: The environment variable that keeps ``$XLA_FLAGS`` exactly as the user set it (``1``).
@@ -54,60 +58,35 @@ def _backend_started() -> bool:
     return xla_bridge.backends_are_initialized()
 
 
-#: The oldest jaxlib whose library is searched for :data:`IF_KNOWN` (older ones are not: the
-#: search of a library that lacks a name reads all of it, ~0.2 s at each import).
-RECENT_JAXLIB = (0, 6)
-
-
-def _recent_jaxlib() -> bool:
+def jaxlib_version() -> tuple[int, ...] | None:
+    """The installed jaxlib's version as numbers (None: not installed)."""
     import importlib.metadata
     import re
 
     try:
         version = importlib.metadata.version("jaxlib")
     except importlib.metadata.PackageNotFoundError:
-        return False
-    parts = tuple(int(x) for x in re.findall(r"\d+", version)[:2])
-    return parts >= RECENT_JAXLIB
+        return None
+    return tuple(int(x) for x in re.findall(r"\d+", version)[:3])
 
 
-def _known(flags) -> set[str]:
-    """The names among ``flags`` that the installed jaxlib's XLA library contains (read
-    from its shared libraries, memory-mapped; a few milliseconds where the name is found)."""
-    import importlib.util
-    import mmap
-    import pathlib
-
-    spec = importlib.util.find_spec("jaxlib")
-    if spec is None or not spec.submodule_search_locations or not _recent_jaxlib():
-        return set()
-    wanted = {name: name.lstrip("-").encode() for name in flags}
-    found: set[str] = set()
-    folder = pathlib.Path(next(iter(spec.submodule_search_locations)))
-    libraries = sorted(folder.glob("*.so"), key=lambda p: -p.stat().st_size)
-    for lib in libraries:
-        try:
-            with open(lib, "rb") as f, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as m:
-                found |= {name for name, raw in wanted.items() if m.find(raw) >= 0}
-        except (OSError, ValueError):
-            continue
-        if found == set(wanted):
-            break
-    return found
-
-
-def flags_to_add(named: set[str] = frozenset()) -> dict[str, str]:
-    """The flags :func:`apply` adds where the user named none of them (name -> value)."""
+def flags_to_add(named=frozenset(), version: tuple[int, ...] | None = None) -> dict[str, str]:
+    """The flags :func:`apply` adds where the user named none of them (name -> value), for
+    jaxlib ``version`` (default: the installed one)."""
     flags = {k: v for k, v in SAFE_FLAGS.items() if k not in named}
     optional = [k for k in IF_KNOWN if k not in named]
     if optional:
-        flags |= {k: IF_KNOWN[k] for k in optional if k in _known(optional)}
+        version = jaxlib_version() if version is None else version
+        for k in optional:
+            value, first, after = IF_KNOWN[k]
+            if version is not None and first <= version < after:
+                flags[k] = value
     return flags
 
 
 def apply() -> tuple[str, ...]:
-    """Add the missing :data:`SAFE_FLAGS` (and the known :data:`IF_KNOWN`) to
-    ``$XLA_FLAGS``; returns the flags added."""
+    """Add the missing :data:`SAFE_FLAGS` (and :data:`IF_KNOWN` where this jaxlib has them)
+    to ``$XLA_FLAGS``; returns the flags added."""
     if os.environ.get(KEEP_ENV, "").strip() not in ("", "0") or _backend_started():
         return ()
     current = os.environ.get("XLA_FLAGS", "")
