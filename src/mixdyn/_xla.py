@@ -73,14 +73,11 @@ def jaxlib_version() -> tuple[int, ...] | None:
 def flags_to_add(named=frozenset(), version: tuple[int, ...] | None = None) -> dict[str, str]:
     """The flags :func:`apply` adds where the user named none of them (name -> value), for
     jaxlib ``version`` (default: the installed one)."""
+    version = jaxlib_version() if version is None else version
     flags = {k: v for k, v in SAFE_FLAGS.items() if k not in named}
-    optional = [k for k in IF_KNOWN if k not in named]
-    if optional:
-        version = jaxlib_version() if version is None else version
-        for k in optional:
-            value, first, after = IF_KNOWN[k]
-            if version is not None and first <= version < after:
-                flags[k] = value
+    for k, (value, first, after) in IF_KNOWN.items():
+        if k not in named and version is not None and first <= version < after:
+            flags[k] = value
     return flags
 
 

@@ -136,6 +136,7 @@ Text = Annotated[str, AfterValidator(_text)]
 """One line of plain text (a title, a label, the model's name)."""
 
 
+@functools.cache
 def _field_docstrings() -> dict[str, dict[str, str]]:
     """The docstrings of the fields of this module's classes (the string below each field),
     by class name and field name, cleaned as pydantic cleans them."""
@@ -170,7 +171,7 @@ class _DocumentedJsonSchema(GenerateJsonSchema):
         json_schema = super().model_schema(schema)
         props = json_schema.get("properties")
         if props:
-            docs = _docstrings()
+            docs = _field_docstrings()
             for name, prop in props.items():
                 for cls in schema["cls"].__mro__:
                     text = docs.get(cls.__name__, {}).get(name)
@@ -178,9 +179,6 @@ class _DocumentedJsonSchema(GenerateJsonSchema):
                         prop.setdefault("description", text)
                         break
         return json_schema
-
-
-_docstrings = functools.cache(_field_docstrings)
 
 
 class Spec(BaseModel):
