@@ -233,6 +233,7 @@ def test_a_second_process_traces_nothing(tmp_path):
     assert second["stats"]["exported"] == 0 and second["stats"]["fallback"] == 0
     assert second["stats"]["loaded"] == first["stats"]["exported"]
     assert second["traces"] == {}
+    assert second["stats"]["executables"] == first["stats"]["exported"]  # nothing lowered
     off = dict(env, MIXDYN_NO_CACHE="1")
     reference = _run(script, off, 350.0, tmp_path / "c.npy")
     assert reference["folder"] is None and reference["traces"]
@@ -244,6 +245,74 @@ def test_a_second_process_traces_nothing(tmp_path):
     assert third["stats"]["loaded"] == third["stats"]["exported"] == 0
     assert third["traces"] == {}
     np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), np.load(tmp_path / "c.npy"))
+
+
+EXE_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    import numpy as np
+    sys.path.insert(0, {tests!r})
+    import mixdyn as md
+    from mixdyn import _compile
+    from mixdyn.analysis._start import _velocity_fix
+    from mixdyn.equations import Constraints
+    from test_compile_cache import paper, HOLD
+    model = paper()
+    q = np.asarray(md.assemble(model, hold=HOLD).q)
+    qd = np.linspace(-1.0, 1.0, model.nq)
+    weights = np.ones(model.nq)
+    weights[[2, 5]] = 0.0
+    out, err = _velocity_fix(Constraints.of(model), q, qd, np.asarray(0.1), weights)
+    np.save(sys.argv[1], np.append(np.asarray(out), float(err)))
+    print(json.dumps({{"stats": _compile.stats, "traces": dict(_compile.traces)}}))
+    """
+)
+
+
+def test_a_new_process_runs_the_stored_executables(tmp_path):
+    """An exported program's executable is stored once compiled, and a new process runs it
+    without lowering or compiling (``mixdyn._executables``), with the same numbers (a least-
+    norm velocity fix: LAPACK inside, set up although nothing is lowered). Damaged stored
+    executables are compiled again, through JAX's cache, and stored anew from its bytes (an
+    executable that was itself loaded does not serialize completely), which then run too."""
+    script = tmp_path / "fix.py"
+    script.write_text(EXE_SCRIPT.format(tests=str(ROOT / "tests")))
+    env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("MIXDYN_NO_CACHE", None)
+    exes = tmp_path / "cache" / "executables"
+    first = _run(script, env, tmp_path / "a.npy")
+    n = first["stats"]["exported"]  # the assembly's programs and the velocity fix
+    assert n >= 2 and first["stats"]["executables"] == 0
+    assert len(list(exes.glob("*.exe"))) == n
+    second = _run(script, env, tmp_path / "b.npy")
+    assert second["stats"]["executables"] == second["stats"]["loaded"] == n
+    assert second["traces"] == {}
+    np.testing.assert_array_equal(np.load(tmp_path / "a.npy"), np.load(tmp_path / "b.npy"))
+    for exe in exes.glob("*.exe"):
+        exe.write_bytes(b"not an executable")
+    third = _run(script, env, tmp_path / "c.npy")
+    assert third["stats"]["executables"] == 0 and third["stats"]["loaded"] == n
+    fourth = _run(script, env, tmp_path / "d.npy")
+    assert fourth["stats"]["executables"] == n and fourth["traces"] == {}
+    for name in "cd":
+        np.testing.assert_array_equal(
+            np.load(tmp_path / "a.npy"), np.load(tmp_path / f"{name}.npy")
+        )
+
+
+def test_an_executable_is_keyed_by_the_xla_flags_and_the_processor(monkeypatch):
+    """Another ``$XLA_FLAGS`` or another processor names another executable (one built for
+    other flags or instructions must not run)."""
+    from mixdyn import _executables
+
+    here = _executables.environment.__wrapped__()
+    assert _executables.environment.__wrapped__() == here
+    flags = os.environ.get("XLA_FLAGS", "") + " --xla_cpu_use_xnnpack=false"
+    monkeypatch.setenv("XLA_FLAGS", flags)
+    assert _executables.environment.__wrapped__() != here
+    monkeypatch.undo()
+    monkeypatch.setattr(_executables, "_processor", lambda: "another processor")
+    assert _executables.environment.__wrapped__() != here
 
 
 # ------------------------------------------------------------------ figures while computing

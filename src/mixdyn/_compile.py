@@ -7,7 +7,9 @@ else ``~/.cache/mixdyn/jax``), on by default in the Python API and the CLI alike
 - the *traced* programs of mixdyn's jitted functions, exported with :mod:`jax.export` per
   model structure (:func:`cached_jit`). JAX's cache starts from a lowered program, so every
   process would otherwise trace each function again (seconds for an integrator); an exported
-  program is read back and lowered without running any Python of the function.
+  program is read back and lowered without running any Python of the function;
+- the executable of each exported program once compiled (:mod:`mixdyn._executables`), so
+  that a later process runs it without lowering it or looking it up in JAX's cache.
 
 A program is keyed by the function (module and qualified name), everything about its
 arguments that is not an array (the PyTree structure with every static field of the
@@ -44,6 +46,8 @@ from collections.abc import Callable
 import equinox as eqx
 import jax
 from jax import export as _export
+
+from . import _executables
 
 #: The environment variable that turns every persistent cache off (``1``).
 NO_CACHE_ENV = "MIXDYN_NO_CACHE"
@@ -261,15 +265,20 @@ def _environment() -> bytes:
 
 # --------------------------------------------------------------------------- the wrapper
 class _Program:
-    """A loaded program: the jitted call of the exported function and the outputs' shape."""
+    """A loaded program: the compiled exported function and the outputs' shape. Without
+    ``compiled`` it is compiled at its first call (its executable then stored at ``exe``:
+    :mod:`mixdyn._executables`)."""
 
-    __slots__ = ("call", "leaves", "treedef")
+    __slots__ = ("call", "exe", "exported", "leaves", "treedef")
 
-    def __init__(self, exported: _export.Exported, skeleton, compiled=None):
-        self.call = jax.jit(exported.call) if compiled is None else compiled
+    def __init__(self, exported: _export.Exported | None, skeleton, compiled=None, exe=None):
+        self.exported, self.call, self.exe = exported, compiled, exe
         self.leaves, self.treedef = jax.tree_util.tree_flatten(skeleton)
 
     def __call__(self, dynamic):
+        if self.call is None:
+            self.call = _executables.compiled(self.exported, self.exe)
+            self.exported = None
         flat = self.call(*dynamic)
         out = [flat[x.i] if isinstance(x, _Leaf) else x for x in self.leaves]
         return jax.tree_util.tree_unflatten(self.treedef, out)
@@ -277,7 +286,7 @@ class _Program:
 
 #: Counters of this process (for tests and profiling): programs traced by export, read
 #: from disk, and calls that fell back to tracing.
-stats = {"exported": 0, "loaded": 0, "fallback": 0, "prefetched": 0}
+stats = {"exported": 0, "loaded": 0, "fallback": 0, "prefetched": 0, "executables": 0}
 #: How many times the Python body of each :func:`cached_jit` function ran, i.e. was traced
 #: (by ``filter_jit`` or by export), by ``module.qualname``.
 traces: collections.Counter = collections.Counter()
@@ -362,7 +371,8 @@ class _CachedJit:
         if blob is None:
             return False
         stats["exported"] += 1
-        return _Program(_export.deserialize(bytearray(blob[0])), blob[1])
+        exe = _executables.path_for(folder, path.stem)
+        return _Program(_export.deserialize(bytearray(blob[0])), blob[1], exe=exe)
 
     def _export(self, args, kwargs, leaves, treedef):
         """``(serialized program, output skeleton)``, or None where JAX cannot export it."""
@@ -397,17 +407,26 @@ class _CachedJit:
 
 
 def _read(path, compile: bool = False):
-    """The program stored at ``path``: a :class:`_Program` (compiled now if ``compile``),
-    False where an earlier process found it not exportable."""
+    """The program stored at ``path``: a :class:`_Program` (its stored executable, else
+    compiled now if ``compile``, else at its first call), False where an earlier process
+    found it not exportable."""
+    path = pathlib.Path(path)
     with open(path, "rb") as f:
         blob = pickle.load(f)
     if blob is None:
         return False  # not exportable (recorded by an earlier process)
+    exe = _executables.path_for(path.parent.parent, path.stem)
+    try:
+        program = _Program(None, blob[1], _executables.load(exe))
+        stats["executables"] += 1
+        return program
+    except Exception:  # none stored (or stale, damaged): compiled again, and stored
+        pass
     exported = _export.deserialize(bytearray(blob[0]))
     compiled = None
     if compile:  # JAX's persistent cache gives the executable; this thread deserializes it
-        compiled = jax.jit(exported.call).lower(*exported.in_avals).compile()
-    return _Program(exported, blob[1], compiled)
+        compiled = _executables.compiled(exported, exe)
+    return _Program(exported, blob[1], compiled, exe)
 
 
 # --------------------------------------------------------------------------- prefetching
