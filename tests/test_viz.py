@@ -78,6 +78,29 @@ def test_gif_frames_and_motion(motion, tmp_path):
     assert np.mean(frames[0] != frames[1]) > 0.001
 
 
+def test_gif_shows_every_frame_as_drawn(motion, tmp_path, monkeypatch):
+    """Each frame of the GIF, decoded, is the frame drawn (on the one palette): the frames
+    written as differences (unchanged pixels transparent), without Pillow's per-frame
+    palette remapping, still add up to the drawing."""
+    from mixdyn.viz import _draw
+
+    writers = []
+    make = _draw._gif_writer
+
+    def keep(fps):
+        writers.append(make(fps))
+        return writers[-1]
+
+    monkeypatch.setattr(_draw, "_gif_writer", keep)
+    path = animate(motion, tmp_path / "a.gif", frames=12, trace=["crank.A"], dpi=50)
+    drawn = [np.asarray(f.convert("RGB")) for f in writers[0]._frames]
+    with Image.open(path) as gif:
+        assert gif.n_frames == len(drawn) == 12
+        for k, want in enumerate(drawn):
+            gif.seek(k)
+            np.testing.assert_array_equal(np.asarray(gif.convert("RGB")), want)
+
+
 def test_no_more_frames_than_outputs(tmp_path):
     model = four_bar()
     res = md.kinematic(model, np.linspace(0, 1, 7))

@@ -120,7 +120,7 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 100) -> path
 
     # Lay the figure out once, then keep that layout for every frame.
     draw(0)
-    fig.canvas.draw()
+    fig.draw_without_rendering()
     fig.set_layout_engine("none")
     path.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".mp4":
@@ -166,6 +166,22 @@ def _gif_writer(fps: int):
             rgb = Image.frombuffer("RGBA", canvas.get_width_height(), canvas.buffer_rgba())
             return rgb.convert("RGB").quantize(colors=128, method=Image.Quantize.FASTOCTREE)
 
+        def finish(self):
+            # Every frame has the one palette: Pillow's per-frame palette optimisation
+            # (remapping each frame to the colours it uses) would give each frame another
+            # palette and compare them in RGBA, a third of the time, for a file of the same
+            # size. Unchanged pixels still become transparent (its ``optimize`` stays on).
+            from PIL import GifImagePlugin
+
+            if self.palette is None or not hasattr(GifImagePlugin, "_get_optimize"):
+                return super().finish()
+            original = GifImagePlugin._get_optimize
+            GifImagePlugin._get_optimize = _no_palette_optimization
+            try:
+                super().finish()
+            finally:
+                GifImagePlugin._get_optimize = original
+
         def grab_frame(self, **savefig_kwargs):
             canvas = self.fig.canvas
             if self.palette is None:
@@ -176,3 +192,8 @@ def _gif_writer(fps: int):
             self._frames.append(frame)
 
     return GifWriter(fps=fps)
+
+
+def _no_palette_optimization(im, info):
+    """Pillow's ``GifImagePlugin._get_optimize`` for frames sharing one palette: keep it."""
+    return None
