@@ -335,8 +335,12 @@ def test_the_figure_worker_draws_what_this_process_draws(tmp_path):
     painter = _Painter()
     try:
         assert painter.proc is not None
+        # On Linux the worker forks: the plot goes to the first channel, the movie to the
+        # second (the copy), which must draw as this process does too.
+        assert len(painter.channels) == (2 if sys.platform.startswith("linux") else 1)
         painter.draw("plot", table, ["bob.phi"], tmp_path / "w.png", units={"t": "s"}, title="a")
         painter.draw("movie", data, tmp_path / "w.gif", fps=10)
+        assert [k for *_, k in painter.tasks] == [0, len(painter.channels) - 1]
         painter.done(tmp_path / "x.html")
         assert painter.results() == [tmp_path / "w.png", tmp_path / "w.gif", tmp_path / "x.html"]
     finally:
@@ -373,6 +377,35 @@ def test_a_lost_worker_leaves_the_figures_to_this_process(tmp_path):
         assert (tmp_path / "a.png").stat().st_size > 0
     finally:
         painter.close()
+
+
+def test_a_worker_that_cannot_fork_serves_one_channel(monkeypatch):
+    """Without ``os.fork`` (or when it fails) the worker closes the second channel's ends,
+    so that the tasks sent there come back to mixdyn run, and serves the first one."""
+    import importlib.util
+
+    from mixdyn import viz
+
+    spec = importlib.util.spec_from_file_location(
+        "_worker_for_test", pathlib.Path(viz.__file__).with_name("_worker.py")
+    )
+    worker = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(worker)
+
+    def no_fork():
+        raise OSError("no fork here")
+
+    monkeypatch.setattr(os, "fork", no_fork)
+    tasks_r, tasks_w = os.pipe()
+    replies_r, replies_w = os.pipe()
+    try:
+        assert worker._fork((tasks_r, replies_w)) == (sys.stdin, sys.stdout)
+        with pytest.raises(BrokenPipeError):  # nobody reads the second channel's tasks
+            os.write(tasks_w, b"task\n")
+        assert os.read(replies_r, 10) == b""  # and nobody will write its replies
+    finally:
+        os.close(tasks_w)
+        os.close(replies_r)
 
 
 def test_a_worker_with_nothing_to_draw_is_stopped_not_awaited():

@@ -7,10 +7,17 @@ pickled task ``(kind, args, kwargs)`` (``kind``: ``"plot"``, ``"movie"``, ``"aga
 ``"band"``); for each it
 writes one line on standard output, the hex of a pickled ``("ok", path)`` or
 ``("error", exception)``. An empty line or the end of the input ends it.
+
+With ``--fork TASKS REPLIES`` (two inherited file descriptors) the worker forks once its
+imports are done: the copy serves a second channel (tasks read from ``TASKS``, replies
+written to ``REPLIES``) beside the first, so that two figures are drawn at once for the
+price of one import of matplotlib (where ``os.fork`` is missing or fails, the second
+channel's ends are closed and its tasks come back to the caller, which draws them itself).
 """
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import pathlib
@@ -39,7 +46,33 @@ def main() -> None:
         "fit": sweeps.plot_fit,
         "optimum": sweeps.plot_optimum,
     }
-    for line in sys.stdin:
+    tasks, replies = sys.stdin, sys.stdout
+    if len(sys.argv) == 4 and sys.argv[1] == "--fork":
+        fds = int(sys.argv[2]), int(sys.argv[3])
+        tasks, replies = _fork(fds)
+    serve(tasks, replies, do)
+
+
+def _fork(fds: tuple[int, int]):
+    """Fork; return the channel this process serves: the copy the second one (``fds``:
+    tasks, replies), this one standard input and output. Each closes the other's ends (a
+    channel ends when its last writer closes it)."""
+    pid = -1
+    with contextlib.suppress(AttributeError, OSError):
+        pid = os.fork()
+    if pid == 0:
+        devnull = os.open(os.devnull, os.O_RDWR)
+        os.dup2(devnull, 0)
+        os.dup2(devnull, 1)
+        return open(fds[0], encoding="utf-8"), open(fds[1], "w", encoding="utf-8")
+    for fd in fds:
+        os.close(fd)
+    return sys.stdin, sys.stdout
+
+
+def serve(tasks, replies, do) -> None:
+    """Draw the tasks named on ``tasks`` in turn, a reply line each on ``replies``."""
+    for line in tasks:
         name = line.strip()
         if not name:
             break
@@ -54,8 +87,8 @@ def main() -> None:
             except Exception:
                 e = RuntimeError(f"{type(e).__name__}: {e}")
             reply = ("error", e)
-        sys.stdout.write(pickle.dumps(reply).hex() + "\n")
-        sys.stdout.flush()
+        replies.write(pickle.dumps(reply).hex() + "\n")
+        replies.flush()
 
 
 if __name__ == "__main__":
