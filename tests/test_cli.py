@@ -6,6 +6,7 @@ import os
 import pathlib
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pandas as pd
@@ -275,3 +276,54 @@ def test_the_installed_command(tmp_path):
         "give the value in a unit of mass"
     ]
     assert proc.stdout == ""
+
+
+def _processes_with(token: str) -> list[int]:
+    """Processes whose environment holds ``token`` (Linux: ``/proc``)."""
+    found = []
+    for entry in pathlib.Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if token.encode() in (entry / "environ").read_bytes():
+                    found.append(int(entry.name))
+            except OSError:
+                pass
+    return found
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+def test_the_early_figure_worker_ends_with_the_command(tmp_path):
+    """``mixdyn run`` starts its figure worker before importing JAX (mixdyn._early); a run
+    that stops on an input error before it draws leaves no worker behind, and a command
+    line that draws nothing starts none."""
+    import uuid
+
+    from mixdyn import _early
+
+    exe = pathlib.Path(sys.executable).parent / "mixdyn"
+    if not exe.exists():
+        pytest.skip("the mixdyn command is not installed beside this Python")
+    assert _early.draws(["/x/mixdyn", "run", "m.yaml"])
+    assert _early.draws(["mixdyn", "run", "m.yaml", "--out", "o"])
+    assert not _early.draws(["mixdyn", "run", "m.yaml", "--no-figures"])
+    assert not _early.draws(["mixdyn", "run", "--help"])
+    assert not _early.draws(["mixdyn", "check", "m.yaml"])
+    assert not _early.draws(["python", "run", "m.yaml"])
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("bodies:\n  - name: b\n    mass: 3 mm\n")
+    token = f"MIXDYN_TEST_TOKEN={uuid.uuid4().hex}"
+    env = dict(os.environ, MIXDYN_NO_CACHE="1", MIXDYN_TEST_TOKEN=token.split("=")[1])
+    for extra, says in (([], "'mm' is a unit of length"), (["--bogus"], "--bogus")):
+        # the file's error: the painter took the worker and stops it; an unknown option:
+        # the command ends before any painter (the worker nobody took is stopped at exit,
+        # or ends at the end of its input)
+        proc = subprocess.run(
+            [str(exe), "run", str(bad), "--out", str(tmp_path / "o"), *extra],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=120,
+        )
+        assert proc.returncode == 2 and says in proc.stderr
+        time.sleep(0.2)
+        assert _processes_with(token) == []

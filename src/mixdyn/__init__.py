@@ -14,7 +14,11 @@ jaxlib knows the flag the MLIR fusion emitters, which compile ~30% slower) unles
 ``$XLA_FLAGS`` names them: see :mod:`mixdyn._xla`.
 """
 
-from . import _xla
+from . import _early
+
+_early.start_for_command_line()  # `mixdyn run` with figures: its drawing worker, before JAX
+
+from . import _xla  # noqa: E402
 
 _xla.apply()
 

@@ -809,44 +809,20 @@ class _Painter:
     MOVIE_COST = 3
 
     def __init__(self):
-        import subprocess
         import tempfile
 
-        from . import viz
+        from . import _early
 
         self.tasks: list = []  # (task or None, path or None, channel or None)
         self.tmp = tempfile.mkdtemp(prefix="mixdyn-figures-")
         self.channels: list = []  # (tasks writer, replies reader) or None where lost
-        self.queued: list[int] = []
-        worker = pathlib.Path(viz.__file__).with_name("_worker.py")
-        command = [sys.executable, str(worker)]
-        second = sys.platform.startswith("linux") and hasattr(os, "fork")
-        ends = (*os.pipe(), *os.pipe()) if second else ()  # tasks r, w; replies r, w
-        if second:
-            command += ["--fork", str(ends[0]), str(ends[3])]
-        try:
-            self.proc = subprocess.Popen(
-                command,
-                stdin=subprocess.PIPE,
-                stdout=subprocess.PIPE,
-                stderr=subprocess.DEVNULL,
-                text=True,
-                pass_fds=(ends[0], ends[3]) if second else (),
-                start_new_session=True,  # the worker and its copy: one group, stopped at once
-            )
-        except OSError:
-            self.proc = None
-        finally:
-            for fd in ends[:1] + ends[3:]:
-                os.close(fd)  # the worker's ends
+        self.proc, second = _early.worker()  # started with the command where it could be
         if self.proc is None:
-            for fd in ends[1:3]:
-                os.close(fd)
             return
         self.channels.append((self.proc.stdin, self.proc.stdout))
-        if second:
-            writer = open(ends[1], "w", encoding="utf-8")  # noqa: SIM115 - closed in close()
-            self.channels.append((writer, open(ends[2], encoding="utf-8")))  # noqa: SIM115
+        if second is not None:
+            writer = open(second[0], "w", encoding="utf-8")  # noqa: SIM115 - closed in close()
+            self.channels.append((writer, open(second[1], encoding="utf-8")))  # noqa: SIM115
         self.queued = [0] * len(self.channels)
 
     def draw(self, kind: str, *args, **kwargs) -> None:
@@ -908,14 +884,10 @@ class _Painter:
 
     def _stop(self) -> None:
         """Stop the worker (and its copy) at once."""
-        import signal
+        from . import _early
 
         if self.proc is not None:
-            with contextlib.suppress(OSError):
-                os.killpg(self.proc.pid, signal.SIGKILL)
-            with contextlib.suppress(OSError):
-                self.proc.kill()
-            self.proc.wait()
+            _early.stop(self.proc)
             self.proc = None
 
     def abort(self) -> None:

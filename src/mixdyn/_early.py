@@ -1,0 +1,103 @@
+"""The figure worker of ``mixdyn run``, started as early as the command line allows.
+
+``mixdyn run`` draws its figures in a worker process (:mod:`mixdyn.viz._worker`: matplotlib,
+no JAX). Importing matplotlib and drawing a first figure costs the worker ~0.5 s; started
+when the command begins, before mixdyn imports JAX (:func:`start_for_command_line`, called
+first thing by ``mixdyn/__init__.py``), the worker is ready by the time the first run ends.
+:func:`worker` hands it to :class:`mixdyn.cli._Painter` (or starts one then). A worker
+nobody took is stopped when the process exits.
+
+This module imports nothing from mixdyn, nor JAX.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+
+#: The worker started for this command line, not yet taken: ``(process, (tasks writer fd,
+#: replies reader fd) or None)``.
+_started: list = []
+
+
+def spawn():
+    """Start a worker: ``(process or None, second channel's ends or None)``.
+
+    On Linux the worker forks once matplotlib is imported and serves a second channel (see
+    :mod:`mixdyn.viz._worker`); the ends returned are this side's file descriptors of it
+    (tasks writer, replies reader)."""
+    worker = pathlib.Path(__file__).parent / "viz" / "_worker.py"
+    command = [sys.executable, str(worker)]
+    second = sys.platform.startswith("linux") and hasattr(os, "fork")
+    ends = (*os.pipe(), *os.pipe()) if second else ()  # tasks r, w; replies r, w
+    if second:
+        command += ["--fork", str(ends[0]), str(ends[3])]
+    proc = None
+    try:
+        proc = subprocess.Popen(
+            command,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+            pass_fds=(ends[0], ends[3]) if second else (),
+            start_new_session=True,  # the worker and its copy: one group, stopped at once
+        )
+    except OSError:
+        pass
+    finally:
+        for fd in ends[:1] + ends[3:]:
+            os.close(fd)  # the worker's ends
+    if proc is None:
+        for fd in ends[1:3]:
+            os.close(fd)
+        return None, None
+    return proc, (ends[1], ends[2]) if second else None
+
+
+def stop(proc) -> None:
+    """Stop a worker (and its copy) at once."""
+    with contextlib.suppress(OSError):
+        os.killpg(proc.pid, signal.SIGKILL)
+    with contextlib.suppress(OSError):
+        proc.kill()
+    proc.wait()
+
+
+def draws(argv: list[str]) -> bool:
+    """Whether ``argv`` is a ``mixdyn run`` command line that may draw figures."""
+    if len(argv) < 3 or os.path.basename(argv[0]) != "mixdyn" or argv[1] != "run":
+        return False
+    return not any(a in ("--no-figures", "-h", "--help") for a in argv[2:])
+
+
+def start_for_command_line() -> None:
+    """Start the worker now if this process is ``mixdyn run`` with figures (see above)."""
+    if _started or not draws(sys.argv):
+        return
+    proc, second = spawn()
+    if proc is not None:
+        _started.append((proc, second))
+        atexit.register(_stop_untaken)
+
+
+def worker():
+    """The worker started for the command line (taken: later calls start new ones), else a
+    new one: ``(process or None, second channel's ends or None)``."""
+    if _started:
+        return _started.pop()
+    return spawn()
+
+
+def _stop_untaken() -> None:
+    while _started:
+        proc, second = _started.pop()
+        stop(proc)
+        for fd in second or ():
+            with contextlib.suppress(OSError):
+                os.close(fd)
