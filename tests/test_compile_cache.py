@@ -136,6 +136,36 @@ def test_exported_program_gives_the_traced_numbers(cache):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
+def test_a_program_prepared_ahead_is_the_one_called(cache):
+    """``ahead`` prepares a program in a second thread from arguments of the same structure
+    and shapes (zeros): the call with the real arguments then traces nothing more and gives
+    the numbers of the traced function; a run prepares its post-processing that way."""
+    from mixdyn.analysis._problem import Problem
+    from mixdyn.analysis._simulate import _post_arrays
+    from mixdyn.equations import Constraints
+
+    model = paper()
+    c = Constraints.of(model)
+    q = np.asarray(md.assemble(model, hold=HOLD).q)
+    problem = Problem(model, c)
+    ts = np.array([0.0, 0.1, 0.2])
+    Q = np.tile(q, (3, 1))
+    QD = np.tile(np.linspace(-1.0, 1.0, model.nq), (3, 1))
+    name = "mixdyn.analysis._simulate._post_arrays"
+    before = _compile.traces[name]
+    zeros = np.zeros_like(Q)
+    _post_arrays.ahead(problem, ts, zeros, zeros)
+    got = _post_arrays(problem, ts, Q, QD)
+    assert _compile.traces[name] == before + 1  # traced once, in the other thread
+    want = eqx.filter_jit(_post_arrays.fn)(problem, ts, Q, QD)
+    for a, b in zip(jax.tree.leaves(want), jax.tree.leaves(got), strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+    # a forward run on a fresh structure: its post-processing traced once, not twice
+    runs = dict(_compile.traces)
+    md.forward(paper_mechanism(), np.linspace(0.0, 0.1, 7), hold=HOLD, rtol=1e-8, atol=1e-8)
+    assert _compile.traces[name] - runs.get(name, 0) == 1
+
+
 class _Local(eqx.Module):
     scale: float = eqx.field(static=True)
 

@@ -331,6 +331,12 @@ class _CachedJit:
             program = self.programs.get(mkey)
         except TypeError:  # an unhashable static part: as filter_jit would refuse it
             return self.jit(*args, **kwargs)
+        if isinstance(program, _Pending):  # being prepared by ahead(): wait for it
+            program = program.get()
+            if program is None:
+                self.programs.pop(mkey, None)  # it failed there: prepared here instead
+            else:
+                self.programs[mkey] = program
         if program is None:
             program = self._load(folder, args, kwargs, leaves, treedef)
             self.programs[mkey] = program
@@ -338,6 +344,49 @@ class _CachedJit:
             stats["fallback"] += 1
             return self.jit(*args, **kwargs)
         return program(dynamic)
+
+    def ahead(self, *args, **kwargs) -> None:
+        """Prepare the program for these arguments in a background thread (read from the
+        cache, else traced, exported and written; compiled), while the caller goes on: a
+        run's post-processing while its integrator is traced and compiled (XLA compiles
+        without holding the interpreter lock, so two programs compile at once). Only the
+        arguments' structure, shapes and dtypes count (arrays of zeros will do); a call
+        with these arguments then waits for the program instead of preparing it again.
+        Nothing happens with the cache off, inside a trace, or when the program is there."""
+        folder = _state["folder"]
+        if folder is None:
+            return
+        leaves, treedef = jax.tree_util.tree_flatten((args, kwargs))
+        if any(isinstance(x, jax.core.Tracer) for x in leaves):
+            return
+        dynamic = [x for x in leaves if eqx.is_array(x)]
+        static = tuple(None if eqx.is_array(x) else x for x in leaves)
+        avals = tuple(
+            (x.shape, str(x.dtype), bool(getattr(x, "weak_type", False))) for x in dynamic
+        )
+        pending = _Pending()
+        try:
+            mkey = (treedef, static, avals)
+            with _lock:
+                if mkey in self.programs:
+                    return
+                self.programs[mkey] = pending
+        except TypeError:
+            return
+
+        def prepare():
+            try:
+                program = self._load(folder, args, kwargs, leaves, treedef)
+                if isinstance(program, _Program) and program.call is None:
+                    program.call = _executables.compiled(program.exported, program.exe)
+                    program.exported = None
+                pending.value = program
+            except Exception:  # the caller prepares it itself
+                pending.value = None
+            finally:
+                pending.done.set()
+
+        threading.Thread(target=prepare, name="mixdyn-ahead", daemon=True).start()
 
     def _load(self, folder, args, kwargs, leaves, treedef):
         """The program for these arguments: from disk, else exported (and written), else

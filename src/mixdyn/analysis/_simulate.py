@@ -406,7 +406,13 @@ def finish(case: Case, traj, arrays=None) -> Result:
 def simulate(case: Case, progress=None) -> Result:
     """Integrate ``case`` from its consistent start and build the result (``progress``: an
     optional ``f(t)`` called at each output time). A run whose energy balance breaks by more
-    than its energy tolerance fails (:func:`check_energy_balance`)."""
+    than its energy tolerance fails (:func:`check_energy_balance`).
+
+    The post-processing's program is prepared beside the integration (read, or traced and
+    compiled, in a second thread: :meth:`mixdyn._compile._CachedJit.ahead`)."""
+    n, nq = len(case.ts), int(np.shape(case.q0)[-1])
+    states = np.zeros((n, nq))
+    _post_arrays.ahead(case.problem, np.asarray(case.ts, dtype=np.float64), states, states)
     return finish(case, integrate(case, progress))
 
 
