@@ -40,6 +40,21 @@ _NAME_FIELDS = ("name", "point_i", "point_j", "point", "body", "body_i", "body_j
                 "center", "center_i", "center_j", "wheel", "line_point")  # fmt: skip
 
 
+def _full(joints, drivers, q, t) -> jax.Array:
+    """Every element's rows, one element after the other (the dense path's residual)."""
+    parts = [j.residual(q) for j in joints] + [d.residual(q, t) for d in drivers]
+    if not parts:
+        return jnp.zeros(0)
+    return jnp.concatenate(parts)
+
+
+#: :func:`_full` inside a trace: traced once per structure and shapes and reused by every
+#: program and derivative that evaluates it (``jax.jacfwd``, ``jax.jvp`` and ``vmap`` of a
+#: jitted call transform its traced program, cached, instead of tracing the elements again).
+#: XLA inlines the call: the compiled program and its numbers are the same.
+_full_traced = eqx.filter_jit(_full)
+
+
 class Constraints(eqx.Module):
     """The constraint set of one analysis: joints, then drivers (prescribed motions).
 
@@ -193,10 +208,9 @@ class Constraints(eqx.Module):
         """All rows ``Phi(q, t)`` (n_full,) before dropping redundant ones."""
         if self.linear_solver == "sparse":
             return self._local(_residual, q, t, rows=range(self.n_full))
-        parts = [j.residual(q) for j in self.joints] + [d.residual(q, t) for d in self.drivers]
-        if not parts:
-            return jnp.zeros(0)
-        return jnp.concatenate(parts)
+        if isinstance(q, jax.core.Tracer) or isinstance(t, jax.core.Tracer):
+            return _full_traced(self.joints, self.drivers, q, t)
+        return _full(self.joints, self.drivers, q, t)
 
     def __call__(self, q, t) -> jax.Array:
         """``Phi(q, t)`` (m,), the rows kept."""
