@@ -952,9 +952,21 @@ class Runner:
         bound = bind_prescribed(model, drivers)
         q = np.asarray(q, dtype=float)
         return tuple(
-            d if p.from_run is None else dataclasses.replace(d, law=m.Constant(float(d.measure(q))))
+            d if p.from_run is None else dataclasses.replace(d, law=self._held(p, d, q))
             for d, p in zip(bound, r.prescribed, strict=True)
         )
+
+    def _held(self, p: s.PrescribedSpec, d: m.Driver, q) -> m.Law:
+        """The stand-in's law: held at its value in ``q``, in the form the replayed motion
+        will have (:func:`mixdyn.analysis.prescribe`: a quintic Hermite interpolant on the
+        source run's output times, here of constant samples, exactly constant), so that the
+        programs the checks compile are the ones the run then calls."""
+        value = float(d.measure(q))
+        source = self.plans.get(p.from_run)
+        if source is None or len(source.times) < 2 or np.any(np.diff(source.times) <= 0):
+            return m.Constant(value)
+        n = len(source.times)
+        return m.QuinticHermite(source.times, np.full(n, value), np.zeros(n), np.zeros(n))
 
     def check_masses(self, plan: Plan) -> None:
         """A dynamic run needs every body's mass and inertia > 0."""
