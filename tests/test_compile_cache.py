@@ -166,6 +166,32 @@ def test_a_program_prepared_ahead_is_the_one_called(cache):
     assert _compile.traces[name] - runs.get(name, 0) == 1
 
 
+def test_a_files_next_run_is_prepared_while_the_first_computes(cache):
+    """mixdyn run's runner prepares the next run's integrator and post-processing in second
+    threads while a run computes (the paper's file: the mixed run, replaying the forward
+    run's slider, set up with its checks' stand-ins): each program is traced once, the
+    mixed run finds its programs ready, and it still recovers the paper's F1."""
+    import mixdyn.io as mio
+    from mixdyn.analysis import _simulate
+    from mixdyn.analysis._structure import _values
+
+    for fn in (_simulate._integrator("projection"), _simulate._post_arrays, _values):
+        fn.programs.clear()  # as in a new process (the folder is new: nothing on disk)
+    runner = mio.Runner(mio.read(ROOT / "examples" / "antonya.yaml"))
+    plans = runner.order()
+    for plan in plans:  # the checks mixdyn run makes first
+        runner.mobility(plan)
+    before, ahead = dict(_compile.traces), _compile.stats["ahead"]
+    results = runner.execute()
+    new = {k: v - before.get(k, 0) for k, v in _compile.traces.items()}
+    integrator = "mixdyn.analysis.integrators.projection.projection"
+    assert new[integrator] == 2  # the forward run's and the mixed run's, each once
+    assert new["mixdyn.analysis._simulate._post_arrays"] == 2
+    assert _compile.stats["ahead"] - ahead >= 3  # both post-processings, the mixed integrator
+    mixed = results["mixed"]
+    np.testing.assert_allclose(mixed["F1"], 10.0 * np.sin(np.pi * mixed.t / 2.0), rtol=0, atol=1e-6)
+
+
 class _Local(eqx.Module):
     scale: float = eqx.field(static=True)
 

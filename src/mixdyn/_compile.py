@@ -285,8 +285,16 @@ class _Program:
 
 
 #: Counters of this process (for tests and profiling): programs traced by export, read
-#: from disk, and calls that fell back to tracing.
-stats = {"exported": 0, "loaded": 0, "fallback": 0, "prefetched": 0, "executables": 0}
+#: from disk (of which read ahead, and loaded as executables), calls that fell back to
+#: tracing, and programs that a call found prepared in advance (``ahead``).
+stats = {
+    "exported": 0,
+    "loaded": 0,
+    "fallback": 0,
+    "prefetched": 0,
+    "executables": 0,
+    "ahead": 0,
+}
 #: How many times the Python body of each :func:`cached_jit` function ran, i.e. was traced
 #: (by ``filter_jit`` or by export), by ``module.qualname``.
 traces: collections.Counter = collections.Counter()
@@ -337,6 +345,7 @@ class _CachedJit:
                 self.programs.pop(mkey, None)  # it failed there: prepared here instead
             else:
                 self.programs[mkey] = program
+                stats["ahead"] += 1
         if program is None:
             program = self._load(folder, args, kwargs, leaves, treedef)
             self.programs[mkey] = program
@@ -542,7 +551,14 @@ def prefetch(tag: str) -> int:
     if queued:
         _stop.clear()
         threading.Thread(target=_read_ahead, args=(queued,), name="mixdyn-prefetch").start()
+    _state["queued"] = _state.get("queued", 0) + len(queued)
     return len(queued)
+
+
+def reading_ahead() -> bool:
+    """Whether this process reads programs ahead from a job's manifest (:func:`prefetch`):
+    its programs are then on disk already, and preparing them in advance gains nothing."""
+    return _state.get("queued", 0) > 0
 
 
 def _read_ahead(paths: list[str]) -> None:
@@ -642,6 +658,7 @@ __all__ = [
     "configure_from_env",
     "job",
     "prefetch",
+    "reading_ahead",
     "register_key",
     "remember",
     "set_cache",

@@ -301,8 +301,10 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
 
 
 @functools.cache
+@functools.cache
 def _integrator(method: str):
-    """The integrator ``method``, its traced programs kept in the persistent cache."""
+    """The integrator ``method``, its traced programs kept in the persistent cache (one
+    wrapper per method: a program read or prepared once serves every later run)."""
     return cached_jit(INTEGRATORS[method])
 
 
@@ -410,10 +412,30 @@ def simulate(case: Case, progress=None) -> Result:
 
     The post-processing's program is prepared beside the integration (read, or traced and
     compiled, in a second thread: :meth:`mixdyn._compile._CachedJit.ahead`)."""
-    n, nq = len(case.ts), int(np.shape(case.q0)[-1])
-    states = np.zeros((n, nq))
-    _post_arrays.ahead(case.problem, np.asarray(case.ts, dtype=np.float64), states, states)
+    _post_ahead(case)
     return finish(case, integrate(case, progress))
 
 
-__all__ = ["Case", "finish", "integrate", "output_times", "require_masses", "simulate"]
+def _post_ahead(case: Case) -> None:
+    n, nq = len(case.ts), int(np.shape(case.q0)[-1])
+    states = np.zeros((n, nq))
+    _post_arrays.ahead(case.problem, np.asarray(case.ts, dtype=np.float64), states, states)
+
+
+def ahead(case: Case) -> None:
+    """Prepare the programs :func:`simulate` will call for ``case`` (its integrator's and
+    its post-processing's) in second threads (:meth:`mixdyn._compile._CachedJit.ahead`),
+    while earlier work goes on: a model file's next run while the one before it computes.
+    ``case`` counts by its structure and shapes only. Without a progress callback."""
+    _integrator(case.options.method).ahead(
+        case.problem,
+        np.asarray(case.ts, dtype=np.float64),
+        case.q0,
+        case.qd0,
+        case.options.as_argument(),
+        progress=None,
+    )
+    _post_ahead(case)
+
+
+__all__ = ["Case", "ahead", "finish", "integrate", "output_times", "require_masses", "simulate"]

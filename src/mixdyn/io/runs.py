@@ -1033,7 +1033,9 @@ class Runner:
             e.file = self.b.file
             raise
 
-    def call(self, plan: Plan, results: dict, *, checked: bool = True) -> tuple[str, m.Model, dict]:
+    def call(
+        self, plan: Plan, results: dict, *, checked: bool = True, stand_ins: bool = False
+    ) -> tuple[str, m.Model, dict]:
         """What a run computes: ``(analysis, model, keywords)``, the analysis a key of
         :data:`ANALYSES` called as ``ANALYSES[analysis](model, plan.times, **keywords)``.
 
@@ -1041,11 +1043,16 @@ class Runner:
             plan: the run.
             results: the results of the runs it replays (``from_run``).
             checked: start from the set-up the checks made (:meth:`mobility`), if any.
+            stand_ins: a replayed motion by the stand-in its checks made (held at its start
+                value, in the replayed law's form: :meth:`_held`) instead of ``results``.
         """
         r = plan.spec
         drivers = []
         for k, p in enumerate(r.prescribed):
-            if p.from_run is not None:
+            if p.from_run is not None and stand_ins:
+                law = self._checked[plan.name][3][k].law  # KeyError: not checked so
+                drivers.append(dataclasses.replace(self._dummy_driver(k, p), law=law))
+            elif p.from_run is not None:
                 src = results[p.from_run]
                 t0, t1 = float(src.t[0]), float(src.t[-1])
                 if plan.times[0] < t0 - 1e-12 or plan.times[-1] > t1 + 1e-12:
@@ -1120,16 +1127,49 @@ class Runner:
             The results by run name, in execution order.
         """
         results: dict[str, an.Result] = {}
-        for plan in self.order(names):
+        plans = self.order(names)
+        for k, plan in enumerate(plans):
             if on_start is not None:
                 on_start(plan)
             t0 = _time.perf_counter()
             cb = progress(plan) if progress is not None else None
+            if k + 1 < len(plans):
+                self.ahead(plans[k + 1])
             res = self.execute_one(plan, results, cb)
             results[plan.name] = res
             if on_done is not None:
                 on_done(plan, res, _time.perf_counter() - t0)
         return results
+
+    def ahead(self, plan: Plan) -> None:
+        """Start preparing a later forward or mixed run's programs (its integrator's and its
+        post-processing's: :func:`mixdyn.analysis._simulate.ahead`) in a second thread, while
+        the runs before it compute: a file's first run compiles them, and two programs
+        compile at once. A run replaying another run's motion is set up with the stand-ins
+        its checks made (:meth:`call`), which have the replayed motion's form. Nothing when
+        the programs are read from the cache anyway (:func:`mixdyn._compile.reading_ahead`),
+        with the cache off, or for other runs; a failure here is left for the run to meet."""
+        import threading
+
+        from .. import _compile
+        from ..analysis import _simulate
+        from ..analysis.forward import forward_case
+        from ..analysis.mixed import mixed_case
+
+        if _compile.cache_folder() is None or _compile.reading_ahead():
+            return
+        if plan.spec.kind not in ("forward", "mixed"):
+            return
+
+        def prepare():
+            try:
+                analysis, model, kwargs = self.call(plan, {}, stand_ins=True)
+                make = {"forward": forward_case, "mixed": mixed_case}[analysis]
+                _simulate.ahead(make(model, plan.times, **kwargs))
+            except Exception:  # the run itself meets it, and names it
+                pass
+
+        threading.Thread(target=prepare, name="mixdyn-next-run", daemon=True).start()
 
 
 def start_q(model: m.Model) -> np.ndarray:
