@@ -344,14 +344,13 @@ def integrate(case: Case, progress=None):
     integrator = _integrator(case.options.method)
     # A progress callback is passed as a key into a registry: one program for every callback.
     with progress_hook(progress) as cb:
-        return integrator(
-            case.problem,
-            np.asarray(case.ts, dtype=np.float64),
-            case.q0,
-            case.qd0,
-            case.options.as_argument(),
-            progress=cb,
-        )
+        return integrator(*_integrator_args(case), progress=cb)
+
+
+def _integrator_args(case: Case) -> tuple:
+    """The integrator's positional arguments for ``case``."""
+    ts = np.asarray(case.ts, dtype=np.float64)
+    return case.problem, ts, case.q0, case.qd0, case.options.as_argument()
 
 
 def finish(case: Case, traj, arrays=None) -> Result:
@@ -427,14 +426,7 @@ def ahead(case: Case) -> None:
     its post-processing's) in second threads (:meth:`mixdyn._compile._CachedJit.ahead`),
     while earlier work goes on: a model file's next run while the one before it computes.
     ``case`` counts by its structure and shapes only. Without a progress callback."""
-    _integrator(case.options.method).ahead(
-        case.problem,
-        np.asarray(case.ts, dtype=np.float64),
-        case.q0,
-        case.qd0,
-        case.options.as_argument(),
-        progress=None,
-    )
+    _integrator(case.options.method).ahead(*_integrator_args(case), progress=None)
     _post_ahead(case)
 
 
