@@ -38,7 +38,6 @@ import os
 import pathlib
 import pickle
 import sys
-import tempfile
 import threading
 import types
 from collections.abc import Callable
@@ -47,7 +46,7 @@ import equinox as eqx
 import jax
 from jax import export as _export
 
-from . import _executables
+from . import _executables, _files
 
 #: The environment variable that turns every persistent cache off (``1``).
 NO_CACHE_ENV = "MIXDYN_NO_CACHE"
@@ -425,7 +424,7 @@ class _CachedJit:
         except Exception:  # a damaged entry: export it again
             pass
         blob = self._export(args, kwargs, leaves, treedef)
-        _write(path, blob)
+        _files.write_pickle(path, blob)
         if blob is None:
             return False
         stats["exported"] += 1
@@ -595,7 +594,7 @@ def remember(tag: str, since: int = 0) -> None:
         path.parent.mkdir(exist_ok=True)
     except OSError:
         return
-    _write_text(path, text)
+    _files.write_text(path, text)
 
 
 @contextlib.contextmanager
@@ -613,33 +612,6 @@ def job(tag: str):
     finally:
         stop_prefetch()
     remember(tag, since)
-
-
-def _write_text(path: pathlib.Path, text: str) -> None:
-    tmp = None
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
-        os.replace(tmp, path)
-    except OSError:
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-
-
-def _write(path: pathlib.Path, blob) -> None:
-    """Write an entry atomically (a concurrent reader sees all of it or nothing)."""
-    tmp = None
-    try:
-        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=".tmp-")
-        with os.fdopen(fd, "wb") as f:
-            pickle.dump(blob, f, protocol=5)
-        os.replace(tmp, path)
-    except OSError:  # a read-only or full folder: the program is still used in memory
-        if tmp is not None:
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
 
 
 def cached_jit(fn: Callable) -> Callable:

@@ -34,6 +34,8 @@ import threading
 
 import jax
 
+from ._files import write_pickle
+
 #: The sub-folder of the cache folder holding the executables.
 EXECUTABLES = "executables"
 
@@ -161,8 +163,6 @@ def _store(path: pathlib.Path, out, key: str, options) -> None:
     from jax._src.lib import xla_client
     from jax.experimental import serialize_executable as se
 
-    from ._compile import _write
-
     class _Pickler(se._JaxPjrtPickler):
         def persistent_id(self, obj):
             if isinstance(obj, xla_client.LoadedExecutable):
@@ -183,7 +183,7 @@ def _store(path: pathlib.Path, out, key: str, options) -> None:
         path.parent.mkdir(exist_ok=True)
     except Exception:  # not stored: the program is still used in memory
         return
-    _write(path, blob)
+    write_pickle(path, blob)
 
 
 def _handlers_ready(platform_name: str) -> None:
