@@ -62,8 +62,9 @@ def spawn():
 
 def stop(proc) -> None:
     """Stop a worker (and its copy) at once."""
-    with contextlib.suppress(OSError):
-        os.killpg(proc.pid, signal.SIGKILL)
+    if hasattr(os, "killpg"):  # the worker's group: its copy too (POSIX)
+        with contextlib.suppress(OSError):
+            os.killpg(proc.pid, signal.SIGKILL)
     with contextlib.suppress(OSError):
         proc.kill()
     proc.wait()
