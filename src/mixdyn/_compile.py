@@ -274,10 +274,14 @@ class _Program:
         self.exported, self.call, self.exe = exported, compiled, exe
         self.leaves, self.treedef = jax.tree_util.tree_flatten(skeleton)
 
-    def __call__(self, dynamic):
+    def compile(self) -> None:
+        """Compile it now, if not compiled yet (and store its executable)."""
         if self.call is None:
             self.call = _executables.compiled(self.exported, self.exe)
             self.exported = None
+
+    def __call__(self, dynamic):
+        self.compile()
         flat = self.call(*dynamic)
         out = [flat[x.i] if isinstance(x, _Leaf) else x for x in self.leaves]
         return jax.tree_util.tree_unflatten(self.treedef, out)
@@ -321,20 +325,28 @@ class _CachedJit:
     def __get__(self, obj, objtype=None):  # pragma: no cover - used on plain functions
         return self if obj is None else types.MethodType(self, obj)
 
-    def __call__(self, *args, **kwargs):
-        folder = _state["folder"]
-        if folder is None:
-            return self.jit(*args, **kwargs)
+    @staticmethod
+    def _key(args, kwargs):
+        """``(leaves, treedef, dynamic, key)`` of a call: its flat arguments, the arrays
+        among them and its key in :attr:`programs` (structure, static parts, shapes); None
+        inside another trace (nothing to cache)."""
         leaves, treedef = jax.tree_util.tree_flatten((args, kwargs))
         if any(isinstance(x, jax.core.Tracer) for x in leaves):
-            return self.jit(*args, **kwargs)  # inside another trace: nothing to cache
+            return None
         dynamic = [x for x in leaves if eqx.is_array(x)]
         static = tuple(None if eqx.is_array(x) else x for x in leaves)
         avals = tuple(
             (x.shape, str(x.dtype), bool(getattr(x, "weak_type", False))) for x in dynamic
         )
+        return leaves, treedef, dynamic, (treedef, static, avals)
+
+    def __call__(self, *args, **kwargs):
+        folder = _state["folder"]
+        called = None if folder is None else self._key(args, kwargs)
+        if called is None:
+            return self.jit(*args, **kwargs)
+        leaves, treedef, dynamic, mkey = called
         try:
-            mkey = (treedef, static, avals)
             program = self.programs.get(mkey)
         except TypeError:  # an unhashable static part: as filter_jit would refuse it
             return self.jit(*args, **kwargs)
@@ -362,32 +374,24 @@ class _CachedJit:
         with these arguments then waits for the program instead of preparing it again.
         Nothing happens with the cache off, inside a trace, or when the program is there."""
         folder = _state["folder"]
-        if folder is None:
+        called = None if folder is None else self._key(args, kwargs)
+        if called is None:
             return
-        leaves, treedef = jax.tree_util.tree_flatten((args, kwargs))
-        if any(isinstance(x, jax.core.Tracer) for x in leaves):
-            return
-        dynamic = [x for x in leaves if eqx.is_array(x)]
-        static = tuple(None if eqx.is_array(x) else x for x in leaves)
-        avals = tuple(
-            (x.shape, str(x.dtype), bool(getattr(x, "weak_type", False))) for x in dynamic
-        )
+        leaves, treedef, _, mkey = called
         pending = _Pending()
-        try:
-            mkey = (treedef, static, avals)
-            with _lock:
+        with _lock:
+            try:
                 if mkey in self.programs:
                     return
-                self.programs[mkey] = pending
-        except TypeError:
-            return
+            except TypeError:  # unhashable: its call is traced by filter_jit
+                return
+            self.programs[mkey] = pending
 
         def prepare():
             try:
                 program = self._load(folder, args, kwargs, leaves, treedef)
-                if isinstance(program, _Program) and program.call is None:
-                    program.call = _executables.compiled(program.exported, program.exe)
-                    program.exported = None
+                if isinstance(program, _Program):
+                    program.compile()
                 pending.value = program
             except Exception:  # the caller prepares it itself
                 pending.value = None
@@ -479,11 +483,10 @@ def _read(path, compile: bool = False):
         return program
     except Exception:  # none stored (or stale, damaged): compiled again, and stored
         pass
-    exported = _export.deserialize(bytearray(blob[0]))
-    compiled = None
+    program = _Program(_export.deserialize(bytearray(blob[0])), blob[1], exe=exe)
     if compile:  # JAX's persistent cache gives the executable; this thread deserializes it
-        compiled = _executables.compiled(exported, exe)
-    return _Program(exported, blob[1], compiled, exe)
+        program.compile()
+    return program
 
 
 # --------------------------------------------------------------------------- prefetching

@@ -873,12 +873,16 @@ class _Painter:
             out.append(pathlib.Path(value))
         return out
 
-    def _lose(self, k: int) -> None:
-        """Give up channel ``k`` (its tasks are drawn here); the worker with the last one."""
+    def _drop(self, k: int) -> None:
+        """Close channel ``k`` (the end of its tasks: the copy serving it ends)."""
         for end in self.channels[k] or ():
             with contextlib.suppress(OSError, ValueError):
                 end.close()
         self.channels[k] = None
+
+    def _lose(self, k: int) -> None:
+        """Give up channel ``k`` (its tasks are drawn here); the worker with the last one."""
+        self._drop(k)
         if not any(self.channels):
             self._stop()
 
@@ -900,11 +904,8 @@ class _Painter:
         import shutil
         import subprocess
 
-        for k, channel in enumerate(self.channels):
-            for end in channel or ():
-                with contextlib.suppress(OSError, ValueError):
-                    end.close()  # the end of its tasks: each copy ends
-            self.channels[k] = None
+        for k in range(len(self.channels)):
+            self._drop(k)
         if self.proc is not None:
             try:
                 self.proc.wait(timeout=10)
