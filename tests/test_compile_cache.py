@@ -166,6 +166,20 @@ def test_a_program_prepared_ahead_is_the_one_called(cache):
     assert _compile.traces[name] - runs.get(name, 0) == 1
 
 
+def test_a_manifest_says_so_for_its_own_job_only(cache):
+    """Within a job whose manifest lists programs, preparing them in advance is skipped
+    (they are on disk); after it, another job or run of the same process prepares again."""
+    assert not _compile.reading_ahead()
+    with _compile.job("first"):
+        md.forward(paper(), TS, hold=HOLD, rtol=1e-9, atol=1e-9)  # written as its manifest
+    assert not _compile.reading_ahead()
+    with _compile.job("first"):
+        assert _compile.reading_ahead()
+    assert not _compile.reading_ahead()
+    with _compile.job("another"):
+        assert not _compile.reading_ahead()
+
+
 def test_a_files_next_run_is_prepared_while_the_first_computes(cache):
     """mixdyn run's runner prepares the next run's integrator and post-processing in second
     threads while a run computes (the paper's file: the mixed run, replaying the forward

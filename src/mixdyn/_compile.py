@@ -541,6 +541,7 @@ def prefetch(tag: str) -> int:
         names = _manifest(folder, tag).read_text().split()
     except OSError:
         return 0
+    _state["manifest"] = bool(names)
     queued = []
     with _lock:
         for name in names:
@@ -553,14 +554,14 @@ def prefetch(tag: str) -> int:
     if queued:
         _stop.clear()
         threading.Thread(target=_read_ahead, args=(queued,), name="mixdyn-prefetch").start()
-    _state["queued"] = _state.get("queued", 0) + len(queued)
     return len(queued)
 
 
 def reading_ahead() -> bool:
-    """Whether this process reads programs ahead from a job's manifest (:func:`prefetch`):
-    its programs are then on disk already, and preparing them in advance gains nothing."""
-    return _state.get("queued", 0) > 0
+    """Whether the running job (:func:`job`) has a manifest of its last run's programs
+    (:func:`prefetch`): they are then on disk already, and preparing them in advance gains
+    nothing."""
+    return _state.get("manifest", False)
 
 
 def _read_ahead(paths: list[str]) -> None:
@@ -609,11 +610,13 @@ def job(tag: str):
             ...  # the runs of a model file
     """
     since = len(_used)
+    _state["manifest"] = False
     prefetch(tag)
     try:
         yield
     finally:
         stop_prefetch()
+        _state["manifest"] = False  # the job's alone: a later job or run starts afresh
     remember(tag, since)
 
 
