@@ -278,6 +278,27 @@ def test_the_installed_command(tmp_path):
     assert proc.stdout == ""
 
 
+@pytest.mark.parametrize(("code", "rc", "err"), [(3, 3, ""), (None, 0, ""), ("stop", 1, "stop\n")])
+def test_the_command_leaves_as_python_would(code, rc, err):
+    """``mixdyn.cli._leave`` skips the interpreter's teardown, not what a normal exit does:
+    a thread that is not a daemon finishes, ``atexit`` functions run after it, buffered
+    output is written (to a pipe: block-buffered), the code reads as ``SystemExit``'s."""
+    script = (
+        "import atexit, threading, time\n"
+        "from mixdyn.cli import _leave\n"
+        "atexit.register(lambda: print('atexit'))\n"
+        "threading.Thread(target=lambda: (time.sleep(0.3), print('thread'))).start()\n"
+        "print('buffered', end=' ')\n"
+        f"_leave({code!r})\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == rc
+    assert proc.stdout == "buffered thread\natexit\n"
+    assert proc.stderr == err
+
+
 def _processes_with(token: str) -> list[int]:
     """Processes whose environment holds ``token`` (Linux: ``/proc``)."""
     found = []
