@@ -1,6 +1,7 @@
 """The command line: every example runs from it and gives the Python API's numbers; the
 paper's example writes its four figures and the animation; exit codes and one-line errors."""
 
+import ast
 import json
 import os
 import pathlib
@@ -297,6 +298,26 @@ def test_the_command_leaves_as_python_would(code, rc, err):
     assert proc.returncode == rc
     assert proc.stdout == "buffered thread\natexit\n"
     assert proc.stderr == err
+
+
+@pytest.mark.parametrize("argv0", ["/usr/bin/mixdyn", "-c"])
+def test_only_the_command_paces_the_collector(argv0):
+    """Importing mixdyn in the ``mixdyn`` command raises the garbage collector's thresholds
+    (``_early.GC_THRESHOLDS``); in any other program they stay as they were."""
+    script = (
+        "import gc, sys\n"
+        f"sys.argv = [{argv0!r}, 'check']\n"
+        "before = gc.get_threshold()\n"
+        "import mixdyn\n"
+        "from mixdyn import _early\n"
+        "print(repr([before, gc.get_threshold(), _early.GC_THRESHOLDS]))\n"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    before, after, paced = ast.literal_eval(proc.stdout)
+    assert after == (paced if argv0.endswith("mixdyn") else before)
+    assert before != paced
 
 
 def _processes_with(token: str) -> list[int]:

@@ -16,6 +16,7 @@ jaxlib knows the flag the MLIR fusion emitters, which compile ~30% slower) unles
 
 from . import _early
 
+_early.pace_collector()  # the `mixdyn` command: cycles collected less often
 _early.start_for_command_line()  # `mixdyn run` with figures: its drawing worker, before JAX
 
 from . import _xla  # noqa: E402

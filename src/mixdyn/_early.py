@@ -1,4 +1,7 @@
-"""The figure worker of ``mixdyn run``, started as early as the command line allows.
+"""What the ``mixdyn`` command does before anything else: its figure worker and the
+garbage collector's pace.
+
+The figure worker of ``mixdyn run`` is started as early as the command line allows.
 
 ``mixdyn run`` draws its figures in a worker process (:mod:`mixdyn.viz._worker`: matplotlib,
 no JAX). Importing matplotlib and drawing a first figure costs the worker ~0.5 s; started
@@ -7,6 +10,13 @@ first thing by ``mixdyn/__init__.py``), the worker is ready by the time the firs
 :func:`worker` hands it to :class:`mixdyn.cli._Painter` (or starts one then). A worker
 nobody took is stopped when the process exits.
 
+The command collects reference cycles less often (:func:`pace_collector`): with Python's
+default thresholds the paper example spent ~0.18 s of a ~2 s warm run and ~1 s of an
+empty-cache run in the cyclic garbage collector (its full collections walk every object the
+imports made), against 0.04 s and 0.14 s with :data:`GC_THRESHOLDS`, for the same peak
+memory within 5%. Cycles are still collected; only the command's own process is paced, not
+a program that imports mixdyn.
+
 This module imports nothing from mixdyn, nor JAX.
 """
 
@@ -14,6 +24,7 @@ from __future__ import annotations
 
 import atexit
 import contextlib
+import gc
 import os
 import pathlib
 import signal
@@ -70,9 +81,25 @@ def stop(proc) -> None:
     proc.wait()
 
 
+#: The collector's thresholds for the ``mixdyn`` command (Python's default: 700, 10, 10).
+GC_THRESHOLDS = (50_000, 20, 100)
+
+
+def is_command(argv: list[str]) -> bool:
+    """Whether ``argv`` is the command line of the ``mixdyn`` command."""
+    return bool(argv) and os.path.basename(argv[0]) == "mixdyn"
+
+
+def pace_collector() -> None:
+    """Collect cycles less often (:data:`GC_THRESHOLDS`) if this process is the ``mixdyn``
+    command."""
+    if is_command(sys.argv):
+        gc.set_threshold(*GC_THRESHOLDS)
+
+
 def draws(argv: list[str]) -> bool:
     """Whether ``argv`` is a ``mixdyn run`` command line that may draw figures."""
-    if len(argv) < 3 or os.path.basename(argv[0]) != "mixdyn" or argv[1] != "run":
+    if len(argv) < 3 or not is_command(argv) or argv[1] != "run":
         return False
     return not any(a in ("--no-figures", "-h", "--help") for a in argv[2:])
 
