@@ -136,6 +136,44 @@ def test_exported_program_gives_the_traced_numbers(cache):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
 
 
+def test_a_quick_program_is_compiled_so_with_the_cache_on_and_off(cache):
+    """``cached_jit(fn, optimize=False)``: XLA gets ``QUICK`` (LLVM at -O0) whether the
+    program is exported, read back in a new wrapper or traced with the cache off
+    (``filter_jit``): the three give the same bits, and the stored executable was built
+    with those options. An optimized compile agrees to the last bits only (~1e-12)."""
+    import pickle
+
+    from jax._src.lib import xla_client
+
+    from mixdyn.analysis._start import _velocity_fix
+    from mixdyn.equations import Constraints
+
+    model = paper()
+    c = Constraints.of(model)
+    q = np.asarray(md.assemble(model, hold=HOLD).q)
+    qd = np.linspace(-1.0, 1.0, model.nq)
+    weights = np.ones(model.nq)
+    weights[[2, 5]] = 0.0
+    args = (c, q, qd, np.asarray(0.1), weights)
+    fn = _velocity_fix.fn.__wrapped__
+    assert _velocity_fix.options == _compile.QUICK  # declared so in mixdyn.analysis._start
+    off = eqx.filter_jit(fn, compiler_options=_compile.QUICK)(*args)
+    exported = _compile.cached_jit(fn, optimize=False)(*args)
+    reread = _compile.cached_jit(optimize=False)(fn)(*args)
+    optimized = eqx.filter_jit(fn)(*args)
+    for a, b, r, o in zip(off, exported, reread, optimized, strict=True):
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+        np.testing.assert_array_equal(np.asarray(a), np.asarray(r))
+        np.testing.assert_allclose(np.asarray(a), np.asarray(o), rtol=1e-11, atol=1e-13)
+    stored = list((cache / "executables").glob("_velocity_fix-*.exe"))
+    assert len(stored) == 1
+    with open(stored[0], "rb") as f:
+        options = xla_client.CompileOptions.ParseFromString(pickle.load(f)[3])
+    assert ("xla_backend_optimization_level", 0) in [
+        (k, int(v)) for k, v in options.env_option_overrides
+    ]
+
+
 def test_a_program_prepared_ahead_is_the_one_called(cache):
     """``ahead`` prepares a program in a second thread from arguments of the same structure
     and shapes (zeros): the call with the real arguments then traces nothing more and gives

@@ -124,10 +124,11 @@ def path_for(folder: str, stem: str) -> pathlib.Path:
     return pathlib.Path(folder, EXECUTABLES, f"{stem}-{environment()}.exe")
 
 
-def compiled(exported, path: pathlib.Path | None):
-    """``exported`` compiled (:class:`jax.stages.Compiled`, through JAX's persistent cache);
-    its executable stored at ``path`` when it can be (see the module)."""
-    lowered = jax.jit(exported.call).lower(*exported.in_avals)
+def compiled(exported, path: pathlib.Path | None, options: dict | None = None):
+    """``exported`` compiled (:class:`jax.stages.Compiled`, through JAX's persistent cache,
+    with XLA's compile ``options``, e.g. :data:`mixdyn._compile.QUICK`); its executable
+    stored at ``path`` when it can be (see the module)."""
+    lowered = jax.jit(exported.call, compiler_options=options).lower(*exported.in_avals)
     armed = path is not None and _install_spy()
     _local.armed, _local.seen = armed, None
     try:

@@ -69,7 +69,7 @@ def hold_drivers(model: Model, hold, q) -> list[CoordinateDriver]:
     return out
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _gn_step(c: Constraints, q, t, damping):
     """One damped Gauss–Newton step ``dq = -J^T (J J^T + damping I)^-1 Phi``; returns the new
     ``q`` and the pivot ratio of the solve (1 on the dense path, which does not report it)."""
@@ -87,12 +87,12 @@ def _gn_step(c: Constraints, q, t, damping):
 SPARSE_STEP_MIN_RATIO = 1e-8
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _residual(c: Constraints, q, t):
     return c.full(q, t)
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _gn_step_packed(p: Packed, q, t, damping, floor=0.0):
     """:func:`_gn_step` on the sparse path for a packed set: a program whose size does not
     depend on the number of joints (one vectorized evaluation per kind). The damping is at
@@ -113,7 +113,7 @@ DENSE_FALLBACK_MAX_ENTRIES = 4_000_000
 SPARSE_DAMPING_FLOOR = 1e-10
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _residual_packed(p: Packed, q, t):
     return p.full(q, t)
 

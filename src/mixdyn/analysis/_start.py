@@ -16,7 +16,7 @@ from ..model import Model
 from ._assembly import assemble, length_scale
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _velocity_fix(c: Constraints, q, qd, t, weights):
     """The least change of ``qd`` (n,) that satisfies ``Phi_q qd = -Phi_t``, the coordinates of
     weight 0 (the held ones and those whose velocity is given) unchanged:

@@ -60,12 +60,12 @@ class DofReport:
         return "\n".join(lines)
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _jac(c: Constraints, q, t):
     return c.phi_q(q, t)
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _values(p: Packed, q, t):
     return p.jacobian_values(q, t)
 

@@ -57,7 +57,7 @@ def _kinematic_scan(c: Constraints, q_start, ts, tol, max_iter):
     return out
 
 
-@cached_jit
+@cached_jit(optimize=False)  # runs a few times per analysis
 def _jacobian(c: Constraints, q, t):
     return c.phi_q(q, t)
 

@@ -47,7 +47,7 @@ from .result import Result
 SOLVERS = ("augmented", "partition")
 
 #: ``B`` at one state, compiled once per model structure and list of names.
-_directions = cached_jit(force_directions)
+_directions = cached_jit(force_directions, optimize=False)  # once per mixed run
 
 
 def prescribe(result: Result, coordinate: str, name: str | None = None) -> Driver:
