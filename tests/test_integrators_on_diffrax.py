@@ -81,3 +81,47 @@ def test_reverse_mode_gradient_through_the_loop(method, options):
     fd = float((f(m0 + h) - f(m0 - h)) / (2 * h))
     assert abs(g) > 1e-4  # the mass matters to the motion
     assert g == pytest.approx(fd, rel=1e-6, abs=1e-9)
+
+
+def _hundred_down(prevbefore):
+    """diffrax's end-of-interval floor: ``t1`` moved down by 100 calls of ``prevbefore``."""
+
+    def floor(t):
+        for _ in range(100):
+            t = prevbefore(t)
+        return t
+
+    return floor
+
+
+def test_the_clip_floor_in_one_loop_gives_the_same_bits():
+    """diffrax's 100 chained ``prevbefore`` calls, computed as one loop from the chain's start
+    (integrators/_clip_floor.py), give the chain's bits for every kind of number (zeros,
+    subnormals, the smallest normal, infinities, NaN, the largest finite), jitted, vmapped
+    and eagerly; a call off the chain starts a new one; the lowered program holds one copy of
+    ``nextafter`` instead of a hundred."""
+    import diffrax._integrate
+    import equinox.internal as eqxi
+
+    from mixdyn.analysis.integrators._clip_floor import ChainedPrevbefore
+
+    tiny = np.finfo(np.float64).tiny
+    big = np.finfo(np.float64).max
+    finite = [0.0, -0.0, 2.0, 1e-300, 5e-324, 3e-322, tiny, 100 * tiny, -3 * tiny, -1.0, 1e6]
+    values = np.array([*finite, np.inf, -np.inf, np.nan, big, -big])
+    chained = ChainedPrevbefore(eqxi.prevbefore)
+    want = np.asarray(jax.jit(jax.vmap(_hundred_down(eqxi.prevbefore)))(values))
+    got = np.asarray(jax.jit(jax.vmap(_hundred_down(chained)))(values))
+    np.testing.assert_array_equal(want.view(np.int64), got.view(np.int64))
+    eager = np.asarray(_hundred_down(chained)(jnp.asarray(2.0)))
+    assert eager.view(np.int64) == np.asarray(2.0).view(np.int64) - 100
+    a = chained(jnp.asarray(1.0))
+    chained(jnp.asarray(3.0))  # another chain in between: a's continues from a itself
+    assert np.asarray(chained(a)) == np.nextafter(np.nextafter(1.0, 0.0), 0.0)
+    # installed for diffrax's loop (mixdyn's integrators import it), one loop when lowered
+    import mixdyn.analysis.integrators._constrained  # noqa: F401
+
+    assert isinstance(diffrax._integrate.eqxi.prevbefore, ChainedPrevbefore)
+    text = jax.jit(_hundred_down(diffrax._integrate.eqxi.prevbefore)).lower(1.0).as_text()
+    before = jax.jit(_hundred_down(eqxi.prevbefore)).lower(1.0).as_text()
+    assert text.count("bitcast_convert") * 50 <= before.count("bitcast_convert")

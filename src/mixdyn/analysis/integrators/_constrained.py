@@ -30,7 +30,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from . import _clip_floor
 from ._common import MAX_STEPS, NOT_FINITE, OK, STEP_COLLAPSE, UNCLOSED, report_progress
+
+_clip_floor.install()  # diffrax's end-of-interval floor: one loop, not 100 copies
 
 #: The explicit Runge–Kutta methods of the adaptive integrators: diffrax's class name.
 METHODS = {"tsit5": "Tsit5", "dopri5": "Dopri5", "dopri8": "Dopri8"}
