@@ -300,6 +300,31 @@ def test_the_command_leaves_as_python_would(code, rc, err):
     assert proc.stderr == err
 
 
+@pytest.mark.parametrize(
+    ("words", "file", "runs"),
+    [
+        (["m.yaml"], "m.yaml", []),
+        (["m.yaml", "--out", "o", "--no-figures"], "m.yaml", []),
+        (["-o", "o", "m.yaml", "--parquet", "-r", "forward"], "m.yaml", ["forward"]),
+        (["--run=mixed", "m.yaml", "--run", "forward", "--out=x"], "m.yaml", ["mixed", "forward"]),
+        (["m.yaml", "n.yaml"], None, None),  # two files: not a plain command line
+        (["m.yaml", "-rforward"], None, None),  # an option written otherwise
+        (["m.yaml", "--out"], None, None),  # a value missing
+        (["--help"], None, None),
+    ],
+)
+def test_the_early_job_tag_is_the_one_run_uses(words, file, runs):
+    """``mixdyn run`` starts reading its programs when mixdyn is imported, under the tag it
+    reads from the command line (``_early.job_tag``): the tag ``run`` itself uses, or None
+    where the command line is not plain (``run`` then reads them itself)."""
+    from mixdyn import _early
+
+    tag = _early.job_tag(["/usr/bin/mixdyn", "run", *words])
+    assert tag == (None if file is None else _early.run_tag(file, runs))
+    assert _early.job_tag(["python", "run", *words]) is None
+    assert _early.job_tag(["/usr/bin/mixdyn", "check", *words]) is None
+
+
 @pytest.mark.parametrize("argv0", ["/usr/bin/mixdyn", "-c"])
 def test_only_the_command_paces_the_collector(argv0):
     """Importing mixdyn in the ``mixdyn`` command raises the garbage collector's thresholds

@@ -355,6 +355,46 @@ def test_a_second_process_traces_nothing(tmp_path):
     np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), np.load(tmp_path / "c.npy"))
 
 
+EARLY_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    sys.argv = [{argv0!r}, "run", {file!r}, "--no-figures", "--out", {out!r}]
+    import mixdyn
+    from mixdyn import _compile
+    queued = sorted(p.rsplit("/", 1)[-1] for p in _compile._prefetched)
+    print(json.dumps(queued))
+    sys.stdout.flush()
+    if {command!r}:
+        from mixdyn.cli import main
+        main()
+    """
+)
+
+
+def test_the_run_command_reads_its_programs_from_the_import_on(tmp_path):
+    """``mixdyn run FILE`` queues the programs its last run of the file used (its manifest)
+    while mixdyn is imported, before the command line is parsed (``_early.job_tag``): all of
+    them, and the run then finds them read; a program that only imports mixdyn queues none."""
+    env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("MIXDYN_NO_CACHE", None)
+    file, out = str(ROOT / "examples" / "pendulum.yaml"), str(tmp_path / "out")
+
+    def run(argv0, command):
+        script = tmp_path / "early.py"
+        script.write_text(EARLY_SCRIPT.format(argv0=argv0, file=file, out=out, command=command))
+        proc = subprocess.run(
+            [sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=300
+        )
+        assert proc.returncode == 0, proc.stderr
+        return json.loads(proc.stdout.splitlines()[0])
+
+    assert run("/usr/bin/mixdyn", True) == []  # the first run: no manifest yet
+    (manifest,) = (tmp_path / "cache" / "manifests").glob("*.txt")
+    used = sorted(set(manifest.read_text().split()))
+    assert used and run("/usr/bin/mixdyn", True) == used
+    assert run(sys.executable, False) == []
+
+
 EXE_SCRIPT = textwrap.dedent(
     """
     import json, sys

@@ -14,6 +14,8 @@ jaxlib knows the flag the MLIR fusion emitters, which compile ~30% slower) unles
 ``$XLA_FLAGS`` names them: see :mod:`mixdyn._xla`.
 """
 
+import sys as _sys
+
 from . import _early
 
 _early.pace_collector()  # the `mixdyn` command: cycles collected less often
@@ -32,7 +34,10 @@ from ._compile import set_cache  # noqa: E402
 set_cache.__module__ = __name__
 from ._compile import configure_from_env as _configure_cache  # noqa: E402
 
-_configure_cache()
+if _configure_cache() is not None and (_tag := _early.job_tag(_sys.argv)) is not None:
+    from ._compile import prefetch as _prefetch
+
+    _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 
 from . import errors  # noqa: E402
 from .analysis import (  # noqa: E402

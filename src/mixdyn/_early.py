@@ -10,6 +10,11 @@ first thing by ``mixdyn/__init__.py``), the worker is ready by the time the firs
 :func:`worker` hands it to :class:`mixdyn.cli._Painter` (or starts one then). A worker
 nobody took is stopped when the process exits.
 
+``mixdyn run FILE`` reads the programs its last run of the file used (its manifest:
+:func:`mixdyn._compile.prefetch`) from the moment JAX is imported, while the rest of mixdyn
+and the command's modules import (~0.3 s): :func:`job_tag` reads the job's tag from the
+command line as the ``run`` command forms it (:func:`run_tag`).
+
 The command collects reference cycles less often (:func:`pace_collector`): with Python's
 default thresholds the paper example spent ~0.18 s of a ~2 s warm run and ~1 s of an
 empty-cache run in the cyclic garbage collector (its full collections walk every object the
@@ -95,6 +100,42 @@ def pace_collector() -> None:
     command."""
     if is_command(sys.argv):
         gc.set_threshold(*GC_THRESHOLDS)
+
+
+def run_tag(file, runs) -> str:
+    """The tag of a ``mixdyn run`` job (:func:`mixdyn._compile.job`): the file and its runs."""
+    return f"run:{pathlib.Path(file).resolve()}:{','.join(runs or ())}"
+
+
+#: ``mixdyn run``'s options that take no value, and those that take one (its next word,
+#: or after ``=``): whether that value names a run.
+_RUN_FLAGS = {"--parquet", "--netcdf", "--figures", "--no-figures", "--progress", "--no-progress"}
+_RUN_VALUED = {"--run": True, "-r": True, "--out": False, "-o": False}
+
+
+def job_tag(argv: list[str]) -> str | None:
+    """The job tag (:func:`run_tag`) of a ``mixdyn run`` command line, read from ``argv``
+    before the command line is parsed; None for any other command line or where it is not
+    plain (an option written otherwise, two files): ``run`` then reads its programs itself."""
+    if len(argv) < 3 or not is_command(argv) or argv[1] != "run":
+        return None
+    file, runs = None, []
+    words = iter(argv[2:])
+    for word in words:
+        name, eq, value = word.partition("=")
+        if name in _RUN_VALUED:
+            value = value if eq else next(words, None)
+            if value is None:
+                return None
+            if _RUN_VALUED[name]:
+                runs.append(value)
+        elif word in _RUN_FLAGS:
+            continue
+        elif word.startswith("-") or file is not None:
+            return None
+        else:
+            file = word
+    return None if file is None else run_tag(file, runs)
 
 
 def draws(argv: list[str]) -> bool:

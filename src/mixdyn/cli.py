@@ -440,10 +440,11 @@ def run(
     (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name),
     OUT/NAME/meta.json (units of every column, solver, tolerances, counters, version) and the
     figures and animation the run asks for."""
-    from . import _compile
+    from . import _compile, _early
 
-    # The programs this job used last time are read from the cache beside the checks below.
-    with _compile.job(f"run:{pathlib.Path(file).resolve()}:{','.join(runs or ())}"):
+    # The programs this job used last time are read from the cache beside the checks below
+    # (from the import of mixdyn on, where it could read the command line: _early.job_tag).
+    with _compile.job(_early.run_tag(file, runs)):
         _run(file, runs, out, parquet, figures, progress, netcdf)
 
 
