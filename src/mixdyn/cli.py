@@ -1364,7 +1364,8 @@ def _leave(code) -> None:
     text is printed on stderr and gives 1) as Python would, less the teardown.
 
     What a normal exit does that matters is done here first, in its order: the threads
-    that are not daemons are joined, the ``atexit`` functions run (JAX's, logging's, the
+    that are not daemons are joined (the one reading programs ahead stops after the one it
+    is reading), the ``atexit`` functions run (JAX's, logging's, the
     figure worker's stop), the standard streams are flushed; then :func:`os._exit`. Every
     file mixdyn writes is closed (and renamed into place) before the command returns.
     """
@@ -1376,6 +1377,9 @@ def _leave(code) -> None:
     elif not isinstance(code, int):
         sys.stderr.write(f"{code}\n")
         code = 1  # what Python gives for a message
+    compiled = sys.modules.get("mixdyn._compile")
+    if compiled is not None:  # programs still being read ahead: not awaited to the last
+        compiled.stop_prefetch()
     for thread in threading.enumerate():
         if thread is not threading.current_thread() and not thread.daemon:
             thread.join()
