@@ -113,6 +113,8 @@ def test_the_clip_floor_in_one_loop_gives_the_same_bits():
     want = np.asarray(jax.jit(jax.vmap(_hundred_down(eqxi.prevbefore)))(values))
     got = np.asarray(jax.jit(jax.vmap(_hundred_down(chained)))(values))
     np.testing.assert_array_equal(want.view(np.int64), got.view(np.int64))
+    grads = [jax.grad(_hundred_down(p))(2.0) for p in (chained, eqxi.prevbefore)]
+    assert grads == [1.0, 1.0]  # prevbefore's derivative: the tangent passes through
     eager = np.asarray(_hundred_down(chained)(jnp.asarray(2.0)))
     assert eager.view(np.int64) == np.asarray(2.0).view(np.int64) - 100
     a = chained(jnp.asarray(1.0))

@@ -12,13 +12,16 @@ time (~0.35 s of ~1.4 s), of its trace and of the time to load its stored execut
 as one ``lax.fori_loop`` of ``prevbefore`` from the chain's start: the ``k``-th call of a chain
 gives ``prevbefore`` applied ``k`` times to its start, in the same order, so the result is
 the same bits; the 99 intermediate loops feed nothing and JAX drops them when it lowers the
-program. A call on anything but the previous call's result starts a new chain. Nothing else
-of diffrax or equinox changes, and other callers of ``equinox.internal.prevbefore`` are not
-touched.
+program. The loop is one jitted function of the start and of ``k`` (an argument, so traced
+once, not per ``k``), with ``prevbefore``'s derivative (the tangent passes through): each
+call costs one cached call in the trace. A call on anything but the previous call's result
+starts a new chain. Nothing else of diffrax or equinox changes, and other callers of
+``equinox.internal.prevbefore`` are not touched.
 """
 
 from __future__ import annotations
 
+import functools
 import threading
 import types
 import weakref
@@ -40,10 +43,26 @@ class ChainedPrevbefore:
         start, k = x, 1
         if last is not None and last[0]() is x and last[1]() is not None:
             start, k = last[1](), last[2] + 1
-        step = self.prevbefore
-        y = jax.lax.fori_loop(0, k, lambda _, v: step(v), start)
+        y = _repeated(self.prevbefore)(start, k)
         self._local.last = (_ref(y), _ref(start), k)
         return y
+
+
+@functools.cache
+def _repeated(step):
+    """``(x, k) -> step`` applied ``k`` times to ``x`` (``k`` a traced integer), jitted; its
+    derivative in ``x`` is the identity, as ``prevbefore``'s is."""
+
+    @jax.custom_jvp
+    def repeated(x, k):
+        return jax.lax.fori_loop(0, k, lambda _, v: step(v), x)
+
+    @repeated.defjvp
+    def _(primals, tangents):
+        x, k = primals
+        return repeated(x, k), tangents[0]
+
+    return jax.jit(repeated)
 
 
 def _ref(value):
