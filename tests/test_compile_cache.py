@@ -355,6 +355,46 @@ def test_a_second_process_traces_nothing(tmp_path):
     np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), np.load(tmp_path / "c.npy"))
 
 
+WRITER_SCRIPT = textwrap.dedent(
+    """
+    import sys
+    import mixdyn  # the cache on: JAX's entries written whole (mixdyn._files)
+    from jax._src import lru_cache
+    cache = lru_cache.LRUCache(sys.argv[1], max_size=-1)
+    for i in range(int(sys.argv[2])):
+        cache.put(f"k{{i}}", bytes([i]) * int(sys.argv[3]))
+    cache.put("k0", b"other")  # an entry already there is kept
+    """
+)
+
+
+def test_a_concurrent_reader_never_sees_half_a_jax_cache_entry(tmp_path):
+    """Another process writing JAX's persistent cache (with mixdyn's cache on) while this one
+    reads it: every entry read is whole (JAX wrote it with one ``write_bytes``: a reader then
+    got a truncated entry, a CI run's warning), no temporary file is left, and an entry that
+    is there already is kept."""
+    folder, n, size = tmp_path / "jax", 12, 8_000_000
+    folder.mkdir()
+    script = tmp_path / "writer.py"
+    script.write_text(WRITER_SCRIPT.format())
+    env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
+    env.pop("MIXDYN_NO_CACHE", None)
+    proc = subprocess.Popen([sys.executable, str(script), str(folder), str(n), str(size)], env=env)
+    reads = 0
+    try:
+        while proc.poll() is None:
+            for entry in folder.glob("*-cache"):
+                data = entry.read_bytes()
+                assert len(data) == size, f"{entry.name}: {len(data)} of {size} bytes"
+                reads += 1
+    finally:
+        proc.wait(timeout=120)
+    assert proc.returncode == 0
+    assert reads > 0
+    assert sorted(p.name for p in folder.iterdir()) == sorted(f"k{i}-cache" for i in range(n))
+    assert (folder / "k0-cache").read_bytes() == bytes([0]) * size
+
+
 EARLY_SCRIPT = textwrap.dedent(
     """
     import json, sys

@@ -136,6 +136,7 @@ def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
             jax.config.update("jax_compilation_cache_dir", folder)
             _state["jax_dir"] = folder
             if folder is not None:
+                _files.atomic_jax_entries()  # a concurrent process never reads half an entry
                 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
                 jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
             cc.reset_cache()  # JAX opens its cache once: make it see the new setting
