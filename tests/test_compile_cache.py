@@ -368,17 +368,21 @@ WRITER_SCRIPT = textwrap.dedent(
 )
 
 
-def test_a_concurrent_reader_never_sees_half_a_jax_cache_entry(tmp_path):
-    """Another process writing JAX's persistent cache (with mixdyn's cache on) while this one
-    reads it: every entry read is whole (JAX wrote it with one ``write_bytes``: a reader then
-    got a truncated entry, a CI run's warning), no temporary file is left, and an entry that
-    is there already is kept."""
+@pytest.mark.parametrize("users_jax_cache", [False, True])
+def test_a_concurrent_reader_never_sees_half_a_jax_cache_entry(tmp_path, users_jax_cache):
+    """Another process writing JAX's persistent cache (with mixdyn's cache on; JAX's cache set
+    up by mixdyn or by the user, as the test session does) while this one reads it: every
+    entry read is whole (JAX wrote it with one ``write_bytes``: a reader then got a truncated
+    entry, a CI run's warning), no temporary file is left, and an entry that is there already
+    is kept."""
     folder, n, size = tmp_path / "jax", 12, 8_000_000
     folder.mkdir()
     script = tmp_path / "writer.py"
     script.write_text(WRITER_SCRIPT.format())
     env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("MIXDYN_NO_CACHE", None)
+    if users_jax_cache:
+        env["JAX_COMPILATION_CACHE_DIR"] = str(tmp_path / "users")
     proc = subprocess.Popen([sys.executable, str(script), str(folder), str(n), str(size)], env=env)
     reads = 0
     try:

@@ -129,6 +129,8 @@ def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
         if folder == _state["folder"]:
             return folder
         _state["folder"] = folder
+        if folder is not None:  # whoever set JAX's cache up: its entries written whole
+            _files.atomic_jax_entries()
         current = jax.config.jax_compilation_cache_dir
         if current is not None and current != _state.get("jax_dir"):
             return folder  # JAX's cache is the user's: not ours to move or turn off
@@ -136,7 +138,6 @@ def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
             jax.config.update("jax_compilation_cache_dir", folder)
             _state["jax_dir"] = folder
             if folder is not None:
-                _files.atomic_jax_entries()  # a concurrent process never reads half an entry
                 jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
                 jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
             cc.reset_cache()  # JAX opens its cache once: make it see the new setting
