@@ -290,6 +290,12 @@ class _Program:
         self.exported, self.call, self.exe, self.options = exported, compiled, exe, options
         self.leaves, self.treedef = jax.tree_util.tree_flatten(skeleton)
 
+    @classmethod
+    def of(cls, blob, exe) -> _Program:
+        """The program of a stored ``blob`` (:meth:`_CachedJit._export`), to be compiled at
+        its first call (its executable then stored at ``exe``)."""
+        return cls(_export.deserialize(bytearray(blob[0])), blob[1], exe=exe, options=blob[2])
+
     def compile(self) -> None:
         """Compile it now, if not compiled yet (and store its executable)."""
         if self.call is None:
@@ -449,8 +455,7 @@ class _CachedJit:
         if blob is None:
             return False
         stats["exported"] += 1
-        exe = _executables.path_for(folder, path.stem)
-        return _Program(_export.deserialize(bytearray(blob[0])), blob[1], exe=exe, options=blob[2])
+        return _Program.of(blob, _executables.path_for(folder, path.stem))
 
     def _export(self, args, kwargs, leaves, treedef):
         """``(serialized program, output skeleton, compile options)``, or None where JAX
@@ -501,7 +506,7 @@ def _read(path, compile: bool = False):
         return program
     except Exception:  # none stored (or stale, damaged): compiled again, and stored
         pass
-    program = _Program(_export.deserialize(bytearray(blob[0])), blob[1], exe=exe, options=blob[2])
+    program = _Program.of(blob, exe)
     if compile:  # JAX's persistent cache gives the executable; this thread deserializes it
         program.compile()
     return program

@@ -1377,9 +1377,9 @@ def _leave(code) -> None:
     elif not isinstance(code, int):
         sys.stderr.write(f"{code}\n")
         code = 1  # what Python gives for a message
-    compiled = sys.modules.get("mixdyn._compile")
-    if compiled is not None:  # programs still being read ahead: not awaited to the last
-        compiled.stop_prefetch()
+    from . import _compile
+
+    _compile.stop_prefetch()  # programs still being read ahead: not awaited to the last
     for thread in threading.enumerate():
         if thread is not threading.current_thread() and not thread.daemon:
             thread.join()

@@ -301,7 +301,6 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
 
 
 @functools.cache
-@functools.cache
 def _integrator(method: str):
     """The integrator ``method``, its traced programs kept in the persistent cache (one
     wrapper per method: a program read or prepared once serves every later run)."""

@@ -36,6 +36,7 @@ class ChainedPrevbefore:
 
     def __init__(self, prevbefore):
         self.prevbefore = prevbefore
+        self.repeated = _repeated(prevbefore)
         self._local = threading.local()
 
     def __call__(self, x):
@@ -43,7 +44,7 @@ class ChainedPrevbefore:
         start, k = x, 1
         if last is not None and last[0]() is x and last[1]() is not None:
             start, k = last[1](), last[2] + 1
-        y = _repeated(self.prevbefore)(start, k)
+        y = self.repeated(start, k)
         self._local.last = (_ref(y), _ref(start), k)
         return y
 
