@@ -56,6 +56,7 @@ import jax
 from jax import export as _export
 
 from . import _executables, _files
+from ._stack import roomy, roomy_target
 
 #: The environment variable that turns every persistent cache off (``1``).
 NO_CACHE_ENV = "MIXDYN_NO_CACHE"
@@ -365,8 +366,10 @@ class _CachedJit:
 
     def __call__(self, *args, **kwargs):
         folder = _state["folder"]
-        called = None if folder is None else self._key(args, kwargs)
-        if called is None:
+        if folder is None:  # traced here at each new structure: on a roomy frame stack
+            return roomy(self.jit, *args, **kwargs)
+        called = self._key(args, kwargs)
+        if called is None:  # inside another trace
             return self.jit(*args, **kwargs)
         leaves, treedef, dynamic, mkey = called
         try:
@@ -385,7 +388,7 @@ class _CachedJit:
             self.programs[mkey] = program
         if program is False:
             stats["fallback"] += 1
-            return self.jit(*args, **kwargs)
+            return roomy(self.jit, *args, **kwargs)
         return program(dynamic)
 
     def ahead(self, *args, **kwargs) -> None:
@@ -421,7 +424,7 @@ class _CachedJit:
             finally:
                 pending.done.set()
 
-        threading.Thread(target=prepare, name="mixdyn-ahead", daemon=True).start()
+        threading.Thread(target=roomy_target(prepare), name="mixdyn-ahead", daemon=True).start()
 
     def _load(self, folder, args, kwargs, leaves, treedef):
         """The program for these arguments: from disk, else exported (and written), else
@@ -482,7 +485,7 @@ class _CachedJit:
             return arrays
 
         try:
-            exported = _export.export(jax.jit(flat))(*specs)
+            exported = roomy(_export.export(jax.jit(flat)), *specs)
             blob = (bytes(exported.serialize()), out_static["skeleton"], self.options)
             pickle.dumps(blob)
         except Exception:
@@ -576,7 +579,9 @@ def prefetch(tag: str) -> int:
                 queued.append(path)
     if queued:
         _stop.clear()
-        threading.Thread(target=_read_ahead, args=(queued,), name="mixdyn-prefetch").start()
+        threading.Thread(
+            target=roomy_target(_read_ahead), args=(queued,), name="mixdyn-prefetch"
+        ).start()
     return len(queued)
 
 

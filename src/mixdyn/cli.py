@@ -27,6 +27,8 @@ from typing import Annotated
 
 import typer
 
+from ._stack import roomy
+
 app = typer.Typer(
     name="mixdyn",
     help="Kinematics and forward, inverse and mixed dynamics of planar mechanisms, from model "
@@ -1348,7 +1350,7 @@ def main() -> None:
     configure_cache()
     t0 = time.perf_counter()
     try:
-        app()
+        roomy(app)  # JAX's tracing on a roomy frame stack (mixdyn._stack)
     except SystemExit as exc:
         code = exc.code
     else:

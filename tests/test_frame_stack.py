@@ -1,0 +1,89 @@
+"""The roomy frame stack (mixdyn._stack): calls at the end of one of CPython's 16 KiB
+frame-stack chunks map and unmap memory at every call; under ``roomy`` they do not.
+
+The truth is the operating system's count of minor page faults (``getrusage``): a chunk
+mapped afresh faults when its first page is written, so a loop of calls that each map a new
+chunk faults at least once per call."""
+
+from __future__ import annotations
+
+import resource
+import sys
+import threading
+
+import pytest
+
+from mixdyn._stack import SLOTS, roomy, roomy_target
+
+CALLS = 400
+
+
+def _leaf():
+    return 1
+
+
+# A leaf frame larger than a frame of _at_depth: whatever the stack's depth where the test
+# starts, some depth of _at_depth leaves room for _at_depth's frames but not for the leaf's.
+_leaf.__code__ = _leaf.__code__.replace(co_stacksize=64)
+
+
+def _at_depth(n: int) -> int:
+    """Recurse ``n`` frames, then make CALLS calls from there."""
+    if n == 0:
+        s = 0
+        for _ in range(CALLS):
+            s += _leaf()
+        return s
+    return _at_depth(n - 1)
+
+
+def _faults(n: int) -> int:
+    before = resource.getrusage(resource.RUSAGE_THREAD).ru_minflt
+    _at_depth(n)
+    return resource.getrusage(resource.RUSAGE_THREAD).ru_minflt - before
+
+
+def _worst_depth(depths) -> tuple[int, int]:
+    """``(depth, faults)`` of the depth whose calls fault most (the chunk's end)."""
+    return max(((n, min(_faults(n) for _ in range(3))) for n in depths), key=lambda x: x[1])
+
+
+needs_rusage_thread = pytest.mark.skipif(
+    not hasattr(resource, "RUSAGE_THREAD"), reason="per-thread page faults (Linux)"
+)
+
+
+@needs_rusage_thread
+def test_calls_at_a_chunk_end_fault_without_roomy_and_not_with_it():
+    depth, faults = _worst_depth(range(0, 400))
+    if faults < CALLS:
+        pytest.skip(f"this Python ({sys.version.split()[0]}) does not map a chunk per call")
+    # The same depths under roomy: every depth reached from the roomy frame stays in its chunk.
+    inside = roomy(_worst_depth, range(0, 400))
+    assert inside[1] < CALLS // 10, (depth, faults, inside)
+
+
+@needs_rusage_thread
+def test_a_thread_target_runs_roomy():
+    out = {}
+
+    def work():
+        out["worst"] = _worst_depth(range(0, 400))
+
+    plain = threading.Thread(target=work)
+    plain.start()
+    plain.join()
+    if out["worst"][1] < CALLS:
+        pytest.skip("this Python does not map a chunk per call")
+    roomy_thread = threading.Thread(target=roomy_target(work))
+    roomy_thread.start()
+    roomy_thread.join()
+    assert out["worst"][1] < CALLS // 10
+
+
+def test_roomy_passes_arguments_results_and_exceptions():
+    assert roomy(lambda a, b=1: (a, b), 3, b=4) == (3, 4)
+    assert roomy(roomy, sum, [1, 2, 3]) == 6  # nested
+    with pytest.raises(ZeroDivisionError):
+        roomy(lambda: 1 / 0)
+    assert roomy.__code__.co_stacksize == SLOTS
