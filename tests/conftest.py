@@ -4,6 +4,8 @@ The tests directory is put on ``sys.path`` so that test modules can ``from fixtu
 (see ``tests/fixtures.py``) whatever pytest's import mode.
 """
 
+import functools
+import inspect
 import os
 import pathlib
 import shutil
@@ -40,6 +42,7 @@ import pytest  # noqa: E402
 
 import mixdyn  # noqa: F401, E402  (enables float64)
 from mixdyn import _compile  # noqa: E402
+from mixdyn._stack import roomy  # noqa: E402
 
 sys.path.insert(0, str(pathlib.Path(__file__).parent))
 
@@ -142,3 +145,31 @@ def _release_compiled_programs():
     mappings, limit = memory_mappings()
     if mappings > CLEAR_CACHES_AT_MAPPINGS * limit:
         jax.clear_caches()
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_pyfunc_call(pyfuncitem):
+    """Each test runs on a roomy frame stack (:func:`mixdyn._stack.roomy`), as mixdyn's own
+    tracing does: JAX's tracing in a test's body otherwise maps and unmaps a chunk of frames
+    at every call that crosses a chunk's end (~48,000 times in ``test_gradients.py``)."""
+    test = pyfuncitem.obj
+    pyfuncitem.obj = functools.wraps(test)(lambda **kwargs: roomy(test, **kwargs))
+    try:
+        return (yield)
+    finally:
+        pyfuncitem.obj = test
+
+
+@pytest.hookimpl(wrapper=True)
+def pytest_fixture_setup(fixturedef, request):
+    """A fixture that is a plain function (the module fixtures' long runs) runs roomy too;
+    generator fixtures are left as they are (their bodies run where they are resumed)."""
+    func = fixturedef.func
+    plain = not (inspect.isgeneratorfunction(func) or inspect.iscoroutinefunction(func))
+    if not plain or request.instance is not None:  # (a method is bound by pytest)
+        return (yield)
+    fixturedef.func = functools.wraps(func)(lambda *a, **kw: roomy(func, *a, **kw))
+    try:
+        return (yield)
+    finally:
+        fixturedef.func = func

@@ -53,32 +53,41 @@ needs_rusage_thread = pytest.mark.skipif(
 )
 
 
+def _in_thread(target) -> tuple[int, int]:
+    """``target()``'s result, computed in a new thread (a frame stack of its own: the test
+    itself runs roomy, tests/conftest.py)."""
+    out = {}
+    thread = threading.Thread(target=lambda: out.setdefault("r", target()))
+    thread.start()
+    thread.join()
+    return out["r"]
+
+
+def _plain_faults() -> tuple[int, int]:
+    worst = _in_thread(lambda: _worst_depth(range(0, 400)))
+    if worst[1] < CALLS:
+        pytest.skip(f"this Python ({sys.version.split()[0]}) does not map a chunk per call")
+    return worst
+
+
 @needs_rusage_thread
 def test_calls_at_a_chunk_end_fault_without_roomy_and_not_with_it():
-    depth, faults = _worst_depth(range(0, 400))
-    if faults < CALLS:
-        pytest.skip(f"this Python ({sys.version.split()[0]}) does not map a chunk per call")
+    depth, faults = _plain_faults()
     # The same depths under roomy: every depth reached from the roomy frame stays in its chunk.
-    inside = roomy(_worst_depth, range(0, 400))
+    inside = _in_thread(lambda: roomy(_worst_depth, range(0, 400)))
     assert inside[1] < CALLS // 10, (depth, faults, inside)
 
 
 @needs_rusage_thread
 def test_a_thread_target_runs_roomy():
+    _plain_faults()
     out = {}
-
-    def work():
-        out["worst"] = _worst_depth(range(0, 400))
-
-    plain = threading.Thread(target=work)
-    plain.start()
-    plain.join()
-    if out["worst"][1] < CALLS:
-        pytest.skip("this Python does not map a chunk per call")
-    roomy_thread = threading.Thread(target=roomy_target(work))
-    roomy_thread.start()
-    roomy_thread.join()
-    assert out["worst"][1] < CALLS // 10
+    thread = threading.Thread(
+        target=roomy_target(lambda: out.setdefault("r", _worst_depth(range(400))))
+    )
+    thread.start()
+    thread.join()
+    assert out["r"][1] < CALLS // 10, out
 
 
 def test_roomy_passes_arguments_results_and_exceptions():
