@@ -5,6 +5,7 @@ The tests directory is put on ``sys.path`` so that test modules can ``from fixtu
 """
 
 import functools
+import gc
 import inspect
 import os
 import pathlib
@@ -36,6 +37,10 @@ def _one_core_per_worker() -> None:
 
 
 _one_core_per_worker()
+
+# The cyclic garbage collector at the command's pace (mixdyn._early.pace_collector): with
+# Python's thresholds it ran through JAX's tracing in every test (1-6% of a module's time).
+gc.set_threshold(50_000, 20, 100)
 
 import jax  # noqa: E402
 import pytest  # noqa: E402
