@@ -394,3 +394,26 @@ def test_the_early_figure_worker_ends_with_the_command(tmp_path):
         assert proc.returncode == 2 and says in proc.stderr
         time.sleep(0.2)
         assert _processes_with(token) == []
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.parametrize("user", [None, "2"])
+def test_the_figure_worker_runs_blas_on_one_thread_unless_told(monkeypatch, user):
+    """The figure worker's environment (``/proc/PID/environ``, read from outside) names one
+    OpenBLAS thread, or the number the user set."""
+    from mixdyn import _early
+
+    if user is None:
+        monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
+    else:
+        monkeypatch.setenv("OPENBLAS_NUM_THREADS", user)
+    proc, second = _early.spawn()
+    if proc is None:
+        pytest.skip("no worker process here")
+    try:
+        environ = pathlib.Path(f"/proc/{proc.pid}/environ").read_bytes().split(b"\0")
+    finally:
+        _early.stop(proc)
+        for fd in second or ():
+            os.close(fd)
+    assert f"OPENBLAS_NUM_THREADS={user or 1}".encode() in environ
