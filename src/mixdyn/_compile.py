@@ -337,6 +337,18 @@ def _counting(fn: Callable, name: str) -> Callable:
     return traced
 
 
+def short_locations():
+    """A context in which JAX records one source line per operation of a program it lowers
+    (``jax_include_full_tracebacks_in_locations`` off, in this thread only), not the
+    whole Python traceback (JAX's default: up to 100 frames per operation). What a program
+    computes is unchanged; it is exported ~30% smaller and traced, lowered and compiled ~4%
+    faster (the paper's forward run). A JAX without the setting: nothing changes."""
+    from jax._src import config
+
+    state = getattr(config, "include_full_tracebacks_in_locations", None)
+    return contextlib.nullcontext() if state is None else state(False)
+
+
 class _CachedJit:
     def __init__(self, fn: Callable, optimize: bool = True):
         self.name = f"{fn.__module__}.{fn.__qualname__}"
@@ -367,7 +379,8 @@ class _CachedJit:
     def __call__(self, *args, **kwargs):
         folder = _state["folder"]
         if folder is None:  # traced here at each new structure: on a roomy frame stack
-            return roomy(self.jit, *args, **kwargs)
+            with short_locations():
+                return roomy(self.jit, *args, **kwargs)
         called = self._key(args, kwargs)
         if called is None:  # inside another trace
             return self.jit(*args, **kwargs)
@@ -388,7 +401,8 @@ class _CachedJit:
             self.programs[mkey] = program
         if program is False:
             stats["fallback"] += 1
-            return roomy(self.jit, *args, **kwargs)
+            with short_locations():
+                return roomy(self.jit, *args, **kwargs)
         return program(dynamic)
 
     def ahead(self, *args, **kwargs) -> None:
@@ -485,7 +499,8 @@ class _CachedJit:
             return arrays
 
         try:
-            exported = roomy(_export.export(jax.jit(flat)), *specs)
+            with short_locations():
+                exported = roomy(_export.export(jax.jit(flat)), *specs)
             blob = (bytes(exported.serialize()), out_static["skeleton"], self.options)
             pickle.dumps(blob)
         except Exception:
