@@ -177,6 +177,9 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
         return self.solver.func(terms, t0, y0, args)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        return _step(self, terms, t0, t1, y0, args, solver_state, made_jump)
+
+    def _step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         data, worst = solver_state
         z0, inner_args = self.reduce(y0, data, t0)
         inner_terms = self.inner_terms(terms)
@@ -208,6 +211,14 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
         worst = jnp.where(end, worst, jnp.maximum(worst, violation))
         dense = dict(y0=y0, y1=y1)
         return y1, y_err, dense, (data1, worst), result
+
+
+@eqx.filter_jit
+def _step(solver, terms, t0, t1, y0, args, solver_state, made_jump):
+    """``solver._step(...)`` as a function JAX traces once per structure: diffrax traces the
+    body of its loop three times (twice for its state's structure, then the loop itself), and
+    the second and third find this step traced."""
+    return solver._step(terms, t0, t1, y0, args, solver_state, made_jump)
 
 
 def _outputs(ts, y0, collect: bool):
