@@ -177,9 +177,10 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
         return self.solver.func(terms, t0, y0, args)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
-        return _step(self, terms, t0, t1, y0, args, solver_state, made_jump)
+        return _traced_once(self, terms, t0, t1, y0, args, solver_state, made_jump)
 
-    def _step(self, terms, t0, t1, y0, args, solver_state, made_jump):
+    def step_body(self, terms, t0, t1, y0, args, solver_state, made_jump):
+        """diffrax's ``step``, as :func:`_traced_once` traces it."""
         data, worst = solver_state
         z0, inner_args = self.reduce(y0, data, t0)
         inner_terms = self.inner_terms(terms)
@@ -214,11 +215,11 @@ class ConstrainedSolver(diffrax.AbstractWrappedSolver, diffrax.AbstractAdaptiveS
 
 
 @eqx.filter_jit
-def _step(solver, terms, t0, t1, y0, args, solver_state, made_jump):
-    """``solver._step(...)`` as a function JAX traces once per structure: diffrax traces the
-    body of its loop three times (twice for its state's structure, then the loop itself), and
-    the second and third find this step traced."""
-    return solver._step(terms, t0, t1, y0, args, solver_state, made_jump)
+def _traced_once(solver, terms, t0, t1, y0, args, solver_state, made_jump):
+    """``solver.step_body(...)`` as a function JAX traces once per structure: diffrax traces
+    the body of its loop three times (twice for its state's structure, then the loop itself),
+    and the second and third find this step traced."""
+    return solver.step_body(terms, t0, t1, y0, args, solver_state, made_jump)
 
 
 def _outputs(ts, y0, collect: bool):
