@@ -13,7 +13,7 @@ import threading
 
 import pytest
 
-from mixdyn._stack import SLOTS, roomy, roomy_target
+from mixdyn._stack import SLOTS, roomy
 
 CALLS = 400
 
@@ -76,18 +76,6 @@ def test_calls_at_a_chunk_end_fault_without_roomy_and_not_with_it():
     # The same depths under roomy: every depth reached from the roomy frame stays in its chunk.
     inside = _in_thread(lambda: roomy(_worst_depth, range(0, 400)))
     assert inside[1] < CALLS // 10, (depth, faults, inside)
-
-
-@needs_rusage_thread
-def test_a_thread_target_runs_roomy():
-    _plain_faults()
-    out = {}
-    thread = threading.Thread(
-        target=roomy_target(lambda: out.setdefault("r", _worst_depth(range(400))))
-    )
-    thread.start()
-    thread.join()
-    assert out["r"][1] < CALLS // 10, out
 
 
 def test_roomy_passes_arguments_results_and_exceptions():

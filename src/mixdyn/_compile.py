@@ -56,7 +56,7 @@ import jax
 from jax import export as _export
 
 from . import _executables, _files
-from ._stack import roomy, roomy_target
+from ._stack import roomy
 
 #: The environment variable that turns every persistent cache off (``1``).
 NO_CACHE_ENV = "MIXDYN_NO_CACHE"
@@ -379,8 +379,8 @@ class _CachedJit:
     def __call__(self, *args, **kwargs):
         folder = _state["folder"]
         called = None if folder is None else self._key(args, kwargs)
-        if called is None:  # no cache, or inside another trace: JAX's jit as it is (no
-            return self.jit(*args, **kwargs)  # roomy frame per call: 30 us each)
+        if called is None:
+            return self.jit(*args, **kwargs)
         leaves, treedef, dynamic, mkey = called
         try:
             program = self.programs.get(mkey)
@@ -434,7 +434,7 @@ class _CachedJit:
             finally:
                 pending.done.set()
 
-        threading.Thread(target=roomy_target(prepare), name="mixdyn-ahead", daemon=True).start()
+        threading.Thread(target=prepare, name="mixdyn-ahead", daemon=True).start()
 
     def _load(self, folder, args, kwargs, leaves, treedef):
         """The program for these arguments: from disk, else exported (and written), else
@@ -590,9 +590,7 @@ def prefetch(tag: str) -> int:
                 queued.append(path)
     if queued:
         _stop.clear()
-        threading.Thread(
-            target=roomy_target(_read_ahead), args=(queued,), name="mixdyn-prefetch"
-        ).start()
+        threading.Thread(target=_read_ahead, args=(queued,), name="mixdyn-prefetch").start()
     return len(queued)
 
 

@@ -32,13 +32,4 @@ def roomy(fn: Callable, *args, **kwargs):
 roomy.__code__ = roomy.__code__.replace(co_stacksize=SLOTS)
 
 
-def roomy_target(fn: Callable) -> Callable:
-    """``fn`` as a thread's target that runs it through :func:`roomy`."""
-
-    def target(*args, **kwargs):
-        return roomy(fn, *args, **kwargs)
-
-    return target
-
-
-__all__ = ["SLOTS", "roomy", "roomy_target"]
+__all__ = ["SLOTS", "roomy"]

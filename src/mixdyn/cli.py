@@ -1350,7 +1350,7 @@ def main() -> None:
     configure_cache()
     t0 = time.perf_counter()
     try:
-        roomy(app)  # JAX's tracing on a roomy frame stack (mixdyn._stack)
+        roomy(app)  # tracing outside the exports (the cache off) on a roomy frame stack
     except SystemExit as exc:
         code = exc.code
     else:

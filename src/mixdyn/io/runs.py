@@ -22,7 +22,6 @@ import numpy as np
 
 from .. import analysis as an
 from .. import model as m
-from .._stack import roomy_target
 from ..analysis._prepare import Prepared, prepare_dynamic, prepare_kinematic
 from ..analysis.mixed import bind_prescribed
 from ..errors import AssemblyError, ModelError, NumericalError
@@ -1170,7 +1169,7 @@ class Runner:
             except Exception:  # the run itself meets it, and names it
                 pass
 
-        threading.Thread(target=roomy_target(prepare), name="mixdyn-next-run", daemon=True).start()
+        threading.Thread(target=prepare, name="mixdyn-next-run", daemon=True).start()
 
 
 def start_q(model: m.Model) -> np.ndarray:
