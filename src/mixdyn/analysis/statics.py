@@ -7,16 +7,28 @@ become
     R(q, lambda) = [ Q(q, 0, t) - Phi_q(q)^T lambda ;  Phi(q, t) ] = 0,
 
 solved by Newton's method from the assembled start, the Jacobian of ``R`` by ``jax.jacfwd``
-(each step halved until ``|R|`` decreases). Free degrees of freedom move to the equilibrium
-(gravity, springs, constant forces and laws at ``t``); driven ones stay where the drivers put
-them and their efforts are the static ones (kinetostatics without inertia; with inertia:
-:func:`~mixdyn.inverse`).
+(each step halved until the residual's measure decreases). Free degrees of freedom move to the
+equilibrium (gravity, springs, constant forces and laws at ``t``); driven ones stay where the
+drivers put them and their efforts are the static ones (kinetostatics without inertia; with
+inertia: :func:`~mixdyn.inverse`).
+
+The residual's measure is the same in every unit system. Each row is taken relative to its
+own scale: with ``L`` the model's characteristic length (its largest point or body offset) and
+the coordinate scales ``D = diag(L, L, 1, ...)`` (a body's x, y [length] and phi [rad]), a
+force row ``Q_i`` counts as the work ``Q_i D_ii`` relative to ``F L`` (``F`` the largest
+applied force, a moment counting as a force at ``L``), and a constraint row ``Phi_j`` relative
+to ``max_i |dPhi_j/dq_i| D_ii`` at the start, i.e. in its own unit (length for a point on a
+point, rad for an angle driver). The same mechanism written in m or in mm then takes the same
+Newton steps and reaches the same equilibrium.
 
 Stability: the tangent stiffness ``K = -d(Q - Phi_q^T lambda)/dq`` (for conservative loads the
-Hessian of ``V + lambda . Phi``) restricted to the motions the constraints allow,
-``K_r = N^T K N`` with ``N`` an orthonormal basis of the null space of ``Phi_q``: the
+Hessian of ``V + lambda . Phi``) in the scaled coordinates ``(x/L, y/L, phi)``,
+``K~ = D K D`` [energy], restricted to the motions the constraints allow,
+``K_r = N^T K~ N`` with ``N`` an orthonormal basis of the null space of ``Phi_q D``: the
 equilibrium is stable when every eigenvalue of ``K_r``'s symmetric part is positive, unstable
-when one is negative (then the mechanism, nudged, leaves it).
+when one is negative (then the mechanism, nudged, leaves it). Every entry of ``K~`` is an
+energy (force times length, or torque per rad squared), so the eigenvalues are energies in
+the model's units: the same physical quantity in m and in mm (converted like a torque).
 """
 
 from __future__ import annotations
@@ -53,11 +65,13 @@ class Statics:
         lam: (m,) the multipliers of the independent constraint rows.
         result: the equilibrium as a one-row :class:`~mixdyn.Result` (kind ``"statics"``):
             positions, the joints' reactions and the drivers' efforts by name, with units.
-        eigenvalues: the reduced stiffness' eigenvalues, ascending (empty without free
-            degrees of freedom) [model units of generalized stiffness].
+        eigenvalues: the reduced stiffness' eigenvalues in the scaled coordinates
+            ``(x/L, y/L, phi)`` (module docstring), ascending (empty without free degrees of
+            freedom) [energy: force * length].
         stable: every eigenvalue positive (True without free degrees of freedom).
         iterations: Newton iterations.
-        residual: the largest force residual after, relative to the forces' scale.
+        residual: the largest residual after, each row relative to its own scale (module
+            docstring) [-].
     """
 
     q: np.ndarray
@@ -139,25 +153,37 @@ def statics(
     Q0 = r0[:nq]  # the applied forces (no multipliers yet)
     _, J0 = _tangent(model, c, tj, jnp.asarray(q), jnp.zeros(m))
     J0 = np.asarray(J0)
-    lam = np.linalg.lstsq(J0.T, Q0, rcond=None)[0] if m else np.zeros(0)
-    x = np.concatenate([q, lam])
     L = length_scale(model)
+    D = coordinate_scales(model, L)
+    F0 = float(np.max(np.abs(Q0) * D, initial=0.0)) / L  # the largest load, as a force
+    rows = np.max(np.abs(J0) * D, axis=1) if m else np.zeros(0)  # each row's own unit
+    rows = np.where(rows > 0.0, rows, 1.0)
+    # the start's multipliers: the loads balanced in the least-squares sense of virtual work
+    lam = np.linalg.lstsq(D[:, None] * J0.T, D * Q0, rcond=None)[0] if m else np.zeros(0)
+    x = np.concatenate([q, lam])
 
-    def scaled(r, x):
-        force = max(np.max(np.abs(Q0)), np.max(np.abs(np.asarray(R(jnp.asarray(x)))[:nq])), 1e-300)
-        return max(np.max(np.abs(r[:nq])) / force, np.max(np.abs(r[nq:]), initial=0.0) / L)
+    def scaled(r):
+        work = np.abs(r[:nq]) * D / L  # a moment as the force at L
+        force = max(F0, float(np.max(work, initial=0.0)), 1e-300)
+        return max(np.max(work, initial=0.0) / force, np.max(np.abs(r[nq:]) / rows, initial=0.0))
 
+    # Newton's step in dimensionless unknowns and rows (the same step in every unit system,
+    # also where the Jacobian is singular and the least-squares step is taken)
+    energy = max(F0, 1e-300) * L
+    row_w = np.concatenate([D / energy, 1.0 / rows])
+    col_w = np.concatenate([D, energy / rows])
     r = np.asarray(R(jnp.asarray(x)))
-    err = scaled(r, x)
+    err = scaled(r)
     it = 0
     while err > tol and it < max_iter:
         it += 1
-        step = np.linalg.lstsq(np.asarray(K(jnp.asarray(x))), -r, rcond=None)[0]
+        Kx = row_w[:, None] * np.asarray(K(jnp.asarray(x))) * col_w[None, :]
+        step = col_w * np.linalg.lstsq(Kx, -row_w * r, rcond=None)[0]
         a = 1.0
         while True:
             trial = x + a * step
             rt = np.asarray(R(jnp.asarray(trial)))
-            et = scaled(rt, trial)
+            et = scaled(rt)
             if np.all(np.isfinite(rt)) and (et < err or a < 1e-6):
                 break
             a *= 0.5
@@ -190,12 +216,20 @@ def _reactions(c, q, t, lam):
     return joint_reactions(c, q, t, lam)
 
 
+def coordinate_scales(model: Model, L: float) -> np.ndarray:
+    """The coordinates' scales ``D`` (nq,): ``L`` for a body's x and y [length], 1 for its
+    phi [rad]."""
+    return np.tile(np.array([L, L, 1.0]), model.nb)
+
+
 def _reduced_stiffness(model, c, t, q, lam) -> np.ndarray:
-    """Eigenvalues of ``N^T K N`` (symmetric part), ascending."""
+    """Eigenvalues of ``N^T (D K D) N`` (symmetric part), ascending [energy]."""
     nq = model.nq
     K, J = (
         np.asarray(a) for a in _tangent(model, c, jnp.asarray(t), jnp.asarray(q), jnp.asarray(lam))
     )
+    D = coordinate_scales(model, length_scale(model))
+    K, J = D[:, None] * K * D[None, :], J * D[None, :]
     if J.shape[0]:
         _, s, vt = np.linalg.svd(J)
         rank = int(np.sum(s > 1e-10 * s[0])) if s.size else 0
@@ -248,8 +282,9 @@ def quasi_static(
     driven against its springs and gravity. A :class:`~mixdyn.Result` of kind ``"statics"``
     (positions, reactions, efforts; velocities and accelerations 0); ``stats`` holds the
     reduced stiffness' smallest eigenvalue at each time and whether every equilibrium is
-    stable. (The start is always assembled, and the dense path taken: ``assemble_first`` and
-    ``linear_solver`` are accepted for the model-file runner's sake.)"""
+    stable (the eigenvalue in the model's unit of energy, named by ``min_eigenvalue_unit``:
+    see the module docstring). (The start is always assembled, and the dense path taken:
+    ``assemble_first`` and ``linear_solver`` are accepted for the model-file runner's sake.)"""
     del assemble_first, linear_solver
     ts = np.atleast_1d(np.asarray(t, dtype=float))
     rows, smallest, iters = [], [], 0
@@ -277,6 +312,7 @@ def quasi_static(
         stats={
             "newton_iterations": iters,
             "min_eigenvalue": smallest,
+            "min_eigenvalue_unit": model.units.unit("energy"),
             "stable": all(stable),
             "unstable_at": [float(tk) for tk, s in zip(ts, stable, strict=True) if not s],
         },

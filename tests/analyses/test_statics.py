@@ -6,14 +6,13 @@ unstable), and the static force analysis against the virtual-work result."""
 from __future__ import annotations
 
 import math
-import pathlib
 
 import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
 import mixdyn as md
-from fixtures import four_bar, four_bar_pose, pendulum, slider_crank
+from fixtures import EXAMPLES, four_bar, four_bar_pose, pendulum, slider_crank
 
 G = 9.81
 
@@ -26,8 +25,10 @@ def test_a_pendulum_hangs_stably_and_balances_unstably(start, phi, stable):
     eq = md.statics(pendulum(L, m, 0.01, start, g=G))
     assert abs(eq["bob.phi"] - phi) <= 1e-9
     assert eq.stable is stable
-    # along the one free motion (unit vector in q = (x, y, phi)): d2V/dphi2 / |dq/dphi|^2
-    k = m * G * L * math.cos(phi) / (1 + L**2)
+    # along the one free motion, in the scaled coordinates (x/L, y/L, phi) (the model's length
+    # scale is L, the pin's offset): d2V/dphi2 / |d(x/L, y/L, phi)/dphi|^2, the tangent's
+    # length squared 2
+    k = m * G * L * math.cos(phi) / 2
     np.testing.assert_allclose(eq.eigenvalues, [k], rtol=1e-9)
     assert abs(eq["pin.Fy"] - m * G) <= 1e-9 * m * G and abs(eq["pin.Fx"]) <= 1e-9
 
@@ -114,7 +115,7 @@ def test_the_example_file_rests_where_its_turning_torque_vanishes(tmp_path):
 
     from mixdyn.cli import app
 
-    path = pathlib.Path(__file__).resolve().parent.parent / "examples" / "statics_four_bar.yaml"
+    path = EXAMPLES / "statics_four_bar.yaml"
     out = tmp_path / "out"
     res = CliRunner().invoke(app, ["run", str(path), "--out", str(out)])
     assert res.exit_code == 0, res.output
