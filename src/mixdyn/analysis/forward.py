@@ -57,7 +57,7 @@ def forward(
             at a large step), ``"modified"`` or ``"full"``. For a mechanism that passes
             through singular positions again and again (the IFToMM N-four-bar) keep the
             projection's default ``solver="tsit5"`` (or use generalized-alpha): ``"dopri8"``
-            loses its grip there (``benchmarks/RESULTS.md``, section 2b).
+            loses its grip there (``benchmarks/RESULTS.md``, the IFToMM N-four-bar).
         rtol, atol: local error tolerances of the adaptive methods (on q and qd, model units;
             default 1e-8 and 1e-10), with a method's name only.
         dt: step [time] of the fixed-step methods (or a fixed step for the adaptive ones),

@@ -1584,7 +1584,7 @@ class SweepRunSpec(Spec):
     member and output time); default: the columns the summaries and bands use."""
     batch_size: int | None = Field(default=None, ge=1)
     """Members integrated by one vectorized program at a time (default: member by member on
-    a CPU, 1024 on an accelerator)."""
+    a CPU, 32,768 on an accelerator)."""
     plots: list[SweepPlotSpec] = Field(default_factory=list)
     """Figures of the sweep: ``{file, x, y, by}`` or ``{file, band}``."""
 
@@ -1733,11 +1733,13 @@ class ModelFile(Spec):
     bodies: list[BodySpec] = Field(min_length=1)
     """The rigid bodies (at least one)."""
     joints: list[JointSpec] = Field(default_factory=list)
-    """Joints: ``revolute``, ``weld``, ``translational``, ``pin_in_slot``, ``distance``."""
+    """Joints: ``revolute``, ``weld``, ``translational``, ``pin_in_slot``, ``distance``,
+    ``gear_pair``, ``rolling_disks``, ``rack_pinion``, ``rolling_on_line``, ``cam_follower``."""
     drivers: list[DriverSpec] = Field(default_factory=list)
     """Drivers prescribing motions: ``coordinate``, ``point``, ``relative_angle``, ``distance``."""
     forces: list[ForceSpec] = Field(default_factory=list)
-    """Force elements: ``point_force``, ``torque``, ``spring_damper``, ``rotary_spring_damper``."""
+    """Force elements: ``point_force``, ``torque``, ``joint_friction``, ``spring_damper``,
+    ``rotary_spring_damper``."""
     assembly: AssemblySpec = AssemblySpec()
     """How the starting pose is closed: ``{hold: [crank.phi]}``."""
     runs: list[RunSpec] = Field(default_factory=list)

@@ -40,7 +40,7 @@ UNROLL = 1
 
 #: ``"auto"`` takes the sparse path from this many constraint rows on, when the reordered
 #: bandwidth is at most :data:`MAX_AUTO_BLOCK`. Measured (``benchmarks/sparse_scaling.py``,
-#: ``benchmarks/RESULTS.md`` section 4): at 32 rows (a 16-link chain) the sparse path is 1.7x
+#: ``benchmarks/RESULTS.md``, the sparse path): at 32 rows (a 16-link chain) the sparse path is 1.7x
 #: faster per RK4 step (53 against 89 us) and compiles faster; below, the gain is 10-40 % and
 #: the small published benchmarks stay on the dense reference path.
 AUTO_MIN_ROWS = 32
