@@ -6,22 +6,22 @@ model's :class:`~mixdyn.UnitSystem`; angles are in radians.
 Compiled programs (traced and compiled) are kept between processes in a cache folder
 (``$MIXDYN_CACHE_DIR``, else ``~/.cache/mixdyn/jax``), so a second process does not trace or
 compile them again: ``MIXDYN_NO_CACHE=1`` (read on import) or :func:`set_cache` turns that
-off (see :mod:`mixdyn._compile`).
+off (see :mod:`mixdyn.runtime`); JAX's own persistent cache is left as the user set it.
 
 On import, mixdyn turns off XLA CPU features (multi-threaded Eigen, which buys its small
 matrices nothing, the concurrency-optimized scheduler, which hung a vmapped loop, and where
 jaxlib knows the flag the MLIR fusion emitters, which compile ~30% slower) unless
-``$XLA_FLAGS`` names them: see :mod:`mixdyn._xla`.
+``$XLA_FLAGS`` names them: see :mod:`mixdyn.runtime._xla`.
 """
 
 import sys as _sys
 
-from . import _early
+from .runtime import _command
 
-_early.pace_collector()  # the `mixdyn` command: cycles collected less often
-_early.start_for_command_line()  # `mixdyn run` with figures: its drawing worker, before JAX
+_command.pace_collector()  # the `mixdyn` command: cycles collected less often
+_command.start_for_command_line()  # `mixdyn run` with figures: its drawing worker, before JAX
 
-from . import _xla  # noqa: E402
+from .runtime import _xla  # noqa: E402
 
 _xla.apply()
 
@@ -29,13 +29,13 @@ import jax as _jax  # noqa: E402
 
 _jax.config.update("jax_enable_x64", True)
 
-from ._compile import set_cache  # noqa: E402
+from .runtime._programs import set_cache  # noqa: E402
 
 set_cache.__module__ = __name__
-from ._compile import configure_from_env as _configure_cache  # noqa: E402
+from .runtime._programs import configure_from_env as _configure_cache  # noqa: E402
 
-if _configure_cache() is not None and (_tag := _early.job_tag(_sys.argv)) is not None:
-    from ._compile import prefetch as _prefetch
+if _configure_cache() is not None and (_tag := _command.job_tag(_sys.argv)) is not None:
+    from .runtime._programs import prefetch as _prefetch
 
     _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 

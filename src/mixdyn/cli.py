@@ -12,7 +12,7 @@ file of UTF-8 text of at most 20 MB (:data:`mixdyn.io._yaml.MAX_BYTES`).
 Traced and compiled programs are kept between invocations (per model structure: a file with
 other numbers reuses them), in ``$MIXDYN_CACHE_DIR`` or ``$XDG_CACHE_HOME/mixdyn/jax``
 (``~/.cache/mixdyn/jax``); set ``MIXDYN_NO_CACHE=1`` to turn that off (see
-:mod:`mixdyn._compile`). ``MIXDYN_DEBUG=1`` shows tracebacks of unexpected errors.
+:mod:`mixdyn.runtime`). ``MIXDYN_DEBUG=1`` shows tracebacks of unexpected errors.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from typing import Annotated
 
 import typer
 
-from ._stack import roomy
+from .runtime._private import exit_now, roomy, use_roomy_frames
 
 app = typer.Typer(
     name="mixdyn",
@@ -160,7 +160,7 @@ def configure_cache() -> str | None:
     Returns:
         The cache folder, or None when turned off.
     """
-    from ._compile import configure_from_env
+    from .runtime._programs import configure_from_env
 
     return configure_from_env()
 
@@ -442,11 +442,11 @@ def run(
     (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name),
     OUT/NAME/meta.json (units of every column, solver, tolerances, counters, version) and the
     figures and animation the run asks for."""
-    from . import _compile, _early
+    from .runtime import _command, _programs
 
     # The programs this job used last time are read from the cache beside the checks below
-    # (from the import of mixdyn on, where it could read the command line: _early.job_tag).
-    with _compile.job(_early.run_tag(file, runs)):
+    # (from the import of mixdyn on, where it could read the command line: _command.job_tag).
+    with _programs.job(_command.run_tag(file, runs)):
         _run(file, runs, out, parquet, figures, progress, netcdf)
 
 
@@ -795,7 +795,7 @@ def _execute(runner, plans, out, parquet, figures, painter, mode, file, failed=N
 
 class _Painter:
     """Draws the figures and animations of ``mixdyn run`` in a worker process
-    (:mod:`mixdyn.viz._worker`: matplotlib, no JAX) while the runs compute, and here where
+    (:mod:`mixdyn.runtime._worker`: matplotlib, no JAX) while the runs compute, and here where
     no worker can be started or it is lost.
 
     On Linux the worker forks once it has imported matplotlib and serves two channels, so
@@ -814,12 +814,12 @@ class _Painter:
     def __init__(self):
         import tempfile
 
-        from . import _early
+        from .runtime import _command
 
         self.tasks: list = []  # (task or None, path or None, channel or None)
         self.tmp = tempfile.mkdtemp(prefix="mixdyn-figures-")
         self.channels: list = []  # (tasks writer, replies reader) or None where lost
-        self.proc, second = _early.worker()  # started with the command where it could be
+        self.proc, second = _command.worker()  # started with the command where it could be
         if self.proc is None:
             return
         self.channels.append((self.proc.stdin, self.proc.stdout))
@@ -891,10 +891,10 @@ class _Painter:
 
     def _stop(self) -> None:
         """Stop the worker (and its copy) at once."""
-        from . import _early
+        from .runtime import _command
 
         if self.proc is not None:
-            _early.stop(self.proc)
+            _command.stop(self.proc)
             self.proc = None
 
     def abort(self) -> None:
@@ -1348,6 +1348,7 @@ def main() -> None:
     ends the usual way, with its traceback.
     """
     configure_cache()
+    use_roomy_frames()
     t0 = time.perf_counter()
     try:
         roomy(app)  # tracing outside the exports (the cache off) on a roomy frame stack
@@ -1363,33 +1364,17 @@ def main() -> None:
 
 def _leave(code) -> None:
     """End the process with ``code`` (as :class:`SystemExit` reads it: ``None`` is 0, a
-    text is printed on stderr and gives 1) as Python would, less the teardown.
-
-    What a normal exit does that matters is done here first, in its order: the threads
-    that are not daemons are joined (the one reading programs ahead stops after the one it
-    is reading), the ``atexit`` functions run (JAX's, logging's, the
-    figure worker's stop), the standard streams are flushed; then :func:`os._exit`. Every
-    file mixdyn writes is closed (and renamed into place) before the command returns.
-    """
-    import atexit
-    import threading
+    text is printed on stderr and gives 1), without the interpreter's teardown where
+    :func:`mixdyn.runtime._private.exit_now` may skip it."""
+    from .runtime import _programs
 
     if code is None:
         code = EXIT_OK
     elif not isinstance(code, int):
         sys.stderr.write(f"{code}\n")
         code = 1  # what Python gives for a message
-    from . import _compile
-
-    _compile.stop_prefetch()  # programs still being read ahead: not awaited to the last
-    for thread in threading.enumerate():
-        if thread is not threading.current_thread() and not thread.daemon:
-            thread.join()
-    atexit._run_exitfuncs()
-    for stream in (sys.stdout, sys.stderr):
-        with contextlib.suppress(OSError, ValueError, AttributeError):
-            stream.flush()
-    os._exit(code)
+    _programs.stop_prefetch()  # programs still being read ahead: not awaited to the last
+    exit_now(code)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -8,7 +8,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compile import cached_jit, register_key, skeleton
 from ..equations import Constraints
 from ..equations import _constraints as _cons
 from ..equations._constraints import Packed
@@ -16,6 +15,7 @@ from ..errors import AssemblyError, ModelError
 from ..linalg import min_norm_step
 from ..model import CoordinateDriver, Model, Polynomial
 from ..model._element import Resolver
+from ..runtime._programs import cached_jit, register_key, skeleton
 
 # The static part of a packed constraint set compares by the identity of its layout (cached
 # per structure) and holds the set with its numbers: across processes it is keyed by the

@@ -10,7 +10,6 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compile import cached_jit
 from ..equations import force_output_kinds, force_outputs, kinetic_energy, potential_energy
 from ..equations._friction import check_supported
 from ..errors import (
@@ -22,6 +21,7 @@ from ..errors import (
 )
 from ..linalg import dependent_rows
 from ..model import Model
+from ..runtime._programs import cached_jit
 from ._assembly import length_scale
 from ._options import value_problem
 from ._problem import Problem
@@ -409,7 +409,7 @@ def simulate(case: Case, progress=None) -> Result:
     than its energy tolerance fails (:func:`check_energy_balance`).
 
     The post-processing's program is prepared beside the integration (read, or traced and
-    compiled, in a second thread: :meth:`mixdyn._compile._CachedJit.ahead`)."""
+    compiled, in a second thread: :meth:`mixdyn.runtime._programs._CachedJit.ahead`)."""
     _post_ahead(case)
     return finish(case, integrate(case, progress))
 
@@ -422,7 +422,7 @@ def _post_ahead(case: Case) -> None:
 
 def ahead(case: Case) -> None:
     """Prepare the programs :func:`simulate` will call for ``case`` (its integrator's and
-    its post-processing's) in second threads (:meth:`mixdyn._compile._CachedJit.ahead`),
+    its post-processing's) in second threads (:meth:`mixdyn.runtime._programs._CachedJit.ahead`),
     while earlier work goes on: a model file's next run while the one before it computes.
     ``case`` counts by its structure and shapes only. Without a progress callback."""
     _integrator(case.options.method).ahead(*_integrator_args(case), progress=None)

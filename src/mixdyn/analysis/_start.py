@@ -9,10 +9,10 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compile import cached_jit
 from ..equations import Constraints
 from ..errors import ModelError
 from ..model import Model
+from ..runtime._programs import cached_jit
 from ._assembly import assemble, length_scale
 
 

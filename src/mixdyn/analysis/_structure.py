@@ -9,12 +9,12 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
-from .._compile import cached_jit
 from ..equations import Constraints
 from ..equations._constraints import Packed
 from ..errors import DegreesOfFreedomError, ModelError, RedundantConstraintError
 from ..linalg import independent_rows
 from ..model import Model
+from ..runtime._programs import cached_jit
 from ._assembly import start_q
 
 

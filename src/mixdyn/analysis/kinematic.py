@@ -12,11 +12,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compile import cached_jit
 from ..equations import Constraints
 from ..errors import ConvergenceError, SingularityError
 from ..linalg import dependent_rows
 from ..model import Model
+from ..runtime._programs import cached_jit
 from ._assembly import length_scale
 from ._newton import newton_positions
 from ._prepare import Prepared, prepare_kinematic, use_prepared

@@ -24,11 +24,11 @@ import numpy as np
 import scipy.linalg as sl
 
 from .._arrays import as_f64
-from .._compile import cached_jit
 from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
+from ..runtime._programs import cached_jit
 from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
 from ._simulate import (

@@ -35,9 +35,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._compile import cached_jit
 from ..errors import MixdynError, ModelError
 from ..model import Model
+from ..runtime._programs import cached_jit
 from ._simulate import Case, _post_arrays, finish, integrate, require_masses
 from .forward import forward_case
 from .integrators import INTEGRATORS

@@ -83,7 +83,7 @@ def registry():
 
     import pint
 
-    from .._compile import cache_folder
+    from ..runtime._programs import cache_folder
 
     folder = cache_folder()
     cache = os.path.join(folder, "pint") if folder else None

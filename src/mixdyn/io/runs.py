@@ -1147,16 +1147,17 @@ class Runner:
         the runs before it compute: a file's first run compiles them, and two programs
         compile at once. A run replaying another run's motion is set up with the stand-ins
         its checks made (:meth:`call`), which have the replayed motion's form. Nothing when
-        the programs are read from the cache anyway (:func:`mixdyn._compile.reading_ahead`),
-        with the cache off, or for other runs; a failure here is left for the run to meet."""
+        the programs are read from the cache anyway
+        (:func:`mixdyn.runtime._programs.reading_ahead`), with the cache off, or for other
+        runs; a failure here is left for the run to meet."""
         import threading
 
-        from .. import _compile
         from ..analysis import _simulate
         from ..analysis.forward import forward_case
         from ..analysis.mixed import mixed_case
+        from ..runtime import _programs
 
-        if _compile.cache_folder() is None or _compile.reading_ahead():
+        if _programs.cache_folder() is None or _programs.reading_ahead():
             return
         if plan.spec.kind not in ("forward", "mixed"):
             return

@@ -2,7 +2,7 @@
 canvas and Pillow.
 
 This module imports nothing from mixdyn (nor JAX), so that a process that only draws
-(:mod:`mixdyn.viz._worker`) can load it by its path; :func:`mixdyn.viz.animate` builds the
+(:mod:`mixdyn.runtime._worker`) can load it by its path; :func:`mixdyn.viz.animate` builds the
 data (:func:`mixdyn.viz.animate.movie_data`) and calls :func:`movie`.
 """
 

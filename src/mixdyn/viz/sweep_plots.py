@@ -2,7 +2,7 @@
 histories over the members, measurements against a fitted motion (PNG, SVG or PDF), without
 pyplot's global state.
 
-Loaded by the figure worker by its path (:mod:`mixdyn.viz._worker`): NumPy and matplotlib only.
+Loaded by the figure worker by its path (:mod:`mixdyn.runtime._worker`): NumPy and matplotlib only.
 """
 
 from __future__ import annotations

@@ -30,10 +30,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from . import _clip_floor
+from ...runtime._private import chained_floor
 from ._common import MAX_STEPS, NOT_FINITE, OK, STEP_COLLAPSE, UNCLOSED, report_progress
-
-_clip_floor.install()  # diffrax's end-of-interval floor: one loop, not 100 copies
 
 #: The explicit Runge–Kutta methods of the adaptive integrators: diffrax's class name.
 METHODS = {"tsit5": "Tsit5", "dopri5": "Dopri5", "dopri8": "Dopri8"}
@@ -403,7 +401,7 @@ def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps, de
     holds them, written when an accepted step lands on an output time: :class:`Landing`):
     diffrax's ``SaveAt(ts=...)`` checks traced output times with a host callback, and a
     program with one is neither exported nor kept in the persistent cache
-    (:mod:`mixdyn._compile`); for the same reason the first step is the controller's, not
+    (:mod:`mixdyn.runtime`); for the same reason the first step is the controller's, not
     ``dt0``. A run made to be reverse-differentiated (``derivatives="reverse"``,
     :func:`~mixdyn.differentiable`) saves them with ``SaveAt(ts)`` instead: there they are
     diffrax's write-only buffers, which the checkpoints of the adjoint do not copy (in the
@@ -424,19 +422,20 @@ def solve(term, solver: ConstrainedSolver, y0, step_controller, *, max_steps, de
         saveat = diffrax.SaveAt(subs=subs, solver_state=True)
     else:
         saveat = diffrax.SaveAt(t1=True, solver_state=True, controller_state=True)
-    sol = diffrax.diffeqsolve(
-        term,
-        solver,
-        ts[0],
-        ts[-1],
-        None,
-        y0,
-        saveat=saveat,
-        stepsize_controller=step_controller,
-        max_steps=max_steps,
-        throw=False,
-        adjoint=ADJOINTS[derivatives](),
-    )
+    with chained_floor():  # diffrax's end-of-interval floor: one loop, not 100 copies
+        sol = diffrax.diffeqsolve(
+            term,
+            solver,
+            ts[0],
+            ts[-1],
+            None,
+            y0,
+            saveat=saveat,
+            stepsize_controller=step_controller,
+            max_steps=max_steps,
+            throw=False,
+            adjoint=ADJOINTS[derivatives](),
+        )
     _, worst = sol.solver_state
     ys, t_end = sol.ys, sol.ts
     if buffered:

@@ -3,7 +3,7 @@ garbage collector's pace.
 
 The figure worker of ``mixdyn run`` is started as early as the command line allows.
 
-``mixdyn run`` draws its figures in a worker process (:mod:`mixdyn.viz._worker`: matplotlib,
+``mixdyn run`` draws its figures in a worker process (:mod:`mixdyn.runtime._worker`: matplotlib,
 no JAX). Importing matplotlib and drawing a first figure costs the worker ~0.5 s; started
 when the command begins, before mixdyn imports JAX (:func:`start_for_command_line`, called
 first thing by ``mixdyn/__init__.py``), the worker is ready by the time the first run ends.
@@ -11,7 +11,7 @@ first thing by ``mixdyn/__init__.py``), the worker is ready by the time the firs
 nobody took is stopped when the process exits.
 
 ``mixdyn run FILE`` reads the programs its last run of the file used (its manifest:
-:func:`mixdyn._compile.prefetch`) from the moment JAX is imported, while the rest of mixdyn
+:func:`mixdyn.runtime._programs.prefetch`) from the moment JAX is imported, while the rest of mixdyn
 and the command's modules import (~0.3 s): :func:`job_tag` reads the job's tag from the
 command line as the ``run`` command forms it (:func:`run_tag`).
 
@@ -45,9 +45,9 @@ def spawn():
     """Start a worker: ``(process or None, second channel's ends or None)``.
 
     On Linux the worker forks once matplotlib is imported and serves a second channel (see
-    :mod:`mixdyn.viz._worker`); the ends returned are this side's file descriptors of it
+    :mod:`mixdyn.runtime._worker`); the ends returned are this side's file descriptors of it
     (tasks writer, replies reader)."""
-    worker = pathlib.Path(__file__).parent / "viz" / "_worker.py"
+    worker = pathlib.Path(__file__).with_name("_worker.py")
     command = [sys.executable, str(worker)]
     second = sys.platform.startswith("linux") and hasattr(os, "fork")
     ends = (*os.pipe(), *os.pipe()) if second else ()  # tasks r, w; replies r, w
@@ -111,7 +111,8 @@ def pace_collector() -> None:
 
 
 def run_tag(file, runs) -> str:
-    """The tag of a ``mixdyn run`` job (:func:`mixdyn._compile.job`): the file and its runs."""
+    """The tag of a ``mixdyn run`` job (:func:`mixdyn.runtime._programs.job`): the file and
+    its runs."""
     return f"run:{pathlib.Path(file).resolve()}:{','.join(runs or ())}"
 
 

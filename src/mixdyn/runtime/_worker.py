@@ -1,6 +1,6 @@
 """A process that draws figures and animations for ``mixdyn run`` while it computes.
 
-Run as a script (``python .../mixdyn/viz/_worker.py``): it imports neither mixdyn nor JAX,
+Run as a script (``python .../mixdyn/runtime/_worker.py``): it imports neither mixdyn nor JAX,
 only NumPy, matplotlib and Pillow, and loads :mod:`mixdyn.viz.plots` and
 :mod:`mixdyn.viz._draw` by their paths. Each line on standard input names a file holding a
 pickled task ``(kind, args, kwargs)`` (``kind``: ``"plot"``, ``"movie"``, ``"against"`` or
@@ -26,7 +26,7 @@ import sys
 
 
 def _load(name: str):
-    path = pathlib.Path(__file__).with_name(f"{name}.py")
+    path = pathlib.Path(__file__).parent.parent / "viz" / f"{name}.py"
     spec = importlib.util.spec_from_file_location(f"_mixdyn_worker_{name}", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)

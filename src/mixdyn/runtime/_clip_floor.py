@@ -7,16 +7,17 @@ Python loop of 100 calls of ``equinox.internal.prevbefore``. Traced, that is 100
 optimized program (1,605 of 5,754 instructions for the paper example), so ~25% of its compile
 time (~0.35 s of ~1.4 s), of its trace and of the time to load its stored executable.
 
-:func:`install` hands ``diffrax._integrate`` a view of ``equinox.internal`` whose
-``prevbefore`` (:class:`ChainedPrevbefore`) returns exactly what the chain of calls returns,
+:class:`Internal` is a view of ``equinox.internal`` whose ``prevbefore``
+(:class:`ChainedPrevbefore`) returns exactly what the chain of calls returns,
 as one ``lax.fori_loop`` of ``prevbefore`` from the chain's start: the ``k``-th call of a chain
 gives ``prevbefore`` applied ``k`` times to its start, in the same order, so the result is
 the same bits; the 99 intermediate loops feed nothing and JAX drops them when it lowers the
 program. The loop is one jitted function of the start and of ``k`` (an argument, so traced
 once, not per ``k``), with ``prevbefore``'s derivative (the tangent passes through): each
 call costs one cached call in the trace. A call on anything but the previous call's result
-starts a new chain. Nothing else of diffrax or equinox changes, and other callers of
-``equinox.internal.prevbefore`` are not touched.
+starts a new chain. :func:`mixdyn.runtime._private.chained_floor` hands it to diffrax while
+mixdyn traces one of its own solves; nothing else of diffrax or equinox changes, and other
+callers of ``equinox.internal.prevbefore`` are not touched.
 """
 
 from __future__ import annotations
@@ -74,7 +75,7 @@ def _ref(value):
         return lambda: value
 
 
-class _Internal(types.ModuleType):
+class Internal(types.ModuleType):
     """``equinox.internal`` with :class:`ChainedPrevbefore` as ``prevbefore``."""
 
     def __init__(self, internal):
@@ -84,17 +85,3 @@ class _Internal(types.ModuleType):
 
     def __getattr__(self, name):
         return getattr(self._internal, name)
-
-
-def install() -> bool:
-    """Give ``diffrax._integrate`` the chained ``prevbefore`` (once); False where this
-    diffrax has no such module global (nothing is changed then)."""
-    from diffrax import _integrate
-
-    internal = getattr(_integrate, "eqxi", None)
-    if isinstance(internal, _Internal):
-        return True
-    if internal is None or not hasattr(internal, "prevbefore"):
-        return False
-    _integrate.eqxi = _Internal(internal)
-    return True

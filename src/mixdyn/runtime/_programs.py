@@ -3,13 +3,13 @@
 Two layers, both in one folder (``$MIXDYN_CACHE_DIR``, else ``$XDG_CACHE_HOME/mixdyn/jax``,
 else ``~/.cache/mixdyn/jax``), on by default in the Python API and the CLI alike:
 
-- JAX's persistent compilation cache (XLA executables, keyed by the lowered program);
 - the *traced* programs of mixdyn's jitted functions, exported with :mod:`jax.export` per
-  model structure (:func:`cached_jit`). JAX's cache starts from a lowered program, so every
-  process would otherwise trace each function again (seconds for an integrator); an exported
-  program is read back and lowered without running any Python of the function;
-- the executable of each exported program once compiled (:mod:`mixdyn._executables`), so
-  that a later process runs it without lowering it or looking it up in JAX's cache.
+  model structure (:func:`cached_jit`): a later process reads one back without running any
+  Python of the function (tracing an integrator takes seconds);
+- the executable of each exported program once compiled (:mod:`mixdyn.runtime._executables`),
+  so that a later process runs it without lowering or compiling it.
+
+JAX's own persistent compilation cache is not touched: it stays as the user set it.
 
 A program is keyed by the function (module and qualified name), everything about its
 arguments that is not an array (the PyTree structure with every static field of the
@@ -56,7 +56,7 @@ import jax
 from jax import export as _export
 
 from . import _executables, _files
-from ._stack import roomy
+from ._private import roomy, short_locations
 
 #: The environment variable that turns every persistent cache off (``1``).
 NO_CACHE_ENV = "MIXDYN_NO_CACHE"
@@ -104,9 +104,8 @@ def default_folder() -> str:
 def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
     """Turn mixdyn's persistent caches on or off for this process.
 
-    JAX's persistent compilation cache is pointed at the same folder only if nothing else
-    configured it (``jax_compilation_cache_dir`` unset, or set by mixdyn): a cache the user
-    set up for JAX is left as it is, on or off.
+    They hold mixdyn's own programs (exported traces and their executables) and nothing
+    else: JAX's own persistent compilation cache is left as the user set it, on or off.
 
     Args:
         enabled: True (the default folder, see the module's documentation), a folder, or
@@ -117,8 +116,6 @@ def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
         The cache folder in use, or None when off (or when the folder cannot be created: a
         cache is an optimisation, never a failure).
     """
-    import jax._src.compilation_cache as cc
-
     with _lock:
         folder = None
         if enabled is not False and enabled is not None:
@@ -127,23 +124,7 @@ def set_cache(enabled: bool | str | os.PathLike = True) -> str | None:
                 os.makedirs(os.path.join(folder, EXPORTED), exist_ok=True)
             except OSError:
                 folder = None
-        if folder == _state["folder"]:
-            return folder
         _state["folder"] = folder
-        if folder is not None:  # whoever set JAX's cache up: its entries written whole
-            _files.atomic_jax_entries()
-        current = jax.config.jax_compilation_cache_dir
-        if current is not None and current != _state.get("jax_dir"):
-            return folder  # JAX's cache is the user's: not ours to move or turn off
-        try:
-            jax.config.update("jax_compilation_cache_dir", folder)
-            _state["jax_dir"] = folder
-            if folder is not None:
-                jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-                jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-            cc.reset_cache()  # JAX opens its cache once: make it see the new setting
-        except Exception:  # pragma: no cover - a cache is never a failure
-            pass
         return folder
 
 
@@ -268,7 +249,7 @@ def _environment() -> bytes:
     ):
         parts.append(f"{flag}={getattr(jax.config, flag, None)}")
     h = hashlib.sha256("\n".join(parts).encode())
-    root = pathlib.Path(__file__).parent
+    root = pathlib.Path(__file__).parent.parent
     for path in sorted(root.rglob("*.py")):
         if path.name == "cli.py" or path.parent.name == "viz":
             continue  # never traced: editing them keeps the programs
@@ -281,7 +262,7 @@ def _environment() -> bytes:
 class _Program:
     """A loaded program: the compiled exported function and the outputs' shape. Without
     ``compiled`` it is compiled at its first call (its executable then stored at ``exe``:
-    :mod:`mixdyn._executables`)."""
+    :mod:`mixdyn.runtime._executables`)."""
 
     __slots__ = ("call", "exe", "exported", "leaves", "options", "treedef")
 
@@ -335,18 +316,6 @@ def _counting(fn: Callable, name: str) -> Callable:
         return fn(*args, **kwargs)
 
     return traced
-
-
-def short_locations():
-    """A context in which JAX records one source line per operation of a program it lowers
-    (``jax_include_full_tracebacks_in_locations`` off, in this thread only), not the
-    whole Python traceback (JAX's default: up to 100 frames per operation). What a program
-    computes is unchanged; the paper example's programs are exported 25% smaller and
-    compiled 5-10% faster. A JAX without the setting: nothing changes."""
-    from jax._src import config
-
-    state = getattr(config, "include_full_tracebacks_in_locations", None)
-    return contextlib.nullcontext() if state is None else state(False)
 
 
 class _CachedJit:
@@ -521,7 +490,7 @@ def _read(path, compile: bool = False):
     except Exception:  # none stored (or stale, damaged): compiled again, and stored
         pass
     program = _Program.of(blob, exe)
-    if compile:  # JAX's persistent cache gives the executable; this thread deserializes it
+    if compile:  # compiled in this thread (and its executable stored)
         program.compile()
     return program
 

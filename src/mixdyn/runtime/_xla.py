@@ -30,7 +30,8 @@ started (JAX used before mixdyn was imported), flags can no longer change and no
 from __future__ import annotations
 
 import os
-import sys
+
+from ._private import backends_started
 
 #: Flag name -> the value mixdyn sets when the user has not named the flag.
 SAFE_FLAGS = {
@@ -48,14 +49,6 @@ IF_KNOWN = {
 
 #: The environment variable that keeps ``$XLA_FLAGS`` exactly as the user set it (``1``).
 KEEP_ENV = "MIXDYN_KEEP_XLA_FLAGS"
-
-
-def _backend_started() -> bool:
-    if "jax" not in sys.modules:
-        return False
-    from jax._src import xla_bridge
-
-    return xla_bridge.backends_are_initialized()
 
 
 def jaxlib_version() -> tuple[int, ...] | None:
@@ -84,7 +77,7 @@ def flags_to_add(named=frozenset(), version: tuple[int, ...] | None = None) -> d
 def apply() -> tuple[str, ...]:
     """Add the missing :data:`SAFE_FLAGS` (and :data:`IF_KNOWN` where this jaxlib has them)
     to ``$XLA_FLAGS``; returns the flags added."""
-    if os.environ.get(KEEP_ENV, "").strip() not in ("", "0") or _backend_started():
+    if os.environ.get(KEEP_ENV, "").strip() not in ("", "0") or backends_started():
         return ()
     current = os.environ.get("XLA_FLAGS", "")
     named = {tok.split("=", 1)[0] for tok in current.split()}
