@@ -28,6 +28,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from .. import model as m
+from ..analysis._options import suggestions
 from ..errors import ModelError
 from ..model._body import GROUND_NAME
 from ..units import UnitSystem
@@ -45,7 +46,6 @@ from .quantities import (
     has_unit_tail,
     looks_like_quantity,
 )
-from .settings import suggestions
 
 _SECTIONS = {
     "bodies": "body",

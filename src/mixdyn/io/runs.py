@@ -28,6 +28,7 @@ from ..errors import AssemblyError, ModelError, NumericalError
 from . import schema as s
 from . import settings
 from ._errors import FileError
+from ._plan import Plan
 from .expressions import ExpressionError
 from .expressions import parse as parse_expression
 from .load import Builder
@@ -63,31 +64,6 @@ _NUMBER_KINDS = {
 def register_study(kind: str, planner, plan_class, execute) -> None:
     """Register a run kind that repeats another run (see :data:`STUDY_KINDS`)."""
     STUDY_KINDS[kind] = (planner, plan_class, execute)
-
-
-@dataclasses.dataclass(frozen=True)
-class Plan:
-    """A checked run ready to execute.
-
-    Attributes:
-        spec: the run's description.
-        index: its position in the file's ``runs``.
-        times: (N,) output times [model time unit].
-        depends: names of the runs whose results it needs (``from_run``).
-    """
-
-    spec: s.KinematicRunSpec | s.ForwardRunSpec | s.InverseRunSpec | s.MixedRunSpec
-    index: int
-    times: np.ndarray
-    depends: tuple[str, ...]
-
-    @property
-    def name(self) -> str:
-        return self.spec.name
-
-    @property
-    def path(self) -> tuple:
-        return ("runs", self.index)
 
 
 class Runner:

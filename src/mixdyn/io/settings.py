@@ -14,7 +14,6 @@ error (exit 2) naming the file, line and setting, never a failure after minutes 
 from __future__ import annotations
 
 import shutil
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,10 +21,8 @@ from ..analysis._options import CHOICES, step_count, suggestions, value_problem
 from ..analysis._simulate import ENERGY_TOL
 from ..analysis.methods import FIXED_STEP, OPTIONS
 from . import schema as s
+from ._plan import Checker, Plan
 from .expressions import ExpressionLaw, evaluate
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .runs import Plan, Runner
 
 #: Options of an inverse run (passed to :func:`mixdyn.kinematic`) and their defaults.
 INVERSE_OPTIONS = {"tol": None, "max_iter": 25, "singular_tol": 1e-7, "assemble_first": True}
@@ -54,7 +51,7 @@ def known_options(run) -> dict[str, object]:
     return {**known, **DYNAMIC_OPTIONS}
 
 
-def check_options(runner: Runner, run, path) -> dict:
+def check_options(runner: Checker, run, path) -> dict:
     """A run's ``options``, checked: names, types, ranges.
 
     Args:
@@ -99,7 +96,7 @@ def _unknown(run, name: str, known) -> tuple[str, str]:
     return f"unknown option {name!r} of {what}", hint
 
 
-def _check_value(runner: Runner, name: str, value, path) -> None:
+def _check_value(runner: Checker, name: str, value, path) -> None:
     """Refuse an option value of the wrong type or out of range."""
     problem = value_problem(name, value)
     if problem:
@@ -111,7 +108,7 @@ def _check_value(runner: Runner, name: str, value, path) -> None:
         runner.fail(path, f"{name} is {value!r}", hint)
 
 
-def check_step(runner: Runner, plan: Plan) -> None:
+def check_step(runner: Checker, plan: Plan) -> None:
     """A fixed step where needed, and no more steps than ``max_steps``."""
     r = plan.spec
     if isinstance(r, s.KinematicRunSpec | s.InverseRunSpec | s.StaticsRunSpec):
@@ -143,7 +140,7 @@ def check_step(runner: Runner, plan: Plan) -> None:
         )
 
 
-def check_outputs(runner: Runner, plan: Plan) -> None:
+def check_outputs(runner: Checker, plan: Plan) -> None:
     """Figure and animation files: a writable type each, no file written twice."""
     r = plan.spec
     seen: dict[str, tuple] = {}
@@ -171,7 +168,7 @@ def check_outputs(runner: Runner, plan: Plan) -> None:
     _check_arrows(runner, plan, a.forces, (*plan.path, "animation", "forces"))
 
 
-def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
+def _check_arrows(runner: Checker, plan: Plan, forces, path) -> None:
     """Force arrows: not in a kinematic run; each name a joint or a point force."""
     if not forces:
         return
@@ -217,7 +214,7 @@ def _check_arrows(runner: Runner, plan: Plan, forces, path) -> None:
             )
 
 
-def check_laws(runner: Runner, plan: Plan) -> None:
+def check_laws(runner: Checker, plan: Plan) -> None:
     """Every expression law of the run's drivers, prescribed motions and known forces finite
     at its output times."""
     r = plan.spec
@@ -241,7 +238,7 @@ def check_laws(runner: Runner, plan: Plan) -> None:
             _finite_law(runner, law, plan.times, path)
 
 
-def check_replays(runner: Runner) -> None:
+def check_replays(runner: Checker) -> None:
     """A motion replayed ``from_run`` covers the replaying run's time span."""
     for plan in runner.plans.values():
         for k, p in enumerate(getattr(plan.spec, "prescribed", ())):
@@ -259,7 +256,7 @@ def check_replays(runner: Runner) -> None:
                 )
 
 
-def _finite_law(runner: Runner, law: ExpressionLaw, times, path) -> None:
+def _finite_law(runner: Checker, law: ExpressionLaw, times, path) -> None:
     values = [float(v) for v in np.asarray(law.values)]
     try:
         with np.errstate(all="ignore"):

@@ -38,7 +38,7 @@ def seconds_per_time_unit(model: Model) -> float:
     """Seconds in one of the model's time units (for real-time playback)."""
     if model.units.time in _SECONDS:
         return _SECONDS[model.units.time]
-    from ..io.quantities import factor
+    from ..units import factor
 
     return 1.0 / factor("s", "time", model.units)
 
