@@ -13,7 +13,7 @@ Scenarios:
 - ``cli-changed``: the file edited in place, one number changed (the parameter ``T``, a new
   value each time), the cache filled by a run of the file before the edit;
 - ``api-second``: a Python process building the paper's mechanism with the Python API
-  (``tests/fixtures.py``, the paper's loads) and calling ``md.forward`` on it as the file's
+  (``tests/fixtures``, the paper's loads) and calling ``md.forward`` on it as the file's
   forward run does, the cache filled by a first process.
 
 Usage::

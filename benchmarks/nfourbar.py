@@ -31,7 +31,7 @@ G = 9.81
 def exact_tip(n: int, t_end: float = 10.0) -> np.ndarray:
     """Crank-0 tip (x, y) [m] at ``t_end`` from the exact reduction ``thetaddot = k sin(theta)``,
     ``k = g 3(3N+1) / (2(4N+1))`` (``theta`` from the upward vertical; derivation in
-    ``tests/test_validation.py``)."""
+    ``tests/validation/test_validation.py``)."""
     k = G * 3 * (3 * n + 1) / (2 * (4 * n + 1))
     sol = solve_ivp(
         lambda t, y: [y[1], k * math.sin(y[0])],

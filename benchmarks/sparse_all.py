@@ -1,5 +1,5 @@
 """Dense vs sparse linear-solver path beyond the acceleration solve (issue 7), on a pendulum
-chain of ``n`` links (default 256, ``tests/fixtures.py::horizontal_chain``):
+chain of ``n`` links (default 256, ``tests/fixtures/models.py::horizontal_chain``):
 
 * post-processing of a dynamic run (``_post``: accelerations, reactions, efforts, powers,
   energies) at 101 output times, first call (with compilation) and second call;

@@ -1,16 +1,14 @@
 """Shared test setup: float64 JAX (enabled by importing mixdyn) and the fixture models.
 
-The tests directory is put on ``sys.path`` so that test modules can ``from fixtures import ...``
-(see ``tests/fixtures.py``) whatever pytest's import mode.
+Test modules in every folder ``from fixtures import ...`` (the package ``tests/fixtures``):
+pytest puts ``tests/`` on ``sys.path`` (``pythonpath`` in pyproject.toml).
 """
 
 import functools
 import gc
 import inspect
 import os
-import pathlib
 import shutil
-import sys
 import tempfile
 
 # mixdyn's persistent caches (its exported traces and JAX's compiled programs) are off while
@@ -48,8 +46,6 @@ import pytest  # noqa: E402
 import mixdyn  # noqa: F401, E402  (enables float64)
 from mixdyn import _compile  # noqa: E402
 from mixdyn._stack import roomy  # noqa: E402
-
-sys.path.insert(0, str(pathlib.Path(__file__).parent))
 
 assert jax.config.jax_enable_x64, "mixdyn must enable float64 on import"
 

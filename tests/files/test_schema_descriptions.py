@@ -1,0 +1,163 @@
+"""The model-file JSON Schema carries hover help: every property of every definition has a
+description (issue 14), and adding them changed nothing else in the schema."""
+
+import hashlib
+import json
+
+import pytest
+
+import mixdyn.io as mio
+from fixtures import EXAMPLES
+from mixdyn.io.schema import ModelFile, json_schema
+
+EXAMPLES = sorted(EXAMPLES.glob("*.yaml"))
+
+# The property names of every definition, recorded before the descriptions were added.
+PROPERTIES = {
+    "AnimationSpec": "file forces fps frames html trace",
+    "AssemblySpec": "hold",
+    "BodySpec": "inertia mass name points q0 vectors",
+    "ConstantSpec": "constant",
+    "CoordinateDriverSpec": "coordinate law name type",
+    "DistanceDriverSpec": "law name point_i point_j type",
+    "DistanceSpec": "length name point_i point_j type",
+    "ExpressionSpec": "expr unit",
+    "ForwardRunSpec": "animation atol drivers dt hold initial kind linear_solver "
+    "method name options outputs plots prescribed rtol time velocities",
+    "GroundSpec": "points",
+    "HarmonicArgs": "amplitude offset omega phase",
+    "HarmonicSpec": "harmonic",
+    "HermiteArgs": "t unit y yd ydd",
+    "HermiteSpec": "hermite",
+    "InverseRunSpec": "animation drivers hold initial kind linear_solver name "
+    "options outputs plots prescribed time velocities",
+    "JointFrictionSpec": "joint mu name radius type v_stick",
+    "KinematicRunSpec": "animation drivers hold initial kind linear_solver max_iter "
+    "name outputs plots prescribed time tol velocities",
+    "MixedRunSpec": "animation atol drivers dt hold independent initial kind linear_solver method "
+    "name options outputs plots prescribed rtol solver time unknown velocities",
+    "ModelFile": "assembly bodies description drivers forces gravity ground joints mixdyn name "
+    "output_units parameters runs units",  # output_units: issue 14
+    "PiecewiseArgs": "breaks coeffs",
+    "PiecewiseSpec": "piecewise",
+    "PinInSlotSpec": "axis name point_i point_j type",
+    "PlotSpec": "columns file reference title x ylabel",  # x: issue 14
+    "PointDriverSpec": "coordinate law name point type",
+    "PointForceSpec": "along frame law name point type",
+    "PolynomialSpec": "polynomial unit",
+    "PrescribedSpec": "coordinate from_run law name",
+    "RampArgs": "rate start",
+    "RampSpec": "ramp",
+    "ReferenceSpec": "expr label unit",
+    "RelativeAngleDriverSpec": "body_i body_j law name type",
+    "RevoluteSpec": "name point_i point_j type",
+    "RotarySpringDamperSpec": "actuator body_i body_j damping free_angle name stiffness type",
+    "SplineArgs": "kind t unit y",
+    # the sweep run kind (issue 15)
+    "SummarySpec": "column name reduce",
+    "SweepPlotSpec": "band by file title x y",
+    "SweepRunSpec": "batch_size kind name outputs plots run samples sampling seed summaries vary",
+    "VarySpec": "n span values",
+    # the identify and optimize run kinds (issue 15)
+    "DesignVariableSpec": "bounds start",
+    "FitSpec": "bounds start",
+    "IdentifyRunSpec": "data fit kind max_evaluations measured name run",
+    "MeasuredSpec": "column data noise",
+    "ObjectiveSpec": "column reduce",
+    "OptimizeRunSpec": "kind max_iterations name objective run sense vary",
+    # the statics run kind (issue 13)
+    # gears, rack and pinion, rolling, cams (issue 13)
+    "CamFollowerSpec": "axis base cam center follower follower_type frame law motion name pivot "
+    "point roller sense type",
+    "GearPairSpec": "body_i body_j carrier center_i center_j internal name pressure_angle "
+    "radius_i radius_j type",
+    "RackPinionSpec": "axis center line_point name pressure_angle radius type wheel",
+    "RollingDisksSpec": "body_i body_j carrier center_i center_j internal name radius_i "
+    "radius_j type",
+    "RollingOnLineSpec": "axis center line_point name radius type wheel",
+    "StaticsRunSpec": "animation drivers hold initial kind linear_solver max_iter "
+    "name outputs plots prescribed time tol velocities",
+    "SplineSpec": "spline",
+    "SpringDamperSpec": "actuator damping free_length name point_i point_j stiffness type",
+    "TimeSpec": "n span step values",
+    "TorqueSpec": "body law name reaction type",
+    "TranslationalSpec": "angle axis name point_i point_j type",
+    "UnitsSpec": "length mass time",
+    "WeldSpec": "angle name point_i point_j type",
+}
+
+# SHA-256 of ModelFile.model_json_schema() without its descriptions (canonical JSON), taken
+# before the descriptions were added (pydantic 2.14): any change of a type, default, bound,
+# required key or discriminator changes it. If a pydantic upgrade alone changes the form of
+# the schema, check the difference and record the new value. Recorded again when the sweep
+# run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
+# and optimize kinds, a plot's x column, the statics kind and output_units.
+STRIPPED_SHA256 = "d29016866fd84979cd479976a78a3f72b51b4a2d09d9f4ea1ff55709c61cd10a"
+
+
+def _definitions(schema: dict) -> dict[str, dict]:
+    return {"ModelFile": schema, **schema["$defs"]}
+
+
+def _strip(node):
+    """The schema without its descriptions (a property called ``description`` stays)."""
+    if isinstance(node, dict):
+        return {
+            k: _strip(v) for k, v in node.items() if not (k == "description" and isinstance(v, str))
+        }
+    if isinstance(node, list):
+        return [_strip(v) for v in node]
+    return node
+
+
+def test_every_property_has_a_description():
+    missing = [
+        f"{name}.{prop}"
+        for name, d in _definitions(ModelFile.model_json_schema()).items()
+        for prop, sub in d.get("properties", {}).items()
+        if not (isinstance(sub.get("description"), str) and sub["description"].strip())
+    ]
+    assert not missing, f"properties without a description: {missing}"
+
+
+def test_every_definition_has_a_description():
+    schema = ModelFile.model_json_schema()
+    missing = [n for n, d in _definitions(schema).items() if not str(d.get("description", ""))]
+    assert not missing
+
+
+def test_descriptions_are_short_plain_text():
+    for name, d in _definitions(ModelFile.model_json_schema()).items():
+        for prop, sub in d.get("properties", {}).items():
+            text = sub["description"]
+            assert len(text) <= 300, f"{name}.{prop}: {len(text)} characters"
+            assert "\t" not in text and not text.startswith(" "), f"{name}.{prop}"
+
+
+def test_the_properties_are_the_recorded_ones():
+    got = {
+        n: " ".join(sorted(d.get("properties", {})))
+        for n, d in _definitions(ModelFile.model_json_schema()).items()
+    }
+    assert got == PROPERTIES
+
+
+def test_the_schema_without_descriptions_is_unchanged():
+    stripped = _strip(ModelFile.model_json_schema())
+    text = json.dumps(stripped, sort_keys=True, separators=(",", ":"))
+    assert hashlib.sha256(text.encode()).hexdigest() == STRIPPED_SHA256
+
+
+def test_json_schema_keeps_the_descriptions():
+    schema = json_schema()
+    assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
+    assert "rad" in schema["$defs"]["BodySpec"]["properties"]["q0"]["description"]
+    assert schema["properties"]["units"]["description"]
+    json.dumps(schema)  # serializable as written by ``mixdyn schema``
+
+
+@pytest.mark.parametrize("path", EXAMPLES, ids=lambda p: p.stem)
+def test_the_examples_still_load(path):
+    spec = mio.read(path)
+    assert isinstance(spec, ModelFile)
+    assert mio.build(spec).bodies
