@@ -311,8 +311,9 @@ def test_a_disk_held_on_an_incline_statics():
 
 
 def test_contact_forces_drawn_as_arrows_where_they_act():
-    """The tooth force of a mesh at its pitch point, along the tangent; a rolling disk's
-    contact force at the contact point, N along the normal and T along the incline."""
+    """The tooth force of a mesh at its pitch point, along the line of action (Ft along the
+    tangent, Fr pushing the gears apart); a rolling disk's contact force at the contact point,
+    N along the normal and T along the incline."""
     from mixdyn.viz.arrows import force_arrows
 
     model, R = train(md.Ramp(0.0, 12.0), load=-0.8)
@@ -320,8 +321,9 @@ def test_contact_forces_drawn_as_arrows_where_they_act():
     (a,) = force_arrows(res, ["m23"])
     x2 = R[0] + R[1]
     np.testing.assert_allclose(a["at"], np.tile([x2 + R[1], 0.0], (5, 1)), atol=1e-12)
-    np.testing.assert_allclose(a["F"][:, 0], 0.0, atol=1e-12)
+    np.testing.assert_allclose(a["F"][:, 0], res["m23.Fr"], rtol=1e-12)  # g3 pushed along +x
     np.testing.assert_allclose(a["F"][:, 1], res["m23.Ft"], rtol=1e-12)
+    np.testing.assert_allclose(np.hypot(*a["F"].T), np.abs(res["m23.Fn"]), rtol=1e-12)
     th = math.radians(30)
     model, u = _incline(th)
     roll = md.forward(model, np.linspace(0, 0.2, 3), rtol=1e-10, atol=1e-12)

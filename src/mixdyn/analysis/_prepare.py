@@ -26,6 +26,7 @@ from ..equations import Constraints
 from ..errors import ModelError
 from ..model import Model
 from ._assembly import assemble
+from ._reactions import require_held_meshes
 from ._start import consistent_state
 from ._structure import DofReport, analyse, require_balanced
 
@@ -78,6 +79,7 @@ def prepare_dynamic(
     inputs = _dynamic_inputs(q0, qd0, hold)
     q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), t0, drivers)
+    require_held_meshes(model, q, t0, drivers)
     return Prepared(model, drivers, t0, q, qd, report, keep, linear_solver, inputs)
 
 
@@ -105,6 +107,7 @@ def prepare_kinematic(
     report, keep = analyse(model, q, t0, drivers)
     if balanced:
         require_balanced(report)
+    require_held_meshes(model, q, t0, drivers)
     return Prepared(model, drivers, t0, q, None, report, keep, linear_solver, inputs)
 
 

@@ -7,6 +7,15 @@ reported moment ``M`` is taken about the joint's point on body j. The force on b
 Only the entries of ``Phi_q`` in the joint's rows and body j's columns take part: they are taken
 at the constraint set's static sparsity pattern from the operator (``values_on``, either path)
 and summed by one segment sum.
+
+Teeth (a gear pair, a rack and pinion) also push their pitch curves apart with the radial
+force ``Fr = |Ft| tan(alpha)`` (:mod:`mixdyn.model._contacts`), a force pair along the line
+of centres whose generalized force is ``Fr grad(s)`` (``s``: the joint's ``separation``).
+The joints that hold the centres carry it: the multipliers ``w`` with ``Phi_q^T w = sum Fr
+grad(s)`` (least squares through ``Phi_q Phi_q^T``, refined once) are added to the
+multipliers before the reactions are taken. Where the other joints do not hold the
+separation (``Phi_q^T w`` misses it by more than :data:`HELD`, relative), the radial force
+would move the mechanism, which the equations of motion do not model: the reactions are NaN.
 """
 
 from __future__ import annotations
@@ -16,7 +25,11 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints
+from ..errors import ModelError
 from ..model._geometry import GROUND
+
+#: Largest relative miss of the radial tooth forces by the joints that hold the centres.
+HELD = 1e-7
 
 
 def reaction_kinds(c: Constraints) -> dict[str, str]:
@@ -35,17 +48,92 @@ def contact_columns(c: Constraints, q, lam) -> dict:
     """The joints' own columns (a gear pair's tooth force, a rolling contact's normal and
     friction forces: ``Joint.contact``) at one state, from the multipliers ``lam`` (m,) of
     the kept rows (a dropped, redundant row counts 0)."""
+    wanted = {k for k, j in enumerate(c.joints) if j.contact_kinds}
     out = {}
+    for k, lj in _joint_multipliers(c, lam, wanted).items():
+        j = c.joints[k]
+        out.update({f"{j.name}.{key}": v for key, v in j.contact(q, lj).items()})
+    return out
+
+
+def _joint_multipliers(c: Constraints, lam, wanted) -> dict:
+    """The multipliers (n_equations,) of the joints with the indices ``wanted``, keyed by
+    index, from ``lam`` (m,) of the kept rows (a dropped, redundant row counts 0)."""
     where = {row: k for k, row in enumerate(c.active)}
-    start = 0
-    for j in c.joints:
+    out, start = {}, 0
+    for k, j in enumerate(c.joints):
         rows = range(start, start + j.n_equations)
         start += j.n_equations
-        if not j.contact_kinds:
-            continue
-        lj = jnp.stack([lam[where[r]] if r in where else jnp.zeros((), lam.dtype) for r in rows])
-        out.update({f"{j.name}.{k}": v for k, v in j.contact(q, lj).items()})
+        if k in wanted:
+            zero = jnp.zeros((), lam.dtype)
+            out[k] = jnp.stack([lam[where[r]] if r in where else zero for r in rows])
     return out
+
+
+def with_tooth_forces(c: Constraints, q, lam, J):
+    """The multipliers ``lam`` (m,) with the radial tooth forces of the meshes (joints with a
+    ``separation``) carried by the joints that hold their centres (module docstring); ``lam``
+    itself without meshes. ``J``: the operator ``Phi_q`` at ``q``."""
+    meshes = [k for k, j in enumerate(c.joints) if hasattr(j, "separation")]
+    if not meshes:
+        return lam
+    lam_j = _joint_multipliers(c, lam, set(meshes))
+    Qr = jnp.zeros_like(q)
+    for k in meshes:
+        j = c.joints[k]
+        Fr = j.contact(q, lam_j[k])["Fr"]
+        Qr = Qr + Fr * jax.grad(j.separation)(q)
+    inner = J.schur(jnp.ones_like(q))
+    w = inner.solve(J.mv(Qr))
+    w = w + inner.solve(J.mv(Qr - J.rmv(w)))
+    miss = jnp.max(jnp.abs(J.rmv(w) - Qr))
+    held = miss <= HELD * jnp.maximum(jnp.max(jnp.abs(Qr)), 1e-300)
+    return jnp.where(held | (miss == 0.0), lam + w, jnp.nan)
+
+
+def require_held_meshes(model, q, t0: float = 0.0, drivers=None) -> None:
+    """Every mesh's separation held by the joints (module docstring), at the start ``q``
+    (nq,): a gear whose centre no joint holds (a free body, a slot along the line of centres)
+    would be pushed away by its radial tooth force, which the equations of motion do not
+    model. The joints' Jacobian is the one the mobility analysis has just computed at
+    ``(q, t0)`` with ``drivers`` (the same compiled program); each mesh's unit separating
+    pair (:meth:`~mixdyn.model.GearPair.separating_pair`) is NumPy.
+
+    Raises:
+        ModelError: naming the first mesh whose separation the joints leave free.
+    """
+    meshes = [j for j in model.joints if hasattr(j, "separation")]
+    if not meshes:
+        return
+    import scipy.sparse as sp
+    from scipy.sparse.linalg import lsqr
+
+    from ._structure import _jac, _sparse_jacobian
+
+    c = Constraints.of(model, drivers)
+    qn, tn = np.asarray(q, dtype=np.float64), np.asarray(t0, dtype=np.float64)
+    if c._local_ok():
+        J = _sparse_jacobian(c, qn, tn)[: c.n_joint_rows]
+    else:
+        J = sp.csr_matrix(np.asarray(_jac(c.with_linear_solver("auto"), qn, tn))[: c.n_joint_rows])
+    dense = J.shape[0] * J.shape[1] <= 250_000
+    for j in meshes:
+        g = np.zeros(model.nq)
+        for b, at, force in j.separating_pair(qn):
+            if b >= 0:  # not the ground
+                r = at - qn[3 * b : 3 * b + 2]
+                g[3 * b : 3 * b + 3] += (force[0], force[1], r[0] * force[1] - r[1] * force[0])
+        if dense:
+            w = np.linalg.lstsq(J.T.toarray(), g, rcond=None)[0] if J.shape[0] else np.zeros(0)
+        else:
+            w = lsqr(J.T.tocsr(), g, atol=1e-14, btol=1e-14, iter_lim=10 * J.shape[0])[0]
+        if np.max(np.abs(J.T @ w - g)) > 10 * HELD * np.max(np.abs(g)):
+            raise ModelError(
+                "the teeth push the pitch curves apart with the radial force |Ft| tan("
+                "pressure angle), and no joint holds them apart: hold each wheel's centre with "
+                "a revolute joint (on the ground or on a carrier) or the rack with a guide",
+                j.name,
+            )
 
 
 def _reaction_bodies(c: Constraints):
@@ -83,16 +171,18 @@ def _sparse_map(c: Constraints, bodies):
 def joint_reactions(c: Constraints, q, t, lam, J=None) -> jax.Array:
     """Reactions (n_joints, 3) ``[Fx, Fy, M]`` of every joint at one time: the force and the
     moment (about the joint point) that body i exerts on body j (on body i, sign flipped, if j
-    is the ground), from ``q`` (nq,), ``t`` and the multipliers ``lam`` (m,); ``J``: the
-    operator ``c.jacobian(q, t)`` if already built. Vectorize over time with ``jax.vmap`` or
-    ``jax.lax.map``."""
+    is the ground), from ``q`` (nq,), ``t`` and the multipliers ``lam`` (m,), the meshes'
+    radial tooth forces included (module docstring); ``J``: the operator ``c.jacobian(q, t)``
+    if already built. Vectorize over time with ``jax.vmap`` or ``jax.lax.map``."""
     nj = len(c.joints)
     if nj == 0:
         return jnp.zeros((0, 3))
     bodies = _reaction_bodies(c)
     rows, cols = c.coo()
     take, slot, sign = _sparse_map(c, bodies)
-    v = (c.jacobian(q, t) if J is None else J).values_on(rows, cols)
+    J = c.jacobian(q, t) if J is None else J
+    lam = with_tooth_forces(c, q, lam, J)
+    v = J.values_on(rows, cols)
     contrib = -(v[take] * lam[rows[take]]) * sign
     w = jax.ops.segment_sum(contrib, jnp.asarray(slot), num_segments=3 * nj).reshape(nj, 3)
     b = np.asarray([b for b, _, _ in bodies], dtype=np.int64)

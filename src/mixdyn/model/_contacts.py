@@ -13,6 +13,15 @@ the carrier's frame, so it is continuous while the line of centres turns less th
 relative to the carrier from there (always, for centres fixed on it). The constants of the
 equations come from the bodies' ``q0``: give the bodies the angles at which their teeth (or
 marks) mesh. Lines (rack, rolling track) are straight, fixed in a body (or the ground).
+
+Teeth (gear pair, rack and pinion) push along their line of action, at the pressure angle
+``alpha`` to the pitch line: besides the tangential force ``Ft`` that the no-slip equation
+transmits, a separating force ``Fr = |Ft| tan(alpha)`` pushes the pitch curves apart, along
+the line of centres (the normal of the rack), whichever way the torque goes. The centres are
+held apart by other joints (pins on the ground or a carrier, a rack's guide), so this force
+does no work and leaves the motion as it is: it loads those joints. Their reactions carry it
+(:func:`~mixdyn.analysis._reactions.joint_reactions`), so that a gear on a pin loads the pin
+with the whole tooth force ``|Fn| = |Ft| / cos(alpha)``.
 """
 
 from __future__ import annotations
@@ -41,6 +50,16 @@ def _start(r: Resolver, b: int, s) -> tuple[np.ndarray, float]:
     x, y, phi = (float(v) for v in np.asarray(r._body_objs[b].q0))
     c, sn = math.cos(phi), math.sin(phi)
     return np.array([x + c * s[0] - sn * s[1], y + sn * s[0] + c * s[1]]), phi
+
+
+def _np_point(q, b: int, s) -> np.ndarray:
+    """Global position (2,) of body point ``s`` at NumPy positions ``q`` (nq,)."""
+    s = np.asarray(s, dtype=float)
+    if b == GROUND:
+        return s
+    x, y, phi = (float(v) for v in q[3 * b : 3 * b + 3])
+    c, sn = math.cos(phi), math.sin(phi)
+    return np.array([x + c * s[0] - sn * s[1], y + sn * s[0] + c * s[1]])
 
 
 def _wrap(a: float) -> float:
@@ -162,8 +181,10 @@ class _Wheels(Joint):
 
     def arrow(self, q, cols):
         P, e, t = jax.vmap(self._frame)(jnp.asarray(q))
-        if "Ft" in self.contact_kinds:
-            F = np.asarray(cols[f"{self.name}.Ft"])[:, None] * np.asarray(t)
+        if "Ft" in self.contact_kinds:  # the tooth force on gear j, along the line of action
+            Ft = np.asarray(cols[f"{self.name}.Ft"])[:, None]
+            Fr = np.asarray(cols[f"{self.name}.Fr"])[:, None]
+            F = Ft * np.asarray(t) + self._s * Fr * np.asarray(e)
         else:
             N = np.asarray(cols[f"{self.name}.N"])[:, None]
             T = np.asarray(cols[f"{self.name}.T"])[:, None]
@@ -180,8 +201,11 @@ class GearPair(_Wheels):
     ``(w_j - w_c) / (w_i - w_c) = -R_i / R_j`` (external) or ``+R_i / R_j`` (internal).
     Result columns: ``{name}.Ft`` the tangential tooth force on gear j [force], along
     ``t = z x e`` (``e``: from i's centre to j's); ``.Fn = Ft / cos(pressure_angle)``, the
-    force along the line of action; ``.Fr = |Ft| tan(pressure_angle)``, the radial force
-    pushing the gears apart (carried by the pins; the constraint itself transmits ``Ft``).
+    tooth force along the line of action; ``.Fr = |Ft| tan(pressure_angle)``, its radial
+    part, pushing gear j away from gear i's teeth (along ``e`` external, ``-e`` internal) and
+    gear i the other way. The tooth force on gear j is ``Ft t +- Fr e``, of magnitude ``|Fn|``:
+    the joints that hold the centres (their pins) carry all of it, the radial part included
+    (see the module).
     """
 
     pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
@@ -199,6 +223,20 @@ class GearPair(_Wheels):
     def contact(self, q, lam):
         L = (self.radius_i + self._s * self.radius_j) / jnp.linalg.norm(self._d(q))
         return _tooth(lam[0] * L, self.pressure_angle)
+
+    def separation(self, q):
+        """The distance that the radial tooth force ``Fr`` pushes to grow: the centres'
+        distance, negated for an internal pair (the pinion pushed towards the ring's centre)
+        [length]; ``Fr`` times its gradient is the radial force pair's generalized force."""
+        return self._s * jnp.linalg.norm(self._d(q))
+
+    def separating_pair(self, q) -> tuple:
+        """The unit separating force pair at NumPy positions ``q`` (nq,): ``(body, point (2,),
+        force (2,))`` per body, the forces (unit and opposite) at the centres, along the line
+        of centres; its generalized force is the gradient of :meth:`separation`."""
+        ci, cj = _np_point(q, self.bi, self.si), _np_point(q, self.bj, self.sj)
+        e = (cj - ci) / np.linalg.norm(cj - ci)
+        return ((self.bj, cj, self._s * e), (self.bi, ci, -self._s * e))
 
 
 class RollingDisks(_Wheels):
@@ -300,8 +338,10 @@ class _OnLine(Joint):
     def arrow(self, q, cols):
         """The force on the wheel at its contact point."""
         P, u, n = (np.asarray(a) for a in jax.vmap(self._contact_point)(jnp.asarray(q)))
-        if "Ft" in self.contact_kinds:  # the rack's tooth force, on the pinion: -Ft u
-            F = -np.asarray(cols[f"{self.name}.Ft"])[:, None] * u
+        if "Ft" in self.contact_kinds:  # the rack's tooth force on the pinion: -Ft u, and Fr
+            Ft = np.asarray(cols[f"{self.name}.Ft"])[:, None]  # away from the pitch line
+            Fr = np.asarray(cols[f"{self.name}.Fr"])[:, None]
+            F = -Ft * u + self.side * Fr * n
         else:
             N = np.asarray(cols[f"{self.name}.N"])[:, None]
             F = N * self.side * n + np.asarray(cols[f"{self.name}.T"])[:, None] * u
@@ -321,7 +361,10 @@ class RackPinion(_OnLine):
     Equation (1): no slip, ``x + side R (phi_i - phi_j) = const`` with ``x`` the pinion
     centre's position along the rack; the rack moves ``R`` per radian of the pinion.
     Result columns: ``{name}.Ft`` the tooth force on the rack along ``axis`` [force],
-    ``.Fn = Ft / cos(pressure_angle)``, ``.Fr = |Ft| tan(pressure_angle)``.
+    ``.Fn = Ft / cos(pressure_angle)`` (along the line of action),
+    ``.Fr = |Ft| tan(pressure_angle)``, the radial part, pushing the pinion's centre away from
+    the pitch line and the rack the other way: the pinion's pin and the rack's guide carry it
+    (see the module).
     """
 
     pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
@@ -338,6 +381,21 @@ class RackPinion(_OnLine):
 
     def contact(self, q, lam):
         return _tooth(lam[0], self.pressure_angle)
+
+    def separation(self, q):
+        """The pinion centre's distance from the rack's pitch line [length], which the
+        radial tooth force ``Fr`` pushes to grow (see :meth:`GearPair.separation`)."""
+        return self.side * self._normal(q) + self.radius
+
+    def separating_pair(self, q) -> tuple:
+        """As :meth:`GearPair.separating_pair`: at the pinion's centre, along the rack's
+        normal, the pinion pushed away from the pitch line and the rack the other way."""
+        ci = _np_point(q, self.bi, self.si)
+        phi = 0.0 if self.bj == GROUND else float(q[3 * self.bj + 2])
+        c, s = math.cos(phi), math.sin(phi)
+        u = np.array([[c, -s], [s, c]]) @ np.asarray(self.u, dtype=float)
+        n = self.side * np.array([-u[1], u[0]])
+        return ((self.bi, ci, n), (self.bj, ci, -n))
 
 
 class RollingOnLine(_OnLine):
