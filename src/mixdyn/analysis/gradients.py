@@ -31,7 +31,11 @@ agrees with the exact sensitivity to the order of the tolerances (tested against
 finite differences to 1e-6, through singular positions too).
 
 A run that fails inside ``f`` (step limit, step collapse, non-finite state) cannot raise
-there: its outputs are NaN, so that no finite wrong number or derivative comes out of it.
+there: its outputs are NaN, and so are their derivatives in both modes (``jax.grad``,
+``jax.jacrev``, ``jax.jvp``, ``jax.jacfwd``): the failure flag enters the outputs through
+:func:`nan_if_failed`, whose derivative is the tangent times 1 after a good run and times NaN
+after a failed one (a plain ``jnp.where(ok, y, nan)`` would give the failed run a zero
+derivative). No finite wrong number or derivative comes out of a failed run.
 """
 
 from __future__ import annotations
@@ -49,6 +53,31 @@ from .forward import forward_case
 from .integrators import INTEGRATORS
 from .mixed import mixed_case
 from .sweep import _leaf_getter
+
+
+@jax.custom_jvp
+def nan_if_failed(ok, y):
+    """``y`` where ``ok``, NaN elsewhere, with the derivative NaN where not ``ok``.
+
+    Args:
+        ok: () or broadcastable to ``y``, bool: whether the run succeeded.
+        y: (...) the run's output (any units).
+
+    Returns:
+        (...) ``y``, or NaN after a failed run. Its tangent is ``dy * s`` with ``s = 1`` where
+        ``ok`` and NaN elsewhere: linear in ``dy``, so reverse mode (its transpose) gives the
+        cotangent times ``s`` too, NaN for a failed run and exactly the cotangent for a good
+        one (no NaN leaks into a good run's derivative, as ``where``'s unused branch would).
+    """
+    return jnp.where(ok, y, jnp.nan)
+
+
+@nan_if_failed.defjvp
+def _nan_if_failed_jvp(primals, tangents):
+    ok, y = primals
+    _, dy = tangents
+    return nan_if_failed(ok, y), dy * jnp.where(ok, 1.0, jnp.nan)
+
 
 #: The dynamic analyses :func:`differentiable` sets up (and ``"inverse"``).
 ANALYSES = {"forward": forward_case, "mixed": mixed_case}
@@ -88,8 +117,9 @@ def differentiable(
     Returns:
         ``(f, theta0)``: ``f(theta)`` with ``theta`` (P,) gives ``{"q": (N, nq), "qd": (N, nq),
         "w": (N, 2)}`` (positions, velocities and accumulated works at the output times,
-        model units; NaN if the run failed); for ``"inverse"`` ``{"q", "qd", "qdd"}`` (the
-        prescribed motion) and every reaction and driver-effort column by name, each (N,)
+        model units; NaN if the run failed, and so are their derivatives); for
+        ``"inverse"`` ``{"q", "qd", "qdd"}`` (the prescribed motion) and every reaction and
+        driver-effort column by name, each (N,)
         (``"B.Fx"``, ``"motor"``, as in :func:`~mixdyn.inverse`'s result); ``theta0`` (P,)
         the nominal numbers.
     """
@@ -146,7 +176,7 @@ def differentiable(
             problem, ts, case.q0, case.qd0, options, progress=None, derivatives=derivatives
         )
         ok = traj.status == 0
-        return {k: jnp.where(ok, getattr(traj, k), jnp.nan) for k in ("q", "qd", "w")}
+        return {k: nan_if_failed(ok, getattr(traj, k)) for k in ("q", "qd", "w")}
 
     return f, np.asarray(theta0)
 
