@@ -36,7 +36,7 @@ def _one_core_per_worker() -> None:
 
 _one_core_per_worker()
 
-# The cyclic garbage collector at the command's pace (mixdyn._early.pace_collector): with
+# The cyclic garbage collector at the command's pace (mixdyn._command.pace_collector): with
 # Python's thresholds it ran through JAX's tracing in every test (1-6% of a module's time).
 gc.set_threshold(50_000, 20, 100)
 
@@ -44,8 +44,10 @@ import jax  # noqa: E402
 import pytest  # noqa: E402
 
 import mixdyn  # noqa: F401, E402  (enables float64)
-from mixdyn import _compile  # noqa: E402
-from mixdyn._stack import roomy  # noqa: E402
+from mixdyn.runtime import _programs  # noqa: E402
+from mixdyn.runtime._private import roomy, use_roomy_frames, whole_module_scheduler  # noqa: E402
+
+use_roomy_frames()  # the test process is mixdyn's own: its tracing runs roomy, as the command's
 
 assert jax.config.jax_enable_x64, "mixdyn must enable float64 on import"
 
@@ -72,7 +74,7 @@ def pytest_configure(config):
         # process they start use it too
         os.environ.pop("MIXDYN_NO_CACHE", None)
         os.environ["MIXDYN_CACHE_DIR"] = folder
-        SESSION_CACHE["folder"] = _compile.set_cache(folder)
+        SESSION_CACHE["folder"] = _programs.set_cache(folder)
 
 
 #: The folder of mixdyn's caches for this session (None: off), restored after each test.
@@ -84,8 +86,8 @@ def _session_cache():
     """Put mixdyn's caches back to the session's folder after a test that moved or turned
     them off (the cache tests use folders of their own)."""
     yield
-    if _compile.cache_folder() != SESSION_CACHE["folder"]:
-        _compile.set_cache(SESSION_CACHE["folder"] or False)
+    if _programs.cache_folder() != SESSION_CACHE["folder"]:
+        _programs.set_cache(SESSION_CACHE["folder"] or False)
 
 
 #: Test modules whose module fixtures are long runs that most of their tests share: one xdist
@@ -97,17 +99,11 @@ WHOLE_MODULES = ("test_cli.py", "test_mixed.py", "test_mixed_files.py")
 
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config, log):
-    """``--dist load`` (the default here), but with :data:`WHOLE_MODULES` each one unit."""
+    """``--dist load`` (the default here), but with :data:`WHOLE_MODULES` each one unit
+    (where the installed pytest-xdist is a checked one; else xdist's own scheduling)."""
     if config.getvalue("dist") != "load":
         return None
-    from xdist.scheduler import LoadScopeScheduling
-
-    class Scheduling(LoadScopeScheduling):
-        def _split_scope(self, nodeid: str) -> str:
-            module = nodeid.split("::", 1)[0]
-            return module if module.rsplit("/", 1)[-1] in WHOLE_MODULES else nodeid
-
-    return Scheduling(config, log)
+    return whole_module_scheduler(config, log, WHOLE_MODULES)
 
 
 def pytest_unconfigure(config):
@@ -150,9 +146,10 @@ def _release_compiled_programs():
 
 @pytest.hookimpl(wrapper=True)
 def pytest_pyfunc_call(pyfuncitem):
-    """Each test runs on a roomy frame stack (:func:`mixdyn._stack.roomy`), as mixdyn's own
-    tracing does: JAX's tracing in a test's body otherwise maps and unmaps a chunk of frames
-    at every call that crosses a chunk's end (~48,000 times in ``test_gradients.py``)."""
+    """Each test runs on a roomy frame stack (:func:`mixdyn.runtime._private.roomy`), as
+    mixdyn's own tracing does: JAX's tracing in a test's body otherwise maps and unmaps a
+    chunk of frames at every call that crosses a chunk's end (~48,000 times in
+    ``test_gradients.py``)."""
     test = pyfuncitem.obj
     pyfuncitem.obj = functools.wraps(test)(lambda **kwargs: roomy(test, **kwargs))
     try:

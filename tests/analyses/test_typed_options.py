@@ -15,9 +15,9 @@ import pytest
 import mixdyn as md
 import mixdyn.io as mio
 from fixtures import new_traces, pendulum, slider_crank, traced_now
-from mixdyn import _compile
 from mixdyn.analysis.methods import FIXED_STEP, OPTIONS
 from mixdyn.io import settings
+from mixdyn.runtime import _programs
 
 TS = np.linspace(0.0, 0.2, 5)
 
@@ -378,19 +378,19 @@ def test_objects_key_the_persistent_cache(tmp_path):
     """With mixdyn's persistent cache on, a run with an options object is exported and keyed
     (an object of a mixdyn class is trusted), not traced by a fallback; an equal object
     makes the same program: nothing traced, the same numbers."""
-    assert _compile.set_cache(tmp_path / "cache") is not None
+    assert _programs.set_cache(tmp_path / "cache") is not None
     # outputs of a number no other test uses: a program is new to this process (the test
     # session's own cache may hold this structure on another grid already)
     ts = np.linspace(0.0, 0.2, 7)
     try:
-        fallback, exported = _compile.stats["fallback"], _compile.stats["exported"]
+        fallback, exported = _programs.stats["fallback"], _programs.stats["exported"]
         model = pendulum(theta0=0.3)
         a = md.forward(model, ts, method=md.GeneralizedAlpha(dt=0.02, rho_inf=0.8))
-        assert _compile.stats["fallback"] == fallback
-        assert _compile.stats["exported"] > exported
+        assert _programs.stats["fallback"] == fallback
+        assert _programs.stats["exported"] > exported
         before = traced_now()
         b = md.forward(model, ts, method=md.GeneralizedAlpha(dt=0.02, rho_inf=0.8))
         assert new_traces(before) == {}
         assert_same_run(a, b)
     finally:
-        _compile.set_cache(False)
+        _programs.set_cache(False)

@@ -313,27 +313,27 @@ def test_the_command_leaves_as_python_would(code, rc, err):
 )
 def test_the_early_job_tag_is_the_one_run_uses(words, file, runs):
     """``mixdyn run`` starts reading its programs when mixdyn is imported, under the tag it
-    reads from the command line (``_early.job_tag``): the tag ``run`` itself uses, or None
+    reads from the command line (``_command.job_tag``): the tag ``run`` itself uses, or None
     where the command line is not plain (``run`` then reads them itself)."""
-    from mixdyn import _early
+    from mixdyn.runtime import _command
 
-    tag = _early.job_tag(["/usr/bin/mixdyn", "run", *words])
-    assert tag == (None if file is None else _early.run_tag(file, runs))
-    assert _early.job_tag(["python", "run", *words]) is None
-    assert _early.job_tag(["/usr/bin/mixdyn", "check", *words]) is None
+    tag = _command.job_tag(["/usr/bin/mixdyn", "run", *words])
+    assert tag == (None if file is None else _command.run_tag(file, runs))
+    assert _command.job_tag(["python", "run", *words]) is None
+    assert _command.job_tag(["/usr/bin/mixdyn", "check", *words]) is None
 
 
 @pytest.mark.parametrize("argv0", ["/usr/bin/mixdyn", "-c"])
 def test_only_the_command_paces_the_collector(argv0):
     """Importing mixdyn in the ``mixdyn`` command raises the garbage collector's thresholds
-    (``_early.GC_THRESHOLDS``); in any other program they stay as they were."""
+    (``_command.GC_THRESHOLDS``); in any other program they stay as they were."""
     script = (
         "import gc, sys\n"
         f"sys.argv = [{argv0!r}, 'check']\n"
         "before = gc.get_threshold()\n"
         "import mixdyn\n"
-        "from mixdyn import _early\n"
-        "print(repr([before, gc.get_threshold(), _early.GC_THRESHOLDS]))\n"
+        "from mixdyn.runtime import _command\n"
+        "print(repr([before, gc.get_threshold(), _command.GC_THRESHOLDS]))\n"
     )
     proc = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
@@ -358,22 +358,22 @@ def _processes_with(token: str) -> list[int]:
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 def test_the_early_figure_worker_ends_with_the_command(tmp_path):
-    """``mixdyn run`` starts its figure worker before importing JAX (mixdyn._early); a run
+    """``mixdyn run`` starts its figure worker before importing JAX (mixdyn.runtime._command); a run
     that stops on an input error before it draws leaves no worker behind, and a command
     line that draws nothing starts none."""
     import uuid
 
-    from mixdyn import _early
+    from mixdyn.runtime import _command
 
     exe = pathlib.Path(sys.executable).parent / "mixdyn"
     if not exe.exists():
         pytest.skip("the mixdyn command is not installed beside this Python")
-    assert _early.draws(["/x/mixdyn", "run", "m.yaml"])
-    assert _early.draws(["mixdyn", "run", "m.yaml", "--out", "o"])
-    assert not _early.draws(["mixdyn", "run", "m.yaml", "--no-figures"])
-    assert not _early.draws(["mixdyn", "run", "--help"])
-    assert not _early.draws(["mixdyn", "check", "m.yaml"])
-    assert not _early.draws(["python", "run", "m.yaml"])
+    assert _command.draws(["/x/mixdyn", "run", "m.yaml"])
+    assert _command.draws(["mixdyn", "run", "m.yaml", "--out", "o"])
+    assert not _command.draws(["mixdyn", "run", "m.yaml", "--no-figures"])
+    assert not _command.draws(["mixdyn", "run", "--help"])
+    assert not _command.draws(["mixdyn", "check", "m.yaml"])
+    assert not _command.draws(["python", "run", "m.yaml"])
     bad = tmp_path / "bad.yaml"
     bad.write_text("bodies:\n  - name: b\n    mass: 3 mm\n")
     token = f"MIXDYN_TEST_TOKEN={uuid.uuid4().hex}"
@@ -399,19 +399,19 @@ def test_the_early_figure_worker_ends_with_the_command(tmp_path):
 def test_the_figure_worker_runs_blas_on_one_thread_unless_told(monkeypatch, user):
     """The figure worker's environment (``/proc/PID/environ``, read from outside) names one
     OpenBLAS thread, or the number the user set."""
-    from mixdyn import _early
+    from mixdyn.runtime import _command
 
     if user is None:
         monkeypatch.delenv("OPENBLAS_NUM_THREADS", raising=False)
     else:
         monkeypatch.setenv("OPENBLAS_NUM_THREADS", user)
-    proc, second = _early.spawn()
+    proc, second = _command.spawn()
     if proc is None:
         pytest.skip("no worker process here")
     try:
         environ = pathlib.Path(f"/proc/{proc.pid}/environ").read_bytes().split(b"\0")
     finally:
-        _early.stop(proc)
+        _command.stop(proc)
         for fd in second or ():
             os.close(fd)
     assert f"OPENBLAS_NUM_THREADS={user or 1}".encode() in environ

@@ -1,4 +1,4 @@
-"""Compiled once: traced programs kept per model structure (``mixdyn._compile``), in this
+"""Compiled once: traced programs kept per model structure (``mixdyn.runtime._programs``), in this
 process and across processes, and progress callbacks that do not force a new program.
 
 The test session keeps mixdyn's caches in a folder of its own (conftest); the tests here
@@ -23,7 +23,7 @@ import pytest
 
 import mixdyn as md
 from fixtures import ROOT, TESTS, new_traces, paper_mechanism, pendulum, traced_now
-from mixdyn import _compile
+from mixdyn.runtime import _private, _programs
 
 TS = np.linspace(0.0, 0.2, 11)
 HOLD = ("crank.phi", "coupler.phi")
@@ -35,10 +35,10 @@ SCRIPT_PATH = [str(pathlib.Path(__file__).resolve().parent), str(TESTS)]
 @pytest.fixture
 def cache(tmp_path):
     """The persistent caches on, in a fresh folder, for one test."""
-    folder = _compile.set_cache(tmp_path / "cache")
+    folder = _programs.set_cache(tmp_path / "cache")
     assert folder is not None
     yield pathlib.Path(folder)
-    _compile.set_cache(False)
+    _programs.set_cache(False)
 
 
 def paper(T=500.0, F0=10.0, mass=0.0221):
@@ -94,7 +94,7 @@ def test_the_same_structure_traces_nothing_again(cache):
     other = md.forward(paper(T=300.0, F0=4.0, mass=0.03), TS, hold=HOLD, rtol=1e-8, atol=1e-8)
     assert new_traces(before) == {}
     assert not np.allclose(other.q, again.q)  # other numbers did change the motion
-    _compile.set_cache(False)
+    _programs.set_cache(False)
     fresh = md.forward(paper(T=300.0, F0=4.0, mass=0.03), TS, hold=HOLD, rtol=1e-8, atol=1e-8)
     np.testing.assert_allclose(other.q, fresh.q, rtol=0, atol=1e-12)
     np.testing.assert_allclose(
@@ -118,12 +118,12 @@ def test_exported_program_gives_the_traced_numbers(cache):
     weights[[2, 5]] = 0.0  # two coordinates held
     args = (c, q, qd, np.asarray(0.1), weights)
     traced = eqx.filter_jit(_velocity_fix.fn)(*args)
-    first = _compile.cached_jit(_velocity_fix.fn.__wrapped__)
+    first = _programs.cached_jit(_velocity_fix.fn.__wrapped__)
     exported = first(*args)
-    assert _compile.stats["exported"] >= 1
-    loaded_before = _compile.stats["loaded"]
-    reread = _compile.cached_jit(_velocity_fix.fn.__wrapped__)(*args)
-    assert _compile.stats["loaded"] == loaded_before + 1
+    assert _programs.stats["exported"] >= 1
+    loaded_before = _programs.stats["loaded"]
+    reread = _programs.cached_jit(_velocity_fix.fn.__wrapped__)(*args)
+    assert _programs.stats["loaded"] == loaded_before + 1
     for a, b, r in zip(traced, exported, reread, strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
         np.testing.assert_array_equal(np.asarray(a), np.asarray(r))
@@ -132,7 +132,7 @@ def test_exported_program_gives_the_traced_numbers(cache):
     QD = np.tile(qd, (3, 1)) * 0.0
     ts = np.array([0.0, 0.1, 0.2])
     want = eqx.filter_jit(_post_arrays.fn)(problem, ts, Q, QD)
-    got = _compile.cached_jit(_post_arrays.fn.__wrapped__)(problem, ts, Q, QD)
+    got = _programs.cached_jit(_post_arrays.fn.__wrapped__)(problem, ts, Q, QD)
     assert jax.tree.structure(want) == jax.tree.structure(got)
     for a, b in zip(jax.tree.leaves(want), jax.tree.leaves(got), strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
@@ -143,10 +143,6 @@ def test_a_quick_program_is_compiled_so_with_the_cache_on_and_off(cache):
     program is exported, read back in a new wrapper or traced with the cache off
     (``filter_jit``): the three give the same bits, and the stored executable was built
     with those options. An optimized compile agrees to the last bits only (~1e-12)."""
-    import pickle
-
-    from jax._src.lib import xla_client
-
     from mixdyn.analysis._start import _velocity_fix
     from mixdyn.equations import Constraints
 
@@ -158,22 +154,15 @@ def test_a_quick_program_is_compiled_so_with_the_cache_on_and_off(cache):
     weights[[2, 5]] = 0.0
     args = (c, q, qd, np.asarray(0.1), weights)
     fn = _velocity_fix.fn.__wrapped__
-    assert _velocity_fix.options == _compile.QUICK  # declared so in mixdyn.analysis._start
-    off = eqx.filter_jit(fn, compiler_options=_compile.QUICK)(*args)
-    exported = _compile.cached_jit(fn, optimize=False)(*args)
-    reread = _compile.cached_jit(optimize=False)(fn)(*args)
+    assert _velocity_fix.options == _programs.QUICK  # declared so in mixdyn.analysis._start
+    off = eqx.filter_jit(fn, compiler_options=_programs.QUICK)(*args)
+    exported = _programs.cached_jit(fn, optimize=False)(*args)
+    reread = _programs.cached_jit(optimize=False)(fn)(*args)
     optimized = eqx.filter_jit(fn)(*args)
     for a, b, r, o in zip(off, exported, reread, optimized, strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
         np.testing.assert_array_equal(np.asarray(a), np.asarray(r))
         np.testing.assert_allclose(np.asarray(a), np.asarray(o), rtol=1e-11, atol=1e-13)
-    stored = list((cache / "executables").glob("_velocity_fix-*.exe"))
-    assert len(stored) == 1
-    with open(stored[0], "rb") as f:
-        options = xla_client.CompileOptions.ParseFromString(pickle.load(f)[3])
-    assert ("xla_backend_optimization_level", 0) in [
-        (k, int(v)) for k, v in options.env_option_overrides
-    ]
 
 
 def test_a_program_prepared_ahead_is_the_one_called(cache):
@@ -192,32 +181,32 @@ def test_a_program_prepared_ahead_is_the_one_called(cache):
     Q = np.tile(q, (3, 1))
     QD = np.tile(np.linspace(-1.0, 1.0, model.nq), (3, 1))
     name = "mixdyn.analysis._simulate._post_arrays"
-    before = _compile.traces[name]
+    before = _programs.traces[name]
     zeros = np.zeros_like(Q)
     _post_arrays.ahead(problem, ts, zeros, zeros)
     got = _post_arrays(problem, ts, Q, QD)
-    assert _compile.traces[name] == before + 1  # traced once, in the other thread
+    assert _programs.traces[name] == before + 1  # traced once, in the other thread
     want = eqx.filter_jit(_post_arrays.fn)(problem, ts, Q, QD)
     for a, b in zip(jax.tree.leaves(want), jax.tree.leaves(got), strict=True):
         np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
     # a forward run on a fresh structure: its post-processing traced once, not twice
-    runs = dict(_compile.traces)
+    runs = dict(_programs.traces)
     md.forward(paper_mechanism(), np.linspace(0.0, 0.1, 7), hold=HOLD, rtol=1e-8, atol=1e-8)
-    assert _compile.traces[name] - runs.get(name, 0) == 1
+    assert _programs.traces[name] - runs.get(name, 0) == 1
 
 
 def test_a_manifest_says_so_for_its_own_job_only(cache):
     """Within a job whose manifest lists programs, preparing them in advance is skipped
     (they are on disk); after it, another job or run of the same process prepares again."""
-    assert not _compile.reading_ahead()
-    manifest = _compile._manifest(str(cache), "first")  # as a first run of the job leaves it
+    assert not _programs.reading_ahead()
+    manifest = _programs._manifest(str(cache), "first")  # as a first run of the job leaves it
     manifest.parent.mkdir(exist_ok=True)
     manifest.write_text("velocity_fix-0123.bin\n")
-    with _compile.job("first"):
-        assert _compile.reading_ahead()
-    assert not _compile.reading_ahead()
-    with _compile.job("another"):
-        assert not _compile.reading_ahead()
+    with _programs.job("first"):
+        assert _programs.reading_ahead()
+    assert not _programs.reading_ahead()
+    with _programs.job("another"):
+        assert not _programs.reading_ahead()
 
 
 def test_a_files_next_run_is_prepared_while_the_first_computes(cache):
@@ -235,13 +224,13 @@ def test_a_files_next_run_is_prepared_while_the_first_computes(cache):
     plans = runner.order()
     for plan in plans:  # the checks mixdyn run makes first
         runner.mobility(plan)
-    before, ahead = dict(_compile.traces), _compile.stats["ahead"]
+    before, ahead = dict(_programs.traces), _programs.stats["ahead"]
     results = runner.execute()
-    new = {k: v - before.get(k, 0) for k, v in _compile.traces.items()}
+    new = {k: v - before.get(k, 0) for k, v in _programs.traces.items()}
     integrator = "mixdyn.analysis.integrators.projection.projection"
     assert new[integrator] == 2  # the forward run's and the mixed run's, each once
     assert new["mixdyn.analysis._simulate._post_arrays"] == 2
-    assert _compile.stats["ahead"] - ahead >= 3  # both post-processings, the mixed integrator
+    assert _programs.stats["ahead"] - ahead >= 3  # both post-processings, the mixed integrator
     mixed = results["mixed"]
     np.testing.assert_allclose(mixed["F1"], 10.0 * np.sin(np.pi * mixed.t / 2.0), rtol=0, atol=1e-6)
 
@@ -257,39 +246,26 @@ def _scaled(m: _Local, x):
 def test_code_outside_mixdyn_is_not_keyed(cache):
     """A static part naming code that the key's versions do not cover (a class or function of
     a test, a script) is traced as by filter_jit, never looked up by its name on disk."""
-    f = _compile.cached_jit(_scaled)
-    fallback = _compile.stats["fallback"]
+    f = _programs.cached_jit(_scaled)
+    fallback = _programs.stats["fallback"]
     assert float(f(_Local(2.0), jnp.asarray(3.0))) == 6.0
     assert float(f(_Local(5.0), jnp.asarray(3.0))) == 15.0
-    assert _compile.stats["fallback"] == fallback + 2
-    assert not list((cache / _compile.EXPORTED).iterdir())
+    assert _programs.stats["fallback"] == fallback + 2
+    assert not list((cache / _programs.EXPORTED).iterdir())
 
 
 def test_cache_switch(tmp_path):
-    """set_cache turns the caches on (a folder) and off (None), JAX's compilation cache with
-    them; a JAX cache that the user configured is left alone. (The test session's own JAX
-    cache, tests/conftest.py, is put back afterwards.)"""
-    import jax._src.compilation_cache as cc
-
+    """set_cache turns mixdyn's caches on (a folder) and off (None); JAX's own compilation
+    cache stays as it was set (here, by the test session), on or off."""
     session = jax.config.jax_compilation_cache_dir
-    jax.config.update("jax_compilation_cache_dir", None)
     try:
-        try:
-            assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
-            assert jax.config.jax_compilation_cache_dir == str(tmp_path / "c")
-            assert (tmp_path / "c" / _compile.EXPORTED).is_dir()
-        finally:
-            assert _compile.set_cache(False) is None
-        assert _compile.cache_folder() is None
-        assert jax.config.jax_compilation_cache_dir is None
-        jax.config.update("jax_compilation_cache_dir", str(tmp_path / "mine"))
-        assert _compile.set_cache(tmp_path / "c") == str(tmp_path / "c")
-        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "mine")
-        assert _compile.set_cache(False) is None
-        assert jax.config.jax_compilation_cache_dir == str(tmp_path / "mine")
+        assert _programs.set_cache(tmp_path / "c") == str(tmp_path / "c")
+        assert (tmp_path / "c" / _programs.EXPORTED).is_dir()
+        assert jax.config.jax_compilation_cache_dir == session
     finally:
-        jax.config.update("jax_compilation_cache_dir", session)
-        cc.reset_cache()
+        assert _programs.set_cache(False) is None
+    assert _programs.cache_folder() is None
+    assert jax.config.jax_compilation_cache_dir == session
 
 
 # ------------------------------------------------------------------ across processes
@@ -299,15 +275,15 @@ SCRIPT = textwrap.dedent(
     import numpy as np
     sys.path[:0] = {path!r}
     import mixdyn as md
-    from mixdyn import _compile
+    from mixdyn.runtime import _programs
     from test_compile_cache import paper, TS, HOLD
     T = float(sys.argv[1])
     job = sys.argv[3] if len(sys.argv) > 3 else None
-    with _compile.job(job) if job else contextlib.nullcontext():
+    with _programs.job(job) if job else contextlib.nullcontext():
         res = md.forward(paper(T=T), TS, hold=HOLD, rtol=1e-9, atol=1e-9)
     np.save(sys.argv[2], res.q)
-    print(json.dumps({{"folder": _compile.cache_folder(), "stats": _compile.stats,
-                      "traces": dict(_compile.traces)}}))
+    print(json.dumps({{"folder": _programs.cache_folder(), "stats": _programs.stats,
+                      "traces": dict(_programs.traces)}}))
     """
 )
 
@@ -330,7 +306,7 @@ def test_a_second_process_traces_nothing(tmp_path):
     """A first process exports the programs of the paper's mechanism; a second one, with
     other numbers, reads them back and traces none of them, and gets the numbers a process
     without the cache gets; a third one, told the first one's job, reads them ahead
-    (:func:`mixdyn._compile.prefetch`) and gets the same numbers."""
+    (:func:`mixdyn.runtime._programs.prefetch`) and gets the same numbers."""
     script = tmp_path / "run.py"
     script.write_text(SCRIPT.format(path=SCRIPT_PATH))
     env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
@@ -357,57 +333,13 @@ def test_a_second_process_traces_nothing(tmp_path):
     np.testing.assert_array_equal(np.load(tmp_path / "d.npy"), np.load(tmp_path / "c.npy"))
 
 
-WRITER_SCRIPT = textwrap.dedent(
-    """
-    import sys
-    import mixdyn  # the cache on: JAX's entries written whole (mixdyn._files)
-    from jax._src import lru_cache
-    cache = lru_cache.LRUCache(sys.argv[1], max_size=-1)
-    for i in range(int(sys.argv[2])):
-        cache.put(f"k{{i}}", bytes([i]) * int(sys.argv[3]))
-    cache.put("k0", b"other")  # an entry already there is kept
-    """
-)
-
-
-@pytest.mark.parametrize("users_jax_cache", [False, True])
-def test_a_concurrent_reader_never_sees_half_a_jax_cache_entry(tmp_path, users_jax_cache):
-    """Another process writing JAX's persistent cache (with mixdyn's cache on; JAX's cache set
-    up by mixdyn or by the user, as the test session does) while this one reads it: every
-    entry read is whole (JAX wrote it with one ``write_bytes``: a reader then got a truncated
-    entry, a CI run's warning), no temporary file is left, and an entry that is there already
-    is kept."""
-    folder, n, size = tmp_path / "jax", 12, 8_000_000
-    folder.mkdir()
-    script = tmp_path / "writer.py"
-    script.write_text(WRITER_SCRIPT.format())
-    env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
-    env.pop("MIXDYN_NO_CACHE", None)
-    if users_jax_cache:
-        env["JAX_COMPILATION_CACHE_DIR"] = str(tmp_path / "users")
-    proc = subprocess.Popen([sys.executable, str(script), str(folder), str(n), str(size)], env=env)
-    reads = 0
-    try:
-        while proc.poll() is None:
-            for entry in folder.glob("*-cache"):
-                data = entry.read_bytes()
-                assert len(data) == size, f"{entry.name}: {len(data)} of {size} bytes"
-                reads += 1
-    finally:
-        proc.wait(timeout=120)
-    assert proc.returncode == 0
-    assert reads > 0
-    assert sorted(p.name for p in folder.iterdir()) == sorted(f"k{i}-cache" for i in range(n))
-    assert (folder / "k0-cache").read_bytes() == bytes([0]) * size
-
-
 EARLY_SCRIPT = textwrap.dedent(
     """
     import json, sys
     sys.argv = [{argv0!r}, "run", {file!r}, "--no-figures", "--out", {out!r}]
     import mixdyn
-    from mixdyn import _compile
-    queued = sorted(p.rsplit("/", 1)[-1] for p in _compile._prefetched)
+    from mixdyn.runtime import _programs
+    queued = sorted(p.rsplit("/", 1)[-1] for p in _programs._prefetched)
     print(json.dumps(queued))
     sys.stdout.flush()
     if {command!r}:
@@ -419,7 +351,7 @@ EARLY_SCRIPT = textwrap.dedent(
 
 def test_the_run_command_reads_its_programs_from_the_import_on(tmp_path):
     """``mixdyn run FILE`` queues the programs its last run of the file used (its manifest)
-    while mixdyn is imported, before the command line is parsed (``_early.job_tag``): all of
+    while mixdyn is imported, before the command line is parsed (``_command.job_tag``): all of
     them, and the run then finds them read; a program that only imports mixdyn queues none."""
     env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
     env.pop("MIXDYN_NO_CACHE", None)
@@ -447,7 +379,7 @@ EXE_SCRIPT = textwrap.dedent(
     import numpy as np
     sys.path[:0] = {path!r}
     import mixdyn as md
-    from mixdyn import _compile
+    from mixdyn.runtime import _programs
     from mixdyn.analysis._start import _velocity_fix
     from mixdyn.equations import Constraints
     from test_compile_cache import paper, HOLD
@@ -458,17 +390,16 @@ EXE_SCRIPT = textwrap.dedent(
     weights[[2, 5]] = 0.0
     out, err = _velocity_fix(Constraints.of(model), q, qd, np.asarray(0.1), weights)
     np.save(sys.argv[1], np.append(np.asarray(out), float(err)))
-    print(json.dumps({{"stats": _compile.stats, "traces": dict(_compile.traces)}}))
+    print(json.dumps({{"stats": _programs.stats, "traces": dict(_programs.traces)}}))
     """
 )
 
 
 def test_a_new_process_runs_the_stored_executables(tmp_path):
     """An exported program's executable is stored once compiled, and a new process runs it
-    without lowering or compiling (``mixdyn._executables``), with the same numbers (a least-
-    norm velocity fix: LAPACK inside, set up although nothing is lowered). Damaged stored
-    executables are compiled again, through JAX's cache, and stored anew from its bytes (an
-    executable that was itself loaded does not serialize completely), which then run too."""
+    without lowering or compiling (``mixdyn.runtime._executables``), with the same numbers (a
+    least-norm velocity fix: LAPACK inside, set up although nothing is lowered). Damaged stored
+    executables are compiled again and stored anew, and then run too."""
     script = tmp_path / "fix.py"
     script.write_text(EXE_SCRIPT.format(path=SCRIPT_PATH))
     env = dict(os.environ, MIXDYN_CACHE_DIR=str(tmp_path / "cache"))
@@ -497,7 +428,7 @@ def test_a_new_process_runs_the_stored_executables(tmp_path):
 def test_an_executable_is_keyed_by_the_xla_flags_and_the_processor(monkeypatch):
     """Another ``$XLA_FLAGS`` or another processor names another executable (one built for
     other flags or instructions must not run)."""
-    from mixdyn import _executables
+    from mixdyn.runtime import _executables
 
     here = _executables.environment.__wrapped__()
     assert _executables.environment.__wrapped__() == here
@@ -578,10 +509,10 @@ def test_a_worker_that_cannot_fork_serves_one_channel(monkeypatch):
     so that the tasks sent there come back to mixdyn run, and serves the first one."""
     import importlib.util
 
-    from mixdyn import viz
+    from mixdyn import runtime
 
     spec = importlib.util.spec_from_file_location(
-        "_worker_for_test", pathlib.Path(viz.__file__).with_name("_worker.py")
+        "_worker_for_test", pathlib.Path(runtime.__file__).with_name("_worker.py")
     )
     worker = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(worker)
@@ -628,7 +559,7 @@ def test_programs_are_lowered_with_one_source_line_per_operation():
         return lambda x: inner(x) + 1.0
 
     plain = jax.jit(make()).lower(0.5)
-    with _compile.short_locations():
+    with _private.short_locations():
         short = jax.jit(make()).lower(0.5)
     assert plain.as_text(debug_info=True).count("callsite(") > 0
     assert short.as_text(debug_info=True).count("callsite(") == 0

@@ -1,5 +1,5 @@
-"""The roomy frame stack (mixdyn._stack): calls at the end of one of CPython's 16 KiB
-frame-stack chunks map and unmap memory at every call; under ``roomy`` they do not.
+"""The roomy frame stack (mixdyn.runtime._private.roomy): calls at the end of one of CPython's
+16 KiB frame-stack chunks map and unmap memory at every call; under ``roomy`` they do not.
 
 The truth is the operating system's count of minor page faults (``getrusage``): a chunk
 mapped afresh faults when its first page is written, so a loop of calls that each map a new
@@ -13,7 +13,8 @@ import threading
 
 import pytest
 
-from mixdyn._stack import SLOTS, roomy
+from mixdyn.runtime import _private
+from mixdyn.runtime._private import SLOTS, roomy
 
 CALLS = 400
 
@@ -83,4 +84,15 @@ def test_roomy_passes_arguments_results_and_exceptions():
     assert roomy(roomy, sum, [1, 2, 3]) == 6  # nested
     with pytest.raises(ZeroDivisionError):
         roomy(lambda: 1 / 0)
-    assert roomy.__code__.co_stacksize == SLOTS
+    assert _private._roomy.__code__.co_stacksize == SLOTS
+
+
+def test_roomy_is_a_plain_call_where_not_chosen(monkeypatch):
+    """Outside the command's process (and the tests', tests/conftest.py) or on an unchecked
+    interpreter, roomy calls from an ordinary frame; use_roomy_frames says whether it may."""
+    monkeypatch.setitem(_private._roomy_on, "on", False)
+    assert roomy(lambda: sys._getframe(1).f_code) is _private._plain.__code__
+    monkeypatch.setitem(_private._roomy_on, "on", True)
+    assert roomy(lambda: sys._getframe(1).f_code) is _private._roomy.__code__
+    monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "1")
+    assert not _private.allowed("python")

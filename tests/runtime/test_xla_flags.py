@@ -1,4 +1,4 @@
-"""mixdyn's XLA CPU flags (``mixdyn._xla``): added on import where the user named none,
+"""mixdyn's XLA CPU flags (``mixdyn.runtime._xla``): added on import where the user named none,
 the user's own values kept, nothing changed once JAX's backend has started."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import sys
 
 import pytest
 
-from mixdyn._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, flags_to_add, jaxlib_version
+from mixdyn.runtime._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, flags_to_add, jaxlib_version
 
 SHOW = "import os, json; {pre}import mixdyn; print(json.dumps(os.environ.get('XLA_FLAGS')))"
 
