@@ -85,6 +85,7 @@ from .errors import (  # noqa: E402
     SolvabilityError,
     StepSizeError,
 )
+from .linalg import AutoSolver, BandedSolver, DenseSolver, LinearSolver  # noqa: E402
 from .model import *  # noqa: E402, F403
 from .model import __all__ as _model_all  # noqa: E402
 from .units import SI, UnitSystem  # noqa: E402
@@ -121,6 +122,10 @@ def __getattr__(name):
 
 
 __all__ = [
+    "AutoSolver",
+    "BandedSolver",
+    "DenseSolver",
+    "LinearSolver",
     "SI",
     "Assembly",
     "AssemblyError",

@@ -54,7 +54,7 @@ def _evaluate(problem, q, qd, t):
         velocities=problem.project_velocities(q, qd, t),
         positions=problem.project_positions(q, t, 1e-14)[0],
     )
-    out["jacobian"] = c.jacobian_values(q, t) if c.linear_solver == "sparse" else c.phi_q(q, t)
+    out["jacobian"] = c.jacobian_values(q, t) if c.banded else c.phi_q(q, t)
     return out
 
 
@@ -66,7 +66,7 @@ def test_jacobian_gamma_and_accelerations_agree(name):
     model = MODELS[name]()
     c = Constraints.of(model)
     cs = c.with_linear_solver("sparse")
-    assert cs.linear_solver == "sparse"
+    assert cs.linear_solver == md.linalg.BandedSolver()
     q, qd = _state(model)
     t = jnp.asarray(0.3)
     d = _evaluate(Problem(model, c), q, qd, t)
@@ -203,13 +203,36 @@ def test_regularized_schur_solve_is_the_minimum_norm_solution():
 
 
 def test_auto_choice_and_bad_name():
-    assert Constraints.of(slider_crank()).with_linear_solver("auto").linear_solver == "dense"
-    assert Constraints.of(chain(64)).with_linear_solver("auto").linear_solver == "sparse"
+    assert Constraints.of(slider_crank()).with_linear_solver("auto").linear_solver.name == "dense"
+    assert Constraints.of(chain(64)).with_linear_solver("auto").linear_solver.name == "sparse"
     # the measured threshold: 32 rows (a 16-link chain) sparse, 30 dense
-    assert Constraints.of(chain(16)).with_linear_solver("auto").linear_solver == "sparse"
-    assert Constraints.of(chain(15)).with_linear_solver("auto").linear_solver == "dense"
+    assert Constraints.of(chain(16)).with_linear_solver("auto").linear_solver.name == "sparse"
+    assert Constraints.of(chain(15)).with_linear_solver("auto").linear_solver.name == "dense"
     with pytest.raises(md.errors.ModelError, match="linear_solver"):
         Constraints.of(slider_crank()).with_linear_solver("klu")
+
+
+def test_the_linear_solver_is_an_object_resolved_once():
+    """A name and its object are one choice; the set carries the resolved path, never
+    ``AutoSolver``; the automatic choice's thresholds are the object's own; a run's result is
+    the same whichever spelling chose its path (bit for bit)."""
+    c = Constraints.of(chain(16))
+    assert c.with_linear_solver(md.AutoSolver()).linear_solver == md.BandedSolver()
+    assert c.with_linear_solver(md.AutoSolver(min_rows=64)).linear_solver == md.DenseSolver()
+    assert c.with_linear_solver(md.AutoSolver(max_block=1)).linear_solver == md.DenseSolver()
+    assert c.with_linear_solver("sparse").banded and not c.with_linear_solver("dense").banded
+    assert Constraints(c.joints, c.drivers, c.nq, linear_solver="auto").linear_solver.name == (
+        "sparse"
+    )
+    model = slider_crank()
+    t = np.linspace(0.0, 0.3, 4)
+    for name, obj in (("dense", md.DenseSolver()), ("sparse", md.BandedSolver())):
+        a = md.kinematic(model, t, linear_solver=name)
+        b = md.kinematic(model, t, linear_solver=obj)
+        assert a.stats["linear_solver"] == b.stats["linear_solver"] == name
+        np.testing.assert_array_equal(np.asarray(a.q), np.asarray(b.q))
+    with pytest.raises(md.errors.ModelError, match="linear_solver"):
+        md.kinematic(model, t, linear_solver=object())
 
 
 def test_singular_schur_reports_zero_ratio():

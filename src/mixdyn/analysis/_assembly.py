@@ -12,7 +12,7 @@ from ..equations import Constraints
 from ..equations import _constraints as _cons
 from ..equations._constraints import Packed
 from ..errors import AssemblyError, ModelError
-from ..linalg import min_norm_step
+from ..linalg import DenseSolver, LinearSolver, min_norm_step
 from ..model import CoordinateDriver, Model, Polynomial
 from ..model._element import Resolver
 from ..runtime._programs import cached_jit, register_key, skeleton
@@ -74,7 +74,7 @@ def _gn_step(c: Constraints, q, t, damping):
     """One damped Gauss–Newton step ``dq = -J^T (J J^T + damping I)^-1 Phi``; returns the new
     ``q`` and the pivot ratio of the solve (1 on the dense path, which does not report it)."""
     r = c(q, t)
-    if c.linear_solver == "sparse":
+    if c.banded:
         solve, ratio = c.min_norm_solver(c.jacobian_values(q, t), shift=damping)
         return q - solve(r), ratio
     J = c.phi_q(q, t)
@@ -124,7 +124,7 @@ class _Steps:
 
     def __init__(self, c: Constraints):
         self.c = c
-        self.p = c.packed() if c.linear_solver == "sparse" else None
+        self.p = c.packed() if c.banded else None
 
     def residual(self, q, t):
         return _residual(self.c, q, t) if self.p is None else _residual_packed(self.p, q, t)
@@ -143,7 +143,7 @@ def assemble(
     drivers=(),
     tol: float | None = None,
     max_iter: int = 100,
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
 ) -> Assembly:
     """Close the joints (and optional drivers) starting from a rough pose.
 
@@ -158,10 +158,10 @@ def assemble(
         drivers: drivers to satisfy as well (none by default).
         tol: largest residual accepted [length] (default ``1e-12 x`` the model's size).
         max_iter: iteration limit.
-        linear_solver: ``"dense"`` (LU of ``J J^T``), ``"sparse"`` (banded Cholesky of
-            ``J J^T``, falling back to the dense step where it is singular: redundant joint
-            equations) or ``"auto"`` (sparse for large mechanisms of small bandwidth, see
-            :mod:`mixdyn.linalg`).
+        linear_solver: a :class:`~mixdyn.LinearSolver`, or its name: ``"dense"`` (LU of ``J J^T``),
+            ``"sparse"`` (banded Cholesky of ``J J^T``, falling back to the dense step where it is
+            singular: redundant joint equations) or ``"auto"`` (sparse for large mechanisms of small
+            bandwidth, see :mod:`mixdyn.linalg`).
 
     Raises:
         AssemblyError: naming the joint equations that could not be closed.
@@ -189,11 +189,11 @@ def assemble(
         damping = np.asarray(min(err / L, 1.0) * 1e-3)
         q_new, ratio = steps.step(q, t, damping)
         q_new = np.asarray(q_new)
-        if c.linear_solver == "sparse" and not (
+        if c.banded and not (
             float(ratio) >= SPARSE_STEP_MIN_RATIO and bool(np.all(np.isfinite(q_new)))
         ):
             if c.m * c.nq <= DENSE_FALLBACK_MAX_ENTRIES:
-                q_new, _ = _gn_step(c.with_linear_solver("dense"), q, t, damping)
+                q_new, _ = _gn_step(c.with_linear_solver(DenseSolver()), q, t, damping)
             else:
                 q_new, _ = steps.step(q, t, damping, SPARSE_DAMPING_FLOOR)
             q_new = np.asarray(q_new)

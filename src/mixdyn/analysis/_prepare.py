@@ -24,6 +24,7 @@ import numpy as np
 
 from ..equations import Constraints
 from ..errors import ModelError
+from ..linalg import LinearSolver, as_linear_solver
 from ..model import Model
 from ._assembly import assemble
 from ._reactions import require_held_meshes
@@ -43,7 +44,7 @@ class Prepared:
         qd: (nq,) consistent velocities, or None (kinematic runs: the drivers give them).
         report: the degrees-of-freedom report at ``(q, t0)``.
         keep: the constraint rows kept (independent joint rows, then the drivers).
-        linear_solver: the path asked for (``"auto"``, ``"dense"``, ``"sparse"``).
+        linear_solver: the solver asked for (:class:`~mixdyn.linalg.LinearSolver`).
         inputs: what the start was made from (the kind of set-up, the rough positions and
             velocities, the held coordinates...), compared by :func:`use_prepared`.
     """
@@ -55,7 +56,7 @@ class Prepared:
     qd: jax.Array | None
     report: DofReport
     keep: tuple[int, ...]
-    linear_solver: str
+    linear_solver: LinearSolver
     inputs: tuple = ()
 
     def constraints(self, independent_rows_only: bool = False) -> Constraints:
@@ -80,7 +81,8 @@ def prepare_dynamic(
     q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), t0, drivers)
     require_held_meshes(model, q, t0, drivers)
-    return Prepared(model, drivers, t0, q, qd, report, keep, linear_solver, inputs)
+    solver = as_linear_solver(linear_solver)
+    return Prepared(model, drivers, t0, q, qd, report, keep, solver, inputs)
 
 
 def prepare_kinematic(
@@ -108,7 +110,8 @@ def prepare_kinematic(
     if balanced:
         require_balanced(report)
     require_held_meshes(model, q, t0, drivers)
-    return Prepared(model, drivers, t0, q, None, report, keep, linear_solver, inputs)
+    solver = as_linear_solver(linear_solver)
+    return Prepared(model, drivers, t0, q, None, report, keep, solver, inputs)
 
 
 def use_prepared(
@@ -168,8 +171,9 @@ def use_prepared(
         wrong.append(f"{kind.get(prepared.inputs[:1], 'an unrecorded')} start")
     elif prepared.inputs != inputs:
         wrong.append("another rough start (q0, qd0, hold or assemble_first)")
-    if prepared.linear_solver != linear_solver:
-        wrong.append(f"the linear solver {prepared.linear_solver!r}, not {linear_solver!r}")
+    if prepared.linear_solver != as_linear_solver(linear_solver):
+        asked = as_linear_solver(linear_solver).name
+        wrong.append(f"the linear solver {prepared.linear_solver.name!r}, not {asked!r}")
     if wrong:
         raise ModelError(
             f"the prepared set-up does not match this {what} analysis: it was made for "

@@ -110,13 +110,6 @@ class Problem(eqx.Module):
     def Minv(self):
         return 1.0 / self.model.mass_diagonal
 
-    @property
-    def sparse(self) -> bool:
-        """Whether the sparse linear-solver path is taken: the constraints ask for it and the
-        augmented solver is used (the partition solver stays dense). Read only by the run's
-        statistics; every solve dispatches through the constraint set's operator."""
-        return self.c.linear_solver == "sparse" and self.solver == "augmented"
-
     # ------------------------------------------------------------------ forces
     def known_forces(self, q, qd, t):
         """Known generalized forces ``Q`` (nq,)."""

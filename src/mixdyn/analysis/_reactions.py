@@ -26,6 +26,7 @@ import numpy as np
 
 from ..equations import Constraints
 from ..errors import ModelError
+from ..linalg import AutoSolver
 from ..model._geometry import GROUND
 
 #: Largest relative miss of the radial tooth forces by the joints that hold the centres.
@@ -115,7 +116,9 @@ def require_held_meshes(model, q, t0: float = 0.0, drivers=None) -> None:
     if c._local_ok():
         J = _sparse_jacobian(c, qn, tn)[: c.n_joint_rows]
     else:
-        J = sp.csr_matrix(np.asarray(_jac(c.with_linear_solver("auto"), qn, tn))[: c.n_joint_rows])
+        J = sp.csr_matrix(
+            np.asarray(_jac(c.with_linear_solver(AutoSolver()), qn, tn))[: c.n_joint_rows]
+        )
     dense = J.shape[0] * J.shape[1] <= 250_000
     for j in meshes:
         g = np.zeros(model.nq)

@@ -387,7 +387,7 @@ def finish(case: Case, traj, arrays=None) -> Result:
         "energy_balance_error": balance,
         "constraint_rows": problem.c.active_labels,
         "unknown_forces": problem.unknown,
-        "linear_solver": "sparse" if problem.sparse else "dense",
+        "linear_solver": problem.c.linear_solver.name,
     }
     stats.update(case.stats)
     return Result(

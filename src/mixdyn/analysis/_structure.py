@@ -12,7 +12,7 @@ from scipy.sparse.linalg import splu
 from ..equations import Constraints
 from ..equations._constraints import Packed
 from ..errors import DegreesOfFreedomError, ModelError, RedundantConstraintError
-from ..linalg import independent_rows
+from ..linalg import AutoSolver, independent_rows
 from ..model import Model
 from ..runtime._programs import cached_jit
 from ._assembly import start_q
@@ -340,7 +340,7 @@ def analyse(
     if c._local_ok():
         J = _sparse_jacobian(c, q, t).toarray()
     else:
-        J = np.asarray(_jac(c.with_linear_solver("auto"), q, t))
+        J = np.asarray(_jac(c.with_linear_solver(AutoSolver()), q, t))
     nk = c.n_joint_rows
     if _full_row_rank(J):  # the usual case, in O(m): every row independent
         keep = tuple(range(c.n_full))

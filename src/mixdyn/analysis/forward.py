@@ -6,6 +6,7 @@ integrator. The model's drivers, if any, act as motion constraints; their effort
 
 from __future__ import annotations
 
+from ..linalg import LinearSolver
 from ..model import Model
 from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
@@ -34,7 +35,7 @@ def forward(
     qd0=None,
     hold=(),
     progress=None,
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     energy_tol: float | str | None = ENERGY_TOL,
     prepared: Prepared | None = None,
     **options,
@@ -66,11 +67,11 @@ def forward(
             (default 0); made consistent before the run.
         hold: coordinates (``"crank.phi"``) kept at their given values while assembling.
         progress: optional ``f(t)`` called at each output time (from inside the jitted loop).
-        linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
-            of small bandwidth, see :mod:`mixdyn.linalg`):
+        linear_solver: a :class:`~mixdyn.LinearSolver`, or its name: ``"dense"``, ``"sparse"`` or
+            ``"auto"`` (sparse for large mechanisms of small bandwidth, see :mod:`mixdyn.linalg`):
             the path of every linear solve of the run: the consistent start (assembly and
-            velocities), the acceleration equations, the projections, generalized-alpha's
-            Newton iterations and the reactions at the output times.
+            velocities), the acceleration equations, the projections, generalized-alpha's Newton
+            iterations and the reactions at the output times.
         energy_tol: relative tolerance of the run's energy balance ``T + V - E0 - W``,
             against its energy scale: ``"auto"`` (default: 1000 x ``rtol`` for the adaptive
             methods, within [1e-9, 1e-4]; 1e-4 for the fixed-step ones), a number, or None
@@ -123,7 +124,7 @@ def forward_case(
     q0=None,
     qd0=None,
     hold=(),
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     energy_tol: float | str | None = ENERGY_TOL,
     prepared: Prepared | None = None,
     **options,

@@ -10,6 +10,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
+from ..linalg import LinearSolver
 from ..model import Model
 from ._prepare import Prepared, prepare_kinematic, use_prepared
 from ._problem import Problem
@@ -24,7 +25,7 @@ def inverse(
     *,
     q0=None,
     hold=(),
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     prepared: Prepared | None = None,
     **kinematic_options,
 ) -> Result:
@@ -36,9 +37,9 @@ def inverse(
         t: (N,) increasing output times [time].
         q0: (nq,) rough starting configuration.
         hold: coordinates kept at their rough value while assembling.
-        linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (sparse for large mechanisms
-            of small bandwidth, see :mod:`mixdyn.linalg`): the
-            path of the kinematic analysis and of the multipliers' solve.
+        linear_solver: a :class:`~mixdyn.LinearSolver`, or its name: ``"dense"``, ``"sparse"`` or
+            ``"auto"`` (sparse for large mechanisms of small bandwidth, see :mod:`mixdyn.linalg`):
+            the path of the kinematic analysis and of the multipliers' solve.
         prepared: the run's set-up, as in :func:`~mixdyn.kinematic` (made by
             :func:`~mixdyn.analysis._prepare.prepare_kinematic` from the same model, start
             time, ``q0``, ``hold``, ``assemble_first`` and ``linear_solver``; another is
@@ -68,7 +69,7 @@ def inverse(
     stats = dict(
         kin.stats,
         min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))),
-        linear_solver=c.linear_solver,
+        linear_solver=c.linear_solver.name,
     )
     return Result(
         kind="inverse",

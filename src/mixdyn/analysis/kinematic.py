@@ -14,7 +14,7 @@ import numpy as np
 
 from ..equations import Constraints
 from ..errors import ConvergenceError, SingularityError
-from ..linalg import dependent_rows
+from ..linalg import LinearSolver, dependent_rows
 from ..model import Model
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
@@ -113,7 +113,7 @@ def kinematic(
     tol: float | None = None,
     max_iter: int = 25,
     singular_tol: float = 1e-7,
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     prepared: Prepared | None = None,
 ) -> Result:
     """Positions, velocities and accelerations of a fully driven mechanism over time.
@@ -128,11 +128,11 @@ def kinematic(
         tol: Newton tolerance on the largest residual [length] (default ``1e-12 x`` size).
         max_iter: Newton iterations per time.
         singular_tol: a pivot ratio of ``Phi_q`` below this is reported as a singularity.
-        linear_solver: ``"dense"`` (LU of ``Phi_q``), ``"sparse"`` (minimum-norm solves
-            through the banded Cholesky factorization of ``Phi_q Phi_q^T``, with one step of
-            iterative refinement for velocities and accelerations; the pivot ratio compared
-            with ``singular_tol`` is the square root of that factorization's) or ``"auto"``
-            (sparse for large mechanisms of small bandwidth, see
+        linear_solver: a :class:`~mixdyn.LinearSolver`, or its name: ``"dense"`` (LU of ``Phi_q``),
+            ``"sparse"`` (minimum-norm solves through the banded Cholesky factorization of ``Phi_q
+            Phi_q^T``, with one step of iterative refinement for velocities and accelerations; the
+            pivot ratio compared with ``singular_tol`` is the square root of that factorization's)
+            or ``"auto"`` (sparse for large mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The assembly takes the same path.
         prepared: the run's set-up (assembled start and mobility analysis), made beforehand
             by :func:`~mixdyn.analysis._prepare.prepare_kinematic` from the same model,
@@ -192,7 +192,7 @@ def run_kinematic(
             "min_pivot_ratio": float(np.min(ratio)),
             "redundant_equations": prep.report.redundant,
             "tolerance": tol,
-            "linear_solver": c.linear_solver,
+            "linear_solver": c.linear_solver.name,
         },
     )
 

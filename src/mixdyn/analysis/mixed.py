@@ -26,6 +26,7 @@ import scipy.linalg as sl
 from .._arrays import as_f64
 from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
+from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
 from ..runtime._programs import cached_jit
@@ -309,14 +310,14 @@ def _setup(
     if solver == "augmented":
         collocated = _collocated(model, c, q, qd, t0, mk, unknown)
     path = c.with_linear_solver(linear_solver).linear_solver
-    if path == "sparse" and solver == "partition":
-        if linear_solver == "sparse":
+    if path.banded and solver == "partition":
+        if isinstance(as_linear_solver(linear_solver), BandedSolver):
             raise ModelError(
                 "the sparse linear solver cannot solve this mixed problem: the partition "
                 "solver is dense; use solver='augmented', or linear_solver='dense' or 'auto'",
                 ", ".join(unknown),
             )
-        path = "dense"
+        path = DenseSolver()
     c = c.with_linear_solver(path)
     problem = Problem(model, c, unknown, solver, j_index, i_index, collocated or ())
     return problem, q, qd, prescribed
@@ -333,7 +334,7 @@ def check_mixed(
     q0=None,
     qd0=None,
     hold=(),
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     prepared: Prepared | None = None,
 ) -> None:
     """Check that a mixed problem is solvable, without integrating it.
@@ -376,7 +377,7 @@ def mixed(
     qd0=None,
     hold=(),
     progress=None,
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     energy_tol: float | str | None = ENERGY_TOL,
     prepared: Prepared | None = None,
     **options,
@@ -397,19 +398,18 @@ def mixed(
             :func:`~mixdyn.forward` (``solver`` is the mixed solver: the Runge–Kutta method
             of an adaptive integrator is chosen by an options object,
             ``method=md.Projection(solver="dopri8")``).
-        linear_solver: ``"dense"``, ``"sparse"`` or ``"auto"`` (the default: sparse for large
-            mechanisms of small bandwidth, see
-            :mod:`mixdyn.linalg`). The sparse path (banded Cholesky of the Schur complement
-            ``C M^-1 C^T``) takes the ``"augmented"`` solver: *collocated* unknown forces, each
-            acting along the gradient of one prescribed motion (``B = Psi_q^T`` up to a scale
-            per force: a force along the coordinate or distance it prescribes, a torque on the
-            body whose angle it prescribes, as in the paper's example), solve the symmetric
-            system directly; other unknown forces (``G != C^T``, a non-symmetric Schur
-            complement ``C M^-1 G``) by a rank-``p`` Sherman–Morrison–Woodbury update of the
-            symmetric one. The ``"partition"`` solver stays on the dense path: ``"auto"``
-            takes it silently, ``"sparse"`` raises a :class:`ModelError`. The
-            consistent start (assembly, velocities) takes the path asked for in any case; the
-            solvability checks of the start state are dense.
+        linear_solver: a :class:`~mixdyn.LinearSolver`, or its name: ``"dense"``, ``"sparse"`` or
+            ``"auto"`` (the default: sparse for large mechanisms of small bandwidth, see
+            :mod:`mixdyn.linalg`). The sparse path (banded Cholesky of the Schur complement ``C M^-1
+            C^T``) takes the ``"augmented"`` solver: *collocated* unknown forces, each acting along
+            the gradient of one prescribed motion (``B = Psi_q^T`` up to a scale per force: a force
+            along the coordinate or distance it prescribes, a torque on the body whose angle it
+            prescribes, as in the paper's example), solve the symmetric system directly; other
+            unknown forces (``G != C^T``, a non-symmetric Schur complement ``C M^-1 G``) by a
+            rank-``p`` Sherman–Morrison–Woodbury update of the symmetric one. The ``"partition"``
+            solver stays on the dense path: ``"auto"`` takes it silently, ``"sparse"`` raises a
+            :class:`ModelError`. The consistent start (assembly, velocities) takes the path asked
+            for in any case; the solvability checks of the start state are dense.
         prepared: the run's set-up (consistent start and mobility analysis), made beforehand
             by :func:`~mixdyn.analysis._prepare.prepare_dynamic` with the model's drivers
             followed by the prescribed motions bound to the bodies
@@ -466,7 +466,7 @@ def mixed_case(
     q0=None,
     qd0=None,
     hold=(),
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
     energy_tol: float | str | None = ENERGY_TOL,
     prepared: Prepared | None = None,
     **options,

@@ -43,6 +43,7 @@ import numpy as np
 from ..equations import applied_forces
 from ..equations._friction import check_supported
 from ..errors import ConvergenceError
+from ..linalg import DenseSolver, LinearSolver
 from ..model import Model
 from ._assembly import length_scale
 from ._prepare import prepare_kinematic
@@ -136,7 +137,7 @@ def statics(
     """
     check_supported(model, "statics (an equilibrium with friction is a set, not a point)")
     prep = prepare_kinematic(
-        model, float(t), q0=q0, hold=hold, balanced=False, linear_solver="dense"
+        model, float(t), q0=q0, hold=hold, balanced=False, linear_solver=DenseSolver()
     )
     c = prep.constraints(independent_rows_only=True)
     nq, m = model.nq, c.m
@@ -275,7 +276,7 @@ def quasi_static(
     tol: float = 1e-10,
     max_iter: int = 100,
     assemble_first: bool = True,
-    linear_solver: str = "auto",
+    linear_solver: str | LinearSolver = "auto",
 ) -> Result:
     """The equilibria at the times ``t`` (N,), each from the one before (the drivers' laws
     and the loads taken at each time): a quasi-static analysis, e.g. a mechanism slowly

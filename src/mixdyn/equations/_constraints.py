@@ -21,6 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
 from ..linalg._dense import solve_ranked
 from ..model import Driver, Joint, Model
 from ._jacobian import (  # noqa: F401  (REGULARIZATION, REFINE_REDUNDANT: re-exported)
@@ -30,9 +31,6 @@ from ._jacobian import (  # noqa: F401  (REGULARIZATION, REFINE_REDUNDANT: re-ex
     DenseJacobian,
     JacobianOperator,
 )
-
-#: The linear-solver paths (see :mod:`mixdyn.linalg`).
-LINEAR_SOLVERS = ("dense", "sparse", "auto")
 
 # Static fields that only name things (resolved into indices and arrays at binding): cleared
 # so that elements of one kind share one vectorized evaluation.
@@ -64,6 +62,9 @@ class Constraints(eqx.Module):
         active: indices of the rows kept (redundant rows dropped), static.
         labels: a label per row of the full set (``"A.x"``, ``"crank_angle"``), static.
         nq: number of coordinates.
+        linear_solver: the path of this set's solves (a
+            :class:`~mixdyn.linalg.DenseSolver` or :class:`~mixdyn.linalg.BandedSolver`),
+            resolved once from the analysis' choice, static.
         batched: whether this set is solved in a sweep's one vectorized program: the guard at
             singular positions then decides once per batch
             (:func:`~mixdyn.linalg._dense.guarded`), static.
@@ -76,7 +77,7 @@ class Constraints(eqx.Module):
     owners: tuple[int, ...] = eqx.field(static=True)
     nq: int = eqx.field(static=True)
     rank: int | None = eqx.field(static=True)
-    linear_solver: str = eqx.field(static=True)
+    linear_solver: DenseSolver | BandedSolver = eqx.field(static=True)
     batched: bool = eqx.field(static=True)
 
     def __init__(
@@ -86,7 +87,7 @@ class Constraints(eqx.Module):
         nq: int,
         active=None,
         rank=None,
-        linear_solver="dense",
+        linear_solver: str | LinearSolver = DenseSolver(),
         batched: bool = False,
     ):
         self.joints = tuple(joints)
@@ -106,26 +107,16 @@ class Constraints(eqx.Module):
         self.linear_solver = self._resolve_solver(linear_solver)
         self.batched = bool(batched)
 
-    def _resolve_solver(self, linear_solver: str) -> str:
-        if linear_solver not in LINEAR_SOLVERS:
-            raise ModelError(
-                f"linear_solver must be one of {', '.join(LINEAR_SOLVERS)}, got {linear_solver!r}"
-            )
-        if linear_solver == "dense" or self.m == 0:  # no equation: nothing to solve
-            return "dense"
-        from ..linalg import AUTO_MIN_ROWS, choose_solver
+    def _resolve_solver(self, choice: str | LinearSolver) -> DenseSolver | BandedSolver:
+        solver = as_linear_solver(choice)
+        if isinstance(solver, DenseSolver):
+            return solver
+        return solver.resolve(self.m, self._local_ok(), self.schur_structure)
 
-        local = self._local_ok()
-        if linear_solver == "auto":
-            if not local or self.m < AUTO_MIN_ROWS:
-                return "dense"
-            return choose_solver(self.m, self.schur_structure())
-        if not local:
-            raise ModelError(
-                "the sparse linear solver needs every joint and driver to refer to its bodies "
-                "through the fields b, bi, bj; use linear_solver='dense'"
-            )
-        return "sparse"
+    @property
+    def banded(self) -> bool:
+        """Whether this set's solves take the banded path (:attr:`linear_solver`)."""
+        return self.linear_solver.banded
 
     @classmethod
     def of(cls, model: Model, drivers=None) -> Constraints:
@@ -157,8 +148,9 @@ class Constraints(eqx.Module):
             batched=self.batched,
         )
 
-    def with_linear_solver(self, linear_solver: str) -> Constraints:
-        """The same set solved by ``linear_solver`` (``"dense"``, ``"sparse"``, ``"auto"``)."""
+    def with_linear_solver(self, linear_solver: str | LinearSolver) -> Constraints:
+        """The same set solved by ``linear_solver`` (a :class:`~mixdyn.linalg.LinearSolver`
+        or its name)."""
         return Constraints(
             self.joints, self.drivers, self.nq, self.active, self.rank, linear_solver, self.batched
         )
@@ -206,7 +198,7 @@ class Constraints(eqx.Module):
     # positions depends on them to the last bit, see tests/test_validation.py).
     def full(self, q, t) -> jax.Array:
         """All rows ``Phi(q, t)`` (n_full,) before dropping redundant ones."""
-        if self.linear_solver == "sparse":
+        if self.banded:
             return self._local(_residual, q, t, rows=range(self.n_full))
         if isinstance(q, jax.core.Tracer) or isinstance(t, jax.core.Tracer):
             return _full_traced(self.joints, self.drivers, q, t)
@@ -214,7 +206,7 @@ class Constraints(eqx.Module):
 
     def __call__(self, q, t) -> jax.Array:
         """``Phi(q, t)`` (m,), the rows kept."""
-        if self.linear_solver == "sparse":
+        if self.banded:
             return self._local(_residual, q, t)
         Phi = self.full(q, t)
         if len(self.active) == self.n_full:
@@ -225,7 +217,7 @@ class Constraints(eqx.Module):
         """Jacobian ``Phi_q`` (m, nq), dense: ``jax.jacfwd`` of :meth:`__call__`, or on the
         sparse path scattered from the per-element Jacobians of :meth:`jacobian_values` (the
         same numbers at O(nnz) work, with a small compiled program)."""
-        if self.linear_solver == "sparse":
+        if self.banded:
             rows, cols = self.coo()
             v = self.jacobian_values(q, t)
             return jnp.zeros((self.m, self.nq), v.dtype).at[rows, cols].add(v)
@@ -234,14 +226,14 @@ class Constraints(eqx.Module):
     def phi_t(self, q, t) -> jax.Array:
         """Partial time derivative ``Phi_t`` (m,)."""
         t = jnp.asarray(t, dtype=jnp.float64)
-        if self.linear_solver == "sparse":
+        if self.banded:
             return self._local(_phi_t, q, t)
         return jax.jacfwd(self.__call__, argnums=1)(q, t)
 
     def gamma(self, q, qd, t) -> jax.Array:
         """Acceleration right-hand side ``gamma`` (m,)."""
         t = jnp.asarray(t, dtype=jnp.float64)
-        if self.linear_solver == "sparse":
+        if self.banded:
             return self._local(_gamma, q, t, qd)
 
         def path(s):
@@ -334,7 +326,7 @@ class Constraints(eqx.Module):
         is read: :class:`~mixdyn.equations._jacobian.DenseJacobian` (the matrix of
         :meth:`phi_q`) or :class:`~mixdyn.equations._jacobian.BandedJacobian` (the values of
         :meth:`jacobian_values`). Every solve with ``Phi_q`` goes through its methods."""
-        if self.linear_solver == "sparse":
+        if self.banded:
             return BandedJacobian(self, self.jacobian_values(q, t))
         return DenseJacobian(self.phi_q(q, t), self.rank, self.batched)
 

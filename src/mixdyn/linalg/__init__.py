@@ -1,7 +1,8 @@
 """The linear-solver layer shared by every analysis.
 
-Two paths, chosen per constraint set (``Constraints.linear_solver``, from the analyses'
-``linear_solver="auto" | "dense" | "sparse"`` argument):
+Two paths, chosen once per constraint set (``Constraints.linear_solver``: a
+:class:`DenseSolver` or a :class:`BandedSolver`, resolved from the analyses' ``linear_solver=``
+argument, an object of :mod:`._choice` or its name ``"auto" | "dense" | "sparse"``):
 
 * dense (:mod:`._dense`): LU of dense matrices built from ``Phi_q``, truncated SVD where
   equations are redundant, a damped (Tikhonov-filtered) SVD at singular positions;
@@ -9,13 +10,20 @@ Two paths, chosen per constraint set (``Constraints.linear_solver``, from the an
   banded block Cholesky factorization of ``Phi_q W Phi_q^T`` (``W = M^-1``: equations of
   motion; ``W = I``: minimum-norm kinematic steps, refined iteratively where accuracy matters).
 
-``"auto"`` (:func:`choose_solver`) takes the sparse path for large mechanisms of small
-bandwidth. The choice is made once per constraint set: ``Constraints.jacobian(q, t)`` returns
-the path's operator (:mod:`mixdyn.equations._jacobian`), whose methods factorize once and
-return a :class:`Factor` (``solve``, pivot ratio). Redundant equations make the Schur
-complement singular: the sparse path solves it by iterated regularization.
+:class:`AutoSolver` takes the sparse path for large mechanisms of small bandwidth.
+``Constraints.jacobian(q, t)`` returns the path's operator (:mod:`mixdyn.equations._jacobian`),
+whose methods factorize once and return a :class:`Factor` (``solve``, pivot ratio). Redundant
+equations make the Schur complement singular: the sparse path solves it by iterated
+regularization.
 """
 
+from ._choice import (
+    AutoSolver,
+    BandedSolver,
+    DenseSolver,
+    LinearSolver,
+    as_linear_solver,
+)
 from ._dense import (
     Factor,
     dependent_rows,
@@ -28,13 +36,17 @@ from ._dense import (
     min_pivot,
     solve_ranked,
 )
-from ._sparse import AUTO_MIN_ROWS, SchurStructure, choose_solver, schur_structure
+from ._sparse import AUTO_MIN_ROWS, SchurStructure, schur_structure
 
 __all__ = [
     "AUTO_MIN_ROWS",
+    "AutoSolver",
+    "BandedSolver",
+    "DenseSolver",
     "Factor",
+    "LinearSolver",
     "SchurStructure",
-    "choose_solver",
+    "as_linear_solver",
     "dependent_rows",
     "factor_ranked",
     "guarded",

@@ -38,11 +38,12 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 MIN_BLOCK = 16
 UNROLL = 1
 
-#: ``"auto"`` takes the sparse path from this many constraint rows on, when the reordered
-#: bandwidth is at most :data:`MAX_AUTO_BLOCK`. Measured (``benchmarks/sparse_scaling.py``,
-#: ``benchmarks/RESULTS.md``, the sparse path): at 32 rows (a 16-link chain) the sparse path is 1.7x
-#: faster per RK4 step (53 against 89 us) and compiles faster; below, the gain is 10-40 % and
-#: the small published benchmarks stay on the dense reference path.
+#: :class:`~mixdyn.linalg.AutoSolver` takes the sparse path from this many constraint rows
+#: on, when the reordered bandwidth is at most :data:`MAX_AUTO_BLOCK`. Measured
+#: (``benchmarks/sparse_scaling.py``, ``benchmarks/RESULTS.md``, the sparse path): at 32 rows
+#: (a 16-link chain) the sparse path is 1.7x faster per RK4 step (53 against 89 us) and
+#: compiles faster; below, the gain is 10-40 % and the small published benchmarks stay on the
+#: dense reference path.
 AUTO_MIN_ROWS = 32
 MAX_AUTO_BLOCK = 64
 
@@ -267,13 +268,4 @@ def schur_structure(m: int, n: int, rows, cols, min_block: int = MIN_BLOCK) -> S
     return _structure_cached(int(m), int(n), rows.tobytes(), cols.tobytes(), int(min_block))
 
 
-def choose_solver(m: int, structure: SchurStructure | None) -> str:
-    """``"dense"`` or ``"sparse"`` for ``linear_solver="auto"``: sparse for ``m >=``
-    :data:`AUTO_MIN_ROWS` rows with a reordered bandwidth of at most :data:`MAX_AUTO_BLOCK`
-    (redundant rows or not: see ``Constraints.schur_solve``)."""
-    if m < AUTO_MIN_ROWS or structure is None:
-        return "dense"
-    return "sparse" if structure.bandwidth <= MAX_AUTO_BLOCK else "dense"
-
-
-__all__ = ["SchurStructure", "choose_solver", "schur_structure"]
+__all__ = ["AUTO_MIN_ROWS", "MAX_AUTO_BLOCK", "SchurStructure", "schur_structure"]
