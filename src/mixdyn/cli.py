@@ -283,8 +283,9 @@ def show(
     without running an analysis."""
     with _guard(file):
         from . import analysis as an
-        from .io import FileError, Runner, read
-        from .io.runs import start_q
+        from .io import FileError, read
+        from .runs import Runner
+        from .runs.runner import start_q
         from .viz.show import SHOW_SUFFIXES, draw
 
         target = output or pathlib.Path(file).with_suffix(".png")
@@ -314,9 +315,10 @@ def check(file: FileArg):
     about 2 s and 50 MB per 1,000 bodies)."""
     with _guard(file):
         from . import analysis as an
-        from .io import Runner, read
+        from .io import read
         from .io import schema as s
-        from .io.runs import start_q
+        from .runs import Runner
+        from .runs.runner import start_q
 
         spec = read(file)
         _require_size(spec, file)
@@ -465,7 +467,8 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
     painter = _Painter() if figures else None
     with _guard(file):
         try:
-            from .io import Runner, read
+            from .io import read
+            from .runs import Runner
 
             spec = read(file)
             _require_size(spec, file)
@@ -1192,7 +1195,8 @@ def animate(
 
         import numpy as np
 
-        from .io import FileError, Runner, read, read_result
+        from .io import FileError, read, read_result
+        from .runs import Runner
         from .viz import animate as write_animation
 
         spec = read(file)

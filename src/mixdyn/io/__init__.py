@@ -1,10 +1,14 @@
-"""Model files: read, validate, build, run and write back.
+"""Model files: read, validate, build and write back.
 
 A model file (YAML) describes a mechanism in one unit system and named runs of analyses on it.
 It is read safely (no code, no aliases), validated by a pydantic schema
 (:class:`ModelFile`, exportable as JSON Schema), and built into a :class:`mixdyn.Model`;
 quantities may carry units (``"500 N*mm"``) and laws of time are safe expressions
 (``"10*sin(pi*t/2)"``). Every fault is a :class:`FileError` naming the file, line and element.
+
+This package holds the file formats (the model file, the written results). Running a file's
+runs is :mod:`mixdyn.runs`; its :class:`Runner`, :class:`Plan` and :func:`execute` are also
+reached here (looked up in :mod:`mixdyn.runs` when first used).
 
 Example::
 
@@ -15,15 +19,25 @@ Example::
     mio.write_result(results["forward"], "out/forward")
 """
 
-from . import design, identify, sweeps  # noqa: F401  (they register their run kinds)
 from ._errors import FileError
 from .dump import describe, dump, dumps
 from .expressions import FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
 from .load import build, load, read, reads, source_of
 from .quantities import DimensionError, QuantityError, convert
 from .results import read_result, write_result
-from .runs import Plan, Runner, execute
 from .schema import ModelFile, json_schema
+
+#: Names of :mod:`mixdyn.runs` reached from here.
+_RUNS = ("Plan", "Runner", "execute")
+
+
+def __getattr__(name: str):
+    if name in _RUNS:
+        from .. import runs
+
+        return getattr(runs, name)
+    raise AttributeError(f"module 'mixdyn.io' has no attribute {name!r}")
+
 
 __all__ = [
     "FUNCTIONS",

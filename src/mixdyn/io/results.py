@@ -199,7 +199,7 @@ def write_sweep(
     settings: dict | None = None,
     extra: dict | None = None,
 ) -> list[pathlib.Path]:
-    """Write a sweep run's result (:class:`mixdyn.io.sweeps.FileSweep`) to ``folder``:
+    """Write a sweep run's result (:class:`mixdyn.runs.sweep.FileSweep`) to ``folder``:
     ``members.csv`` (a row per member: index, varied values, status, error, summaries),
     ``table.csv`` (and ``table.parquet``: a row per member and output time), with
     ``netcdf`` ``sweep.nc`` (the table's columns as a labelled array on (member, t), the

@@ -32,8 +32,8 @@ from ..analysis.fit import _RATES
 from ..analysis.optimize import Optimum, reduce
 from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
-from . import schema as s
-from .runs import ANALYSES, Plan, Runner, register_study
+from ..io import schema as s
+from .runner import ANALYSES, Plan, Runner, register_study
 
 
 @dataclasses.dataclass(frozen=True)

@@ -1,5 +1,5 @@
-"""A file's run once checked (:class:`Plan`): what the checks (:mod:`.settings`) and the
-runner (:mod:`.runs`) both read."""
+"""A file's run once checked (:class:`Plan`): what the checks (:mod:`.checks`) and the
+runner (:mod:`.runner`) both read."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from typing import Protocol
 import numpy as np
 
 from .. import model as m
-from . import schema as s
-from .load import Builder
+from ..io import schema as s
+from ..io.load import Builder
 
 
 @dataclasses.dataclass(frozen=True)
@@ -39,7 +39,7 @@ class Plan:
 
 
 class Checker(Protocol):
-    """What a run's checks (:mod:`.settings`) read of the runner (:class:`.runs.Runner`):
+    """What a run's checks (:mod:`.checks`) read of the runner (:class:`.runner.Runner`):
     its model, its builder, its plans, and how it reports a problem."""
 
     model: m.Model

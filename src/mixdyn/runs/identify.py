@@ -36,8 +36,8 @@ from ..analysis import Result
 from ..analysis.fit import _RATES, Fit
 from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
-from . import schema as s
-from .runs import ANALYSES, Plan, Runner, register_study
+from ..io import schema as s
+from .runner import ANALYSES, Plan, Runner, register_study
 
 #: Kinds of quantity of a measured column, by its suffix.
 _KINDS = {

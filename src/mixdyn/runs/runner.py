@@ -25,13 +25,13 @@ from .. import model as m
 from ..analysis._prepare import Prepared, prepare_dynamic, prepare_kinematic
 from ..analysis.mixed import bind_prescribed
 from ..errors import AssemblyError, ModelError, NumericalError
-from . import schema as s
-from . import settings
-from ._errors import FileError
-from ._plan import Plan
-from .expressions import ExpressionError
-from .expressions import parse as parse_expression
-from .load import Builder
+from ..io import schema as s
+from ..io._errors import FileError
+from ..io.expressions import ExpressionError
+from ..io.expressions import parse as parse_expression
+from ..io.load import Builder
+from . import checks as settings
+from .plan import Plan
 
 #: Suffixes of the per-body columns of a result.
 BODY_COLUMNS = ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")
@@ -46,7 +46,7 @@ ANALYSES = {
 #: Run kinds that repeat another run (``run:``): a sweep, an identification, an optimization.
 STUDIES = ("sweep", "identify", "optimize")
 #: Each such kind's ``(plan(runner, index, spec), its plan class, execute(runner, plan,
-#: progress))``, registered by its module (:mod:`.sweeps`, :mod:`.identify`, :mod:`.design`,
+#: progress))``, registered by its module (:mod:`.sweep`, :mod:`.identify`, :mod:`.optimize`,
 #: imported by the package) so that the runner does not import them.
 STUDY_KINDS: dict[str, tuple] = {}
 
@@ -305,7 +305,7 @@ class Runner:
         return plan
 
     def _check_settings(self, plan: Plan) -> None:
-        """The run's options, step, outputs and laws (see :mod:`mixdyn.io.settings`)."""
+        """The run's options, step, outputs and laws (see :mod:`mixdyn.runs.checks`)."""
         settings.check_options(self, plan.spec, plan.path)
         settings.check_step(self, plan)
         settings.check_outputs(self, plan)
@@ -985,7 +985,7 @@ class Runner:
     # ----------------------------------------------------------------- executing
     def execute_one(self, plan: Plan, results: dict, progress: Callable | None = None):
         """Run one plan (its dependencies' results in ``results``) and return its Result (a
-        sweep's: its :class:`~mixdyn.io.sweeps.FileSweep`; ``progress`` then gets member
+        sweep's: its :class:`~mixdyn.runs.sweep.FileSweep`; ``progress`` then gets member
         indices)."""
         try:
             for _, kind_of_plan, run in STUDY_KINDS.values():

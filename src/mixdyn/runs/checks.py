@@ -20,9 +20,9 @@ import numpy as np
 from ..analysis._options import CHOICES, step_count, suggestions, value_problem
 from ..analysis._simulate import ENERGY_TOL
 from ..analysis.methods import FIXED_STEP, OPTIONS
-from . import schema as s
-from ._plan import Checker, Plan
-from .expressions import ExpressionLaw, evaluate
+from ..io import schema as s
+from ..io.expressions import ExpressionLaw, evaluate
+from .plan import Checker, Plan
 
 #: Options of an inverse run (passed to :func:`mixdyn.kinematic`) and their defaults.
 INVERSE_OPTIONS = {"tol": None, "max_iter": 25, "singular_tol": 1e-7, "assemble_first": True}

@@ -40,10 +40,10 @@ import numpy as np
 
 from ..analysis.sweep import Sweep, _leaf_getter, grid, latin_hypercube, run_members
 from ..errors import MixdynError, ModelError
-from . import schema as s
-from ._errors import FileError
-from .load import Builder
-from .runs import Plan, Runner, register_study
+from ..io import schema as s
+from ..io._errors import FileError
+from ..io.load import Builder
+from .runner import Plan, Runner, register_study
 
 #: Most members a sweep may have.
 MAX_MEMBERS = 1_000_000
@@ -153,8 +153,8 @@ def _error_time(err) -> float:
 
 
 def _columns(result, names, output_units=None) -> dict[str, np.ndarray]:
+    from ..io.results import in_units
     from ..viz.plots import result_columns
-    from .results import in_units
 
     cols, units = result_columns(result, list(names))
     return in_units(result, cols, units, output_units)[0]
@@ -327,8 +327,8 @@ _REDUCE = {
 def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
     """Each summary per member and the units of the summaries and table columns (in the
     file's ``output_units``)."""
+    from ..io.results import in_units
     from ..viz.plots import result_columns
-    from .results import in_units
 
     r: s.SweepRunSpec = plan.spec
     ok = next((res for res in results if res is not None), None)
