@@ -39,8 +39,9 @@ if _configure_cache() is not None and (_tag := _command.job_tag(_sys.argv)) is n
 
     _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 
-from . import errors  # noqa: E402
+from . import analyses, errors, paths  # noqa: E402
 from .analysis import (  # noqa: E402
+    Analysis,
     Assembly,
     Baumgarte,
     DofReport,
@@ -51,6 +52,7 @@ from .analysis import (  # noqa: E402
     Partitioning,
     Projection,
     Result,
+    Setup,
     Statics,
     Sweep,
     assemble,
@@ -65,8 +67,10 @@ from .analysis import (  # noqa: E402
     latin_hypercube,
     mixed,
     optimize,
+    prepare,
     prescribe,
     quasi_static,
+    run,
     statics,
     sweep,
 )
@@ -118,6 +122,10 @@ def __getattr__(name):
         import importlib
 
         return importlib.import_module(f".{name}", __name__)
+    from . import model
+
+    if name in model._REPLACED:  # deprecated registries: mixdyn.model warns
+        return getattr(model, name)
     raise AttributeError(f"module 'mixdyn' has no attribute {name!r}")
 
 
@@ -127,6 +135,7 @@ __all__ = [
     "DenseSolver",
     "LinearSolver",
     "SI",
+    "Analysis",
     "Assembly",
     "AssemblyError",
     "Baumgarte",
@@ -145,6 +154,7 @@ __all__ = [
     "Projection",
     "RedundantConstraintError",
     "Result",
+    "Setup",
     "Fit",
     "Optimum",
     "Statics",
@@ -154,6 +164,7 @@ __all__ = [
     "StepSizeError",
     "UnitSystem",
     "__version__",
+    "analyses",
     "assemble",
     "check_mixed",
     "degrees_of_freedom",
@@ -168,7 +179,10 @@ __all__ = [
     "latin_hypercube",
     "inverse",
     "mixed",
+    "paths",
+    "prepare",
     "prescribe",
+    "run",
     "sweep",
     "set_cache",
     "kinematic",

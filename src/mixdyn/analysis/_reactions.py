@@ -132,9 +132,8 @@ def require_held_meshes(model, q, t0: float = 0.0, drivers=None) -> None:
             w = lsqr(J.T.tocsr(), g, atol=1e-14, btol=1e-14, iter_lim=10 * J.shape[0])[0]
         if np.max(np.abs(J.T @ w - g)) > 10 * HELD * np.max(np.abs(g)):
             raise ModelError(
-                "the teeth push the pitch curves apart with the radial force |Ft| tan("
-                "pressure angle), and no joint holds them apart: hold each wheel's centre with "
-                "a revolute joint (on the ground or on a carrier) or the rack with a guide",
+                f"{j.along_centres}, and no joint holds them apart: hold each wheel's centre "
+                "with a revolute joint (on the ground or on a carrier) or the rack with a guide",
                 j.name,
             )
 

@@ -16,6 +16,7 @@ Scalars (:data:`Scalar`) are numbers in the model's units, or strings with units
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import operator
@@ -30,9 +31,13 @@ from pydantic import (
     Discriminator,
     Field,
     Tag,
+    create_model,
     model_validator,
 )
 from pydantic.json_schema import GenerateJsonSchema
+
+from ..errors import ModelError
+from ..model import _declare as _decl
 
 FORMAT_VERSION = 1
 
@@ -191,6 +196,104 @@ class Spec(BaseModel):
         """pydantic's, with the fields' docstrings as their descriptions (hover help)."""
         kwargs.setdefault("schema_generator", _DocumentedJsonSchema)
         return super().model_json_schema(*args, **kwargs)
+
+
+# --------------------------------------------------------------------------- declared elements
+#: What the ``name`` of an element of each section is used for (its description).
+_NAME_DOCS = {
+    "joints": "Unique name of the joint; its reactions are the result columns ``name.Fx``, "
+    "``name.Fy``, ``name.M``.",
+    "drivers": "Unique name of the driver; its effort is the result column ``name``.",
+    "forces": "Unique name of the force element (used in a mixed run's ``unknown``).",
+}
+_TYPE_DOCS = {"joints": "Joint", "drivers": "Driver", "forces": "Force"}
+
+
+class _DeclaredSpec(Spec):
+    """An element described by its class's declaration (:mod:`mixdyn.model._declare`): its
+    fields, their kinds and docs, read once from the class."""
+
+    def build(self, b, p):
+        """The element, every declared field read from the file at its own path."""
+        kind = self.declared
+        values = {}
+        for field, decl, _ in kind.fields():
+            value, at = getattr(self, field), (*p, field)
+            if isinstance(decl, _decl.Reference):
+                (b.body if decl.what == "body" else b.point)(value, at)
+            elif isinstance(decl, _decl.Quantity):
+                value = (
+                    b.law(value, decl.kind, at, state=decl.state)
+                    if decl.law
+                    else b.scalar(value, decl.kind, at)
+                )
+            values[field] = value
+        try:
+            return kind.cls(self.name, **values)
+        except ModelError as e:
+            b.fail(p, _without_element(e, self.name))
+
+    @classmethod
+    def from_element(cls, e, d):
+        """The description of the element ``e`` (numbers in the model's units)."""
+        values = {}
+        for field, decl, _ in cls.declared.fields():
+            value = getattr(e, field)
+            if isinstance(decl, _decl.Quantity):
+                value = d.law(value, e.name) if decl.law else float(value)
+            values[field] = value
+        return cls(type=cls.declared.file_name, name=e.name, **values)
+
+
+def _without_element(error: ModelError, name: str) -> str:
+    """A model error's text without its element's name in front."""
+    text = str(error)
+    return text[len(name) + 2 :] if text.startswith(f"{name}: ") else text
+
+
+def _declared_field(decl, default):
+    """The pydantic annotation and field of a declared field."""
+    if isinstance(decl, _decl.Reference):
+        annotation = Name if decl.what == "body" else Ref
+        doc = decl.doc
+    elif isinstance(decl, _decl.Quantity):
+        annotation = LawSpec if decl.law else Scalar
+        doc = f"{decl.doc} [{decl.kind.replace('_', ' ')}]"
+    else:
+        annotation = type(default) if default is not dataclasses.MISSING else str
+        doc = decl.doc
+    if default is dataclasses.MISSING:
+        return annotation, Field(description=doc)
+    if hasattr(default, "shape"):  # a number the class converted to an array
+        default = float(default)
+    return annotation, Field(default=default, description=doc)
+
+
+def _declared_spec(kind) -> type[Spec]:
+    """The file spec of a registered element class (:func:`mixdyn.model.element`)."""
+    cls = kind.cls
+    fields = {
+        "type": (
+            Literal[kind.file_name],
+            Field(description=f"{_TYPE_DOCS[kind.group]} type: ``{kind.file_name}``."),
+        ),
+        "name": (Name, Field(description=_NAME_DOCS[kind.group])),
+    }
+    for field, decl, default in kind.fields():
+        fields[field] = _declared_field(decl, default)
+    doc = (cls.__doc__ or cls.__name__).strip().split("\n\n")[0]
+    spec = create_model(f"{cls.__name__}Spec", __base__=_DeclaredSpec, __doc__=doc, **fields)
+    spec.declared = kind
+    spec.element_class = cls.__name__
+    return spec
+
+
+def _declared_specs(group: str, registry: dict) -> None:
+    """Add to ``registry`` the spec of every element class of ``group`` that declares its
+    fields and has no spec written by hand."""
+    for kind in _decl.ELEMENTS[group].values():
+        if kind.cls.__name__ not in registry and kind.fields():
+            registry[kind.cls.__name__] = _declared_spec(kind)
 
 
 # --------------------------------------------------------------------------- laws
@@ -916,6 +1019,7 @@ class CamFollowerSpec(Spec):
         return cls(**out)
 
 
+_declared_specs("joints", JOINT_SPECS)
 JointSpec = Annotated[
     functools.reduce(operator.or_, JOINT_SPECS.values()),
     Field(discriminator="type"),
@@ -1033,6 +1137,7 @@ class DistanceDriverSpec(Spec):
         return cls(type="distance", name=e.name, point_i=e.point_i, point_j=e.point_j, law=law)
 
 
+_declared_specs("drivers", DRIVER_SPECS)
 DriverSpec = Annotated[
     functools.reduce(operator.or_, DRIVER_SPECS.values()),
     Field(discriminator="type"),
@@ -1159,106 +1264,7 @@ class JointFrictionSpec(Spec):
         )
 
 
-@element_kind("SpringDamper", FORCE_SPECS)
-class SpringDamperSpec(Spec):
-    """A translational spring-damper-actuator between two points."""
-
-    type: Literal["spring_damper"]
-    """Force type: ``spring_damper``."""
-    name: Name
-    """Unique name of the force element (used in a mixed run's ``unknown``)."""
-    point_i: Ref
-    """First attachment point: ``body.point``, ``body`` or ``ground.point``."""
-    point_j: Ref
-    """Second attachment point, on another body."""
-    stiffness: Scalar = 0.0
-    """Spring stiffness [force/length], e.g. ``"2 N/mm"``. Tension ``stiffness (L - free_length)
-    + damping dL/dt - actuator``. Default 0."""
-    damping: Scalar = 0.0
-    """Damping coefficient [force*time/length], e.g. ``"5 N*s/m"``. Default 0."""
-    free_length: Scalar = 0.0
-    """Unstretched length of the spring [length]. Default 0."""
-    actuator: LawSpec = 0.0
-    """Actuator force [force] pushing the points apart: a law of time, which may also use body
-    states. Default 0."""
-
-    def build(self, b, p):
-        b._two_points(p, self)
-        return b.m.SpringDamper(
-            self.name,
-            self.point_i,
-            self.point_j,
-            stiffness=b.scalar(self.stiffness, "stiffness", (*p, "stiffness")),
-            damping=b.scalar(self.damping, "damping", (*p, "damping")),
-            free_length=b.scalar(self.free_length, "length", (*p, "free_length")),
-            actuator=b.law(self.actuator, "force", (*p, "actuator"), state=True),
-        )
-
-    @classmethod
-    def from_element(cls, e, d):
-        return cls(
-            type="spring_damper",
-            name=e.name,
-            point_i=e.point_i,
-            point_j=e.point_j,
-            stiffness=float(e.stiffness),
-            damping=float(e.damping),
-            free_length=float(e.free_length),
-            actuator=d.law(e.actuator, e.name),
-        )
-
-
-@element_kind("RotarySpringDamper", FORCE_SPECS)
-class RotarySpringDamperSpec(Spec):
-    """A rotational spring-damper-actuator between two bodies (either may be ``ground``)."""
-
-    type: Literal["rotary_spring_damper"]
-    """Force type: ``rotary_spring_damper``."""
-    name: Name
-    """Unique name of the force element (used in a mixed run's ``unknown``)."""
-    body_i: Name
-    """Body i (may be ``ground``)."""
-    body_j: Name
-    """Body j (another body). The torque on j is ``-stiffness (theta - free_angle) - damping
-    dtheta/dt + actuator`` with ``theta = phi_j - phi_i``; the opposite acts on i."""
-    stiffness: Scalar = 0.0
-    """Rotational stiffness [torque/rad], e.g. ``"500 N*mm/rad"``. Default 0."""
-    damping: Scalar = 0.0
-    """Rotational damping [torque*time/rad]. Default 0."""
-    free_angle: Scalar = 0.0
-    """Relative angle ``phi_j - phi_i`` at which the spring is relaxed [rad] (or with a unit).
-    Default 0."""
-    actuator: LawSpec = 0.0
-    """Actuator torque [torque] on body j (opposite on body i): a law of time, which may also use
-    body states. Default 0."""
-
-    def build(self, b, p):
-        b.body(self.body_i, (*p, "body_i"))
-        b.body(self.body_j, (*p, "body_j"))
-        if self.body_i == self.body_j:
-            b.fail(p, "body_i and body_j are the same body", "name two different bodies")
-        return b.m.RotarySpringDamper(
-            self.name,
-            self.body_i,
-            self.body_j,
-            stiffness=b.scalar(self.stiffness, "rotational_stiffness", (*p, "stiffness")),
-            damping=b.scalar(self.damping, "rotational_damping", (*p, "damping")),
-            free_angle=b.scalar(self.free_angle, "angle", (*p, "free_angle")),
-            actuator=b.law(self.actuator, "torque", (*p, "actuator"), state=True),
-        )
-
-    @classmethod
-    def from_element(cls, e, d):
-        return cls(
-            type="rotary_spring_damper",
-            name=e.name,
-            body_i=e.body_i,
-            body_j=e.body_j,
-            stiffness=float(e.stiffness),
-            damping=float(e.damping),
-            free_angle=float(e.free_angle),
-            actuator=d.law(e.actuator, e.name),
-        )
+_declared_specs("forces", FORCE_SPECS)
 
 
 ForceSpec = Annotated[

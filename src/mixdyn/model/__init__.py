@@ -1,10 +1,10 @@
 """Model of a planar mechanism: bodies, joints, drivers, forces and laws of time."""
 
 from ._body import Body, Ground
-from ._cams import CAM_TYPES, CamFollower
-from ._contacts import CONTACT_TYPES, GearPair, RackPinion, RollingDisks, RollingOnLine
+from ._cams import CamFollower
+from ._contacts import GearPair, RackPinion, RollingDisks, RollingOnLine
+from ._declare import ELEMENTS, element
 from ._drivers import (
-    DRIVER_TYPES,
     CoordinateDriver,
     DistanceDriver,
     Driver,
@@ -12,7 +12,6 @@ from ._drivers import (
     RelativeAngleDriver,
 )
 from ._forces import (
-    FORCE_TYPES,
     ForceElement,
     GeneralizedForce,
     PointForce,
@@ -22,7 +21,7 @@ from ._forces import (
     Torque,
 )
 from ._friction import JointFriction
-from ._joints import JOINT_TYPES, Distance, Joint, PinInSlot, Revolute, Translational, Weld
+from ._joints import Distance, Joint, PinInSlot, Revolute, Translational, Weld
 from ._laws import (
     Constant,
     FunctionLaw,
@@ -37,12 +36,36 @@ from ._laws import (
 )
 from ._model import Model
 
+#: The element registries that :data:`ELEMENTS` replaced, by their old names and the section
+#: and file names they held.
+_REPLACED = {
+    "JOINT_TYPES": ("joints", ("revolute", "translational", "weld", "distance", "pin_in_slot")),
+    "CONTACT_TYPES": ("joints", ("gear_pair", "rolling_disks", "rack_pinion", "rolling_on_line")),
+    "CAM_TYPES": ("joints", ("cam_follower",)),
+    "DRIVER_TYPES": ("drivers", ("coordinate", "point", "relative_angle", "distance")),
+    "FORCE_TYPES": ("forces", ("point_force", "torque", "spring_damper", "rotary_spring_damper")),
+}
+
+
+def __getattr__(name: str):
+    if name in _REPLACED:
+        import warnings
+
+        group, names = _REPLACED[name]
+        warnings.warn(
+            f"mixdyn.{name} is deprecated: use mixdyn.model.ELEMENTS[{group!r}] "
+            "(every registered element class by file name)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        registry = {n: ELEMENTS[group][n].cls for n in names}
+        if name == "FORCE_TYPES":
+            registry["generalized"] = GeneralizedForce
+        return registry
+    raise AttributeError(f"module 'mixdyn.model' has no attribute {name!r}")
+
 __all__ = [
-    "CAM_TYPES",
-    "CONTACT_TYPES",
-    "DRIVER_TYPES",
-    "FORCE_TYPES",
-    "JOINT_TYPES",
+    "ELEMENTS",
     "Body",
     "CamFollower",
     "Constant",
@@ -80,4 +103,14 @@ __all__ = [
     "Translational",
     "Weld",
     "as_law",
+    "element",
 ]
+
+# Every registered element class is a name of this package (and of mixdyn): a new element
+# is its class, registered with @element, and nothing else.
+for _group in ELEMENTS.values():
+    for _kind in _group.values():
+        globals().setdefault(_kind.cls.__name__, _kind.cls)
+        if _kind.cls.__name__ not in __all__:
+            __all__.append(_kind.cls.__name__)
+del _group, _kind

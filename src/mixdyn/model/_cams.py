@@ -43,6 +43,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ._declare import element
 from ._element import Resolver, moving, static_direction
 from ._geometry import angle, cross, point, vector
 from ._joints import _UNBOUND, Joint, _f64
@@ -53,6 +54,7 @@ FOLLOWERS = ("knife", "roller", "flat")
 MOTIONS = ("translating", "oscillating")
 
 
+@element("cam_follower", "joints")
 class CamFollower(Joint):
     """A cam driving a translating follower by the displacement law ``law`` (see the module).
 
@@ -287,6 +289,3 @@ def _envelope(n, pitch, th) -> np.ndarray:
     dh = np.gradient(h, th, edge_order=2)
     A = np.stack([n, dn], axis=1)  # (k, 2, 2): rows n and n'
     return np.linalg.solve(A, np.stack([h, dh], axis=1)[..., None])[..., 0]
-
-
-CAM_TYPES: dict[str, type[Joint]] = {"cam_follower": CamFollower}

@@ -36,6 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ._declare import element
 from ._element import Resolver, moving, static_direction
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._joints import _UNBOUND, Joint, _f64
@@ -192,6 +193,7 @@ class _Wheels(Joint):
         return np.asarray(P), F
 
 
+@element("gear_pair", "joints")
 class GearPair(_Wheels):
     """A pair of spur gears (external, or internal with body i the ring gear), pitch radii
     ``radius_i``, ``radius_j`` [length] about ``center_i``, ``center_j`` (default: the bodies'
@@ -212,6 +214,10 @@ class GearPair(_Wheels):
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
     contact_kinds: ClassVar[dict[str, str]] = TOOTH_KINDS
+    #: What pushes along the line of centres (a mesh's separation, see the module).
+    along_centres: ClassVar[str] = (
+        "the teeth push the pitch curves apart with the radial force |Ft| tan(pressure angle)"
+    )
 
     def __check_init__(self):
         super().__check_init__()
@@ -239,6 +245,7 @@ class GearPair(_Wheels):
         return ((self.bj, cj, self._s * e), (self.bi, ci, -self._s * e))
 
 
+@element("rolling_disks", "joints")
 class RollingDisks(_Wheels):
     """Two disks rolling on each other without slipping: external, or disk j inside the ring
     of body i (``internal``). Equations (2): the centres ``R_i + R_j`` (or ``R_i - R_j``)
@@ -354,6 +361,7 @@ class _OnLine(Joint):
         return out
 
 
+@element("rack_pinion", "joints")
 class RackPinion(_OnLine):
     """A rack (body j, its pitch line through ``line_point`` along ``axis``) and a pinion
     (body i, pitch radius ``radius``), the pinion's centre held by other joints.
@@ -371,6 +379,10 @@ class RackPinion(_OnLine):
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
     contact_kinds: ClassVar[dict[str, str]] = TOOTH_KINDS
+    #: What pushes along the line of centres (a mesh's separation, see the module).
+    along_centres: ClassVar[str] = (
+        "the teeth push the pitch curves apart with the radial force |Ft| tan(pressure angle)"
+    )
 
     def __check_init__(self):
         super().__check_init__()
@@ -398,6 +410,7 @@ class RackPinion(_OnLine):
         return ((self.bi, ci, n), (self.bj, ci, -n))
 
 
+@element("rolling_on_line", "joints")
 class RollingOnLine(_OnLine):
     """A disk (body i, radius ``radius``) rolling without slipping on a straight line of body
     j (a track, an incline: ``line_point``, ``axis``).
@@ -419,11 +432,3 @@ class RollingOnLine(_OnLine):
 
     def contact(self, q, lam):
         return {"N": -self.side * lam[0], "T": -lam[1]}
-
-
-CONTACT_TYPES: dict[str, type[Joint]] = {
-    "gear_pair": GearPair,
-    "rolling_disks": RollingDisks,
-    "rack_pinion": RackPinion,
-    "rolling_on_line": RollingOnLine,
-}

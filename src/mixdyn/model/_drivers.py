@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
+from ._declare import element
 from ._element import Element, Resolver, moving
 from ._geometry import GROUND, angle, point
 from ._laws import Law, as_law
@@ -46,6 +47,7 @@ class Driver(Element):
         return "torque" if self.measure_kind == "angle" else "force"
 
 
+@element("coordinate", "drivers")
 class CoordinateDriver(Driver):
     """Prescribes one absolute coordinate (``"x"``, ``"y"`` or ``"phi"``) of a body."""
 
@@ -77,6 +79,7 @@ class CoordinateDriver(Driver):
         return q[self.index]
 
 
+@element("point", "drivers")
 class PointDriver(Driver):
     """Prescribes the global ``"x"`` or ``"y"`` coordinate of a body point."""
 
@@ -100,6 +103,7 @@ class PointDriver(Driver):
         return point(q, self.b, self.s)[_COORD[self.coordinate]]
 
 
+@element("relative_angle", "drivers")
 class RelativeAngleDriver(Driver):
     """Prescribes ``phi_j - phi_i`` [rad], the angle of body j relative to body i."""
 
@@ -122,6 +126,7 @@ class RelativeAngleDriver(Driver):
         return angle(q, self.bj) - angle(q, self.bi)
 
 
+@element("distance", "drivers")
 class DistanceDriver(Driver):
     """Prescribes the distance ``|r_Pj - r_Pi|`` [length] between two points (an actuator)."""
 
@@ -144,11 +149,3 @@ class DistanceDriver(Driver):
 
     def measure(self, q):
         return jnp.linalg.norm(point(q, self.bj, self.sj) - point(q, self.bi, self.si))
-
-
-DRIVER_TYPES: dict[str, type[Driver]] = {
-    "coordinate": CoordinateDriver,
-    "point": PointDriver,
-    "relative_angle": RelativeAngleDriver,
-    "distance": DistanceDriver,
-}

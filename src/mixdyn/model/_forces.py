@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
+from ._declare import element, quantity, reference
 from ._element import Element, Resolver, moving, static_direction
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._laws import Law, as_law
@@ -114,6 +115,7 @@ class ForceElement(Element):
         return {"": self.magnitude_kind} if self.has_magnitude else {}
 
 
+@element("point_force", "forces")
 class PointForce(ForceElement):
     """A force at a body point along a fixed direction, of magnitude ``magnitude`` [force].
 
@@ -160,6 +162,7 @@ class PointForce(ForceElement):
         return _magnitude(self.law, q, qd, t)
 
 
+@element("torque", "forces")
 class Torque(ForceElement):
     """A torque ``magnitude`` [torque] (counter-clockwise positive) on ``body``.
 
@@ -195,6 +198,7 @@ class Torque(ForceElement):
         return "torque"
 
 
+@element("spring_damper", "forces")
 class SpringDamper(ForceElement):
     """Translational spring–damper–actuator between two points.
 
@@ -202,12 +206,32 @@ class SpringDamper(ForceElement):
     together; the actuator force [force] pushes them apart. ``L`` is the current distance.
     """
 
-    point_i: str = eqx.field(static=True)
-    point_j: str = eqx.field(static=True)
-    stiffness: jax.Array = eqx.field(default=0.0, converter=_f64)
-    damping: jax.Array = eqx.field(default=0.0, converter=_f64)
-    free_length: jax.Array = eqx.field(default=0.0, converter=_f64)
-    actuator: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
+    point_i: str = reference(
+        "First attachment point: ``body.point``, ``body`` or ``ground.point``."
+    )
+    point_j: str = reference("Second attachment point, on another body.")
+    stiffness: jax.Array = quantity(
+        "stiffness",
+        "Spring stiffness, e.g. ``\"2 N/mm\"``. Tension ``stiffness (L - free_length) + "
+        "damping dL/dt - actuator``. Default 0.",
+        0.0,
+        converter=_f64,
+    )
+    damping: jax.Array = quantity(
+        "damping", "Damping coefficient, e.g. ``\"5 N*s/m\"``. Default 0.", 0.0, converter=_f64
+    )
+    free_length: jax.Array = quantity(
+        "length", "Unstretched length of the spring. Default 0.", 0.0, converter=_f64
+    )
+    actuator: Law | StateFunction | None = quantity(
+        "force",
+        "Actuator force pushing the points apart: a law of time, which may also use body "
+        "states. Default 0.",
+        0.0,
+        converter=_as_magnitude,
+        law=True,
+        state=True,
+    )
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     si: jax.Array | None = eqx.field(default=None, kw_only=True)
@@ -277,6 +301,7 @@ class SpringDamper(ForceElement):
         return {"": "force", "length": "length", "tension": "force"}
 
 
+@element("rotary_spring_damper", "forces")
 class RotarySpringDamper(ForceElement):
     """Rotational spring–damper–actuator between body i and body j (either may be the ground).
 
@@ -284,12 +309,36 @@ class RotarySpringDamper(ForceElement):
     ``theta = phi_j - phi_i``; the opposite torque acts on body i.
     """
 
-    body_i: str = eqx.field(static=True)
-    body_j: str = eqx.field(static=True)
-    stiffness: jax.Array = eqx.field(default=0.0, converter=_f64)
-    damping: jax.Array = eqx.field(default=0.0, converter=_f64)
-    free_angle: jax.Array = eqx.field(default=0.0, converter=_f64)
-    actuator: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
+    body_i: str = reference("Body i (may be ``ground``).", what="body")
+    body_j: str = reference(
+        "Body j (another body). The torque on j is ``-stiffness (theta - free_angle) - damping "
+        "dtheta/dt + actuator`` with ``theta = phi_j - phi_i``; the opposite acts on i.",
+        what="body",
+    )
+    stiffness: jax.Array = quantity(
+        "rotational_stiffness",
+        "Rotational stiffness, e.g. ``\"500 N*mm/rad\"``. Default 0.",
+        0.0,
+        converter=_f64,
+    )
+    damping: jax.Array = quantity(
+        "rotational_damping", "Rotational damping. Default 0.", 0.0, converter=_f64
+    )
+    free_angle: jax.Array = quantity(
+        "angle",
+        "Relative angle ``phi_j - phi_i`` at which the spring is relaxed. Default 0.",
+        0.0,
+        converter=_f64,
+    )
+    actuator: Law | StateFunction | None = quantity(
+        "torque",
+        "Actuator torque on body j (opposite on body i): a law of time, which may also use "
+        "body states. Default 0.",
+        0.0,
+        converter=_as_magnitude,
+        law=True,
+        state=True,
+    )
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     has_magnitude = True
@@ -371,12 +420,3 @@ class GeneralizedForce(ForceElement):
         if Q.shape != (nq,):
             raise ModelError(f"the function must return shape ({nq},), got {Q.shape}", self.name)
         return Q
-
-
-FORCE_TYPES: dict[str, type[ForceElement]] = {
-    "point_force": PointForce,
-    "torque": Torque,
-    "spring_damper": SpringDamper,
-    "rotary_spring_damper": RotarySpringDamper,
-    "generalized": GeneralizedForce,
-}

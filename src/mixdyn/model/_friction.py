@@ -13,8 +13,13 @@ the accelerations: the element holds the coefficients, the analysis evaluates it
 Stick and slip (Karnopp's model): while the relative speed is below ``v_stick`` the joint
 sticks: the friction force is the one that keeps the relative acceleration zero, as long as
 it stays within the limit; past the limit, or above ``v_stick``, the joint slips with the
-limit force opposing the motion. The one regularization is that band: a joint that comes to a
-stop inside it keeps its speed there (at most ``v_stick``) instead of zero.
+limit force opposing the motion. A joint that stops (its speed inside the band, or reversed
+within a step) and that its static friction holds is brought to rest exactly after the step
+(:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`: the impulse that zeroes its
+relative speed, its kinetic energy counted as the friction's work), so that it stays where it
+stopped. The one regularization left is the band for a joint that cannot stick: it turns
+round inside it at the limit force the other way (a time shift of about ``v_stick`` over the
+acceleration).
 """
 
 from __future__ import annotations
@@ -27,11 +32,13 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
+from ._declare import element
 from ._element import Resolver
 from ._forces import ForceElement, _f64
 from ._validate import finite
 
 
+@element("joint_friction", "forces")
 class JointFriction(ForceElement):
     """Coulomb friction in the revolute or translational joint named ``joint``.
 

@@ -18,6 +18,7 @@ import jax
 import jax.numpy as jnp
 
 from .._arrays import as_f64
+from ._declare import element
 from ._element import Element, Resolver, moving, static_direction
 from ._geometry import angle, cross, point, vector
 from ._validate import finite
@@ -105,6 +106,7 @@ class _TwoPoint(Joint):
         return point(q, self.bj, self.sj) - point(q, self.bi, self.si)
 
 
+@element("revolute", "joints")
 class Revolute(_TwoPoint):
     """Revolute (pin) joint: point ``point_i`` of body i coincides with ``point_j`` of body j.
 
@@ -121,6 +123,7 @@ class Revolute(_TwoPoint):
         return {"pins": [(self.bj, self.sj)]}
 
 
+@element("weld", "joints")
 class Weld(_TwoPoint):
     """Rigid (weld) joint: points coincide and the relative angle is fixed.
 
@@ -143,6 +146,7 @@ class Weld(_TwoPoint):
         return True
 
 
+@element("translational", "joints")
 class Translational(_TwoPoint):
     """Translational (prismatic, sliding) joint along ``axis`` fixed in body i.
 
@@ -184,6 +188,7 @@ class Translational(_TwoPoint):
         return {}
 
 
+@element("pin_in_slot", "joints")
 class PinInSlot(Translational):
     """Revolute–translational joint: point ``point_j`` of body j moves in a slot of body i.
 
@@ -205,6 +210,7 @@ class PinInSlot(Translational):
         return {"pins": [(self.bj, self.sj)], **super().drawing()}
 
 
+@element("distance", "joints")
 class Distance(_TwoPoint):
     """Distance constraint (a massless rod): ``|r_Pj - r_Pi| - length = 0`` (1 equation).
 
@@ -220,12 +226,3 @@ class Distance(_TwoPoint):
 
     def residual(self, q):
         return (jnp.linalg.norm(self._d(q)) - self.length)[None]
-
-
-JOINT_TYPES: dict[str, type[Joint]] = {
-    "revolute": Revolute,
-    "translational": Translational,
-    "weld": Weld,
-    "distance": Distance,
-    "pin_in_slot": PinInSlot,
-}
