@@ -36,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ._declare import element
+from ._declare import element, option, quantity, reference
 from ._element import Resolver, moving, static_direction
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._joints import _UNBOUND, Joint, _f64
@@ -267,6 +267,109 @@ class RollingDisks(_Wheels):
     def contact(self, q, lam):
         L = (self.radius_i + self._s * self.radius_j) / jnp.linalg.norm(self._d(q))
         return {"N": -self._s * lam[0], "T": lam[1] * L}
+
+
+@element("belt_drive", "joints")
+class BeltDrive(_Wheels):
+    """A belt (or chain) drive: an endless belt around two pulleys, open or crossed, the
+    pulleys' centres held by other joints (pins on the ground or on a carrier).
+
+    Equation (1): the belt does not slip on either pulley: the no-slip equation of two wheels
+    (see the module) with ``s = -1`` (open: the pulleys turn the same way,
+    ``w_j / w_i = R_i / R_j`` relative to the carrier) or ``s = +1`` (crossed: opposite ways).
+    Its multiplier is the tension difference ``F = T_tight - T_slack`` [force] (up to its
+    sign), whose torques ``R F`` drive the pulleys.
+
+    Result columns [force]: ``{name}.F`` the tension difference (signed: positive when the
+    torque it exerts on pulley j turns j like ``-s`` times its positive angle);
+    ``.T_tight`` and ``.T_slack`` the spans' tensions; ``.Fr`` the spans' pull on pulley j
+    along the line of centres, away from pulley i (negative: the belt pulls the pulleys
+    together), the opposite on pulley i. The spans' tensions follow from ``initial_tension``
+    ``T0``: a belt whose length does not change keeps ``T_tight + T_slack = 2 T0``, so
+    ``T_tight = T0 + |F| / 2`` and ``T_slack = T0 - |F| / 2``; with ``T0 = 0`` (a chain, or a
+    belt taken at the least tension that drives) the slack span carries nothing,
+    ``T_tight = |F|``. Both spans leave the pulleys at the angle ``beta`` to the line of
+    centres (``sin beta = (R_i + s R_j) / d``, ``d`` the centres' distance), so they pull the
+    centres together with ``(T_tight + T_slack) cos beta`` (carried by the pins, as a gear's
+    radial tooth force: see the module) and across it with ``F sin beta`` (the no-slip
+    equation's own force). A slack span whose tension would fall below zero (``|F| > 2 T0``)
+    means the belt slips: the run stops there (:class:`~mixdyn.errors.ContactLostError`).
+    """
+
+    body_i: str = reference(
+        "Pulley i: a body, its centre at the body's origin, held by a revolute joint.",
+        what="body",
+    )
+    body_j: str = reference("Pulley j: another body, held the same way.", what="body")
+    radius_i: object = quantity("length", "Pitch radius of pulley i.", converter=_f64)
+    radius_j: object = quantity("length", "Pitch radius of pulley j.", converter=_f64)
+    crossed: bool = option(
+        "A crossed belt: the pulleys turn opposite ways (default: open, the same way).", False
+    )
+    initial_tension: object = quantity(
+        "force",
+        "The belt's tension at rest ``T0`` (each span); 0 (the default): a chain, whose "
+        "slack span carries nothing.",
+        0.0,
+        converter=_f64,
+    )
+    n_equations: ClassVar[int] = 1
+    equation_labels: ClassVar[tuple[str, ...]] = ("belt",)
+    contact_kinds: ClassVar[dict[str, str]] = {
+        "F": "force",
+        "T_tight": "force",
+        "T_slack": "force",
+        "Fr": "force",
+    }
+    #: The column that must stay at or above zero (a slack span cannot push).
+    unilateral: ClassVar[str] = "T_slack"
+    #: What pulls along the line of centres (see :class:`GearPair`).
+    along_centres: ClassVar[str] = "the belt's spans pull the pulleys together"
+
+    def __check_init__(self):
+        super().__check_init__()
+        finite(self.initial_tension, "initial_tension", self.name, at_least=0.0)
+
+    @property
+    def _s(self) -> float:
+        return 1.0 if self.crossed else -1.0
+
+    def residual(self, q):
+        return self._no_slip(q)[None]
+
+    def contact(self, q, lam):
+        F = lam[0]
+        T0 = self.initial_tension
+        preloaded = T0 > 0.0
+        tight = jnp.where(preloaded, T0 + 0.5 * jnp.abs(F), jnp.abs(F))
+        slack = jnp.where(preloaded, T0 - 0.5 * jnp.abs(F), 0.0)
+        sin_beta = (self.radius_i + self._s * self.radius_j) / jnp.linalg.norm(self._d(q))
+        cos_beta = jnp.sqrt(jnp.maximum(1.0 - sin_beta**2, 0.0))
+        return {"F": F, "T_tight": tight, "T_slack": slack, "Fr": -(tight + slack) * cos_beta}
+
+    def separation(self, q):
+        """The centres' distance [length]: the spans' pull ``Fr`` (negative) times its
+        gradient is the pull's generalized force (see :class:`GearPair`)."""
+        return jnp.linalg.norm(self._d(q))
+
+    def separating_pair(self, q) -> tuple:
+        """The unit pair along the line of centres at NumPy positions ``q`` (nq,): ``(body,
+        point (2,), force (2,))`` per pulley, pushing the centres apart."""
+        ci, cj = _np_point(q, self.bi, self.si), _np_point(q, self.bj, self.sj)
+        e = (cj - ci) / np.linalg.norm(cj - ci)
+        return ((self.bj, cj, e), (self.bi, ci, -e))
+
+    def arrow(self, q, cols):
+        """The belt's force on pulley j at its centre: the pull along the line of centres
+        and the tension difference's part across it."""
+        q = jnp.asarray(q)
+        cj = jax.vmap(lambda x: point(x, self.bj, self.sj))(q)
+        _, e, t = jax.vmap(self._frame)(q)
+        d = np.linalg.norm(np.asarray(jax.vmap(self._d)(q)), axis=1)
+        sin_beta = (float(self.radius_i) + self._s * float(self.radius_j)) / d
+        F = np.asarray(cols[f"{self.name}.F"]) * sin_beta
+        Fr = np.asarray(cols[f"{self.name}.Fr"])
+        return np.asarray(cj), Fr[:, None] * np.asarray(e) + F[:, None] * np.asarray(t)
 
 
 class _OnLine(Joint):
