@@ -169,10 +169,13 @@ class Problem(eqx.Module):
         """The model's joint-friction elements (static)."""
         return fr.friction_elements(self.model)
 
-    def _with_friction(self, q, qd, t, solve, qdd0, mu0):
-        """Accelerations and multipliers with the joint friction forces, from the KKT
-        solve factorized once (:mod:`mixdyn.equations._friction`); and the friction record
-        ``(f, normal, limit, v, D)``."""
+    def _friction_solve(self, q, qd, t, solve, qdd0, mu0, stopped=None):
+        """The joint friction at one state from the KKT solve factorized once
+        (:mod:`mixdyn.equations._friction`): ``(f, stick, A, Mu_f, H, v, D)``, the friction
+        forces (nf,), which joints stick (nf,), the constrained responses to a unit force
+        along each joint ``A`` (nq, nf) and ``Mu_f`` (m, nf), ``H = D^T A`` (nf, nf), the
+        relative speeds ``v`` (nf,) and the directions ``D`` (nq, nf). ``stopped`` (nf,),
+        bool: joints taken as inside the stick band whatever their speed (default none)."""
         elements = self.friction
         pos = fr.rows(self.model, self.c, elements)
         # D (nq, nf) and its rate along the motion, in one pass: dd = qd^T (dD/dq) qd
@@ -186,10 +189,50 @@ class Problem(eqx.Module):
         H = D.T @ A
         a0 = D.T @ qdd0 + dd
         h_free = jnp.sum(D**2 * self.Minv[:, None], axis=0)
-        f, _ = fr.solve_friction(elements, pos, v, a0, H, mu0, Mu_f, h_free)
+        v_band = v if stopped is None else jnp.where(stopped, 0.0, v)
+        f, stick = fr.solve_friction(elements, pos, v_band, a0, H, mu0, Mu_f, h_free)
+        return f, stick, A, Mu_f, H, v, D
+
+    def _with_friction(self, q, qd, t, solve, qdd0, mu0):
+        """Accelerations and multipliers with the joint friction forces, from the KKT
+        solve factorized once (:meth:`_friction_solve`); and the friction record
+        ``(f, normal, limit, v, D)``."""
+        f, _, A, Mu_f, _, v, D = self._friction_solve(q, qd, t, solve, qdd0, mu0)
         mu = mu0 + Mu_f @ f
-        lim, normal = fr.limits(elements, pos, mu)
+        lim, normal = fr.limits(self.friction, fr.rows(self.model, self.c, self.friction), mu)
         return qdd0 + A @ f, mu, (f, normal, lim, v, D)
+
+    def halt_sticking(self, q, qd, w, t, q_start, qd_start):
+        """The velocities ``qd`` (nq,) and works ``w`` (2,) at the end of a step with every
+        sticking friction joint brought to rest.
+
+        A joint sticks at ``(q, qd, t)`` where it has stopped, inside the stick band or with
+        its relative speed reversed since the step's start ``(q_start, qd_start)`` (it
+        stopped within the step), and its static friction holds it within its limit
+        (:func:`~mixdyn.equations._friction.solve_friction`). The sticking joints get the
+        impulse ``A y`` along their directions that makes their relative speeds exactly 0
+        (``H_ss y_s = -v_s``), the constraints' velocities kept (``C A = 0``). The stick
+        force then holds their relative accelerations at 0, so that a stopped joint stays
+        where it stopped instead of creeping on at the speed it was left with (up to
+        ``v_stick`` inside the band, a step's worth of deceleration past a reversal). The
+        kinetic energy the impulse takes out, the friction's work in the stop, is added to
+        the nonconservative work ``w[0]``. ``(qd, w)`` themselves without friction."""
+        if not self.friction:
+            return qd, w
+        elements = self.friction
+        v_start = fr.directions(self.model, elements, q_start).T @ qd_start
+        v_end = fr.directions(self.model, elements, q).T @ qd
+        J = self.c.jacobian(q, t)
+        solve, _ = self.kkt(q, qd, t, J)
+        qdd0, mu0 = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
+        reversed_ = v_start * v_end < 0.0
+        _, stick, A, _, H, v, _ = self._friction_solve(q, qd, t, solve, qdd0, mu0, reversed_)
+        both = stick[:, None] & stick[None, :]
+        y = jnp.linalg.solve(jnp.where(both, H, jnp.eye(H.shape[0])), jnp.where(stick, -v, 0.0))
+        halted = qd + A @ jnp.where(stick, y, 0.0)
+        mass = self.model.mass_diagonal
+        work = 0.5 * (jnp.dot(mass * halted, halted) - jnp.dot(mass * qd, qd))
+        return halted, w.at[0].add(work)
 
     def friction_columns(self, record) -> dict:
         """The friction elements' result columns at one state from its friction ``record``

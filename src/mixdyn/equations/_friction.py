@@ -14,7 +14,9 @@ The KKT matrix does not depend on ``f``: factorized once, it gives ``qdd = qdd0 
 - slip (``|v_k| >= v_stick``): ``f_k = -limit_k sign(v_k)``;
 - stick (``|v_k| < v_stick``): ``f_k`` such that ``a_k = 0``, solved jointly for the
   sticking joints; one whose force would exceed its limit slips at the limit, in the
-  direction of the force it needed.
+  direction of the force it needed. The integrators bring a sticking joint's speed to
+  exactly 0 after each step (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`), so
+  that ``a_k = 0`` holds it where it stopped.
 
 The limits depend on the reactions, which depend on ``f``: a fixed-point iteration of
 :data:`ITERATIONS` steps (each a small ``nf x nf`` solve; the factorization is reused). A

@@ -23,8 +23,10 @@ def _solver_class():
 
         def finish(self, t0, t1, y0, z1, z_err, data):
             c = self.problem.c
-            viol = jnp.max(jnp.abs(c(z1[0], t1))) if c.m else jnp.zeros(())
-            return z1, None, data, jnp.asarray(True), viol
+            q, qd, w = z1
+            viol = jnp.max(jnp.abs(c(q, t1))) if c.m else jnp.zeros(())
+            qd, w = self.problem.halt_sticking(q, qd, w, t1, *y0[:2])  # stuck joints at rest
+            return (q, qd, w), None, data, jnp.asarray(True), viol
 
     return Stabilized
 

@@ -14,12 +14,15 @@ from ._common import Trajectory
 
 
 @eqx.filter_jit  # traced once, however often diffrax traces its loop's body
-def _project(p: Problem, q, qd, t, tol):
-    """Positions, then velocities, projected on the constraints at ``t``; the position
-    residual after and the violation before [length]."""
+def _project(p: Problem, q, qd, w, t, tol, start):
+    """Positions, then velocities, projected on the constraints at ``t``, the sticking
+    friction joints brought to rest (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`,
+    ``start``: the step's starting ``(q, qd)``; their stops' work added to ``w``); the
+    position residual after and the violation before [length]."""
     viol = jnp.max(jnp.abs(p.c(q, t))) if p.c.m else jnp.zeros(())
     q, residual = p.project_positions(q, t, tol)
-    return q, p.project_velocities(q, qd, t), residual, viol
+    qd, w = p.halt_sticking(q, p.project_velocities(q, qd, t), w, t, *start)
+    return q, qd, w, residual, viol
 
 
 def _solver_class():
@@ -37,7 +40,7 @@ def _solver_class():
 
         def finish(self, t0, t1, y0, z1, z_err, data):
             q, qd, w = z1
-            q, qd, residual, viol = _project(self.problem, q, qd, t1, self.tol_pos)
+            q, qd, w, residual, viol = _project(self.problem, q, qd, w, t1, self.tol_pos, y0[:2])
             err = None if self.fixed else (z_err[0], z_err[1], jnp.zeros_like(w))
             return (q, qd, w), err, data, residual <= self.tol_closed, viol
 
