@@ -32,11 +32,13 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
+from ._declare import element
 from ._element import Resolver
 from ._forces import ForceElement, _f64
 from ._validate import finite
 
 
+@element("joint_friction", "forces")
 class JointFriction(ForceElement):
     """Coulomb friction in the revolute or translational joint named ``joint``.
 
