@@ -9,6 +9,15 @@ import pytest
 import mixdyn.io as mio
 from fixtures import EXAMPLES
 from mixdyn.io.schema import ModelFile, json_schema
+from mixdyn.model import ELEMENTS
+
+#: The specs made from an element class's declaration (mixdyn.model.element): their keys are
+#: the class's declared fields, checked against the class below, and they are left out of the
+#: record and of the digest, so that a new declared element changes neither.
+DECLARED = {
+    f"{kind.cls.__name__}Spec": kind for group in ELEMENTS.values() for kind in group.values()
+    if kind.fields()
+}
 
 EXAMPLES = sorted(EXAMPLES.glob("*.yaml"))
 
@@ -51,7 +60,6 @@ PROPERTIES = {
     "ReferenceSpec": "expr label unit",
     "RelativeAngleDriverSpec": "body_i body_j law name type",
     "RevoluteSpec": "name point_i point_j type",
-    "RotarySpringDamperSpec": "actuator body_i body_j damping free_angle name stiffness type",
     "SplineArgs": "kind t unit y",
     # the sweep run kind (issue 15)
     "SummarySpec": "column name reduce",
@@ -78,7 +86,6 @@ PROPERTIES = {
     "StaticsRunSpec": "animation drivers hold initial kind linear_solver max_iter "
     "name outputs plots prescribed time tol velocities",
     "SplineSpec": "spline",
-    "SpringDamperSpec": "actuator damping free_length name point_i point_j stiffness type",
     "TimeSpec": "n span step values",
     "TorqueSpec": "body law name reaction type",
     "TranslationalSpec": "angle axis name point_i point_j type",
@@ -91,22 +98,35 @@ PROPERTIES = {
 # required key or discriminator changes it. If a pydantic upgrade alone changes the form of
 # the schema, check the difference and record the new value. Recorded again when the sweep
 # run kind (SweepRunSpec, VarySpec, SummarySpec, SweepPlotSpec) was added, and the identify
-# and optimize kinds, a plot's x column, the statics kind and output_units.
-STRIPPED_SHA256 = "d29016866fd84979cd479976a78a3f72b51b4a2d09d9f4ea1ff55709c61cd10a"
+# and optimize kinds, a plot's x column, the statics kind and output_units; and with the
+# declared elements' specs left out (the same value with the spring-dampers written by hand).
+STRIPPED_SHA256 = "729fc3b943b3d5b076ba7118c985bc954cc38b0385e8718c4e1bb2eb66420818"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:
     return {"ModelFile": schema, **schema["$defs"]}
 
 
+def _declared_ref(value) -> bool:
+    refs = {f"#/$defs/{name}" for name in DECLARED}
+    if isinstance(value, dict):
+        return value.get("$ref") in refs
+    return isinstance(value, str) and value in refs
+
+
 def _strip(node):
-    """The schema without its descriptions (a property called ``description`` stays)."""
+    """The schema without its descriptions (a property called ``description`` stays) and
+    without the declared elements' specs (:data:`DECLARED`) and the references to them."""
     if isinstance(node, dict):
         return {
-            k: _strip(v) for k, v in node.items() if not (k == "description" and isinstance(v, str))
+            k: _strip(v)
+            for k, v in node.items()
+            if not (k == "description" and isinstance(v, str))
+            and k not in DECLARED
+            and not _declared_ref(v)
         }
     if isinstance(node, list):
-        return [_strip(v) for v in node]
+        return [_strip(v) for v in node if not _declared_ref(v)]
     return node
 
 
@@ -138,8 +158,27 @@ def test_the_properties_are_the_recorded_ones():
     got = {
         n: " ".join(sorted(d.get("properties", {})))
         for n, d in _definitions(ModelFile.model_json_schema()).items()
+        if n not in DECLARED
     }
     assert got == PROPERTIES
+
+
+def test_a_declared_elements_keys_are_its_declared_fields():
+    """A spec made from a declaration has ``type``, ``name`` and the class's declared fields,
+    each described by its declaration (with the unit kind of a quantity), its defaults the
+    class's; it is in the schema under its section's union."""
+    definitions = _definitions(ModelFile.model_json_schema())
+    assert DECLARED and set(DECLARED) <= set(definitions)
+    for name, kind in DECLARED.items():
+        props = definitions[name]["properties"]
+        assert set(props) == {"type", "name", *(f for f, _, _ in kind.fields())}
+        assert props["type"]["const"] == kind.file_name
+        for field, decl, default in kind.fields():
+            assert props[field]["description"].startswith(decl.doc)
+            if hasattr(decl, "kind") and not decl.law:
+                assert props[field]["description"].endswith(f"[{decl.kind.replace('_', ' ')}]")
+            if default is not None and not callable(default) and "default" in props[field]:
+                assert props[field]["default"] == pytest.approx(default)
 
 
 def test_the_schema_without_descriptions_is_unchanged():
