@@ -2,7 +2,7 @@
 
 from ._body import Body, Ground
 from ._cams import CamFollower
-from ._contacts import GearPair, RackPinion, RollingDisks, RollingOnLine
+from ._contacts import BeltDrive, GearPair, RackPinion, RollingDisks, RollingOnLine
 from ._declare import ELEMENTS, element
 from ._drivers import (
     CoordinateDriver,
@@ -66,6 +66,7 @@ def __getattr__(name: str):
 
 __all__ = [
     "ELEMENTS",
+    "BeltDrive",
     "Body",
     "CamFollower",
     "Constant",
@@ -106,8 +107,8 @@ __all__ = [
     "element",
 ]
 
-# Every registered element class is a name of this package (and of mixdyn): a new element
-# is its class, registered with @element, and nothing else.
+# Every registered element class is a name of this package (and of mixdyn) at run time; the
+# import above names it for readers of the source (type checkers, the API reference).
 for _group in ELEMENTS.values():
     for _kind in _group.values():
         globals().setdefault(_kind.cls.__name__, _kind.cls)
