@@ -64,8 +64,8 @@ def test_a_kinematic_run_has_the_motion_only(tmp_path):
     runner = mio.Runner(mio.reads(text))
     kin = next(p for p in runner.plans.values() if p.spec.kind == "kinematic")
     with pytest.raises(mio.FileError, match="a kinematic run has the motion only"):
-        runner._check_column("O.Fx", kin.spec, kin.path)
-    runner._check_column("rod.B.ay", kin.spec, kin.path)  # a point's acceleration: there
+        runner.check_column("O.Fx", kin.spec, kin.path)
+    runner.check_column("rod.B.ay", kin.spec, kin.path)  # a point's acceleration: there
 
 
 def test_a_plot_against_another_column(tmp_path):

@@ -19,10 +19,11 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn as md
-from mixdyn.cli import _progress_log, app, clean
+from mixdyn.cli import app
 from mixdyn.errors import ModelError
 from mixdyn.io import ExpressionError
 from mixdyn.io.expressions import ExpressionLaw, constant_value
+from mixdyn.runs.console import clean, progress_log
 
 BASE = """\
 mixdyn: 1
@@ -815,7 +816,7 @@ class _Plan:
 
 
 def test_progress_lines_without_a_terminal(capsys):
-    at = _progress_log(_Plan(), every=0.0)
+    at = progress_log(_Plan(), every=0.0)
     at(0.5)
     at(1.0)
     lines = capsys.readouterr().err.strip().splitlines()
@@ -824,7 +825,7 @@ def test_progress_lines_without_a_terminal(capsys):
 
 
 def test_progress_lines_are_throttled(capsys):
-    at = _progress_log(_Plan(), every=3600.0)
+    at = progress_log(_Plan(), every=3600.0)
     for t in (0.1, 0.2, 0.3):
         at(t)
     assert capsys.readouterr().err == ""

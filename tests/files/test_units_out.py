@@ -103,7 +103,8 @@ def test_plot_draws_a_column_in_another_unit(tmp_path):
     import pandas as pd
     from typer.testing import CliRunner
 
-    from mixdyn.cli import _in_unit, app
+    from mixdyn.cli import app
+    from mixdyn.io.results import column_in_unit
 
     example = EXAMPLES / "slider_crank.yaml"
     path = tmp_path / "s.yaml"
@@ -116,9 +117,9 @@ def test_plot_draws_a_column_in_another_unit(tmp_path):
     folder = out / "inverse"
     table = pd.read_csv(folder / "results.csv")
     units = {"crank.phi": "rad", "motor": "N*m"}
-    conv, new = _in_unit(table, units, "crank.phi=deg", folder, 0)
+    conv, new = column_in_unit(table, units, "crank.phi=deg", folder, 0)
     np.testing.assert_allclose(conv["crank.phi"], table["crank.phi"] * 180 / math.pi, rtol=1e-14)
-    conv, new = _in_unit(table, units, "motor = N*mm", folder, 0)
+    conv, new = column_in_unit(table, units, "motor = N*mm", folder, 0)
     np.testing.assert_allclose(conv["motor"], 1000 * table["motor"], rtol=1e-14)
     assert new["motor"] == "N*mm" and units["motor"] == "N*m"
     ok = CliRunner().invoke(

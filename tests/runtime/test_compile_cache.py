@@ -451,13 +451,13 @@ def _motion():
 
 def test_the_figure_worker_draws_what_this_process_draws(tmp_path):
     """mixdyn run's worker process (no JAX) writes the same bytes as drawing here."""
-    from mixdyn.cli import _Painter
     from mixdyn.viz import _draw, movie_data, plot_columns
+    from mixdyn.viz.painter import Painter
 
     model, t, q = _motion()
     data = movie_data(model=model, t=t, q=q, frames=10, trace=["bob.O"])
     table = {"t": t, "bob.phi": q[:, 2]}
-    painter = _Painter()
+    painter = Painter()
     try:
         assert painter.proc is not None
         # On Linux the worker forks: the plot goes to the first channel, the movie to the
@@ -477,10 +477,10 @@ def test_the_figure_worker_draws_what_this_process_draws(tmp_path):
 
 
 def test_a_figure_failure_in_the_worker_is_raised_here(tmp_path):
-    from mixdyn.cli import _Painter
+    from mixdyn.viz.painter import Painter
 
     t = np.linspace(0.0, 1.0, 5)
-    painter = _Painter()
+    painter = Painter()
     try:
         painter.draw("plot", {"t": t, "y": t}, ["y"], tmp_path / "bad.txt")
         with pytest.raises(ValueError, match="cannot write a plot"):
@@ -490,10 +490,10 @@ def test_a_figure_failure_in_the_worker_is_raised_here(tmp_path):
 
 
 def test_a_lost_worker_leaves_the_figures_to_this_process(tmp_path):
-    from mixdyn.cli import _Painter
+    from mixdyn.viz.painter import Painter
 
     t = np.linspace(0.0, 1.0, 5)
-    painter = _Painter()
+    painter = Painter()
     try:
         painter.proc.kill()
         painter.proc.wait()
@@ -536,9 +536,9 @@ def test_a_worker_that_cannot_fork_serves_one_channel(monkeypatch):
 def test_a_worker_with_nothing_to_draw_is_stopped_not_awaited():
     """mixdyn run starts its figure worker before it knows whether the runs draw; when they
     draw nothing the worker is stopped at once (killed while importing), not waited for."""
-    from mixdyn.cli import _Painter
+    from mixdyn.viz.painter import Painter
 
-    painter = _Painter()
+    painter = Painter()
     proc, folder = painter.proc, painter.tmp
     assert proc is not None and proc.poll() is None
     painter.abort()

@@ -294,6 +294,83 @@ def read_result(path):
     return df, meta
 
 
+def read_motion(path, model, file) -> tuple[np.ndarray, np.ndarray]:
+    """The motion of ``model`` in written results (``mixdyn animate --results``).
+
+    Args:
+        path: the run's folder, or its ``results.csv`` / ``results.parquet``.
+        model: the model whose bodies' coordinates are read.
+        file: the model file, for the messages.
+
+    Returns:
+        ``(t, q)``: (N,) times and (N, 3 * bodies) coordinates [model units].
+
+    Raises:
+        FileError: no results there, or results of another model (named as ``--results``).
+    """
+    from ._errors import FileError
+
+    try:
+        table, _ = read_result(path)
+    except FileNotFoundError as e:
+        raise FileError(str(e), "--results", file=str(file)) from None
+    names = [f"{b.name}.{c}" for b in model.bodies for c in ("x", "y", "phi")]
+    missing = [n for n in names if n not in table.columns]
+    if missing:
+        raise FileError(
+            f"the results lack column {missing[0]!r}; they are not of this model",
+            "--results",
+            file=str(file),
+            hint="give the results of this file's run",
+        )
+    return table["t"].to_numpy(), table[names].to_numpy()
+
+
+def column_in_unit(table, units: dict, spec: str, source, k: int):
+    """``table`` with the column of ``spec`` (``COLUMN=UNIT``) converted from its written unit
+    (``units``: meta.json's, or the Parquet file's) into UNIT.
+
+    Args:
+        table: the results read (:func:`read_result`).
+        units: the unit of each column.
+        spec: ``COLUMN=UNIT`` as given on the command line (``--unit``).
+        source: the results' path, for the message.
+        k: the position of ``spec`` among the ``--unit`` options (from 0).
+
+    Returns:
+        ``(table, units)``: a copy of the table with the column converted, and the units.
+
+    Raises:
+        FileError: a unit of another dimension, an unknown column or unit, named as ``--unit``.
+    """
+    from ..units import SI
+    from ._errors import FileError
+    from .quantities import QuantityError, exponents, factor
+
+    col, sep, target = spec.partition("=")
+    col, target = col.strip(), target.strip()
+    where = dict(file=str(source), hint="write --unit COLUMN=UNIT, e.g. crank.phi=deg")
+    if not sep or not col or not target:
+        raise FileError(f"{spec!r} is not COLUMN=UNIT", f"--unit {k + 1}", **where)
+    if col not in table.columns:
+        raise FileError(f"no column {col!r}", f"--unit {k + 1}", **where)
+    was = units.get(col) or ""
+    try:
+        same = exponents(was or "1") == exponents(target)
+        scale = factor(was or "1", None, SI) / factor(target, None, SI)
+    except QuantityError as e:
+        raise FileError(f"{target!r}: {e.problem}", f"--unit {k + 1}", **where) from None
+    if not same:
+        raise FileError(
+            f"column {col!r} is in {was or 'no unit'}, which {target!r} is not a unit of",
+            f"--unit {k + 1}",
+            **where,
+        )
+    table = table.copy()
+    table[col] = table[col] * scale
+    return table, {**units, col: target}
+
+
 def run_settings(spec) -> dict:
     """The settings of a run description worth recording (kind, solver, tolerances...)."""
     data = spec.model_dump(mode="json", exclude={"plots", "animation"})
@@ -307,9 +384,11 @@ __all__ = [
     "RESULTS_PARQUET",
     "TABLE_CSV",
     "TABLE_PARQUET",
+    "column_in_unit",
     "in_units",
     "jsonable",
     "point_columns",
+    "read_motion",
     "read_result",
     "write_result",
     "write_sweep",

@@ -1,4 +1,18 @@
-"""The runs of a model file: planned, checked, set up and executed.
+"""The runs of a model file: planned, checked, set up, executed and written.
+
+A file's runs are found by their ``kind:`` in one registry (:mod:`.kinds`), each kind
+registered by its module: :mod:`.analyses` (kinematic, statics, inverse, forward, mixed),
+:mod:`.sweep`, :mod:`.identify` and :mod:`.optimize`. A :class:`Runner` holds a file's plans
+and does its jobs through one module each:
+
+* :mod:`.plan`: a run checked into a :class:`Plan` (output times, order, what a study may
+  change);
+* :mod:`.checks`: every check made before anything is computed (settings, columns, masses,
+  mobility, a mixed run's solvability);
+* :mod:`.setup`: a run's model, start and analysis keywords, made once and shared by its check
+  and its run;
+* :mod:`.execute`: the runs in the order of their dependencies;
+* :mod:`.outputs` and :mod:`.console`: what ``mixdyn run`` writes and shows.
 
 Example::
 
@@ -8,8 +22,9 @@ Example::
     results = Runner(spec).execute()     # every run, by name
 """
 
-from . import identify, optimize, sweep  # noqa: F401  (they register their run kinds)
+from . import analyses, identify, optimize, sweep  # noqa: F401  (they register their kinds)
+from .kinds import KINDS, RunKind, kind_of
 from .plan import Plan
 from .runner import Runner, execute
 
-__all__ = ["Plan", "Runner", "execute"]
+__all__ = ["KINDS", "Plan", "RunKind", "Runner", "execute", "kind_of"]

@@ -1,28 +1,53 @@
-"""Checks of a run's settings made when the run is planned, before anything is computed.
+"""Checks of a file's runs, made before anything is computed.
 
-``mixdyn check`` and ``mixdyn run`` plan every run first, so each fault below is an input
-error (exit 2) naming the file, line and setting, never a failure after minutes of computing:
+``mixdyn check`` and ``mixdyn run`` plan and check every run first, so each fault below is an
+input error (exit 2) naming the file, line and setting, never a failure after minutes of
+computing.
+
+When a run is planned (:meth:`.kinds.RunKind.plan`):
 
 * ``options``: only the names the run's analysis takes (close matches suggested), none that
   repeats a setting of the run itself (``rtol``, ``dt``, ``linear_solver``...), every value of
   the right type, finite and in range (``rho_inf`` in [0, 1], ``max_steps`` >= 1...);
 * the step: a fixed-step method needs ``dt``, and ``span / dt`` may not exceed ``max_steps``;
-* the outputs: figure and animation files of a known type, each written once;
-* the laws: every expression law finite at the run's output times.
+* the outputs: figure and animation files of a known type, each written once; columns the
+  run's result has (:func:`columns`);
+* the laws: every expression law finite at the run's output times;
+* a mixed run's unknown forces and prescribed motions paired one to one.
+
+Once every run is planned: motions replayed ``from_run`` cover the replaying run's span
+(:func:`check_replays`) and ``output_units`` are units of their kind (:func:`output_units`).
+
+With numbers, on the run's own set-up (:mod:`.setup`): every body's mass and inertia for a
+dynamic run (:func:`check_masses`), the drivers against the degrees of freedom
+(:func:`mobility`) and a mixed run's solvability (:func:`check_solvable`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import shutil
+from collections.abc import Callable
 
 import numpy as np
 
+from .. import analysis as an
+from .. import model as m
 from ..analysis._options import CHOICES, step_count, suggestions, value_problem
+from ..analysis._prepare import prepare_dynamic
 from ..analysis._simulate import ENERGY_TOL
 from ..analysis.methods import FIXED_STEP, OPTIONS
+from ..analysis.mixed import bind_prescribed
+from ..errors import AssemblyError, ModelError, NumericalError
 from ..io import schema as s
+from ..io._errors import FileError
 from ..io.expressions import ExpressionLaw, evaluate
-from .plan import Checker, Plan
+from . import setup
+from .kinds import kind_of
+from .plan import Plan
+
+#: Suffixes of the per-body columns of a result.
+BODY_COLUMNS = ("x", "y", "phi", "vx", "vy", "omega", "ax", "ay", "alpha")
 
 #: Options of an inverse run (passed to :func:`mixdyn.kinematic`) and their defaults.
 INVERSE_OPTIONS = {"tol": None, "max_iter": 25, "singular_tol": 1e-7, "assemble_first": True}
@@ -51,7 +76,7 @@ def known_options(run) -> dict[str, object]:
     return {**known, **DYNAMIC_OPTIONS}
 
 
-def check_options(runner: Checker, run, path) -> dict:
+def check_options(runner, run, path) -> dict:
     """A run's ``options``, checked: names, types, ranges.
 
     Args:
@@ -96,7 +121,7 @@ def _unknown(run, name: str, known) -> tuple[str, str]:
     return f"unknown option {name!r} of {what}", hint
 
 
-def _check_value(runner: Checker, name: str, value, path) -> None:
+def _check_value(runner, name: str, value, path) -> None:
     """Refuse an option value of the wrong type or out of range."""
     problem = value_problem(name, value)
     if problem:
@@ -108,7 +133,7 @@ def _check_value(runner: Checker, name: str, value, path) -> None:
         runner.fail(path, f"{name} is {value!r}", hint)
 
 
-def check_step(runner: Checker, plan: Plan) -> None:
+def check_step(runner, plan: Plan) -> None:
     """A fixed step where needed, and no more steps than ``max_steps``."""
     r = plan.spec
     if isinstance(r, s.KinematicRunSpec | s.InverseRunSpec | s.StaticsRunSpec):
@@ -140,7 +165,7 @@ def check_step(runner: Checker, plan: Plan) -> None:
         )
 
 
-def check_outputs(runner: Checker, plan: Plan) -> None:
+def check_outputs(runner, plan: Plan) -> None:
     """Figure and animation files: a writable type each, no file written twice."""
     r = plan.spec
     seen: dict[str, tuple] = {}
@@ -168,11 +193,11 @@ def check_outputs(runner: Checker, plan: Plan) -> None:
     _check_arrows(runner, plan, a.forces, (*plan.path, "animation", "forces"))
 
 
-def _check_arrows(runner: Checker, plan: Plan, forces, path) -> None:
+def _check_arrows(runner, plan: Plan, forces, path) -> None:
     """Force arrows: not in a kinematic run; each name a joint or a point force."""
     if not forces:
         return
-    if plan.spec.kind == "kinematic":
+    if kind_of(plan).motion_only:
         runner.fail(
             path,
             "a kinematic run has no forces to draw",
@@ -214,7 +239,7 @@ def _check_arrows(runner: Checker, plan: Plan, forces, path) -> None:
             )
 
 
-def check_laws(runner: Checker, plan: Plan) -> None:
+def check_laws(runner, plan: Plan) -> None:
     """Every expression law of the run's drivers, prescribed motions and known forces finite
     at its output times."""
     r = plan.spec
@@ -232,13 +257,13 @@ def check_laws(runner: Checker, plan: Plan) -> None:
     for k, p in enumerate(r.prescribed):
         if p.law is not None:
             path = (*plan.path, "prescribed", k)
-            laws.append(((*path, "law"), runner._prescribed_driver(p, path).law))
+            laws.append(((*path, "law"), setup.prescribed_driver(runner, p, path).law))
     for path, law in laws:
         if isinstance(law, ExpressionLaw):
             _finite_law(runner, law, plan.times, path)
 
 
-def check_replays(runner: Checker) -> None:
+def check_replays(runner) -> None:
     """A motion replayed ``from_run`` covers the replaying run's time span."""
     for plan in runner.plans.values():
         for k, p in enumerate(getattr(plan.spec, "prescribed", ())):
@@ -256,7 +281,7 @@ def check_replays(runner: Checker) -> None:
                 )
 
 
-def _finite_law(runner: Checker, law: ExpressionLaw, times, path) -> None:
+def _finite_law(runner, law: ExpressionLaw, times, path) -> None:
     values = [float(v) for v in np.asarray(law.values)]
     try:
         with np.errstate(all="ignore"):
@@ -274,14 +299,509 @@ def _finite_law(runner: Checker, law: ExpressionLaw, times, path) -> None:
         )
 
 
+def check_settings(runner, plan: Plan) -> None:
+    """The run's options, step, outputs and laws."""
+    check_options(runner, plan.spec, plan.path)
+    check_step(runner, plan)
+    check_outputs(runner, plan)
+    check_laws(runner, plan)
+
+
+def output_units(runner) -> dict[str, str]:
+    """The file's ``output_units`` checked: known kinds, units of their dimension."""
+    from ..units import DIMENSIONS
+
+    out = {}
+    for kind, unit in runner.spec.output_units.items():
+        path = ("output_units", kind)
+        if kind not in DIMENSIONS:
+            from .._hints import did_you_mean
+
+            runner.fail(
+                path, f"no kind of quantity {kind!r}", did_you_mean(kind, DIMENSIONS, "kinds")
+            )
+        runner.b.factor(unit, kind, path)  # the dimension checked
+        out[kind] = unit
+    return out
+
+
+def check_mixed(runner, r: s.MixedRunSpec, path) -> None:
+    """A mixed run's unknown forces (each a force of the model with a magnitude, listed once,
+    one per prescribed motion), its independent coordinates and its hold."""
+    forces = {f.name: f for f in runner.model.forces}
+    seen = set()
+    for k, name in enumerate(r.unknown):
+        pp = (*path, "unknown", k)
+        if name not in forces:
+            runner.fail(
+                pp,
+                f"unknown force {name!r}",
+                f"the model's forces: {', '.join(forces) or '(none)'}",
+            )
+        if not forces[name].has_magnitude:
+            runner.fail(pp, f"force {name!r} has no magnitude that could be unknown", "")
+        if name in seen:
+            runner.fail(pp, f"force {name!r} is listed twice", "list it once")
+        seen.add(name)
+    if len(r.unknown) != len(r.prescribed):
+        runner.fail(
+            path,
+            f"{len(r.unknown)} unknown force(s) but {len(r.prescribed)} prescribed motion(s)",
+            "a mixed run needs one prescribed motion per unknown force",
+        )
+    for k, ref in enumerate(r.independent or ()):
+        runner.b.coordinate(ref, (*path, "independent", k))
+    prescribed = {p.coordinate: k for k, p in enumerate(r.prescribed)}
+    for k, ref in enumerate(r.hold or ()):
+        if ref in prescribed:
+            runner.fail(
+                (*path, "hold", k),
+                f"{ref} is held, but the run prescribes it (prescribed[{prescribed[ref]}]): "
+                "a held coordinate cannot follow a prescribed motion",
+                "remove it from the run's hold",
+            )
+
+
+def columns(runner, r) -> tuple[list[str], set[str]]:
+    """The columns a run's result has: ``(names, owners of lambda.* columns)`` (the
+    multipliers ``lambda.{row}`` of the joints' and drivers' rows; point columns
+    ``body.P.x`` are checked apart).
+
+    Args:
+        runner: the file's runner.
+        r: the description of a run of one analysis.
+    """
+    kind = kind_of(r)
+    model = runner.model
+    cols = ["t"] + [f"{b}.{c}" for b in runner.b.body_names for c in BODY_COLUMNS]
+    if kind.motion_only:
+        return cols, set()
+    for j in model.joints:
+        if j.generic_reaction:
+            cols += [f"{j.name}.Fx", f"{j.name}.Fy"]
+            cols += [f"{j.name}.M"] if j.carries_moment else []
+        cols += [f"{j.name}.{k}" for k in j.contact_kinds]
+    drivers = [d.name for d in model.drivers if r.drivers is None or d.name in r.drivers]
+    if not kind.unknown_forces:  # a mixed run's prescribed motions are paired with its unknowns
+        drivers += [p.name or f"prescribed {p.coordinate}" for p in r.prescribed]
+    unknown = tuple(getattr(r, "unknown", None) or ())
+    for name in [*drivers, *unknown]:
+        cols += [name, f"{name}.power"]
+    if kind.element_columns:
+        from ..equations import force_output_kinds
+
+        cols += list(force_output_kinds(model, exclude=unknown))
+    cols += ["energy.kinetic", "energy.potential", "energy.total", "constraint.violation"]
+    if kind.integrated:
+        cols += ["work.nonconservative", "work.constraints"]
+    owners = {j.name for j in model.joints} | set(drivers)
+    return cols, owners
+
+
+def check_column(runner, col: str, r, path) -> None:
+    """Refuse a column the run's result does not have (a point's ``body.P.x`` checked as a
+    point of the body)."""
+    parts = col.split(".")
+    if len(parts) == 3 and parts[0] in runner.b.body_index and parts[1] not in BODY_COLUMNS:
+        runner.b.point(f"{parts[0]}.{parts[1]}", path)
+        if parts[2] in ("x", "y", "vx", "vy", "ax", "ay"):
+            return
+    names, owners = columns(runner, r)
+    if col in names:
+        return
+    if col.startswith("lambda.") and any(
+        col == f"lambda.{o}" or col.startswith(f"lambda.{o}.") for o in owners
+    ):
+        return
+    from .._hints import did_you_mean
+
+    what = "a kinematic run has the motion only" if kind_of(r).motion_only else ""
+    runner.fail(
+        path,
+        f"no column {col!r} in run {r.name!r}" + (f" ({what})" if what else ""),
+        did_you_mean(col, names) + "; points: body.P.x (.y, .vx, .vy, .ax, .ay)",
+    )
+
+
+# --------------------------------------------------------------------------- with numbers
+def check_masses(runner, plan: Plan) -> None:
+    """A dynamic run needs every body's mass and inertia > 0."""
+    plan = plan.subject
+    if not kind_of(plan).dynamic:
+        return
+    for i, body in enumerate(runner.model.bodies):
+        for key in ("mass", "inertia"):
+            if not float(getattr(body, key)) > 0:
+                runner.fail(
+                    ("bodies", i, key),
+                    f"{key} is {float(getattr(body, key)):g}, but run {plan.name!r} "
+                    f"({plan.spec.kind}) is dynamic",
+                    f"give the body a {key} > 0, or make the run kinematic",
+                )
+
+
+def mobility(runner, plan: Plan):
+    """Degrees of freedom of a run's model with its drivers and prescribed motions, at the
+    assembled start.
+
+    The check is made on the run's own set-up where it can be (:func:`.setup.prepare`: the
+    start the run will start from and its mobility analysis), which the run then hands to its
+    analysis, so that the check and the run share one assembly and one rank analysis. A run
+    replaying another run's motion (``from_run``) is checked with a stand-in for that motion
+    and prepares itself when it runs.
+
+    The prescribed motions are bound to their bodies as :func:`mixdyn.mixed` binds them, so
+    the check counts the coordinates the run will drive. A mixed run is then checked as
+    :func:`check_solvable` does (its start with the held coordinates, the pairing of forces
+    and motions), so that ``mixdyn run`` refuses it before any long computation.
+
+    Args:
+        runner: the file's runner.
+        plan: the run (a sweep, fit or optimization: the run it repeats, at its nominal
+            numbers).
+
+    Returns:
+        The :class:`~mixdyn.DofReport` of the run's model and drivers.
+
+    Raises:
+        FileError: a fully driven run (kinematic, inverse) does not have one driver per
+            degree of freedom, another run is over-driven, or a mixed run fails a check of
+            :func:`check_solvable`.
+    """
+    plan = plan.subject
+    r = plan.spec
+    kind = kind_of(plan)
+    mixed = isinstance(r, s.MixedRunSpec)
+    report = None
+    if plan.replays:
+        if mixed:
+            report = _standin_report(runner, plan)
+    else:
+        try:
+            report = setup.prepare(runner, plan).report
+        except FileError:
+            raise
+        except (ModelError, NumericalError):
+            pass  # checked as before below; the run prepares itself and says why it fails
+    if report is None:
+        report = _rough_report(runner, plan)
+    n = report.n_drivers
+    if kind.fully_driven:
+        if report.redundant_drivers:
+            runner.fail(
+                plan.path,
+                f"driver(s) {', '.join(report.redundant_drivers)} prescribe a motion the "
+                "joints or other drivers already fix",
+                "remove them or drive another coordinate",
+            )
+        if n != report.dof:
+            more = "remove" if n > report.dof else "add"
+            runner.fail(
+                plan.path,
+                f"the mechanism has {report.dof} degree(s) of freedom but the {r.kind} run "
+                f"has {n} driver(s)",
+                f"{more} {abs(n - report.dof)} driver(s) (drivers: or prescribed:)",
+            )
+    elif n > report.dof or report.redundant_drivers:
+        runner.fail(
+            plan.path,
+            f"the mechanism has {report.dof} degree(s) of freedom but the run prescribes "
+            f"{n} motion(s)"
+            + (
+                f" (redundant: {', '.join(report.redundant_drivers)})"
+                if report.redundant_drivers
+                else ""
+            ),
+            "prescribe fewer motions, or motions of coordinates the joints leave free",
+        )
+    if mixed:
+        check_solvable(runner, plan)
+    return report
+
+
+def _mixed_setup(runner, plan: Plan):
+    """What :func:`check_solvable` checks a mixed run on: ``(model, q0, qd0, prescribed
+    motions, Prepared)``, the run's own set-up (:func:`.setup.prepare`) or, for a run
+    replaying another run's motion, the stand-ins' (:func:`_standin_report`); None where the
+    start cannot be made."""
+    if plan.replays:
+        if plan.name not in runner.setups.checked:
+            _standin_report(runner, plan)
+        return runner.setups.checked.get(plan.name)
+    try:
+        prep = setup.prepare(runner, plan)
+    except FileError:
+        raise
+    except (ModelError, NumericalError):
+        return None
+    args, _ = runner.setups.prepared[plan.name]
+    prescribed = prep.drivers[len(prep.model.drivers) :]
+    return prep.model, args["q0"], args["qd0"], prescribed, prep
+
+
+def _standin_report(runner, plan: Plan):
+    """A mixed run replaying another run's motion, checked with stand-ins held at their value
+    at the assembled start (:func:`prescribed_motions`): the start the checks of
+    :func:`mixdyn.check_mixed` make, kept for :func:`check_solvable`. None where that start
+    cannot be made (the checks then report as before)."""
+    r = plan.spec
+    model = setup.run_model(runner, plan, ())
+    hold = setup.hold_of(runner, plan)
+    try:
+        q = _assembled(runner, plan, model, hold)
+        prescribed = prescribed_motions(runner, plan, model, q)
+    except ModelError as e:
+        runner.model_error(plan, e)
+    try:
+        prep = prepare_dynamic(
+            model,
+            float(plan.times[0]),
+            drivers=(*model.drivers, *prescribed),
+            q0=q,
+            hold=hold,
+            linear_solver=r.linear_solver,
+        )
+    except FileError:
+        raise
+    except (ModelError, NumericalError):
+        return None
+    runner.setups.checked[plan.name] = (model, q, None, prescribed, prep)
+    return prep.report
+
+
+def _assembled(runner, plan: Plan, model: m.Model, hold) -> np.ndarray:
+    """The rough start closed on the joints (the run's drivers aside) with ``hold``, made once
+    for runs that share it."""
+    cache = runner.setups.mobility
+    q_rough = np.asarray(setup.q_start(runner, plan, model), dtype=float)
+    key = ("assemble", setup.drivers_key(model.drivers), hold, q_rough.tobytes())
+    if key not in cache:
+        cache[key] = np.asarray(an.assemble(model, q_rough, hold=hold).q)
+    return cache[key]
+
+
+def _rough_report(runner, plan: Plan):
+    """The mobility of a run at its rough start closed on the joints, where the run's own
+    start could not be made (the run then fails there, saying why)."""
+    r = plan.spec
+    mixed = isinstance(r, s.MixedRunSpec)
+    if mixed:
+        model = setup.run_model(runner, plan, ())
+    else:
+        model = setup.run_model(
+            runner,
+            plan,
+            [
+                setup.dummy_driver(k, p)
+                if p.from_run is not None
+                else setup.prescribed_driver(runner, p, (*plan.path, "prescribed", k))
+                for k, p in enumerate(r.prescribed)
+            ],
+        )
+    # Assembly and analysis are cached by what they depend on (the drivers, the held
+    # coordinates, the start, the time): runs that share them are analysed once.
+    cache = runner.setups.mobility
+    hold = setup.hold_of(runner, plan)
+    try:
+        q = _assembled(runner, plan, model, hold)
+        prescribed = prescribed_motions(runner, plan, model, q) if mixed else ()
+    except ModelError as e:
+        runner.model_error(plan, e)
+    drivers = (*model.drivers, *prescribed)
+    t0 = float(plan.times[0])
+    key = ("dof", setup.drivers_key(drivers), q.tobytes(), t0)
+    if key not in cache:
+        cache[key] = an.degrees_of_freedom(model, q, t0, drivers=drivers)
+    return cache[key]
+
+
+def check_solvable(runner, plan: Plan) -> None:
+    """For a mixed run, every solvability check of :func:`mixdyn.check_mixed` at the assembled
+    start, without integrating.
+
+    The prescribed motions are those of the run, built and bound as the run builds them
+    (:func:`prescribed_motions`); a motion taken from another run is held at its value at the
+    assembled start for the check. A start the held coordinates make impossible (a hold that
+    fights a prescribed motion) is reported at the hold, naming where it comes from (the
+    run's ``hold`` or ``assembly.hold``). Checked once per run.
+
+    Args:
+        runner: the file's runner.
+        plan: the run (other kinds pass).
+
+    Raises:
+        FileError: the run cannot be solved, with the reason.
+    """
+    plan = plan.subject
+    r = plan.spec
+    if not isinstance(r, s.MixedRunSpec):
+        return
+    done = runner.setups.solvable
+    if plan.name in done:
+        return
+    hold = setup.hold_of(runner, plan)
+    found = _mixed_setup(runner, plan)
+    if found is not None:  # on the set-up the run starts from (no second assembly)
+        model, q0, qd0, prescribed, prep = found
+        try:
+            _solvable_at(plan, model, prescribed, q0, qd0, hold, prep.linear_solver, prep)
+        except (ModelError, NumericalError):
+            runner.setups.prepared.pop(plan.name, None)  # the run prepares itself; see below
+        else:
+            done.add(plan.name)
+            return
+    model = setup.run_model(runner, plan, ())
+    try:
+        q = np.asarray(an.assemble(model, setup.q_start(runner, plan, model), hold=hold).q)
+        prescribed = prescribed_motions(runner, plan, model, q)
+    except ModelError as e:
+        runner.model_error(plan, e)
+    # A stand-in for another run's motion has no speed: the run's start speeds are
+    # checked only where every prescribed motion is a law.
+    laws_only = all(p.from_run is None for p in r.prescribed)
+
+    def check(hold):
+        qd0 = setup.qd_start(runner, plan, model) if laws_only else None
+        _solvable_at(plan, model, prescribed, q, qd0, hold, r.linear_solver)
+
+    try:
+        check(hold)
+    except (ModelError, AssemblyError) as e:
+        if hold and _passes(check, ()):
+            path, source = setup.hold_source(plan)
+            cause = str(e)
+            element = getattr(e, "element", None)
+            if element and cause.startswith(f"{element}: "):
+                cause = cause[len(element) + 2 :]
+            runner.fail(
+                path,
+                f"run {plan.name!r}: the held coordinate(s) {', '.join(hold)} (from "
+                f"{source}) conflict with its prescribed motion(s) "
+                f"{', '.join(d.name for d in prescribed)} at t = {plan.times[0]:g}: {cause}",
+                "remove them from the run's hold"
+                if r.hold is not None
+                else "give the run its own hold: (hold: [] holds nothing)",
+            )
+        if isinstance(e, AssemblyError):
+            raise
+        runner.model_error(plan, e)
+    done.add(plan.name)
+
+
+def _solvable_at(plan: Plan, model, prescribed, q0, qd0, hold, linear_solver, prepared=None):
+    """:func:`mixdyn.check_mixed` of a mixed run's unknown forces and solver."""
+    r = plan.spec
+    an.check_mixed(
+        model,
+        prescribed,
+        tuple(r.unknown),
+        t0=float(plan.times[0]),
+        solver=r.solver,
+        independent=r.independent,
+        q0=q0,
+        qd0=qd0,
+        hold=hold,
+        linear_solver=linear_solver,
+        prepared=prepared,
+    )
+
+
+def _passes(check: Callable, hold) -> bool:
+    """Whether ``check(hold)`` raises no :class:`ModelError` or :class:`NumericalError`."""
+    try:
+        check(hold)
+    except (ModelError, NumericalError):
+        return False
+    return True
+
+
+def prescribed_motions(runner, plan: Plan, model: m.Model, q) -> tuple[m.Driver, ...]:
+    """A mixed run's prescribed motions as the checks see them, bound to the bodies of
+    ``model`` exactly as :func:`mixdyn.mixed` binds them: a ``law`` as written, a motion
+    ``from_run`` by a stand-in held at its value in ``q`` (that run has not run yet)."""
+    r = plan.spec
+    drivers = [
+        setup.dummy_driver(k, p)
+        if p.from_run is not None
+        else setup.prescribed_driver(runner, p, (*plan.path, "prescribed", k))
+        for k, p in enumerate(r.prescribed)
+    ]
+    bound = bind_prescribed(model, drivers)
+    q = np.asarray(q, dtype=float)
+    return tuple(
+        d if p.from_run is None else dataclasses.replace(d, law=held(runner, p, d, q))
+        for d, p in zip(bound, r.prescribed, strict=True)
+    )
+
+
+def held(runner, p: s.PrescribedSpec, d: m.Driver, q) -> m.Law:
+    """The stand-in's law: held at its value in ``q``, in the form the replayed motion will
+    have (:func:`mixdyn.analysis.prescribe`: a quintic Hermite interpolant on the source run's
+    output times, here of constant samples, exactly constant), so that the programs the
+    checks compile are the ones the run then calls."""
+    value = float(d.measure(q))
+    source = runner.plans.get(p.from_run)
+    if source is None or len(source.times) < 2 or np.any(np.diff(source.times) <= 0):
+        return m.Constant(value)
+    n = len(source.times)
+    return m.QuinticHermite(source.times, np.full(n, value), np.zeros(n), np.zeros(n))
+
+
+# --------------------------------------------------------------------------- the command's
+def require_size(spec: s.ModelFile, file) -> None:
+    """Refuse, before building anything, a model too large to check in bounded time."""
+    from ..analysis._structure import require_checkable
+
+    require_checkable(len(spec.bodies), str(file))
+
+
+def file_warnings(spec: s.ModelFile, model: m.Model, report) -> list[str]:
+    """What ``mixdyn check`` warns of: no runs, redundant joint equations, bodies connected to
+    nothing, forces that no run uses.
+
+    Args:
+        spec: the file's description.
+        model: its model.
+        report: the model's degrees of freedom at its assembled start.
+    """
+    out = []
+    if not spec.runs:
+        out.append("the file has no runs; `mixdyn run` has nothing to do")
+    if report.redundant:
+        out.append(
+            f"redundant joint equations {', '.join(report.redundant)} are dropped by the solvers "
+            "(their reactions are not unique)"
+        )
+    used = set()
+    for j in (*model.joints, *model.drivers, *model.forces):
+        used.update(j.body_indices())
+    for i, b in enumerate(model.bodies):
+        if i not in used:
+            out.append(f"body {b.name!r} is not connected to anything")
+    if model.forces and spec.runs and all(kind_of(r).motion_only for r in spec.runs):
+        out.append("the forces have no effect: every run is kinematic")
+    return out
+
+
 __all__ = [
+    "BODY_COLUMNS",
     "DYNAMIC_OPTIONS",
     "INVERSE_OPTIONS",
     "RUN_SETTINGS",
+    "check_column",
     "check_laws",
+    "check_masses",
+    "check_mixed",
     "check_options",
     "check_outputs",
     "check_replays",
+    "check_settings",
+    "check_solvable",
     "check_step",
+    "columns",
+    "file_warnings",
     "known_options",
+    "mobility",
+    "output_units",
+    "require_size",
 ]

@@ -37,7 +37,11 @@ from ..analysis.fit import _RATES, Fit
 from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
 from ..io import schema as s
-from .runner import ANALYSES, Plan, Runner, register_study
+from . import setup
+from .console import esc
+from .kinds import KINDS, RunKind, register
+from .outputs import write_study_run
+from .plan import Plan, model_number, study_base
 
 #: Kinds of quantity of a measured column, by its suffix.
 _KINDS = {
@@ -55,14 +59,14 @@ class IdentifyPlan(Plan):
     """A checked identification run.
 
     Attributes:
-        base: the plan of the run whose settings the fit uses.
         measured: result column -> (N,) its measured values [model units].
         noise: result column -> its standard deviation [model units].
         start: path -> first guess (None: the model's value).
         bounds: path -> ``(low, high)``.
+
+    Its ``base`` is the plan of the run whose settings the fit uses.
     """
 
-    base: Plan | None = None
     measured: dict = dataclasses.field(default_factory=dict)
     noise: dict = dataclasses.field(default_factory=dict)
     start: dict = dataclasses.field(default_factory=dict)
@@ -82,13 +86,13 @@ class FileFit:
         return "identify"
 
 
-def _data_path(runner: Runner, name: str) -> pathlib.Path:
+def _data_path(runner, name: str) -> pathlib.Path:
     file = runner.b.file
     folder = pathlib.Path(file).parent if file and not file.startswith("<") else pathlib.Path()
     return folder / name
 
 
-def _read_data(runner: Runner, r: s.IdentifyRunSpec, path):
+def _read_data(runner, r: s.IdentifyRunSpec, path):
     import pandas as pd
 
     file = _data_path(runner, r.data)
@@ -110,10 +114,10 @@ def _read_data(runner: Runner, r: s.IdentifyRunSpec, path):
     return file, table, t
 
 
-def plan(runner: Runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
+def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     """Check an identification run against the file, its model and its data."""
     path = ("runs", index)
-    base = runner.study_base(index, r, ("forward", "mixed"), "fit")
+    base = study_base(runner, index, r, ("forward", "mixed"), "fit")
     file, table, t = _read_data(runner, r, path)
     measured, noise = {}, {}
     for k, m in enumerate(r.measured):
@@ -152,7 +156,7 @@ def plan(runner: Runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     start, bounds = {}, {}
     for name, f in r.fit.items():
         fp = (*path, "fit", name)
-        kind = runner.model_number(name, fp, "fit")
+        kind = model_number(runner, name, fp, "fit")
         if f.start is not None:
             start[name] = runner.b.scalar(f.start, kind, (*fp, "start"))
         if f.bounds is not None:
@@ -166,7 +170,7 @@ def plan(runner: Runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     )
 
 
-def execute(runner: Runner, plan: IdentifyPlan) -> FileFit:
+def execute(runner, plan: IdentifyPlan) -> FileFit:
     """Fit, then run at the estimate."""
     import equinox as eqx
     import jax.numpy as jnp
@@ -174,7 +178,7 @@ def execute(runner: Runner, plan: IdentifyPlan) -> FileFit:
     from ..analysis.fit import fit
 
     r: s.IdentifyRunSpec = plan.spec
-    analysis, model, kwargs = runner.call(plan.base, {}, checked=False)
+    analysis, model, kwargs = setup.call(runner, plan.base, {}, checked=False)
     params = list(r.fit)
     nominal = [float(_leaf_getter(model, p)[0](model)) for p in params]
     x0 = [plan.start.get(p, v) for p, v in zip(params, nominal, strict=True)]
@@ -197,10 +201,81 @@ def execute(runner: Runner, plan: IdentifyPlan) -> FileFit:
     for p, v in zip(params, result.values, strict=True):
         get, _ = _leaf_getter(fitted, p)
         fitted = eqx.tree_at(get, fitted, jnp.asarray(float(v)))
-    run = ANALYSES[analysis](fitted, plan.times, **kwargs)
+    run = KINDS[analysis].analysis(fitted, plan.times, **kwargs)
     return FileFit(plan, result, run)
 
 
-register_study("identify", plan, IdentifyPlan, lambda runner, plan, progress: execute(runner, plan))
+@register
+class IdentifyKind(RunKind):
+    """An identification: numbers of the model fitted to a measured motion."""
 
-__all__ = ["FileFit", "IdentifyPlan", "execute", "plan"]
+    name = "identify"
+    repeats = True
+    not_replayable = "an identify run"
+
+    def plan(self, runner, index: int, spec) -> IdentifyPlan:
+        return plan(runner, index, spec)
+
+    def execute(self, runner, plan: IdentifyPlan, results: dict, progress) -> FileFit:
+        return execute(runner, plan)
+
+    def output_files(self, runner, plan: IdentifyPlan, figures: bool) -> list[str]:
+        return ["fit.csv", "results.csv", "meta.json"] + (["fit.png"] if figures else [])
+
+    def draws(self, runner, plan: IdentifyPlan) -> bool:
+        return True
+
+    def write(self, runner, plan: IdentifyPlan, result: FileFit, seconds: float, outputs):
+        from ..io.results import write_frame
+
+        f = result.fit
+        details = {
+            "parameters": list(f.params),
+            "estimate": f.values,
+            "std_dev": f.deviations,
+            "start": f.start,
+            "chi2_reduced": f.chi2,
+            "evaluations": f.evaluations,
+            "message": f.message,
+            "noise": plan.noise,
+        }
+        folder = outputs.folder(plan)
+        files = write_study_run(
+            runner, plan, result.result, seconds, outputs, "fit", details, "fit.png"
+        )
+        files.append(write_frame(f.table(), folder / "fit.csv"))
+        if outputs.painter is not None:
+            from ..viz.plots import result_columns
+
+            cols, units = result_columns(result.result, list(plan.measured))
+            outputs.painter.draw(
+                "fit",
+                np.asarray(plan.times),
+                {k: np.asarray(v) for k, v in plan.measured.items()},
+                {k: np.asarray(cols[k]) for k in plan.measured},
+                folder / "fit.png",
+                units=units,
+                title=f"{plan.name}: measured and fitted ({', '.join(f.params)})",
+            )
+        return files
+
+    def describe(self, plan: IdentifyPlan, report, model) -> str:
+        r = plan.spec
+        return (
+            f"run [bold]{esc(r.name)}[/bold] (identify with {esc(r.run)}): "
+            f"{esc(', '.join(r.fit))} from {len(plan.times)} times of "
+            f"{esc(', '.join(plan.measured))}"
+        )
+
+    def task(self, plan: IdentifyPlan, mode: str) -> tuple[str, float | None]:
+        return f"{plan.name} (identify with {plan.base.name})", None
+
+    def done(self, plan: IdentifyPlan, result: FileFit, seconds: float, folder) -> str:
+        f = result.fit
+        return (
+            f"{plan.name}: identify, {len(f.params)} number(s), chi-square "
+            f"{f.chi2:.3g}, {f.evaluations} runs, {seconds:.2f} s -> {folder}"
+        )
+
+
+__all__ = ["FileFit", "IdentifyKind", "IdentifyPlan", "execute", "plan"]

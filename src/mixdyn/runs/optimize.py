@@ -33,7 +33,11 @@ from ..analysis.optimize import Optimum, reduce
 from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
 from ..io import schema as s
-from .runner import ANALYSES, Plan, Runner, register_study
+from . import setup
+from .console import esc
+from .kinds import KINDS, RunKind, register
+from .outputs import write_study_run
+from .plan import Plan, model_number, study_base
 
 
 @dataclasses.dataclass(frozen=True)
@@ -41,12 +45,12 @@ class OptimizePlan(Plan):
     """A checked optimization run.
 
     Attributes:
-        base: the plan of the run whose result the objective reduces.
         bounds: path -> ``(low, high)`` [model units].
         start: path -> first guess (absent: the model's value within the bounds).
+
+    Its ``base`` is the plan of the run whose result the objective reduces.
     """
 
-    base: Plan | None = None
     bounds: dict = dataclasses.field(default_factory=dict)
     start: dict = dataclasses.field(default_factory=dict)
 
@@ -65,15 +69,16 @@ class FileOptimum:
         return "optimize"
 
 
-def _selector(runner: Runner, column: str, kind: str):
-    """``outputs -> (N,)`` for ``column`` of a differentiable run's outputs, or None."""
+def _selector(runner, column: str, kind: str):
+    """``outputs -> (N,)`` for ``column`` of the differentiable outputs of a run of ``kind``,
+    or None."""
     body, _, suffix = column.rpartition(".")
     coord = _RATES.get(suffix, suffix)
     if body in runner.b.body_index and coord in ("x", "y", "phi"):
         k = runner.model.coordinate_index(f"{body}.{coord}")
         which = "qd" if suffix in _RATES else "q"
         return lambda o: o[which][:, k]
-    if kind == "inverse":
+    if KINDS[kind].differentiable_efforts:
         joints = {j.name for j in runner.model.joints}
         drivers = {d.name for d in runner.model.drivers}
         name, _, comp = column.partition(".")
@@ -82,19 +87,19 @@ def _selector(runner: Runner, column: str, kind: str):
     return None
 
 
-def plan(runner: Runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
+def plan(runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
     """Check an optimization run against the file and its model."""
     path = ("runs", index)
-    base = runner.study_base(index, r, ("forward", "mixed", "inverse"), "optimize")
+    base = study_base(runner, index, r, ("forward", "mixed", "inverse"), "optimize")
     if _selector(runner, r.objective.column, base.spec.kind) is None:
         what = "a body coordinate or velocity"
-        if base.spec.kind == "inverse":
+        if KINDS[base.spec.kind].differentiable_efforts:
             what += ", a joint's Fx/Fy/M or a driver's effort"
         runner.fail((*path, "objective", "column"), f"{r.objective.column!r} is not {what}", "")
     bounds, start = {}, {}
     for name, v in r.vary.items():
         vp = (*path, "vary", name)
-        kind = runner.model_number(name, vp, "vary")
+        kind = model_number(runner, name, vp, "vary")
         lo = runner.b.scalar(v.bounds[0], kind, (*vp, "bounds", 0))
         hi = runner.b.scalar(v.bounds[1], kind, (*vp, "bounds", 1))
         if not hi > lo:
@@ -108,7 +113,7 @@ def plan(runner: Runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
     return OptimizePlan(r, index, base.times, (), base=base, bounds=bounds, start=start)
 
 
-def execute(runner: Runner, plan: OptimizePlan) -> FileOptimum:
+def execute(runner, plan: OptimizePlan) -> FileOptimum:
     """Optimize, then run at the start and at the optimum."""
     import equinox as eqx
     import jax.numpy as jnp
@@ -116,7 +121,7 @@ def execute(runner: Runner, plan: OptimizePlan) -> FileOptimum:
     from ..analysis.optimize import optimize
 
     r: s.OptimizeRunSpec = plan.spec
-    analysis, model, kwargs = runner.call(plan.base, {}, checked=False)
+    analysis, model, kwargs = setup.call(runner, plan.base, {}, checked=False)
     params = list(r.vary)
     select = _selector(runner, r.objective.column, analysis)
     sign = 1.0 if r.sense == "minimize" else -1.0
@@ -159,11 +164,94 @@ def execute(runner: Runner, plan: OptimizePlan) -> FileOptimum:
         for p, v in zip(params, values, strict=True):
             get, _ = _leaf_getter(m, p)
             m = eqx.tree_at(get, m, jnp.asarray(float(v)))
-        return ANALYSES[analysis](m, plan.times, **kwargs)
+        return KINDS[analysis].analysis(m, plan.times, **kwargs)
 
     return FileOptimum(plan, opt, at(opt.values), at(opt.start))
 
 
-register_study("optimize", plan, OptimizePlan, lambda runner, plan, progress: execute(runner, plan))
+@register
+class OptimizeKind(RunKind):
+    """An optimization: numbers chosen to minimize (or maximize) a scalar of another run."""
 
-__all__ = ["FileOptimum", "OptimizePlan", "execute", "plan"]
+    name = "optimize"
+    repeats = True
+    not_replayable = "an optimize run"
+
+    def plan(self, runner, index: int, spec) -> OptimizePlan:
+        return plan(runner, index, spec)
+
+    def execute(self, runner, plan: OptimizePlan, results: dict, progress) -> FileOptimum:
+        return execute(runner, plan)
+
+    def output_files(self, runner, plan: OptimizePlan, figures: bool) -> list[str]:
+        names = ["optimum.csv", "results.csv", "meta.json"]
+        return names + (["optimize.png"] if figures else [])
+
+    def draws(self, runner, plan: OptimizePlan) -> bool:
+        return True
+
+    def write(self, runner, plan: OptimizePlan, result: FileOptimum, seconds: float, outputs):
+        from ..io.results import write_frame
+
+        o, r = result.optimum, plan.spec
+        details = {
+            "objective": r.objective.model_dump(),
+            "sense": r.sense,
+            "parameters": list(o.params),
+            "optimum": o.values,
+            "start": o.start,
+            "bounds": o.bounds,
+            "gradient": o.gradient,
+            "objective_start": o.objective_start,
+            "objective_optimum": o.objective,
+            "history": o.history,
+            "iterations": o.iterations,
+            "evaluations": o.evaluations,
+            "message": o.message,
+        }
+        folder = outputs.folder(plan)
+        files = write_study_run(
+            runner, plan, result.result, seconds, outputs, "optimize", details, "optimize.png"
+        )
+        files.append(write_frame(o.table(), folder / "optimum.csv"))
+        if outputs.painter is not None:
+            from ..viz.plots import result_columns
+
+            col = r.objective.column
+            first, units = result_columns(result.first, [col])
+            best, _ = result_columns(result.result, [col])
+            outputs.painter.draw(
+                "optimum",
+                np.asarray(o.history),
+                np.asarray(plan.times),
+                np.asarray(first[col]),
+                np.asarray(best[col]),
+                folder / "optimize.png",
+                column=col,
+                reduce=r.objective.reduce,
+                units=units,
+                title=f"{plan.name}: {r.sense} the {r.objective.reduce} of {col}",
+            )
+        return files
+
+    def describe(self, plan: OptimizePlan, report, model) -> str:
+        r = plan.spec
+        o = r.objective
+        return (
+            f"run [bold]{esc(r.name)}[/bold] (optimize with {esc(r.run)}): "
+            f"{r.sense} the {o.reduce} of {esc(o.column)} over {esc(', '.join(r.vary))}"
+        )
+
+    def task(self, plan: OptimizePlan, mode: str) -> tuple[str, float | None]:
+        return f"{plan.name} (optimize with {plan.base.name})", None
+
+    def done(self, plan: OptimizePlan, result: FileOptimum, seconds: float, folder) -> str:
+        o = result.optimum
+        return (
+            f"{plan.name}: optimize, {plan.spec.objective.reduce} of "
+            f"{plan.spec.objective.column} {o.objective_start:.6g} -> "
+            f"{o.objective:.6g} in {o.iterations} iterations, {seconds:.2f} s -> {folder}"
+        )
+
+
+__all__ = ["FileOptimum", "OptimizeKind", "OptimizePlan", "execute", "plan"]

@@ -1,16 +1,32 @@
-"""A file's run once checked (:class:`Plan`): what the checks (:mod:`.checks`) and the
-runner (:mod:`.runner`) both read."""
+"""A file's run once checked (:class:`Plan`), and what planning runs of any kind reads: their
+output times, the order they run in, the run a study repeats and the numbers it may change.
+
+Each run is planned by its kind (:meth:`.kinds.RunKind.plan`); the runner plans the runs that
+repeat another run (sweeps, fits, optimizations) after the others, whose plans they take.
+Planning reads the file and the model only: every fault found here is an input error (exit 2)
+before anything is computed.
+"""
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Protocol
 
 import numpy as np
 
 from .. import model as m
+from ..analysis.sweep import _leaf_getter
+from ..errors import ModelError
 from ..io import schema as s
-from ..io.load import Builder
+from ..io._errors import FileError
+
+#: Kinds of quantity of the numbers of bodies and force elements, by field.
+_NUMBER_KINDS = {
+    "mass": "mass",
+    "inertia": "inertia",
+    "free_length": "length",
+    "stiffness": "stiffness",
+    "damping": "damping",
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -22,12 +38,15 @@ class Plan:
         index: its position in the file's ``runs``.
         times: (N,) output times [model time unit].
         depends: names of the runs whose results it needs (``from_run``).
+        base: the plan of the run a sweep, fit or optimization repeats (``run:``); None for
+            a run of one analysis.
     """
 
-    spec: s.KinematicRunSpec | s.ForwardRunSpec | s.InverseRunSpec | s.MixedRunSpec
+    spec: s.RunSpec
     index: int
     times: np.ndarray
     depends: tuple[str, ...]
+    base: Plan | None = None
 
     @property
     def name(self) -> str:
@@ -37,15 +56,155 @@ class Plan:
     def path(self) -> tuple:
         return ("runs", self.index)
 
+    @property
+    def subject(self) -> Plan:
+        """The run whose analysis this run computes: the run a sweep, fit or optimization
+        repeats; the plan itself for a run of one analysis."""
+        return self.base if self.base is not None else self
 
-class Checker(Protocol):
-    """What a run's checks (:mod:`.checks`) read of the runner (:class:`.runner.Runner`):
-    its model, its builder, its plans, and how it reports a problem."""
+    @property
+    def replays(self) -> bool:
+        """Whether the run replays another run's motion (``from_run``): its set-up needs that
+        run's result."""
+        return any(p.from_run is not None for p in getattr(self.spec, "prescribed", ()))
 
-    model: m.Model
-    b: Builder
-    plans: dict[str, Plan]
 
-    def fail(self, path, problem: str, hint: str = "") -> None: ...
+def times(runner, t: s.TimeSpec, path) -> np.ndarray:
+    """A run's output times [model time unit], checked: a span that is not empty, a positive
+    step, at most a million times.
 
-    def _prescribed_driver(self, p: s.PrescribedSpec, path) -> m.Driver: ...
+    Args:
+        runner: the file's runner (:class:`~mixdyn.runs.Runner`): its builder reads the
+            quantities and reports the faults.
+        t: the run's ``time``.
+        path: its path in the file.
+    """
+    b = runner.b
+    if t.values is not None:
+        return np.asarray(b.times(t.values, (*path, "values")), dtype=float)
+    t0 = b.scalar(t.span[0], "time", (*path, "span", 0))
+    t1 = b.scalar(t.span[1], "time", (*path, "span", 1))
+    if not t1 > t0:
+        runner.fail((*path, "span"), f"the span [{t0:g}, {t1:g}] is empty", "give [start, stop]")
+    if t.n is not None:
+        return np.linspace(t0, t1, t.n)
+    step = b.scalar(t.step, "time", (*path, "step"))
+    if not step > 0:
+        runner.fail((*path, "step"), "the step must be positive", "")
+    n = int(np.floor((t1 - t0) / step * (1 + 1e-12))) + 1
+    if n > 1_000_000:
+        runner.fail((*path, "step"), f"{n} output times are too many", "use a larger step")
+    return t0 + step * np.arange(n)
+
+
+def study_base(runner, index: int, r, kinds: tuple[str, ...], verb: str) -> Plan:
+    """The run a sweep, fit or optimization repeats (``r.run``), checked: of one of ``kinds``,
+    with its prescribed motions given by laws (not replayed ``from_run``, which its members or
+    trials would not share); ``verb`` names the study in the hints."""
+    path = ("runs", index, "run")
+    kind = {x.name: x.kind for x in runner.spec.runs}.get(r.run)
+    known = ", ".join(x.name for x in runner.spec.runs if x.kind in kinds) or "(none)"
+    allowed = " or ".join([", ".join(kinds[:-1]), kinds[-1]] if len(kinds) > 1 else kinds)
+    if kind is None or r.run not in runner.plans:
+        runner.fail(path, f"unknown run {r.run!r}", f"runs to {verb}: {known}")
+    if kind not in kinds:
+        runner.fail(
+            path,
+            f"run {r.run!r} is a {kind} run, not a {allowed} run",
+            f"runs to {verb}: {known}",
+        )
+    base = runner.plans[r.run]
+    if base.replays:
+        runner.fail(
+            path,
+            f"run {r.run!r} replays another run's motion (from_run)",
+            f"{verb} a run whose prescribed motions are laws",
+        )
+    return base
+
+
+def number_kind(runner, path: str) -> str | None:
+    """The kind of quantity of a body's or force element's number ``"name.field"`` (a mass, a
+    spring's stiffness...), for its values with units; None (model units) for a law's number
+    or a field of no fixed kind."""
+    head, _, field = path.rpartition(".")
+    if "." in head:  # a law's number: its unit is the law's
+        return None
+    kinds = dict(_NUMBER_KINDS)
+    rotary = head not in runner.b.body_index and isinstance(
+        runner.model.element(head), m.RotarySpringDamper
+    )
+    if rotary:
+        kinds.update(stiffness="rotational_stiffness", damping="rotational_damping")
+        kinds["free_angle"] = "angle"
+    return kinds.get(field)
+
+
+def model_number(runner, name: str, path, verb: str) -> str | None:
+    """Check that ``name`` is one number of a body or force element (what a fit or an
+    optimization may change); its kind of quantity (:func:`number_kind`)."""
+    try:
+        _, shape = _leaf_getter(runner.model, name)
+    except ModelError as e:
+        runner.fail(path, str(e.args[0]), "name a number of a body or force element")
+    owners = {b.name for b in runner.model.bodies} | {f.name for f in runner.model.forces}
+    if shape != () or name.split(".", 1)[0] not in owners:
+        runner.fail(
+            path,
+            f"{name!r} is not a number of a body or force element",
+            f"{verb} masses, inertias, and numbers of forces and their laws",
+        )
+    return number_kind(runner, name)
+
+
+def check_cycles(runner) -> None:
+    """Refuse runs that replay each other's motion in a cycle."""
+    state: dict[str, int] = {}
+
+    def visit(name, chain):
+        if state.get(name) == 2:
+            return
+        if state.get(name) == 1:
+            plan = runner.plans[name]
+            runner.fail(
+                (*plan.path, "prescribed"),
+                "runs depend on each other in a cycle: " + " -> ".join([*chain, name]),
+                "break the cycle",
+            )
+        state[name] = 1
+        for d in runner.plans[name].depends:
+            visit(d, [*chain, name])
+        state[name] = 2
+
+    for name in runner.plans:
+        visit(name, [])
+
+
+def order(runner, names=None) -> list[Plan]:
+    """The plans to execute for runs ``names`` (default all), dependencies first.
+
+    Raises:
+        FileError: a name that is no run of the file (named as ``--run``).
+    """
+    if names is None:
+        names = list(runner.plans)
+    for n in names:
+        if n not in runner.plans:
+            known = ", ".join(runner.plans) or "(the file has no runs)"
+            raise FileError(
+                f"no run {n!r}", "--run", file=runner.b.file, hint=f"runs in the file: {known}"
+            )
+    out: list[str] = []
+
+    def add(n):
+        for d in runner.plans[n].depends:
+            add(d)
+        if n not in out:
+            out.append(n)
+
+    for n in names:
+        add(n)
+    return [runner.plans[n] for n in out]
+
+
+__all__ = ["Plan", "check_cycles", "model_number", "number_kind", "order", "study_base", "times"]

@@ -33,6 +33,7 @@ summaries and table columns in the file's ``output_units`` where it gives them.
 from __future__ import annotations
 
 import dataclasses
+import pathlib
 import time
 from collections.abc import Callable
 
@@ -43,7 +44,11 @@ from ..errors import MixdynError, ModelError
 from ..io import schema as s
 from ..io._errors import FileError
 from ..io.load import Builder
-from .runner import Plan, Runner, register_study
+from . import checks, setup
+from .console import esc
+from .kinds import RunKind, register
+from .plan import Plan, number_kind, study_base
+from .runner import Runner
 
 #: Most members a sweep may have.
 MAX_MEMBERS = 1_000_000
@@ -54,11 +59,10 @@ class SweepPlan(Plan):
     """A checked sweep run.
 
     Attributes:
-        base: the plan of the run swept.
-        values: varied name -> (M,) its value for each member [model units].
+        values: varied name -> (M,) its value for each member [model units]; ``base`` is
+            the plan of the run swept.
     """
 
-    base: Plan | None = None
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
 
     @property
@@ -172,8 +176,8 @@ def outputs_of(r: s.SweepRunSpec) -> list[str]:
 def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
     """Check a sweep run against the file and its model; its members' values made."""
     path = ("runs", index)
-    base = runner.study_base(
-        index, r, ("kinematic", "statics", "forward", "inverse", "mixed"), "sweep"
+    base = study_base(
+        runner, index, r, ("kinematic", "statics", "forward", "inverse", "mixed"), "sweep"
     )
     axes, spans = {}, {}
     for name, v in r.vary.items():
@@ -205,13 +209,13 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
         if x.name in names or x.name in taken or x.name in seen:
             runner.fail((*sp, "name"), f"the name {x.name!r} is taken", "rename the summary")
         seen.add(x.name)
-        runner._check_column(x.column, base.spec, (*sp, "column"))
+        checks.check_column(runner, x.column, base.spec, (*sp, "column"))
     for k, col in enumerate(r.outputs or ()):
-        runner._check_column(col, base.spec, (*path, "outputs", k))
+        checks.check_column(runner, col, base.spec, (*path, "outputs", k))
     for k, p in enumerate(r.plots):
         pp = (*path, "plots", k)
         if p.band is not None:
-            runner._check_column(p.band, base.spec, (*pp, "band"))
+            checks.check_column(runner, p.band, base.spec, (*pp, "band"))
             continue
         for key in ("x", "by"):
             v = getattr(p, key)
@@ -246,7 +250,7 @@ def _check_name(runner: Runner, name: str, path) -> str | None:
             f"{name!r} holds {int(np.prod(shape))} numbers, not one",
             "put the number in a file parameter and vary the parameter",
         )
-    return runner.number_kind(name)
+    return number_kind(runner, name)
 
 
 # --------------------------------------------------------------------------- executing
@@ -279,7 +283,9 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     for i in range(plan.members):
         try:
             member = _member_runner(runner, plan, i)
-            analysis, model, kw = member.call(member.plans[plan.base.name], {}, checked=False)
+            analysis, model, kw = setup.call(
+                member, member.plans[plan.base.name], {}, checked=False
+            )
         except (FileError, ModelError) as e:
             runner.fail(
                 (*plan.path, "vary"),
@@ -352,6 +358,134 @@ def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
     return out, units
 
 
-register_study("sweep", plan, SweepPlan, execute)
+# --------------------------------------------------------------------------- writing
+def _figures(plan: SweepPlan, result: FileSweep, folder: pathlib.Path, painter) -> None:
+    """Hand a sweep's plots to ``painter``: a summary against a swept quantity, or a band."""
+    from ..viz.plots import result_columns
 
-__all__ = ["FileSweep", "SweepPlan", "execute", "outputs_of", "plan"]
+    units = dict(result.units)
+    model = next((r.model for r in result.sweep.results if r is not None), None)
+    for name in plan.values:  # a swept body number has the unit of its kind
+        kind = {"mass": "mass", "inertia": "inertia"}.get(name.rsplit(".", 1)[-1])
+        if kind and model is not None:
+            units[name] = model.units.label(kind)
+    for p in plan.spec.plots:
+        if p.band is not None:
+            ok = [r for r in result.sweep.results if r is not None]
+            if not ok:
+                continue
+            rows = [np.asarray(result_columns(r, [p.band])[0][p.band]) for r in ok]
+            units["t"] = ok[0].units()["t"]
+            painter.draw(
+                "band",
+                np.asarray(plan.times),
+                np.stack(rows),
+                folder / p.file,
+                name=p.band,
+                units=units,
+                title=p.title,
+            )
+            continue
+        painter.draw(
+            "against",
+            plan.values[p.x],
+            result.summaries[p.y],
+            folder / p.file,
+            names=(p.x, p.y),
+            by=None if p.by is None else plan.values[p.by],
+            by_name=p.by or "",
+            units=units,
+            title=p.title,
+            scatter=plan.spec.sampling == "latin_hypercube",
+        )
+
+
+def _failure(plan: SweepPlan, result: FileSweep, outputs) -> str:
+    """The line that ends ``mixdyn run`` (exit 1) when members failed: how many, the first
+    one and why, where every member's outcome is."""
+    errors = result.sweep.errors
+    i = min(errors)
+    e = errors[i]
+    at = f" at t = {e.time:g}" if getattr(e, "time", None) is not None else ""
+    return (
+        f"{outputs.file}: run {plan.name!r}: {len(errors)} of {plan.members} members failed "
+        f"(first: member {i}, {plan.describe(i)}{at}: {type(e).__name__}: "
+        f"{getattr(e, 'message', None) or e}); the others are written, each member's "
+        f"outcome in {outputs.folder(plan) / 'members.csv'}"
+    )
+
+
+@register
+class SweepKind(RunKind):
+    """A sweep: another run repeated over many values of some numbers."""
+
+    name = "sweep"
+    repeats = True
+    not_replayable = "a sweep run, with a motion per member"
+
+    def plan(self, runner, index: int, spec) -> SweepPlan:
+        return plan(runner, index, spec)
+
+    def execute(self, runner, plan: SweepPlan, results: dict, progress):
+        return execute(runner, plan, progress)
+
+    def output_files(self, runner, plan: SweepPlan, figures: bool) -> list[str]:
+        names = ["members.csv", "table.csv", "meta.json"]
+        return names + ([p.file for p in plan.spec.plots] if figures else [])
+
+    def draws(self, runner, plan: SweepPlan) -> bool:
+        return bool(plan.spec.plots)
+
+    def write(self, runner, plan: SweepPlan, result: FileSweep, seconds: float, outputs):
+        from ..io.results import run_settings, write_sweep
+
+        folder = outputs.folder(plan)
+        files = write_sweep(
+            result,
+            folder,
+            parquet=outputs.parquet,
+            netcdf=outputs.netcdf,
+            settings=run_settings(plan.spec),
+            extra={
+                "file": str(outputs.file),
+                "run": plan.name,
+                "wall_time_s": round(seconds, 3),
+                "figures": [p.file for p in plan.spec.plots] if outputs.figures else [],
+                "base_settings": run_settings(plan.base.spec),
+            },
+        )
+        if outputs.painter is not None:
+            _figures(plan, result, folder, outputs.painter)
+        if result.sweep.errors:
+            outputs.failed.append(_failure(plan, result, outputs))
+        return files
+
+    def describe(self, plan: SweepPlan, report, model) -> str:
+        r = plan.spec
+        how = "grid" if r.sampling == "grid" else f"Latin hypercube, seed {r.seed}"
+        return (
+            f"run [bold]{esc(r.name)}[/bold] (sweep of {esc(r.run)}): "
+            f"{plan.members} members ({how}) over {esc(', '.join(r.vary))}"
+        )
+
+    def task(self, plan: SweepPlan, mode: str) -> tuple[str, float | None]:
+        total = plan.members
+        return f"{plan.name} (sweep of {plan.base.name}: {total} members)", total
+
+    def progress(self, plan: SweepPlan, console):
+        return console.members(plan)
+
+    def done(self, plan: SweepPlan, result: FileSweep, seconds: float, folder) -> str:
+        return (
+            f"{plan.name}: sweep of {plan.base.name}, {plan.members} members "
+            f"({len(result.sweep.errors)} failed), {seconds:.2f} s -> {folder}"
+        )
+
+    def animation_refusal(self, plan: SweepPlan) -> tuple[str, str]:
+        return (
+            f"run {plan.name!r} is a sweep: its members have no single motion to animate",
+            f"animate the run it sweeps, {plan.spec.run!r}",
+        )
+
+
+__all__ = ["FileSweep", "SweepKind", "SweepPlan", "execute", "outputs_of", "plan"]

@@ -1,0 +1,224 @@
+"""What ``mixdyn run`` writes: each run's folder, checked before anything runs and written as
+the run ends, by its kind (:meth:`.kinds.RunKind.write`); the figures drawn by the figure
+worker (:class:`mixdyn.viz.painter.Painter`) while the next runs compute.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+import pathlib
+
+from ..io._errors import FileError
+from . import execute as _execute
+from .console import RunProgress
+from .kinds import kind_of
+
+
+@dataclasses.dataclass
+class Outputs:
+    """Where and how a file's runs are written.
+
+    Attributes:
+        out: the output folder; each run writes ``out/NAME/``.
+        file: the model file (named in each ``meta.json``).
+        parquet: also write ``results.parquet``.
+        netcdf: also write each sweep as ``sweep.nc``.
+        figures: write the plots and animations the runs ask for.
+        painter: the figure worker (:class:`~mixdyn.viz.painter.Painter`), None where
+            nothing is drawn.
+        failed: the first line of each sweep with failed members (its members are written).
+    """
+
+    out: pathlib.Path
+    file: str | pathlib.Path
+    parquet: bool = False
+    netcdf: bool = False
+    figures: bool = True
+    painter: object | None = None
+    failed: list[str] = dataclasses.field(default_factory=list)
+
+    def folder(self, plan) -> pathlib.Path:
+        """The run's folder."""
+        return pathlib.Path(self.out) / plan.name
+
+
+# --------------------------------------------------------------------------- output paths
+def _refuse(path, problem: str, option: str, hint: str) -> None:
+    raise FileError(problem, option, file=str(path), hint=hint)
+
+
+def _existing_ancestor(path: pathlib.Path, option: str) -> pathlib.Path:
+    """The nearest folder above ``path`` that exists (refusing a file on the way)."""
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if parent.exists() and not parent.is_dir():
+        _refuse(parent, "is a file, not a folder", option, "give a path inside a folder")
+    return parent
+
+
+def check_output(path: pathlib.Path, option: str, *, folder: bool = False) -> None:
+    """Refuse, before anything is computed, an output that cannot be written: a folder where a
+    file is wanted or the reverse, a parent that is a file, no permission to write.
+
+    Args:
+        path: the file (or with ``folder``, the folder) to be written.
+        option: the command-line option that named it, for the message.
+        folder: whether ``path`` is a folder (created if missing).
+
+    Raises:
+        FileError: the output cannot be written, named by ``option``.
+    """
+    path = pathlib.Path(path)
+    if path.exists() or path.is_symlink():
+        if folder and not path.is_dir():
+            _refuse(path, "exists and is not a folder", option, "give a folder for the results")
+        if not folder and path.is_dir():
+            _refuse(path, "is a folder", option, "give a file name")
+        if not os.access(path, os.W_OK | (os.X_OK if folder else 0)):
+            _refuse(path, "is not writable", option, "check its permissions or write elsewhere")
+        return
+    parent = _existing_ancestor(path, option)
+    if not os.access(parent, os.W_OK | os.X_OK):
+        _refuse(path, f"cannot be created: {parent} is not writable", option, "write elsewhere")
+
+
+def check_run_outputs(out: pathlib.Path, plans, figures: bool, runner) -> None:
+    """The output folder and every file the runs will write (:meth:`.kinds.RunKind.output_files`),
+    checked before running."""
+    check_output(out, "--out", folder=True)
+    for plan in plans:
+        folder = out / plan.name
+        check_output(folder, "--out", folder=True)
+        for name in kind_of(plan).output_files(runner, plan, figures):
+            check_output(folder / name, "--out")
+
+
+def animation_targets(outputs, file) -> list[pathlib.Path]:
+    """The files ``mixdyn animate --output`` writes, checked: a GIF, an MP4 (with ffmpeg) or
+    an HTML page each; a name without a suffix gives both ``NAME.gif`` and ``NAME.html``.
+
+    Args:
+        outputs: the ``--output`` paths.
+        file: the model file, for the messages.
+
+    Raises:
+        FileError: a type that cannot be written, or an output that cannot be written there.
+    """
+    import shutil
+
+    targets = []
+    for o in outputs:
+        if o.suffix == "":
+            targets += [o.with_suffix(".gif"), o.with_suffix(".html")]
+        elif o.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+            raise FileError(
+                "writing MP4 needs ffmpeg, which is not installed",
+                "--output",
+                file=str(file),
+                hint="write a .gif or .html instead",
+            )
+        elif o.suffix.lower() in (".gif", ".mp4", ".html"):
+            targets.append(o)
+        else:
+            raise FileError(
+                f"cannot write an animation to {o.name!r}",
+                "--output",
+                file=str(file),
+                hint="use .gif, .mp4 or .html",
+            )
+    for target in targets:
+        check_output(target, "--output")
+    return targets
+
+
+def draws(runner, plans, figures: bool) -> bool:
+    """Whether any of the runs draws a figure or an animation (with ``figures``)."""
+    return figures and any(kind_of(p).draws(runner, p) for p in plans)
+
+
+# --------------------------------------------------------------------------- writing
+def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]:
+    """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
+    ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
+
+    The figures and animations are drawn by ``outputs.painter`` (None: no figures), a worker
+    process that draws while the next runs compute (matplotlib is imported there while the
+    runs are checked, on another core); a failure there is raised here as if drawn in turn.
+    The painter is closed on return. A sweep with failed members adds its line to
+    ``outputs.failed``.
+
+    Returns:
+        The files written.
+    """
+    written: list[pathlib.Path] = []
+    painter = outputs.painter
+    try:
+        with RunProgress(plans, mode) as progress:
+
+            def done(plan, result, seconds):
+                progress.done(plan)
+                kind = kind_of(plan)
+                written.extend(kind.write(runner, plan, result, seconds, outputs))
+                progress.say(kind.done(plan, result, seconds, outputs.folder(plan)))
+
+            _execute.execute(
+                runner,
+                [p.name for p in plans],
+                progress=progress.hook,
+                on_start=progress.start,
+                on_done=done,
+            )
+        if painter is not None:  # in order: the first failure is raised, as if drawn in turn
+            written.extend(painter.results())
+    except KeyboardInterrupt:
+        raise
+    except Exception:  # a run failed: its predecessors' figures are still written
+        if painter is not None:
+            with contextlib.suppress(Exception):
+                painter.results()
+        raise
+    finally:
+        if painter is not None:
+            painter.close()
+    return written
+
+
+def write_study_run(
+    runner, plan, run, seconds: float, outputs: Outputs, key: str, details: dict, figure: str
+) -> list[pathlib.Path]:
+    """The run at a fit's estimate or an optimum, written like any run (``results.csv``,
+    ``meta.json``), the study's numbers under ``key`` in its ``meta.json`` and its figure
+    ``figure`` named there when drawn."""
+    from ..io.results import run_settings, write_result
+
+    extra = {
+        "file": str(outputs.file),
+        "run": plan.name,
+        "kind": plan.spec.kind,
+        "wall_time_s": round(seconds, 3),
+        key: details,
+        "figures": [figure] if outputs.painter is not None else [],
+    }
+    return write_result(
+        run,
+        outputs.folder(plan),
+        parquet=outputs.parquet,
+        settings=run_settings(plan.base.spec),
+        extra=extra,
+        output_units=runner.output_units,
+        points=getattr(plan.base.spec, "outputs", ()),
+    )
+
+
+__all__ = [
+    "Outputs",
+    "animation_targets",
+    "check_output",
+    "check_run_outputs",
+    "draws",
+    "write_runs",
+    "write_study_run",
+]
