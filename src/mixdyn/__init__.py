@@ -8,10 +8,11 @@ Compiled programs (traced and compiled) are kept between processes in a cache fo
 compile them again: ``MIXDYN_NO_CACHE=1`` (read on import) or :func:`set_cache` turns that
 off (see :mod:`mixdyn.runtime`); JAX's own persistent cache is left as the user set it.
 
-On import, mixdyn turns off XLA CPU features (multi-threaded Eigen, which buys its small
-matrices nothing, the concurrency-optimized scheduler, which hung a vmapped loop, and where
-jaxlib knows the flag the MLIR fusion emitters, which compile ~30% slower) unless
-``$XLA_FLAGS`` names them: see :mod:`mixdyn.runtime._xla`.
+mixdyn compiles its own programs with XLA CPU options of its own (multi-threaded Eigen off,
+which buys its small matrices nothing, the concurrency-optimized scheduler off, which hung a
+vmapped loop, and where jaxlib knows the option the MLIR fusion emitters off, which compile
+~30% slower) unless ``$XLA_FLAGS`` names them: see :mod:`mixdyn.runtime._xla`. Other JAX
+programs of the process and ``$XLA_FLAGS`` are left as they are.
 """
 
 import sys as _sys
@@ -20,10 +21,6 @@ from .runtime import _command
 
 _command.pace_collector()  # the `mixdyn` command: cycles collected less often
 _command.start_for_command_line()  # `mixdyn run` with figures: its drawing worker, before JAX
-
-from .runtime import _xla  # noqa: E402
-
-_xla.apply()
 
 import jax as _jax  # noqa: E402
 

@@ -1,5 +1,6 @@
-"""mixdyn's XLA CPU flags (``mixdyn.runtime._xla``): added on import where the user named none,
-the user's own values kept, nothing changed once JAX's backend has started."""
+"""mixdyn's XLA CPU options (``mixdyn.runtime._xla``): given to XLA with each of mixdyn's
+programs, the flags the user names in ``$XLA_FLAGS`` left to the user, and ``$XLA_FLAGS``
+itself, as every other program of the process, untouched."""
 
 from __future__ import annotations
 
@@ -8,21 +9,27 @@ import os
 import subprocess
 import sys
 
+import jax.numpy as jnp
 import pytest
 
+from mixdyn.runtime import _programs, _xla
 from mixdyn.runtime._xla import IF_KNOWN, KEEP_ENV, SAFE_FLAGS, flags_to_add, jaxlib_version
 
-SHOW = "import os, json; {pre}import mixdyn; print(json.dumps(os.environ.get('XLA_FLAGS')))"
+SHOW = (
+    "import os, json; import mixdyn; from mixdyn.runtime import _xla; "
+    "print(json.dumps([os.environ.get('XLA_FLAGS'), _xla.compile_options()]))"
+)
 
 
-def _flags_after_import(env_flags: str | None, pre: str = "", keep: bool = False):
+def _after_import(env_flags: str | None, keep: bool = False):
+    """``($XLA_FLAGS, compile options)`` in a new process after ``import mixdyn``."""
     env = {k: v for k, v in os.environ.items() if k not in ("XLA_FLAGS", KEEP_ENV)}
     if env_flags is not None:
         env["XLA_FLAGS"] = env_flags
     if keep:
         env[KEEP_ENV] = "1"
     out = subprocess.run(
-        [sys.executable, "-c", SHOW.format(pre=pre)],
+        [sys.executable, "-c", SHOW],
         env=env,
         capture_output=True,
         text=True,
@@ -32,28 +39,37 @@ def _flags_after_import(env_flags: str | None, pre: str = "", keep: bool = False
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
-def _parse(flags: str | None) -> dict[str, str]:
-    return dict(tok.split("=", 1) for tok in (flags or "").split())
-
-
 @pytest.mark.timeout(300)
-def test_flags_are_added_and_the_users_are_kept():
-    added = _parse(_flags_after_import(None))
-    assert added == flags_to_add()
-    assert SAFE_FLAGS.items() <= added.items()
+def test_the_environment_is_left_and_the_users_flags_are_kept():
+    flags, options = _after_import(None)
+    assert flags is None
+    assert options == {k.lstrip("-"): v == "true" for k, v in flags_to_add().items()}
+    assert {k.lstrip("-") for k in SAFE_FLAGS} <= set(options)
     mine = "--xla_cpu_multi_thread_eigen=true --xla_dump_to=/tmp/nowhere"
-    got = _parse(_flags_after_import(mine))
-    assert got["--xla_cpu_multi_thread_eigen"] == "true"
-    assert got["--xla_dump_to"] == "/tmp/nowhere"
-    assert got["--xla_cpu_enable_concurrency_optimized_scheduler"] == "false"
-    assert _flags_after_import(mine, keep=True) == mine
-    assert _flags_after_import(None, keep=True) is None
+    flags, options = _after_import(mine)
+    assert flags == mine
+    assert "xla_cpu_multi_thread_eigen" not in options  # the user's value holds
+    assert options["xla_cpu_enable_concurrency_optimized_scheduler"] is False
+    assert _after_import(mine, keep=True) == [mine, {}]
 
 
-@pytest.mark.timeout(300)
-def test_nothing_is_added_once_jax_has_started():
-    started = "import jax.numpy as jnp; jnp.ones(2).block_until_ready(); "
-    assert _flags_after_import(None, pre=started) is None
+def test_mixdyn_programs_are_compiled_with_the_options(monkeypatch):
+    """The options reach XLA with every compile of a mixdyn program: an option XLA does not
+    know is refused by it (with the cache on and off)."""
+
+    def double(x):
+        return 2.0 * x
+
+    ok = _programs.cached_jit(double)
+    assert ok.options == _xla.compile_options()
+    assert float(ok(jnp.asarray(1.5))) == 3.0
+    monkeypatch.setattr(_xla, "compile_options", lambda: {"xla_no_such_option": False})
+
+    def triple(x):
+        return 3.0 * x
+
+    with pytest.raises(Exception, match="xla_no_such_option"):
+        _programs.cached_jit(triple)(jnp.asarray(1.5))
 
 
 def test_optional_flags_are_added_only_for_the_jaxlibs_checked():

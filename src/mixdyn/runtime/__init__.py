@@ -8,14 +8,14 @@ Its public face is small:
 - :func:`cached_jit`: ``equinox.filter_jit`` whose programs persist in that folder.
 
 Behind it, one module a job: ``_programs`` (export, keys, read-ahead), ``_executables``
-(stored executables), ``_files`` (atomic writes), ``_xla`` (XLA CPU flags set at import),
-``_command`` and ``_worker`` (what the ``mixdyn`` command does in its own process: its
+(stored executables), ``_files`` (atomic writes), ``_xla`` (the XLA CPU options of its
+programs), ``_command`` and ``_worker`` (what the ``mixdyn`` command does in its own process: its
 figure worker, the collector's pace), ``_clip_floor`` and ``_private``: every private part
 of JAX, diffrax or CPython that mixdyn uses, each behind a version check with a public
 fallback (``MIXDYN_PUBLIC_ONLY=1`` takes the public path everywhere).
 
 This package imports JAX only when one of its public names is first used: the command's
-start-up (``_command``, ``_xla``) runs before JAX is imported.
+start-up (``_command``) runs before JAX is imported.
 """
 
 from __future__ import annotations

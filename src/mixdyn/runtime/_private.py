@@ -20,8 +20,6 @@ roomy frames         CPython's frame-stack chunks (a code object's    a plain ca
                      ``mixdyn`` command's process only
 quick exit           ``atexit._run_exitfuncs`` then ``os._exit``      ``SystemExit``
                      (:func:`exit_now`), the command's process only
-backends started     ``jax._src.xla_bridge``                          "started" once JAX
-                     (:func:`backends_started`)                       is imported
 test scheduling      pytest-xdist's ``_split_scope``                  xdist's own
                      (:func:`whole_module_scheduler`), mixdyn's       scheduling
                      test session only
@@ -92,21 +90,6 @@ def short_locations():
         return contextlib.nullcontext()
     state = getattr(config, "include_full_tracebacks_in_locations", None)
     return contextlib.nullcontext() if state is None else state(False)
-
-
-def backends_started() -> bool:
-    """Whether JAX has started its backends (after which ``$XLA_FLAGS`` no longer counts).
-    Public fallback: True once JAX is imported (nothing is assumed about a started JAX)."""
-    if "jax" not in sys.modules:
-        return False
-    if not allowed("jax"):
-        return True
-    try:
-        from jax._src import xla_bridge
-
-        return bool(xla_bridge.backends_are_initialized())
-    except (ImportError, AttributeError):  # pragma: no cover - a JAX laid out otherwise
-        return True
 
 
 # --------------------------------------------------------------------------- diffrax
@@ -251,7 +234,6 @@ __all__ = [
     "PUBLIC_ONLY_ENV",
     "SLOTS",
     "allowed",
-    "backends_started",
     "chained_floor",
     "exit_now",
     "roomy",

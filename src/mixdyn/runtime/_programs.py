@@ -31,6 +31,9 @@ time) keep XLA's full optimization. The setting is the function's own, the same 
 cache on and off (``equinox.filter_jit``'s ``compiler_options``) and stored with its
 program; results differ from an optimized compile in the last bits (~1e-12 relative).
 
+Every program is compiled with mixdyn's XLA CPU options
+(:func:`mixdyn.runtime._xla.compile_options`), its own and nobody else's.
+
 Switches: ``MIXDYN_NO_CACHE=1`` (read when mixdyn is imported) or :func:`set_cache`. The cache
 folder is trusted code, as JAX's own cache is: do not share it with users you do not trust.
 """
@@ -55,7 +58,7 @@ import equinox as eqx
 import jax
 from jax import export as _export
 
-from . import _executables, _files
+from . import _executables, _files, _xla
 from ._private import roomy, short_locations
 
 #: The environment variable that turns every persistent cache off (``1``).
@@ -322,7 +325,7 @@ class _CachedJit:
     def __init__(self, fn: Callable, optimize: bool = True):
         self.name = f"{fn.__module__}.{fn.__qualname__}"
         self.fn = _counting(fn, self.name)
-        self.options = None if optimize else dict(QUICK)
+        self.options = {**_xla.compile_options(), **({} if optimize else QUICK)} or None
         self.jit = eqx.filter_jit(self.fn, compiler_options=self.options)
         self.programs: dict = {}
         functools.update_wrapper(self, fn, updated=())

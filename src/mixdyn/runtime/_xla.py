@@ -1,4 +1,6 @@
-"""XLA CPU settings for mixdyn's compiled loops.
+"""XLA CPU settings for mixdyn's compiled programs, given to XLA as each program's compile
+options (:func:`compile_options`): a user's own JAX programs and ``$XLA_FLAGS`` are left as
+they are.
 
 Two XLA CPU features are turned off: the concurrency-optimized scheduler (a vmapped
 ``while_loop`` of mixdyn deadlocked with it) and multi-threaded Eigen (others' programs
@@ -11,9 +13,9 @@ flag (:data:`IF_KNOWN`): the older LLVM-IR emitters compile mixdyn's programs ab
 fast or faster (``benchmarks/per_step.py``: 0.89-1.04 of the time), mid-sized ones up to ~10%
 slower (a 128-link chain 1.07-1.14, 256 links 0.97-1.05, the N = 40 four-bar 1.03-1.07).
 Where a long run of a large mechanism matters more than compiling, set
-``XLA_FLAGS=--xla_cpu_use_fusion_emitters=true``. An unknown flag would abort the process,
-so the flag is added only for the jaxlib versions in which it was checked (:data:`IF_KNOWN`;
-its name in the library is no proof: jaxlib 0.10 names flags it no longer takes).
+``XLA_FLAGS=--xla_cpu_use_fusion_emitters=true``. An unknown option is refused by XLA, so
+the option is given only for the jaxlib versions in which it was checked (:data:`IF_KNOWN`;
+jaxlib 0.12 no longer has it).
 
 What they do not change: XLA's CPU runtime still runs one of mixdyn's programs on two threads
 (its execution thread and one of its pool), handing work to each other; two such processes
@@ -21,17 +23,14 @@ on two cores (pytest's two workers) slowed two N = 40 runs from 21-46 s to past 
 suite pins each worker to a core of its own (``tests/conftest.py``); a user running several
 mixdyn processes at once on few cores may do the same (``taskset -c``).
 
-:func:`apply` adds these flags to ``$XLA_FLAGS`` on import of mixdyn, before JAX starts its
-CPU backend. A flag the user names in ``$XLA_FLAGS`` (either value) is left as the user set
-it; ``MIXDYN_KEEP_XLA_FLAGS=1`` leaves ``$XLA_FLAGS`` untouched. Once a JAX backend has
-started (JAX used before mixdyn was imported), flags can no longer change and none is added.
+A flag the user names in ``$XLA_FLAGS`` (either value) is not given (the user's value holds);
+``MIXDYN_KEEP_XLA_FLAGS=1`` gives none of them.
 """
 
 from __future__ import annotations
 
+import functools
 import os
-
-from ._private import backends_started
 
 #: Flag name -> the value mixdyn sets when the user has not named the flag.
 SAFE_FLAGS = {
@@ -47,7 +46,7 @@ IF_KNOWN = {
     "--xla_cpu_use_fusion_emitters": ("false", (0, 6), (0, 11)),
 }
 
-#: The environment variable that keeps ``$XLA_FLAGS`` exactly as the user set it (``1``).
+#: The environment variable with which mixdyn gives XLA none of its options (``1``).
 KEEP_ENV = "MIXDYN_KEEP_XLA_FLAGS"
 
 
@@ -64,8 +63,8 @@ def jaxlib_version() -> tuple[int, ...] | None:
 
 
 def flags_to_add(named=frozenset(), version: tuple[int, ...] | None = None) -> dict[str, str]:
-    """The flags :func:`apply` adds where the user named none of them (name -> value), for
-    jaxlib ``version`` (default: the installed one)."""
+    """The flags mixdyn gives where the user named none of them in ``named`` (name ->
+    value), for jaxlib ``version`` (default: the installed one)."""
     version = jaxlib_version() if version is None else version
     flags = {k: v for k, v in SAFE_FLAGS.items() if k not in named}
     for k, (value, first, after) in IF_KNOWN.items():
@@ -74,14 +73,18 @@ def flags_to_add(named=frozenset(), version: tuple[int, ...] | None = None) -> d
     return flags
 
 
-def apply() -> tuple[str, ...]:
-    """Add the missing :data:`SAFE_FLAGS` (and :data:`IF_KNOWN` where this jaxlib has them)
-    to ``$XLA_FLAGS``; returns the flags added."""
-    if os.environ.get(KEEP_ENV, "").strip() not in ("", "0") or backends_started():
-        return ()
-    current = os.environ.get("XLA_FLAGS", "")
-    named = {tok.split("=", 1)[0] for tok in current.split()}
-    added = tuple(f"{k}={v}" for k, v in flags_to_add(named).items())
-    if added:
-        os.environ["XLA_FLAGS"] = " ".join([*current.split(), *added])
-    return added
+def user_flags() -> frozenset[str]:
+    """The flags named in ``$XLA_FLAGS`` (``--name``)."""
+    return frozenset(tok.split("=", 1)[0] for tok in os.environ.get("XLA_FLAGS", "").split())
+
+
+@functools.cache
+def compile_options() -> dict[str, bool]:
+    """XLA's compile options for every program of mixdyn (``jax.jit``'s ``compiler_options``):
+    :func:`flags_to_add` for the installed jaxlib, less the flags the user named in
+    ``$XLA_FLAGS``; none with ``MIXDYN_KEEP_XLA_FLAGS=1``. Read once per process."""
+    if os.environ.get(KEEP_ENV, "").strip() not in ("", "0"):
+        return {}
+    return {
+        name.lstrip("-"): value == "true" for name, value in flags_to_add(user_flags()).items()
+    }
