@@ -36,9 +36,8 @@ if _configure_cache() is not None and (_tag := _command.job_tag(_sys.argv)) is n
 
     _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 
-from . import analyses, errors, paths  # noqa: E402
+from . import errors  # noqa: E402
 from .analysis import (  # noqa: E402
-    Analysis,
     Assembly,
     Baumgarte,
     DofReport,
@@ -49,7 +48,6 @@ from .analysis import (  # noqa: E402
     Partitioning,
     Projection,
     Result,
-    Setup,
     Statics,
     Sweep,
     assemble,
@@ -64,10 +62,8 @@ from .analysis import (  # noqa: E402
     latin_hypercube,
     mixed,
     optimize,
-    prepare,
     prescribe,
     quasi_static,
-    run,
     statics,
     sweep,
 )
@@ -132,7 +128,6 @@ __all__ = [
     "DenseSolver",
     "LinearSolver",
     "SI",
-    "Analysis",
     "Assembly",
     "AssemblyError",
     "Baumgarte",
@@ -151,7 +146,6 @@ __all__ = [
     "Projection",
     "RedundantConstraintError",
     "Result",
-    "Setup",
     "Fit",
     "Optimum",
     "Statics",
@@ -161,7 +155,6 @@ __all__ = [
     "StepSizeError",
     "UnitSystem",
     "__version__",
-    "analyses",
     "assemble",
     "check_mixed",
     "degrees_of_freedom",
@@ -176,10 +169,7 @@ __all__ = [
     "latin_hypercube",
     "inverse",
     "mixed",
-    "paths",
-    "prepare",
     "prescribe",
-    "run",
     "sweep",
     "set_cache",
     "kinematic",
