@@ -105,8 +105,9 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
     with tempfile.TemporaryDirectory(prefix="mixdyn-latency-") as tmp_:
         tmp = pathlib.Path(tmp_)
         result = tmp / "out"
-        script = tmp / "api.py"
-        script.write_text(API_SCRIPT.format(tests=str(ROOT / "tests")), encoding="utf-8")
+        scripts = {v: tmp / f"api-{v}.py" for v in srcs}
+        for v, src in srcs.items():  # each tree's own fixtures
+            scripts[v].write_text(API_SCRIPT.format(tests=str(src.parent / "tests")), "utf-8")
         env = {v: _env(src, tmp / v / "cache") for v, src in srcs.items()}
         api_env = {v: _env(src, tmp / v / "api-cache") for v, src in srcs.items()}
         for v in srcs:  # fill the caches: a first run, a first process
@@ -115,7 +116,7 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
             if "cli-changed" in only:
                 _time([*cli, str(_changed(tmp, None)), "--out", str(result)], env[v], tmp)
             if "api-second" in only:
-                _time([py, str(script)], api_env[v], tmp)
+                _time([py, str(scripts[v])], api_env[v], tmp)
         for k in range(repeat):
             changed = _changed(tmp, k)
             for v, src in srcs.items():
@@ -135,7 +136,9 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
                         _time([*cli, str(changed), "--out", str(result)], env[v], tmp)
                     )
                 if "api-second" in only:
-                    t.setdefault("api-second", []).append(_time([py, str(script)], api_env[v], tmp))
+                    t.setdefault("api-second", []).append(
+                        _time([py, str(scripts[v])], api_env[v], tmp)
+                    )
     return out
 
 

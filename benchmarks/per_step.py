@@ -100,7 +100,7 @@ def main() -> None:
             capture_output=True,
         )
         try:
-            other = run_tree(wt / "src", ROOT / "tests", args.repeat)
+            other = run_tree(wt / "src", wt / "tests", args.repeat)  # its own fixtures
         finally:
             subprocess.run(
                 ["git", "-C", str(ROOT), "worktree", "remove", "--force", str(wt)], check=False
