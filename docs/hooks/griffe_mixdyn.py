@@ -33,25 +33,34 @@ _ROLE = re.compile(r":(?:py:)?(?:class|func|meth|mod|data|attr|exc|obj|const):`(
 _LITERAL = re.compile(r"(?<=\S)::$", re.MULTILINE)
 
 
+def _all(path: pathlib.Path) -> set[str]:
+    """The names in a module's ``__all__`` list, read from its source."""
+    names: set[str] = set()
+    for node in ast.parse(path.read_text(encoding="utf-8")).body:
+        if (
+            isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets)
+            and isinstance(node.value, ast.List)
+        ):
+            names |= {e.value for e in node.value.elts if isinstance(e, ast.Constant)}
+    return {n for n in names if not n.startswith("_")}
+
+
 def _public_names() -> set[str]:
     """The names in ``mixdyn.__all__`` and ``mixdyn.model.__all__`` (read from the source,
-    without importing the package) and the public classes of ``mixdyn.errors``."""
+    without importing the package), those of the public modules ``mixdyn.analyses`` and
+    ``mixdyn.paths``, and the public classes of ``mixdyn.errors``."""
     src = pathlib.Path(__file__).resolve().parents[2] / "src" / "mixdyn"
-    names: set[str] = set()
-    for path in (src / "__init__.py", src / "model" / "__init__.py"):
-        tree = ast.parse(path.read_text(encoding="utf-8"))
-        for node in tree.body:
-            if (
-                isinstance(node, ast.Assign)
-                and any(isinstance(t, ast.Name) and t.id == "__all__" for t in node.targets)
-                and isinstance(node.value, ast.List)
-            ):
-                names |= {e.value for e in node.value.elts if isinstance(e, ast.Constant)}
+    names = _all(src / "__init__.py") | _all(src / "model" / "__init__.py")
+    public = {f"mixdyn.{n}" for n in names}
+    for module in ("analyses", "paths"):
+        if (src / f"{module}.py").exists():
+            public |= {f"mixdyn.{module}.{n}" for n in _all(src / f"{module}.py")}
     errors = ast.parse((src / "errors.py").read_text(encoding="utf-8"))
     error_names = {n.name for n in errors.body if isinstance(n, ast.ClassDef)}
-    return {f"mixdyn.{n}" for n in names if not n.startswith("_")} | {
-        f"mixdyn.errors.{n}" for n in error_names if not n.startswith("_")
-    } | {"mixdyn.errors"}
+    return public | {f"mixdyn.errors.{n}" for n in error_names if not n.startswith("_")} | {
+        "mixdyn.errors"
+    }
 
 
 class SphinxRoles(Extension):

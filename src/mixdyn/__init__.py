@@ -36,8 +36,9 @@ if _configure_cache() is not None and (_tag := _command.job_tag(_sys.argv)) is n
 
     _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 
-from . import errors  # noqa: E402
+from . import analyses, errors  # noqa: E402
 from .analysis import (  # noqa: E402
+    Analysis,
     Assembly,
     Baumgarte,
     DofReport,
@@ -48,6 +49,7 @@ from .analysis import (  # noqa: E402
     Partitioning,
     Projection,
     Result,
+    Setup,
     Statics,
     Sweep,
     assemble,
@@ -62,8 +64,10 @@ from .analysis import (  # noqa: E402
     latin_hypercube,
     mixed,
     optimize,
+    prepare,
     prescribe,
     quasi_static,
+    run,
     statics,
     sweep,
 )
@@ -128,6 +132,7 @@ __all__ = [
     "DenseSolver",
     "LinearSolver",
     "SI",
+    "Analysis",
     "Assembly",
     "AssemblyError",
     "Baumgarte",
@@ -146,6 +151,7 @@ __all__ = [
     "Projection",
     "RedundantConstraintError",
     "Result",
+    "Setup",
     "Fit",
     "Optimum",
     "Statics",
@@ -155,6 +161,7 @@ __all__ = [
     "StepSizeError",
     "UnitSystem",
     "__version__",
+    "analyses",
     "assemble",
     "check_mixed",
     "degrees_of_freedom",
@@ -169,7 +176,9 @@ __all__ = [
     "latin_hypercube",
     "inverse",
     "mixed",
+    "prepare",
     "prescribe",
+    "run",
     "sweep",
     "set_cache",
     "kinematic",

@@ -7,10 +7,12 @@ drivers checked against the degrees of freedom). Both return a :class:`Prepared`
 which an analysis takes the constraint rows its solver needs
 (:meth:`Prepared.constraints`).
 
-A set-up can be made once and handed to the analysis (their ``prepared=`` keyword): the
-model-file runner (:mod:`mixdyn.io.runs`) checks a run on the set-up the run then starts from,
-so that each run is assembled and analysed once. :func:`use_prepared` refuses a set-up made
-for another call (model, drivers, start time, rough start, held coordinates, linear solver).
+The analysis values make theirs in :func:`~mixdyn.prepare` (:mod:`._setup`), which carries
+it in its :class:`~._setup.Setup`. A :class:`Prepared` made here beforehand is also taken by
+the analysis functions' deprecated ``prepared=`` keyword (the model-file runner,
+:mod:`mixdyn.io.runs`, checks a run on the start the run then starts from):
+:func:`use_prepared` refuses one made for another call (model, drivers, start time, rough
+start, held coordinates, linear solver).
 """
 
 from __future__ import annotations
@@ -120,6 +122,7 @@ def use_prepared(
     t0: float,
     *,
     what: str,
+    dynamic: bool,
     drivers=None,
     q0=None,
     qd0=None,
@@ -133,8 +136,9 @@ def use_prepared(
         prepared: the :class:`Prepared` handed over.
         model: the analysis' model.
         t0: its start time [time].
-        what: ``"forward"``, ``"mixed"`` (dynamic set-ups), ``"kinematic"`` or ``"inverse"``
-            (kinematic ones), for the set-up's kind and the messages.
+        what: the analysis' name, for the messages.
+        dynamic: whether the analysis makes a dynamic start (positions and velocities:
+            forward, mixed) or a kinematic one (kinematic, inverse).
         drivers: the drivers of the run (default: the model's).
         q0, qd0, hold, assemble_first, linear_solver: the analysis' arguments.
 
@@ -153,7 +157,6 @@ def use_prepared(
             f"{type(prepared).__name__}",
             "prepared",
         )
-    dynamic = what in ("forward", "mixed")
     drivers = tuple(model.drivers if drivers is None else drivers)
     wrong = []
     if not _same_model(prepared.model, model):

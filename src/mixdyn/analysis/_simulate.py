@@ -5,7 +5,9 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from typing import ClassVar
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -19,11 +21,12 @@ from ..errors import (
     SingularityError,
     StepSizeError,
 )
-from ..linalg import dependent_rows
+from ..linalg import AutoSolver, LinearSolver, dependent_rows
 from ..model import Model
 from ..runtime._programs import cached_jit
+from . import _setup
 from ._assembly import length_scale
-from ._options import value_problem
+from ._options import suggestions, value_problem
 from ._problem import Problem
 from ._reactions import (
     check_contacts,
@@ -42,7 +45,7 @@ from .integrators._common import (
     progress_hook,
 )
 from .kinematic import output_times
-from .methods import IntegratorOptions, resolve
+from .methods import IntegratorOptions, Projection, as_method, check_steps, resolve
 from .result import Result
 
 #: Default tolerance of a dynamic run's energy balance (see :func:`energy_tolerance`).
@@ -53,13 +56,14 @@ ENERGY_PER_RTOL = 1e3
 ENERGY_TOL_RANGE = (1e-9, 1e-4)
 
 
-def refuse_friction_in(model: Model, method: str) -> None:
-    """Joint friction is solved with the accelerations of the explicit integrators; the
-    generalized-alpha method's Newton iteration does not include it (named input error)."""
-    if method == "generalized-alpha":
+def refuse_friction_in(model: Model, options: IntegratorOptions) -> None:
+    """Joint friction is solved with the accelerations of the explicit integrators; a method
+    whose iteration does not include it (generalized-alpha's Newton iteration:
+    :attr:`~.methods.IntegratorOptions.friction` false) refuses it (named input error)."""
+    if not options.friction:
         check_supported(
             model,
-            "the generalized-alpha method",
+            f"the {options.method} method",
             "use projection (the default), partitioning or baumgarte",
         )
 
@@ -226,7 +230,9 @@ def run_options(
     return resolve(method, np.asarray(ts), options)
 
 
-def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_tol) -> float:
+def check_energy_balance(
+    problem: Problem, ts, Q, extra, ratio, options: IntegratorOptions, energy_tol
+) -> float:
     """The energy balance of a dynamic run, ``T + V - E0 - W_nc - W_c`` [energy], relative to
     its energy scale; raise past ``energy_tol``.
 
@@ -246,7 +252,7 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
         Q: (N, nq) positions at ``ts`` (to name the elements at the failure).
         extra: result columns (``energy.*``, ``work.*``).
         ratio: (N,) pivot ratios at ``ts`` (to tell a singular position).
-        method: integrator name (for the message).
+        options: the integrator's options (its name and whether it damps, for the message).
         energy_tol: relative tolerance, or None to skip the check.
 
     Returns:
@@ -285,9 +291,10 @@ def check_energy_balance(problem: Problem, ts, Q, extra, ratio, method, energy_t
         if singular
         else "the steps are too large for the accuracy asked, or the motion left its branch"
     )
-    if method == "generalized-alpha":
+    method = options.method
+    if options.damps:
         cause += (
-            " (generalized-alpha also damps unresolved high frequencies by design, rho_inf "
+            f" ({method} also damps unresolved high frequencies by design, rho_inf "
             "< 1: if that loss is intended, set energy_tol=None)"
         )
     raise EnergyBalanceError(
@@ -337,6 +344,110 @@ class Case:
     stats: dict = dataclasses.field(default_factory=dict)
 
 
+class Integrated(_setup.Analysis):
+    """The options that forward and mixed dynamics share (see either): the integration
+    method with its options, the energy balance's tolerance, the start and the linear
+    solver."""
+
+    integrated: ClassVar[bool] = True
+
+    _: dataclasses.KW_ONLY
+    method: IntegratorOptions = eqx.field(default=Projection(), converter=as_method)
+    energy_tol: float | str | None = eqx.field(
+        default=ENERGY_TOL, converter=_setup.checked("energy_tol")
+    )
+    q0: np.ndarray | None = eqx.field(default=None, converter=_setup.start_positions)
+    qd0: np.ndarray | dict | None = eqx.field(default=None, converter=_setup.start_velocities)
+    hold: tuple[str, ...] = eqx.field(default=(), converter=_setup.held)
+    linear_solver: LinearSolver = eqx.field(default=AutoSolver(), converter=_setup.linear_solver)
+
+    @classmethod
+    def _elsewhere(cls, key: str, kwargs: dict) -> str:
+        method = kwargs.get("method", "projection")
+        from .methods import OPTIONS
+
+        options = type(method) if isinstance(method, IntegratorOptions) else OPTIONS.get(method)
+        if options is None:
+            return ""
+        spelled = f"method=mixdyn.{options.__name__}({{}}=...)"
+        if key in options.defaults():
+            return f"{key} is an option of the integrator: give {spelled.format(key)}; "
+        close = suggestions(key, options.defaults())
+        return f"did you mean {spelled.format(close[0])}? " if close else ""
+
+    def _start(self) -> dict:
+        """The start settings, as the keywords of :func:`~._prepare.prepare_dynamic`."""
+        return _setup.start_of(self, "q0", "qd0", "hold", "linear_solver")
+
+    def _start_forces(self) -> tuple[str, ...]:
+        """The force elements whose numbers enter the start (a mixed run's unknown forces,
+        whose directions its solvability check reads)."""
+        return ()
+
+    def _shares_setup(self, setup: _setup.Setup) -> bool:
+        """Whether members of a sweep that differ only in masses, inertias and the numbers
+        of known forces can share ``setup`` (:func:`~.sweep.shares_start`)."""
+        return True
+
+    def _case(self, setup: _setup.Setup, t) -> Case:
+        """The run of ``setup`` over the output times ``t`` (N,) [time], set up and not yet
+        integrated (its step count checked against ``max_steps``)."""
+        ts = output_times(t)
+        _setup.check_start(setup, ts)
+        check_steps(self.method, ts)
+        start = setup.start
+        return Case(
+            self.name,
+            setup.problem,
+            ts,
+            start.q,
+            start.qd,
+            self.method,
+            len(setup.model.drivers),
+            self.energy_tol,
+            setup.recorded,
+            dict(setup.stats),
+        )
+
+    def _run(self, setup: _setup.Setup, t, progress=None) -> Result:
+        return simulate(self._case(setup, t), progress)
+
+    @classmethod
+    def _from_keywords(cls, t, kwargs: dict) -> tuple[Integrated, dict]:
+        """The keyword spelling (``method`` a name or an object, ``rtol``, ``atol``, ``dt``
+        and the method's own options beside the analysis' fields) as the value, and the
+        options its results record (:func:`run_options`: the options given, with a name)."""
+        fields = {f.name for f in dataclasses.fields(cls)}
+        kw = {k: v for k, v in kwargs.items() if k != "prepared"}
+        method = kw.pop("method", "projection")
+        rtol, atol, dt = (kw.pop(k, None) for k in ("rtol", "atol", "dt"))
+        energy_tol = kw.pop("energy_tol", ENERGY_TOL)
+        own = {k: kw.pop(k) for k in list(kw) if k in fields}
+        ts = output_times(t)
+        options, recorded = run_options(
+            method, ts, dict(kw, rtol=rtol, atol=atol, dt=dt), energy_tol
+        )
+        return cls(method=options, energy_tol=energy_tol, **own), recorded
+
+    @classmethod
+    def _spelling(cls, kwargs: dict) -> str:
+        """The value that the keyword spelling ``kwargs`` reads as, for a message."""
+        fields = {f.name for f in dataclasses.fields(cls)}
+        method = kwargs.get("method", "projection")
+        options = [k for k in kwargs if k not in fields and k not in ("method", "prepared")]
+        if isinstance(method, IntegratorOptions):
+            spelled = [f"method={type(method).__name__}(...)"]
+        elif options or method != "projection":
+            from .methods import OPTIONS
+
+            name = getattr(OPTIONS.get(method), "__name__", "Projection")
+            spelled = [f"method=mixdyn.{name}({', '.join(f'{k}=...' for k in options)})"]
+        else:
+            spelled = []
+        spelled += [f"{k}=..." for k in kwargs if k in fields and k != "method"]
+        return f"mixdyn.analyses.{cls.__name__}({', '.join(spelled)})"
+
+
 def integrate(case: Case, progress=None):
     """The trajectory of ``case`` (an :class:`~.integrators.Trajectory`); ``progress``: an
     optional ``f(t)`` called at each output time."""
@@ -374,7 +485,7 @@ def finish(case: Case, traj, arrays=None) -> Result:
             "accelerations are not finite: singular equations of motion", float(ts[k])
         )
     tol = energy_tolerance(case.energy_tol, options)
-    balance = check_energy_balance(problem, ts, Q, extra, ratio, method, tol)
+    balance = check_energy_balance(problem, ts, Q, extra, ratio, options, tol)
     stats = {
         "method": method,
         "options": dict(options.recorded() if case.recorded is None else case.recorded),
@@ -429,4 +540,13 @@ def ahead(case: Case) -> None:
     _post_ahead(case)
 
 
-__all__ = ["Case", "ahead", "finish", "integrate", "output_times", "require_masses", "simulate"]
+__all__ = [
+    "Case",
+    "Integrated",
+    "ahead",
+    "finish",
+    "integrate",
+    "output_times",
+    "require_masses",
+    "simulate",
+]

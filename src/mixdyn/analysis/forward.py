@@ -1,26 +1,69 @@
-"""Forward dynamics: forces known, motion sought.
-
-``M qdd + Phi_q^T lambda = Q^A``, ``Phi_q qdd = gamma``, integrated in time by a chosen
-integrator. The model's drivers, if any, act as motion constraints; their efforts are reported.
-"""
-
 from __future__ import annotations
+
+import dataclasses
+from typing import ClassVar
 
 from ..linalg import LinearSolver
 from ..model import Model
 from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
+from ._setup import Setup, keyword_setup
 from ._simulate import (
     ENERGY_TOL,
     Case,
+    Integrated,
     output_times,
     refuse_friction_in,
     require_masses,
-    run_options,
     simulate,
 )
 from .methods import IntegratorOptions
 from .result import Result
+
+
+class Forward(Integrated):
+    """Forward dynamics as a value: the forces known, the motion sought from a consistent
+    start (``md.forward``'s options, for :func:`~mixdyn.prepare` and the studies).
+
+    ``Forward(method=md.Projection(rtol=1e-10))`` prepared and run over ``t`` is
+    ``md.forward(model, t, method=md.Projection(rtol=1e-10))``, bit for bit.
+
+    Attributes:
+        method: the integration method with its options: an object of
+            :class:`~mixdyn.Projection` (default), :class:`~mixdyn.Partitioning`,
+            :class:`~mixdyn.Baumgarte` or :class:`~mixdyn.GeneralizedAlpha`, or a method's
+            name with its default options (``"projection"``; a fixed-step method needs its
+            object, with ``dt``).
+        energy_tol: relative tolerance of the run's energy balance ``T + V - E0 - W``
+            against its energy scale [-]: ``"auto"`` (default: 1000 x ``rtol`` of an
+            adaptive method within [1e-9, 1e-4], 1e-4 at a fixed step), a number, or None
+            (not checked).
+        q0: (nq,) rough initial positions [model units], or None (the bodies' ``q0``).
+        qd0: initial velocities [model units / time]: None (the least consistent ones),
+            velocity conditions ``{"crank.phi": 1.0}`` (kept exactly, the others follow) or a
+            full (nq,) vector (consistent).
+        hold: coordinates (``"crank.phi"``) kept at their given values while assembling.
+        linear_solver: a :class:`~mixdyn.LinearSolver` or its name (``"auto"``, default;
+            ``"dense"``, ``"sparse"``): the path of every linear solve of the run.
+    """
+
+    name: ClassVar[str] = "forward"
+
+    def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
+        refuse_friction_in(model, self.method)
+        require_masses(model)
+        if given is None:
+            prep = prepare_dynamic(model, t0, **self._start())
+        else:
+            prep = use_prepared(given, model, t0, what="forward", dynamic=True, **self._start())
+        # The partitioning integrator needs independent rows; the others solve redundant
+        # constraints in the least-squares sense (robust where the redundancy moves).
+        problem = Problem(model, prep.constraints(self.method.independent_rows))
+        stats = {"redundant_equations": prep.report.redundant}
+        return Setup(self, model, t0, prep, problem, stats)
+
+    def _run(self, setup: Setup, t, progress=None) -> Result:
+        return simulate(self._case(setup, t), progress)
 
 
 def forward(
@@ -95,73 +138,34 @@ def forward(
         energies (``energy.kinetic``, ``energy.potential``, ``energy.total``), accumulated
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
     """
-    case = forward_case(
-        model,
-        t,
-        method=method,
-        rtol=rtol,
-        atol=atol,
-        dt=dt,
-        q0=q0,
-        qd0=qd0,
-        hold=hold,
-        linear_solver=linear_solver,
-        energy_tol=energy_tol,
-        prepared=prepared,
-        **options,
-    )
-    return simulate(case, progress)
-
-
-def forward_case(
-    model: Model,
-    t,
-    *,
-    method: str | IntegratorOptions = "projection",
-    rtol: float | None = None,
-    atol: float | None = None,
-    dt: float | None = None,
-    q0=None,
-    qd0=None,
-    hold=(),
-    linear_solver: str | LinearSolver = "auto",
-    energy_tol: float | str | None = ENERGY_TOL,
-    prepared: Prepared | None = None,
-    **options,
-) -> Case:
-    """The set-up of a forward run (:func:`forward`'s arguments but ``progress``): its
-    checked options, consistent start and equations, not yet integrated."""
     ts = output_times(t)
-    opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
-    refuse_friction_in(model, opts.method)
-    require_masses(model)
-    if prepared is None:
-        prep = prepare_dynamic(
-            model, float(ts[0]), q0=q0, qd0=qd0, hold=hold, linear_solver=linear_solver
-        )
-    else:
-        prep = use_prepared(
-            prepared,
-            model,
-            float(ts[0]),
-            what="forward",
+    analysis, recorded = Forward._from_keywords(
+        ts,
+        dict(
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            dt=dt,
             q0=q0,
             qd0=qd0,
             hold=hold,
             linear_solver=linear_solver,
-        )
-    # The partitioning integrator needs independent rows; the others solve redundant
-    # constraints in the least-squares sense (robust where the redundancy moves).
-    problem = Problem(model, prep.constraints(opts.method == "partitioning"))
-    return Case(
-        "forward",
-        problem,
-        ts,
-        prep.q,
-        prep.qd,
-        opts,
-        len(model.drivers),
-        energy_tol,
-        recorded,
-        {"redundant_equations": prep.report.redundant},
+            energy_tol=energy_tol,
+            **options,
+        ),
     )
+    setup = keyword_setup(model, analysis, float(ts[0]), recorded, prepared)
+    return analysis._run(setup, ts, progress)
+
+
+def forward_case(model: Model, t, **kwargs) -> Case:
+    """The set-up of a forward run from :func:`forward`'s keywords but ``progress``, not yet
+    integrated (for the model-file runner's programs prepared ahead; ``prepared=`` taken as
+    :func:`forward` takes it, without the warning)."""
+    ts = output_times(t)
+    analysis, recorded = Forward._from_keywords(ts, kwargs)
+    setup = analysis._prepare(model, float(ts[0]), kwargs.get("prepared"))
+    return analysis._case(dataclasses.replace(setup, recorded=recorded), ts)
+
+
+__all__ = ["Forward", "forward"]

@@ -7,16 +7,77 @@ constrained solve as forward dynamics). Each driver's effort is ``-lambda`` of i
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import jax.numpy as jnp
 import numpy as np
 
 from ..linalg import LinearSolver
 from ..model import Model
+from . import _setup
 from ._prepare import Prepared, prepare_kinematic, use_prepared
 from ._problem import Problem
+from ._setup import Setup, keyword_setup
 from ._simulate import _post, output_times, post_kinds, require_masses
-from .kinematic import run_kinematic
+from .kinematic import _Driven
 from .result import Result
+
+
+class Inverse(_Driven):
+    """Inverse dynamics as a value: the driver efforts and joint reactions of a fully driven
+    mechanism (``md.inverse``'s options, for :func:`~mixdyn.prepare` and the studies).
+    Preparing it checks the masses, assembles the start and checks that the drivers fix every
+    degree of freedom.
+
+    Attributes:
+        q0: (nq,) rough starting configuration [model units], or None (the bodies' ``q0``).
+        hold: coordinates kept at their rough value while assembling.
+        assemble_first: close the joints from the rough pose before applying the drivers
+            (default True).
+        tol, max_iter, singular_tol: the kinematic analysis' options, as in
+            :class:`~mixdyn.analyses.Kinematic`.
+        linear_solver: a :class:`~mixdyn.LinearSolver` or its name (``"auto"``, default;
+            ``"dense"``, ``"sparse"``): the path of the kinematic analysis and of the
+            multipliers' solve.
+    """
+
+    name: ClassVar[str] = "inverse"
+
+    def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
+        require_masses(model)
+        if given is None:
+            prep = prepare_kinematic(model, t0, **self._start())
+        else:
+            prep = use_prepared(given, model, t0, what="inverse", dynamic=False, **self._start())
+        # the kinematic run's rows: assembled and analysed once
+        return Setup(self, model, t0, prep, Problem(model, prep.constraints()))
+
+    def _run(self, setup: Setup, t, progress=None) -> Result:
+        _setup.no_progress(self, progress)
+        ts = output_times(t)
+        _setup.check_start(setup, ts)
+        model, problem = setup.model, setup.problem
+        kin = self._kinematics(setup, ts)
+        _, _, ratio, cols = _post(
+            problem, jnp.asarray(ts), jnp.asarray(kin.q), jnp.asarray(kin.qd), len(model.drivers)
+        )
+        extra = {k: np.asarray(v) for k, v in cols.items()}
+        stats = dict(
+            kin.stats,
+            min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))),
+            linear_solver=problem.c.linear_solver.name,
+        )
+        return Result(
+            kind="inverse",
+            model=model,
+            t=ts,
+            q=kin.q,
+            qd=kin.qd,
+            qdd=kin.qdd,
+            extra=extra,
+            kinds=post_kinds(problem, len(model.drivers)),
+            stats=stats,
+        )
 
 
 def inverse(
@@ -51,34 +112,8 @@ def inverse(
         after the driver) and power (``{driver}.power``), the joint reactions and the energies.
     """
     ts = output_times(t)
-    require_masses(model)
-    kin_options = dict(kinematic_options)
-    assemble_first = kin_options.pop("assemble_first", True)
-    args = dict(q0=q0, hold=hold, assemble_first=assemble_first, linear_solver=linear_solver)
-    if prepared is None:
-        prep = prepare_kinematic(model, float(ts[0]), **args)
-    else:
-        prep = use_prepared(prepared, model, float(ts[0]), what="inverse", **args)
-    kin = run_kinematic(prep, ts, **kin_options)
-    c = prep.constraints()  # the kinematic run's rows: assembled and analysed once
-    problem = Problem(model, c)
-    _, _, ratio, cols = _post(
-        problem, jnp.asarray(ts), jnp.asarray(kin.q), jnp.asarray(kin.qd), len(model.drivers)
-    )
-    extra = {k: np.asarray(v) for k, v in cols.items()}
-    stats = dict(
-        kin.stats,
-        min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))),
-        linear_solver=c.linear_solver.name,
-    )
-    return Result(
-        kind="inverse",
-        model=model,
-        t=ts,
-        q=kin.q,
-        qd=kin.qd,
-        qdd=kin.qdd,
-        extra=extra,
-        kinds=post_kinds(problem, len(model.drivers)),
-        stats=stats,
-    )
+    analysis = Inverse(q0=q0, hold=hold, linear_solver=linear_solver, **kinematic_options)
+    return analysis._run(keyword_setup(model, analysis, float(ts[0]), prepared=prepared), ts)
+
+
+__all__ = ["Inverse", "inverse"]

@@ -8,18 +8,24 @@ second-order Taylor prediction from the previous time), velocities from
 
 from __future__ import annotations
 
+import dataclasses
+from typing import ClassVar
+
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints
-from ..errors import ConvergenceError, SingularityError
-from ..linalg import LinearSolver, dependent_rows
-from ..model import Model
+from ..errors import ConvergenceError, ModelError, SingularityError
+from ..linalg import AutoSolver, LinearSolver, dependent_rows
+from ..model import Driver, Model
 from ..runtime._programs import cached_jit
+from . import _setup
 from ._assembly import length_scale
 from ._newton import newton_positions
 from ._prepare import Prepared, prepare_kinematic, use_prepared
+from ._setup import Setup, keyword_setup
 from .result import Result
 
 
@@ -102,6 +108,88 @@ def check_run(c, ts, q, it, res, ratio, tol, max_iter, singular_tol):
     )
 
 
+def _drivers(value) -> tuple[Driver, ...] | None:
+    """``drivers``: None (the model's) or a tuple of drivers."""
+    if value is None:
+        return None
+    out = (value,) if isinstance(value, Driver) else tuple(value)
+    for d in out:
+        if not isinstance(d, Driver):
+            raise ModelError(f"drivers must be drivers, got {type(d).__name__}", "drivers")
+    return out
+
+
+class _Driven(_setup.Analysis):
+    """The options that kinematic and inverse analyses share (see either)."""
+
+    _: dataclasses.KW_ONLY
+    q0: np.ndarray | None = eqx.field(default=None, converter=_setup.start_positions)
+    hold: tuple[str, ...] = eqx.field(default=(), converter=_setup.held)
+    assemble_first: bool = eqx.field(default=True, converter=_setup.switch("assemble_first"))
+    tol: float | None = eqx.field(default=None, converter=_setup.checked("tol"))
+    max_iter: int = eqx.field(default=25, converter=_setup.checked("max_iter"))
+    singular_tol: float = eqx.field(default=1e-7, converter=_setup.checked("singular_tol"))
+    linear_solver: LinearSolver = eqx.field(default=AutoSolver(), converter=_setup.linear_solver)
+
+    def _start(self) -> dict:
+        """The start settings, as the keywords of :func:`~._prepare.prepare_kinematic`."""
+        return _setup.start_of(self, "q0", "hold", "assemble_first", "linear_solver")
+
+    def _kinematics(self, setup: Setup, ts) -> Result:
+        """The kinematic run of ``setup`` over the output times ``ts`` (N,) [time]."""
+        return run_kinematic(
+            setup.start, ts, tol=self.tol, max_iter=self.max_iter, singular_tol=self.singular_tol
+        )
+
+
+class Kinematic(_Driven):
+    """Kinematic analysis as a value: positions, velocities and accelerations of a fully
+    driven mechanism (``md.kinematic``'s options, for :func:`~mixdyn.prepare` and the
+    studies). Preparing it assembles the start and checks that the drivers fix every degree
+    of freedom.
+
+    Attributes:
+        drivers: drivers to use instead of the model's, or None (default: the model's).
+        q0: (nq,) rough starting configuration [model units], or None (the bodies' ``q0``).
+        hold: coordinates (``"crank.phi"``) kept at their rough value while assembling.
+        assemble_first: close the joints from the rough pose before applying the drivers
+            (default True).
+        tol: Newton tolerance on the largest residual [length], or None (default:
+            ``1e-12 x`` the model's size).
+        max_iter: Newton iterations per time, 1 to 1000 (default 25).
+        singular_tol: a pivot ratio of ``Phi_q`` below this is a singularity, in (0, 1)
+            (default 1e-7).
+        linear_solver: a :class:`~mixdyn.LinearSolver` or its name (``"auto"``, default;
+            ``"dense"``, ``"sparse"``); the assembly takes the same path.
+    """
+
+    name: ClassVar[str] = "kinematic"
+
+    _: dataclasses.KW_ONLY
+    drivers: tuple[Driver, ...] | None = eqx.field(default=None, converter=_drivers)
+
+    def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
+        drivers = (
+            model.drivers
+            if self.drivers is None
+            else tuple(d.bind(_resolver(model)) for d in self.drivers)
+        )
+        if given is None:
+            prep = prepare_kinematic(model, t0, drivers=drivers, **self._start())
+        else:
+            prep = use_prepared(
+                given, model, t0, what="kinematic", dynamic=False, drivers=drivers,
+                **self._start(),
+            )  # fmt: skip
+        return Setup(self, model, t0, prep)
+
+    def _run(self, setup: Setup, t, progress=None) -> Result:
+        _setup.no_progress(self, progress)
+        ts = output_times(t, minimum=1)
+        _setup.check_start(setup, ts)
+        return self._kinematics(setup, ts)
+
+
 def kinematic(
     model: Model,
     t,
@@ -150,19 +238,17 @@ def kinematic(
         AssemblyError, ConvergenceError, SingularityError: with the time and the elements.
     """
     ts = output_times(t, minimum=1)
-    drivers = model.drivers if drivers is None else tuple(d.bind(_resolver(model)) for d in drivers)
-    args = dict(
+    analysis = Kinematic(
         drivers=drivers,
         q0=q0,
-        hold=hold,
         assemble_first=assemble_first,
+        hold=hold,
+        tol=tol,
+        max_iter=max_iter,
+        singular_tol=singular_tol,
         linear_solver=linear_solver,
     )
-    if prepared is None:
-        prep = prepare_kinematic(model, float(ts[0]), **args)
-    else:
-        prep = use_prepared(prepared, model, float(ts[0]), what="kinematic", **args)
-    return run_kinematic(prep, ts, tol=tol, max_iter=max_iter, singular_tol=singular_tol)
+    return analysis._run(keyword_setup(model, analysis, float(ts[0]), prepared=prepared), ts)
 
 
 def run_kinematic(

@@ -70,6 +70,17 @@ class IntegratorOptions(eqx.Module):
     fixed_step: ClassVar[bool] = False
     #: Options passed to the integrator as float64 arrays (not part of the traced program).
     _arrays: ClassVar[tuple[str, ...]] = ()
+    #: Whether the method integrates the independent coordinates only, and so needs the
+    #: independent constraint rows (a regular ``Phi_q``); the others solve redundant rows in
+    #: the least-squares sense.
+    independent_rows: ClassVar[bool] = False
+    #: Whether the method's step includes joint friction (solved with the accelerations).
+    friction: ClassVar[bool] = True
+    #: Whether a run is differentiable (``jax.grad``, ``jax.jvp``) through the method's loop.
+    differentiable: ClassVar[bool] = True
+    #: Whether the method damps unresolved high frequencies by design (energy lost on
+    #: purpose, named when the energy balance breaks).
+    damps: ClassVar[bool] = False
 
     def __new__(cls, *args, **kwargs):
         if not hasattr(cls, "method"):
@@ -163,6 +174,7 @@ class Partitioning(_AdaptiveRungeKutta):
     """
 
     method: ClassVar[str] = "partitioning"
+    independent_rows: ClassVar[bool] = True
 
 
 class Baumgarte(IntegratorOptions):
@@ -212,6 +224,9 @@ class GeneralizedAlpha(IntegratorOptions):
 
     method: ClassVar[str] = "generalized-alpha"
     fixed_step: ClassVar[bool] = True
+    friction: ClassVar[bool] = False
+    differentiable: ClassVar[bool] = False
+    damps: ClassVar[bool] = True
     _arrays: ClassVar[tuple[str, ...]] = ("dt", "rho_inf", "tol")
 
     _: dataclasses.KW_ONLY
@@ -305,6 +320,19 @@ def _method_class(method) -> type[IntegratorOptions]:
     )
 
 
+def as_method(method: str | IntegratorOptions) -> IntegratorOptions:
+    """``method`` as its options object: the object itself, or a method's name with its
+    default options (a fixed-step method's name alone is refused: it needs ``dt``).
+
+    Raises:
+        ModelError: an unknown method, a class instead of an object, or a fixed-step
+            method's name.
+    """
+    if isinstance(method, IntegratorOptions):
+        return method
+    return _method_class(method)()
+
+
 def resolve(
     method: str | IntegratorOptions, ts, options: dict
 ) -> tuple[IntegratorOptions, dict[str, object]]:
@@ -364,6 +392,7 @@ __all__ = [
     "IntegratorOptions",
     "Partitioning",
     "Projection",
+    "as_method",
     "check",
     "check_steps",
     "resolve",

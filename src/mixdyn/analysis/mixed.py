@@ -18,8 +18,11 @@ a basis of the motions the joints allow).
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
+from typing import ClassVar
 
+import equinox as eqx
 import numpy as np
 import scipy.linalg as sl
 
@@ -30,15 +33,17 @@ from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
 from ..runtime._programs import cached_jit
+from . import _setup
 from ._prepare import Prepared, prepare_dynamic, use_prepared
 from ._problem import Problem
+from ._setup import Setup, keyword_setup
 from ._simulate import (
     ENERGY_TOL,
     Case,
+    Integrated,
     output_times,
     refuse_friction_in,
     require_masses,
-    run_options,
     simulate,
 )
 from ._structure import _jac
@@ -213,114 +218,169 @@ def _collocated(model, c: Constraints, q, qd, t, mk: int, unknown):
     return None
 
 
-def _setup(
-    model: Model,
-    t0: float,
-    prescribed,
-    unknown,
-    solver,
-    independent,
-    method,
-    q0,
-    qd0,
-    hold,
-    linear_solver="auto",
-    prepared: Prepared | None = None,
-):
-    """Everything a mixed run does before integrating: checks, consistent start, problem
-    (the start and its mobility analysis taken from ``prepared`` where given)."""
-    if solver not in SOLVERS:
-        raise ModelError(
-            f"unknown mixed solver {solver!r}; use 'augmented' or 'partition'", "solver"
-        )
-    require_masses(model)
-    unknown = tuple(unknown)
-    prescribed = bind_prescribed(model, prescribed)
-    if len(unknown) != len(prescribed):
-        raise SolvabilityError(
-            f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); a "
-            "mixed problem needs one prescribed motion per unknown force",
-            ", ".join(unknown) or "unknown",
-        )
-    if not unknown:
-        raise SolvabilityError("no unknown force: use forward dynamics instead", "unknown")
-    existing = {e.name for e in (*model.joints, *model.drivers, *model.forces)}
-    for d in prescribed:
-        if d.name in existing:
-            raise ModelError("a prescribed motion needs a name not used by the model", d.name)
-    if len(set(unknown)) != len(unknown):
-        raise SolvabilityError("an unknown force is named twice", ", ".join(unknown))
-    for name in unknown:
-        f = model.element(name)
-        if not getattr(f, "has_magnitude", False):
-            raise SolvabilityError(
-                "only a force element with a magnitude (point force, torque, "
-                "actuator) can be unknown",
-                name,
-            )
-    args = dict(
-        drivers=(*model.drivers, *prescribed),
-        q0=q0,
-        qd0=qd0,
-        hold=hold,
-        linear_solver=linear_solver,
-    )
-    if prepared is None:
-        prep = prepare_dynamic(model, t0, **args)
-    else:
-        prep = use_prepared(prepared, model, t0, what="mixed", **args)
-    q, qd, report = prep.q, prep.qd, prep.report
-    bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
-    if bad:
-        raise SolvabilityError(
-            "this prescribed motion is already fixed by the joints or other "
-            "drivers; prescribe a coordinate that is free",
-            ", ".join(bad),
-        )
-    c = prep.constraints(independent_rows_only=solver == "partition" or method == "partitioning")
-    mk = c.m - len(prescribed)
-    _check_solvable(model, c, q, qd, t0, mk, unknown, prescribed)
-    j_index, i_index = (), ()
-    if solver == "partition":
-        j_index = _collocation(model, unknown, prescribed, q, qd, t0)
-        n_i = model.nq - len(j_index) - mk
-        if independent is not None:
-            i_index = [model.coordinate_index(x) for x in independent]
-            if len(i_index) != n_i:
-                raise SolvabilityError(
-                    f"the partition needs {n_i} independent coordinate(s) (3n - j - k), got "
-                    f"{len(i_index)}",
-                    ", ".join(independent),
-                )
-            if set(i_index) & set(j_index):
-                raise SolvabilityError(
-                    "an independent coordinate cannot be prescribed", ", ".join(independent)
-                )
-            k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
-            J = np.asarray(_jac(c, as_f64(q), as_f64(t0)))[:mk]
-            sv = np.linalg.svd(J[:, k_index], compute_uv=False)
-            if sv.size and sv[-1] < 1e-9 * sv[0]:
-                raise SolvabilityError(
-                    "with these independent coordinates the dependent block Phi_qk is singular "
-                    "(the remaining coordinates cannot be solved from the joints); choose other "
-                    "independent coordinates or leave the choice automatic",
-                    ", ".join(independent),
-                )
-    collocated = None
-    if solver == "augmented":
-        collocated = _collocated(model, c, q, qd, t0, mk, unknown)
-    path = c.with_linear_solver(linear_solver).linear_solver
-    if path.banded and solver == "partition":
-        if isinstance(as_linear_solver(linear_solver), BandedSolver):
+def _drivers(value) -> tuple[Driver, ...]:
+    """``prescribed``: a tuple of drivers (one driver alone: a tuple of one)."""
+    out = (value,) if isinstance(value, Driver) else tuple(value)
+    for d in out:
+        if not isinstance(d, Driver):
             raise ModelError(
-                "the sparse linear solver cannot solve this mixed problem: the partition "
-                "solver is dense; use solver='augmented', or linear_solver='dense' or 'auto'",
-                ", ".join(unknown),
+                f"a prescribed motion is a driver (md.CoordinateDriver(...), md.prescribe(...)), "
+                f"got {type(d).__name__}",
+                "prescribed",
             )
-        path = DenseSolver()
-    c = c.with_linear_solver(path)
-    problem = Problem(model, c, unknown, solver, j_index, i_index, collocated or ())
-    return problem, q, qd, prescribed
+    return out
+
+
+def _solver(value) -> str:
+    if value not in SOLVERS:
+        raise ModelError(
+            f"unknown mixed solver {value!r}; use 'augmented' or 'partition'", "solver"
+        )
+    return str(value)
+
+
+def _independent(value) -> tuple[str, ...] | None:
+    return None if value is None else _setup.names(value, "independent")
+
+
+class Mixed(Integrated):
+    """Mixed dynamics as a value: the unknown forces that produce the prescribed motions
+    while the rest of the mechanism moves freely (``md.mixed``'s options, for
+    :func:`~mixdyn.prepare` and the studies).
+
+    Preparing it runs every check of :func:`check_mixed` (the counts, the names, the
+    solvability, the partition) and makes the consistent start.
+
+    Attributes:
+        prescribed: drivers (any type) prescribing ``p`` motions; see also :func:`prescribe`.
+        unknown: names of ``p`` force elements of the model whose magnitude is unknown.
+        solver: ``"augmented"`` (default, general) or ``"partition"`` (the paper's method).
+        independent: for ``"partition"``, the independent coordinates (``["coupler.phi"]``),
+            or None (default: chosen by pivoted LU).
+        method, energy_tol, q0, qd0, hold, linear_solver: as in
+            :class:`~mixdyn.analyses.Forward` (the Runge–Kutta method of an adaptive
+            integrator is chosen by its object, ``method=md.Projection(solver="dopri8")``;
+            the sparse linear solver takes the ``"augmented"`` solver only, see
+            :func:`~mixdyn.mixed`).
+    """
+
+    name: ClassVar[str] = "mixed"
+
+    _: dataclasses.KW_ONLY
+    prescribed: tuple[Driver, ...] = eqx.field(converter=_drivers)
+    unknown: tuple[str, ...] = eqx.field(converter=lambda v: _setup.names(v, "unknown"))
+    solver: str = eqx.field(default="augmented", converter=_solver)
+    independent: tuple[str, ...] | None = eqx.field(default=None, converter=_independent)
+
+    def _start_forces(self) -> tuple[str, ...]:
+        return self.unknown
+
+    def _shares_setup(self, setup: Setup) -> bool:
+        # collocated forces (the partition solver takes only those): the solvability is
+        # structural, not a matter of the masses
+        return bool(setup.problem.collocated) or self.solver == "partition"
+
+    def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
+        """Everything a mixed run does before integrating: checks, consistent start,
+        problem (the start and its mobility analysis checked on ``given`` where given)."""
+        solver, method = self.solver, self.method
+        refuse_friction_in(model, method)
+        require_masses(model)
+        unknown = self.unknown
+        prescribed = bind_prescribed(model, self.prescribed)
+        if len(unknown) != len(prescribed):
+            raise SolvabilityError(
+                f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); "
+                "a mixed problem needs one prescribed motion per unknown force",
+                ", ".join(unknown) or "unknown",
+            )
+        if not unknown:
+            raise SolvabilityError("no unknown force: use forward dynamics instead", "unknown")
+        existing = {e.name for e in (*model.joints, *model.drivers, *model.forces)}
+        for d in prescribed:
+            if d.name in existing:
+                raise ModelError("a prescribed motion needs a name not used by the model", d.name)
+        if len(set(unknown)) != len(unknown):
+            raise SolvabilityError("an unknown force is named twice", ", ".join(unknown))
+        for name in unknown:
+            f = model.element(name)
+            if not getattr(f, "has_magnitude", False):
+                raise SolvabilityError(
+                    "only a force element with a magnitude (point force, torque, "
+                    "actuator) can be unknown",
+                    name,
+                )
+        args = dict(drivers=(*model.drivers, *prescribed), **self._start())
+        if given is None:
+            prep = prepare_dynamic(model, t0, **args)
+        else:
+            prep = use_prepared(given, model, t0, what="mixed", dynamic=True, **args)
+        q, qd, report = prep.q, prep.qd, prep.report
+        bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
+        if bad:
+            raise SolvabilityError(
+                "this prescribed motion is already fixed by the joints or other "
+                "drivers; prescribe a coordinate that is free",
+                ", ".join(bad),
+            )
+        partition = solver == "partition"
+        c = prep.constraints(independent_rows_only=partition or method.independent_rows)
+        mk = c.m - len(prescribed)
+        _check_solvable(model, c, q, qd, t0, mk, unknown, prescribed)
+        j_index, i_index = (), ()
+        independent = self.independent
+        if partition:
+            j_index = _collocation(model, unknown, prescribed, q, qd, t0)
+            n_i = model.nq - len(j_index) - mk
+            if independent is not None:
+                i_index = [model.coordinate_index(x) for x in independent]
+                if len(i_index) != n_i:
+                    raise SolvabilityError(
+                        f"the partition needs {n_i} independent coordinate(s) (3n - j - k), "
+                        f"got {len(i_index)}",
+                        ", ".join(independent),
+                    )
+                if set(i_index) & set(j_index):
+                    raise SolvabilityError(
+                        "an independent coordinate cannot be prescribed", ", ".join(independent)
+                    )
+                k_index = sorted(set(range(model.nq)) - set(i_index) - set(j_index))
+                J = np.asarray(_jac(c, as_f64(q), as_f64(t0)))[:mk]
+                sv = np.linalg.svd(J[:, k_index], compute_uv=False)
+                if sv.size and sv[-1] < 1e-9 * sv[0]:
+                    raise SolvabilityError(
+                        "with these independent coordinates the dependent block Phi_qk is "
+                        "singular (the remaining coordinates cannot be solved from the "
+                        "joints); choose other independent coordinates or leave the choice "
+                        "automatic",
+                        ", ".join(independent),
+                    )
+        collocated = None
+        if not partition:
+            collocated = _collocated(model, c, q, qd, t0, mk, unknown)
+        linear_solver = self.linear_solver
+        path = c.with_linear_solver(linear_solver).linear_solver
+        if path.banded and partition:
+            if isinstance(as_linear_solver(linear_solver), BandedSolver):
+                raise ModelError(
+                    "the sparse linear solver cannot solve this mixed problem: the partition "
+                    "solver is dense; use solver='augmented', or linear_solver='dense' or "
+                    "'auto'",
+                    ", ".join(unknown),
+                )
+            path = DenseSolver()
+        c = c.with_linear_solver(path)
+        problem = Problem(model, c, unknown, solver, j_index, i_index, collocated or ())
+        stats = dict(
+            solver=solver,
+            independent=tuple(independent or ()),
+            prescribed=tuple(d.name for d in prescribed),
+            collocated=bool(problem.collocated),
+        )
+        return Setup(self, model, t0, prep, problem, stats)
+
+    def _run(self, setup: Setup, t, progress=None) -> Result:
+        return simulate(self._case(setup, t), progress)
 
 
 def check_mixed(
@@ -342,23 +402,21 @@ def check_mixed(
     Runs every check of :func:`mixed` at the start time ``t0`` [time]: the counts, the unknown
     forces' names, a consistent start, the prescribed motions' independence, the pairing of
     forces and motions, and (for ``solver="partition"``) the collocation and the partition.
-    Returns None; raises the same errors as :func:`mixed`. ``prepared``: the run's set-up, as
-    in :func:`mixed` (checked on it, not prepared again).
+    Returns None; raises the same errors as :func:`mixed`. The same checks are made by
+    ``mixdyn.prepare(model, mixdyn.analyses.Mixed(...), t0=t0)``, which also returns the
+    set-up to run. ``prepared`` (deprecated): a start made beforehand, as in :func:`mixed`.
     """
-    _setup(
-        model,
-        t0,
-        prescribed,
-        unknown,
-        solver,
-        independent,
-        "projection",
-        q0,
-        qd0,
-        hold,
-        linear_solver,
-        prepared,
+    analysis = Mixed(
+        prescribed=prescribed,
+        unknown=unknown,
+        solver=solver,
+        independent=independent,
+        q0=q0,
+        qd0=qd0,
+        hold=hold,
+        linear_solver=linear_solver,
     )
+    keyword_setup(model, analysis, float(t0), prepared=prepared)
 
 
 def mixed(
@@ -429,71 +487,38 @@ def mixed(
         ModelError: ``linear_solver="sparse"`` for a problem the sparse path cannot solve
             (see above), or a bad option.
     """
-    case = mixed_case(
-        model,
-        t,
-        prescribed=prescribed,
-        unknown=unknown,
-        solver=solver,
-        independent=independent,
-        method=method,
-        rtol=rtol,
-        atol=atol,
-        dt=dt,
-        q0=q0,
-        qd0=qd0,
-        hold=hold,
-        linear_solver=linear_solver,
-        energy_tol=energy_tol,
-        prepared=prepared,
-        **options,
-    )
-    return simulate(case, progress)
-
-
-def mixed_case(
-    model: Model,
-    t,
-    *,
-    prescribed,
-    unknown,
-    solver: str = "augmented",
-    independent=None,
-    method: str | IntegratorOptions = "projection",
-    rtol: float | None = None,
-    atol: float | None = None,
-    dt: float | None = None,
-    q0=None,
-    qd0=None,
-    hold=(),
-    linear_solver: str | LinearSolver = "auto",
-    energy_tol: float | str | None = ENERGY_TOL,
-    prepared: Prepared | None = None,
-    **options,
-) -> Case:
-    """The set-up of a mixed run (:func:`mixed`'s arguments but ``progress``): its checked
-    options, solvability, consistent start and equations, not yet integrated."""
     ts = output_times(t)
-    opts, recorded = run_options(method, ts, dict(options, rtol=rtol, atol=atol, dt=dt), energy_tol)
-    refuse_friction_in(model, opts.method)
-    problem, q, qd, prescribed = _setup(
-        model,
-        float(ts[0]),
-        prescribed,
-        unknown,
-        solver,
-        independent,
-        opts.method,
-        q0,
-        qd0,
-        hold,
-        linear_solver,
-        prepared,
+    analysis, recorded = Mixed._from_keywords(
+        ts,
+        dict(
+            prescribed=prescribed,
+            unknown=unknown,
+            solver=solver,
+            independent=independent,
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            dt=dt,
+            q0=q0,
+            qd0=qd0,
+            hold=hold,
+            linear_solver=linear_solver,
+            energy_tol=energy_tol,
+            **options,
+        ),
     )
-    stats = dict(
-        solver=solver,
-        independent=tuple(independent or ()),
-        prescribed=tuple(d.name for d in prescribed),
-        collocated=bool(problem.collocated),
-    )
-    return Case("mixed", problem, ts, q, qd, opts, len(model.drivers), energy_tol, recorded, stats)
+    setup = keyword_setup(model, analysis, float(ts[0]), recorded, prepared)
+    return analysis._run(setup, ts, progress)
+
+
+def mixed_case(model: Model, t, **kwargs) -> Case:
+    """The set-up of a mixed run from :func:`mixed`'s keywords but ``progress``, not yet
+    integrated (for the model-file runner's programs prepared ahead; ``prepared=`` taken as
+    :func:`mixed` takes it, without the warning)."""
+    ts = output_times(t)
+    analysis, recorded = Mixed._from_keywords(ts, kwargs)
+    setup = analysis._prepare(model, float(ts[0]), kwargs.get("prepared"))
+    return analysis._case(dataclasses.replace(setup, recorded=recorded), ts)
+
+
+__all__ = ["Mixed", "bind_prescribed", "check_mixed", "mixed", "prescribe"]

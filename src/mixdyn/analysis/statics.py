@@ -34,6 +34,7 @@ the model's units: the same physical quantity in m and in mm (converted like a t
 from __future__ import annotations
 
 import dataclasses
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -42,9 +43,10 @@ import numpy as np
 
 from ..equations import applied_forces
 from ..equations._friction import check_supported
-from ..errors import ConvergenceError
+from ..errors import ConvergenceError, ModelError
 from ..linalg import DenseSolver, LinearSolver
 from ..model import Model
+from . import _setup
 from ._assembly import length_scale
 from ._prepare import prepare_kinematic
 from ._reactions import (
@@ -54,6 +56,7 @@ from ._reactions import (
     reaction_columns,
     reaction_kinds,
 )
+from ._setup import Setup
 from .result import Result
 
 
@@ -106,6 +109,68 @@ def _jacobian(model, c, t, x):
     return jax.jacfwd(lambda y: _residual_of(model, c, t, y))(x)
 
 
+def _positive(option: str):
+    def convert(value):
+        try:
+            ok = not isinstance(value, bool) and np.isfinite(float(value)) and float(value) > 0
+        except (TypeError, ValueError):
+            ok = False
+        if not ok:
+            raise ModelError(f"{option} must be a finite number > 0, got {value!r}", option)
+        return float(value)
+
+    return convert
+
+
+class _Equilibria(_setup.Analysis):
+    """The options that static and quasi-static analyses share (see either)."""
+
+    _: dataclasses.KW_ONLY
+    q0: np.ndarray | None = eqx.field(default=None, converter=_setup.start_positions)
+    hold: tuple[str, ...] = eqx.field(default=(), converter=_setup.held)
+    tol: float = eqx.field(default=1e-10, converter=_positive("tol"))
+    max_iter: int = eqx.field(default=100, converter=_setup.checked("max_iter"))
+
+    def _equilibrium_start(self, model: Model, t0: float):
+        """The assembled start of an equilibrium at ``t0`` (dense path; the drivers'
+        balance not required: free degrees of freedom settle)."""
+        check_supported(model, "statics (an equilibrium with friction is a set, not a point)")
+        return prepare_kinematic(
+            model, t0, q0=self.q0, hold=self.hold, balanced=False, linear_solver=DenseSolver()
+        )
+
+
+class Static(_Equilibria):
+    """Statics as a value: the equilibrium of a mechanism under its loads at one time, and its
+    stability (``md.statics``' options, for :func:`~mixdyn.prepare`). Its run takes the one
+    time ``t0`` of its set-up and gives a :class:`~mixdyn.Statics`.
+
+    Attributes:
+        q0: (nq,) rough start [model units], or None (the bodies' ``q0``); the equilibrium
+            found is the one Newton's method reaches from there.
+        hold: coordinates held while the start is assembled (not at the equilibrium).
+        tol: relative tolerance on the force and constraint residuals [-] (default 1e-10).
+        max_iter: Newton iterations at most, 1 to 1000 (default 100).
+    """
+
+    name: ClassVar[str] = "statics"
+
+    def _prepare(self, model: Model, t0: float, given=None) -> Setup:
+        return Setup(self, model, t0, self._equilibrium_start(model, t0))
+
+    def _run(self, setup: Setup, t, progress=None) -> Statics:
+        _setup.no_progress(self, progress)
+        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        if ts.shape != (1,):
+            raise ModelError(
+                f"a static analysis is at one time, its set-up's t0 = {setup.t0:g}; got "
+                f"{ts.size} times (a quasi-static analysis follows many: QuasiStatic)",
+                "t",
+            )
+        _setup.check_start(setup, ts)
+        return _equilibrium(setup)
+
+
 def statics(
     model: Model,
     *,
@@ -135,10 +200,15 @@ def statics(
         ConvergenceError: no equilibrium reached (a load no position can balance, e.g. an
             unbalanced constant force on a free slider).
     """
-    check_supported(model, "statics (an equilibrium with friction is a set, not a point)")
-    prep = prepare_kinematic(
-        model, float(t), q0=q0, hold=hold, balanced=False, linear_solver=DenseSolver()
-    )
+    analysis = Static(q0=q0, hold=hold, tol=tol, max_iter=max_iter)
+    return analysis._run(analysis._prepare(model, float(t)), float(t))
+
+
+def _equilibrium(setup: Setup) -> Statics:
+    """Newton's method on ``R(q, lambda) = 0`` from the set-up's start at its time ``t0``,
+    then the stability (module docstring)."""
+    analysis, model, prep, t = setup.analysis, setup.model, setup.start, setup.t0
+    tol, max_iter = analysis.tol, analysis.max_iter
     c = prep.constraints(independent_rows_only=True)
     nq, m = model.nq, c.m
     tj = jnp.asarray(float(t))
@@ -267,6 +337,67 @@ def _result(model, c, prep, t, q, lam) -> Result:
     )
 
 
+class QuasiStatic(_Equilibria):
+    """Quasi-statics as a value: the equilibria at the output times, each from the one
+    before (``md.quasi_static``'s options, for :func:`~mixdyn.prepare` and the studies). Its
+    set-up holds the first equilibrium's assembled start.
+
+    Attributes:
+        q0: (nq,) rough start of the first equilibrium [model units], or None.
+        hold: coordinates held while the first start is assembled.
+        tol: relative tolerance on the force and constraint residuals [-] (default 1e-10).
+        max_iter: Newton iterations at most per time, 1 to 1000 (default 100).
+    """
+
+    name: ClassVar[str] = "quasi-static"
+
+    def _prepare(self, model: Model, t0: float, given=None) -> Setup:
+        return Setup(self, model, t0, self._equilibrium_start(model, t0))
+
+    def _run(self, setup: Setup, t, progress=None) -> Result:
+        _setup.no_progress(self, progress)
+        model = setup.model
+        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        _setup.check_start(setup, ts)
+        rows, smallest, iters = [], [], 0
+        for k, tk in enumerate(ts):
+            if k == 0:
+                eq = _equilibrium(setup)
+            else:
+                nxt = Static(q0=eq.q, tol=self.tol, max_iter=self.max_iter)
+                eq = _equilibrium(nxt._prepare(model, float(tk)))
+            rows.append(eq.result)
+            smallest.append(float(eq.eigenvalues[0]) if eq.eigenvalues.size else float("nan"))
+            iters += eq.iterations
+        first_row = rows[0]
+        extra = {c: np.concatenate([r.extra[c] for r in rows]) for c in first_row.extra}
+        zeros = np.zeros((len(ts), model.nq))
+        stable = [bool(np.isnan(e) or e > 0) for e in smallest]
+        return Result(
+            kind="statics",
+            model=model,
+            t=ts,
+            q=np.concatenate([r.q for r in rows]),
+            qd=zeros,
+            qdd=zeros,
+            extra=extra,
+            kinds=dict(first_row.kinds),
+            stats={
+                "newton_iterations": iters,
+                "min_eigenvalue": smallest,
+                "min_eigenvalue_unit": model.units.unit("energy"),
+                "stable": all(stable),
+                "unstable_at": [float(tk) for tk, s in zip(ts, stable, strict=True) if not s],
+            },
+        )
+
+    @classmethod
+    def _from_keywords(cls, t, kwargs: dict):
+        # assemble_first and linear_solver: quasi_static's, without effect
+        skip = ("prepared", "assemble_first", "linear_solver")
+        return cls(**{k: v for k, v in kwargs.items() if k not in skip}), None
+
+
 def quasi_static(
     model: Model,
     t,
@@ -288,36 +419,8 @@ def quasi_static(
     ``assemble_first`` and ``linear_solver`` are accepted for the model-file runner's sake.)"""
     del assemble_first, linear_solver
     ts = np.atleast_1d(np.asarray(t, dtype=float))
-    rows, smallest, iters = [], [], 0
-    q = q0
-    for k, tk in enumerate(ts):
-        eq = statics(model, t=float(tk), q0=q, hold=hold if k == 0 else (), tol=tol,
-                     max_iter=max_iter)  # fmt: skip
-        rows.append(eq.result)
-        smallest.append(float(eq.eigenvalues[0]) if eq.eigenvalues.size else float("nan"))
-        iters += eq.iterations
-        q = eq.q
-    first = rows[0]
-    extra = {c: np.concatenate([r.extra[c] for r in rows]) for c in first.extra}
-    zeros = np.zeros((len(ts), model.nq))
-    stable = [bool(np.isnan(e) or e > 0) for e in smallest]
-    return Result(
-        kind="statics",
-        model=model,
-        t=ts,
-        q=np.concatenate([r.q for r in rows]),
-        qd=zeros,
-        qdd=zeros,
-        extra=extra,
-        kinds=dict(first.kinds),
-        stats={
-            "newton_iterations": iters,
-            "min_eigenvalue": smallest,
-            "min_eigenvalue_unit": model.units.unit("energy"),
-            "stable": all(stable),
-            "unstable_at": [float(tk) for tk, s in zip(ts, stable, strict=True) if not s],
-        },
-    )
+    analysis = QuasiStatic(q0=q0, hold=hold, tol=tol, max_iter=max_iter)
+    return analysis._run(analysis._prepare(model, float(ts[0])), ts)
 
 
-__all__ = ["Statics", "quasi_static", "statics"]
+__all__ = ["QuasiStatic", "Static", "Statics", "quasi_static", "statics"]
