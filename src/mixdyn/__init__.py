@@ -36,7 +36,7 @@ if _configure_cache() is not None and (_tag := _command.job_tag(_sys.argv)) is n
 
     _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 
-from . import analyses, errors  # noqa: E402
+from . import analyses, errors, paths  # noqa: E402
 from .analysis import (  # noqa: E402
     Analysis,
     Assembly,
@@ -176,6 +176,7 @@ __all__ = [
     "latin_hypercube",
     "inverse",
     "mixed",
+    "paths",
     "prepare",
     "prescribe",
     "run",

@@ -32,9 +32,9 @@ import pathlib
 
 import numpy as np
 
+from .. import paths
 from ..analysis import Result
 from ..analysis.fit import _RATES, Fit
-from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
 from ..io import schema as s
 from . import setup
@@ -180,7 +180,7 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
     r: s.IdentifyRunSpec = plan.spec
     analysis, model, kwargs = setup.call(runner, plan.base, {}, checked=False)
     params = list(r.fit)
-    nominal = [float(_leaf_getter(model, p)[0](model)) for p in params]
+    nominal = [float(paths.getter(model, p)[0](model)) for p in params]
     x0 = [plan.start.get(p, v) for p, v in zip(params, nominal, strict=True)]
     try:
         result = fit(
@@ -199,7 +199,7 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
         runner.fail(plan.path, str(e), "")
     fitted = model
     for p, v in zip(params, result.values, strict=True):
-        get, _ = _leaf_getter(fitted, p)
+        get, _ = paths.getter(fitted, p)
         fitted = eqx.tree_at(get, fitted, jnp.asarray(float(v)))
     run = KINDS[analysis].analysis(fitted, plan.times, **kwargs)
     return FileFit(plan, result, run)

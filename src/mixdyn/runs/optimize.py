@@ -27,10 +27,10 @@ import dataclasses
 
 import numpy as np
 
+from .. import paths
 from ..analysis import Result
 from ..analysis.fit import _RATES
 from ..analysis.optimize import Optimum, reduce
-from ..analysis.sweep import _leaf_getter
 from ..errors import ModelError
 from ..io import schema as s
 from . import setup
@@ -131,7 +131,7 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
 
     start = None
     if plan.start:
-        nominal = [float(_leaf_getter(model, p)[0](model)) for p in params]
+        nominal = [float(paths.getter(model, p)[0](model)) for p in params]
         start = [
             plan.start.get(p, float(np.clip(v, *plan.bounds[p])))
             for p, v in zip(params, nominal, strict=True)
@@ -162,7 +162,7 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
     def at(values):
         m = model
         for p, v in zip(params, values, strict=True):
-            get, _ = _leaf_getter(m, p)
+            get, _ = paths.getter(m, p)
             m = eqx.tree_at(get, m, jnp.asarray(float(v)))
         return KINDS[analysis].analysis(m, plan.times, **kwargs)
 

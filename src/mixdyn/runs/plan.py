@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 
 from .. import model as m
-from ..analysis.sweep import _leaf_getter
+from .. import paths
 from ..errors import ModelError
 from ..io import schema as s
 from ..io._errors import FileError
@@ -144,7 +144,7 @@ def model_number(runner, name: str, path, verb: str) -> str | None:
     """Check that ``name`` is one number of a body or force element (what a fit or an
     optimization may change); its kind of quantity (:func:`number_kind`)."""
     try:
-        _, shape = _leaf_getter(runner.model, name)
+        _, shape = paths.getter(runner.model, name)
     except ModelError as e:
         runner.fail(path, str(e.args[0]), "name a number of a body or force element")
     owners = {b.name for b in runner.model.bodies} | {f.name for f in runner.model.forces}

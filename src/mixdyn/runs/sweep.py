@@ -39,7 +39,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..analysis.sweep import Sweep, _leaf_getter, grid, latin_hypercube, run_members
+from .. import paths
+from ..analysis.sweep import Sweep, grid, latin_hypercube, run_members
 from ..errors import MixdynError, ModelError
 from ..io import schema as s
 from ..io._errors import FileError
@@ -241,7 +242,7 @@ def _check_name(runner: Runner, name: str, path) -> str | None:
             )
         return None
     try:
-        _, shape = _leaf_getter(runner.model, name)
+        _, shape = paths.getter(runner.model, name)
     except ModelError as e:
         runner.fail(path, str(e.args[0]), "name a number, e.g. slider.mass, or a file parameter")
     if shape != ():
@@ -268,7 +269,7 @@ def _member_runner(runner: Runner, plan: SweepPlan, i: int) -> Runner:
         model = runner.model
     for k, v in plan.values.items():
         if "." in k:
-            get, _ = _leaf_getter(model, k)
+            get, _ = paths.getter(model, k)
             model = eqx.tree_at(get, model, jnp.asarray(float(v[i])))
     if not params:
         return Runner.member(spec, model, plan.base.name, like=runner)
