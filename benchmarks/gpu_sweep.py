@@ -52,7 +52,8 @@ def main() -> None:
     import mixdyn as md
     from fixtures import paper_under_loads
     from mixdyn.analysis._simulate import finish, integrate
-    from mixdyn.analysis.sweep import ANALYSES, _integrate_batch_jit, _leaf_getter, for_batch
+    from mixdyn.analysis.forward import forward_case
+    from mixdyn.analysis.sweep import _integrate_batch_jit, for_batch
 
     if a.variant == "nofallback":
         import mixdyn.equations._jacobian as jac
@@ -66,9 +67,10 @@ def main() -> None:
     if a.method == "baumgarte":
         opts = dict(method="baumgarte", dt=1e-3)
     model = paper_under_loads()
-    get_m, _ = _leaf_getter(model, "slider.mass")
-    get_a, _ = _leaf_getter(model, "F1.law.amplitude")
-    base = ANALYSES["forward"](model, ts, **opts)
+    get_m, _ = md.paths.getter(model, "slider.mass")
+    get_a, _ = md.paths.getter(model, "F1.law.amplitude")
+    base = forward_case(model, ts, **opts)
+    value = md.analyses.Forward(method=base.options)
     argument = base.options.as_argument()
 
     def members(n):
@@ -97,7 +99,7 @@ def main() -> None:
     for i in range(n_check):
         mi = eqx.tree_at(lambda m: (get_m(m), get_a(m)), model, (mass[i], amp[i]))
         t0 = time.perf_counter()
-        case = ANALYSES["forward"](mi, ts, **opts)
+        case = forward_case(mi, ts, **opts)
         t1 = time.perf_counter()
         traj = jax.block_until_ready(integrate(case))
         t2 = time.perf_counter()
@@ -142,8 +144,8 @@ def main() -> None:
         for n in a.full:
             mass, amp = members(n)
             vary = {"slider.mass": mass, "F1.law.amplitude": amp}
-            md.sweep(model, ts, vary=vary, batch_size=n, **opts)
-            sw = md.sweep(model, ts, vary=vary, batch_size=n, **opts)
+            md.sweep(model, ts, vary=vary, batch_size=n, analysis=value)
+            sw = md.sweep(model, ts, vary=vary, batch_size=n, analysis=value)
             sec = sw.seconds
             print(
                 f"| {n} | {sec['total']:.2f} | {sec['setup']:.2f} | {sec['integration']:.2f} "

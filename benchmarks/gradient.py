@@ -48,9 +48,8 @@ def main() -> None:
     ap.add_argument("--max-steps", type=int, default=1_000_000)
     a = ap.parse_args()
     model = paper_under_loads()
-    f, th0 = md.differentiable(
-        model, np.linspace(0.0, 2.0, 201), PARAMS, rtol=1e-8, max_steps=a.max_steps
-    )
+    run = md.analyses.Forward(method=md.Projection(rtol=1e-8, max_steps=a.max_steps))
+    f, th0 = md.differentiable(model, np.linspace(0.0, 2.0, 201), PARAMS, analysis=run)
     ix = 3 * 3  # the slider's x
 
     def objective(th):

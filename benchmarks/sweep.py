@@ -55,16 +55,22 @@ def main() -> None:
     }
     members = vary_models(m, vary)
     opts = dict(rtol=1e-8)
+    run = md.analyses.Forward(method=md.Projection(rtol=1e-8))
     single = best(lambda: [md.forward(x, ts, **opts) for x in members], a.repeat)
     rows = [("single runs (peer)", single)]
     rows.append(
-        ("sweep, member by member", best(lambda: md.sweep(m, ts, vary=vary, **opts), a.repeat))
+        (
+            "sweep, member by member",
+            best(lambda: md.sweep(m, ts, vary=vary, analysis=run), a.repeat),
+        )
     )
     for bs in sorted({1, 8, a.members}):
         rows.append(
             (
                 f"sweep, one program, batch_size {bs}",
-                best(lambda bs=bs: md.sweep(m, ts, vary=vary, batch_size=bs, **opts), a.repeat),
+                best(
+                    lambda bs=bs: md.sweep(m, ts, vary=vary, batch_size=bs, analysis=run), a.repeat
+                ),
             )
         )
     if a.cluster:
@@ -78,7 +84,9 @@ def main() -> None:
                 ) as cl,
                 Client(cl) as c,
             ):
-                per[n] = best(lambda c=c: md.sweep(m, ts, vary=vary, client=c, **opts), a.repeat)
+                per[n] = best(
+                    lambda c=c: md.sweep(m, ts, vary=vary, client=c, analysis=run), a.repeat
+                )
                 rows.append((f"Dask local cluster, {n} worker(s)", per[n]))
     print(f"{a.members} members, {os.cpu_count()} cores, best of {a.repeat}")
     print("| way | ms per member | ratio to single runs |")

@@ -85,7 +85,6 @@ def identify(seed: int = 0, start=(1.3, 0.7, 1.4, 0.6)):
     deviations, truth, reduced chi-square)``, each (4,) but the last."""
     t, measured = record(seed)
     model = build_model()
-    opts = dict(rtol=1e-10, atol=1e-12)
     result = md.fit(
         model,
         t,
@@ -93,7 +92,7 @@ def identify(seed: int = 0, start=(1.3, 0.7, 1.4, 0.6)):
         PARAMS,
         noise=dict(zip(measured, NOISE, strict=True)),
         start=TRUE * np.asarray(start),
-        **opts,
+        analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10, atol=1e-12)),
     )
     return result.values, result.deviations, TRUE, result.chi2
 

@@ -77,13 +77,14 @@ def test_a_second_sweep_with_other_numbers_traces_nothing(paper):
 def _count_setups(monkeypatch, analysis: str) -> list:
     """A list that grows by one at each set-up of a member of a sweep of ``analysis``."""
     sweep_module = importlib.import_module("mixdyn.analysis.sweep")
-    calls, real = [], sweep_module.ANALYSES[analysis]
+    calls, real = [], sweep_module.prepare
 
-    def counting(*a, **k):
-        calls.append(1)
-        return real(*a, **k)
+    def counting(model, value, **k):
+        if value.name == analysis:
+            calls.append(1)
+        return real(model, value, **k)
 
-    monkeypatch.setitem(sweep_module.ANALYSES, analysis, counting)
+    monkeypatch.setattr(sweep_module, "prepare", counting)
     return calls
 
 

@@ -1,9 +1,10 @@
 """Identification: numbers of a mechanism fitted to a measured motion (weighted least squares).
 
-:func:`fit` sets the run up once (:func:`~.gradients.differentiable`, forward-mode
-derivatives), then minimizes ``sum_k ((y_k(theta) - measured_k) / sigma_k)**2`` over the
-measured columns (body coordinates ``slider.x``, ``crank.phi``, or velocities ``slider.vx``,
-``crank.omega``) at the output times, with scipy's trust-region least squares and the
+:func:`fit` sets the run of an analysis value up once
+(:func:`~.gradients.differentiable`, forward-mode derivatives), then minimizes
+``sum_k ((y_k(theta) - measured_k) / sigma_k)**2`` over the measured columns (body
+coordinates ``slider.x``, ``crank.phi``, or velocities ``slider.vx``, ``crank.omega``) at the
+output times, with scipy's trust-region least squares and the
 Jacobian ``d y / d theta`` from ``jax.jacfwd`` through the integrator. The covariance of the
 estimate is ``(J^T J)^-1`` of the weighted residuals at the optimum, its square-root diagonal
 the standard deviations; with the right noise the reduced chi-square is near 1.
@@ -19,6 +20,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, ModelError
 from ..model import Model
+from ._setup import Analysis
 
 #: Velocity column suffixes and the coordinate each is the rate of.
 _RATES = {"vx": "x", "vy": "y", "omega": "phi"}
@@ -103,7 +105,7 @@ def fit(
     noise: Mapping[str, float] | float = 1.0,
     start: Sequence[float] | None = None,
     bounds: Mapping[str, tuple[float, float]] | None = None,
-    analysis: str = "forward",
+    analysis: Analysis | str | None = None,
     xtol: float = 1e-10,
     max_evaluations: int = 200,
     **kwargs,
@@ -121,10 +123,14 @@ def fit(
             all), the weights of the residuals and the scale of the deviations.
         start: (P,) the first guess (default: the model's numbers).
         bounds: path -> ``(low, high)``: the fit stays within (default: unbounded).
-        analysis: ``"forward"`` (default) or ``"mixed"``.
+        analysis: the analysis value (:mod:`mixdyn.analyses`): ``Forward(...)`` (default:
+            ``Forward()``) or ``Mixed(...)``, e.g.
+            ``analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10))``.
         xtol: relative change of the numbers at which the fit stops.
         max_evaluations: runs at most.
-        **kwargs: the analysis' keywords (``rtol``, ``atol``, ``method``, ``q0``, ``hold``...).
+        **kwargs: deprecated (a DeprecationWarning names the value to give instead): the
+            analysis' keywords (``rtol``, ``atol``, ``method``, ``q0``, ``hold``...) with
+            ``analysis`` an analysis' name (``"forward"``, ``"mixed"``).
 
     Returns:
         A :class:`Fit`.
@@ -138,6 +144,7 @@ def fit(
     import jax.numpy as jnp
     from scipy.optimize import least_squares
 
+    from ._keywords import study_analysis
     from .gradients import differentiable
 
     ts = np.asarray(t, dtype=float)
@@ -151,9 +158,8 @@ def fit(
         if s is None or not np.isfinite(float(s)) or float(s) <= 0:
             raise ModelError(f"the noise must be a number > 0, got {s!r}", f"noise of {col!r}")
         sigma[col] = float(s)
-    f, theta0 = differentiable(
-        model, ts, params, analysis=analysis, derivatives="forward", **kwargs
-    )
+    value, _ = study_analysis("md.fit", analysis, ts, kwargs)
+    f, theta0 = differentiable(model, ts, params, analysis=value, derivatives="forward")
     x0 = theta0 if start is None else np.asarray(start, dtype=float)
     if x0.shape != theta0.shape or not np.all(np.isfinite(x0)):
         raise ModelError(f"start must be {len(params)} finite numbers, got {start!r}", "start")

@@ -17,7 +17,7 @@ when the function is made:
 - ``derivatives="forward"``: ``jax.jvp``, ``jax.jacfwd`` (diffrax's ``ForwardMode``); for
   many outputs of few numbers (a least-squares fit's Jacobian).
 
-An inverse run (``analysis="inverse"``) is differentiable too: its motion comes from the
+An inverse run (``analysis=Inverse(...)``) is differentiable too: its motion comes from the
 drivers alone (the kinematic analysis, made once: the numbers of bodies and forces do not move
 it), and ``f(theta)`` gives the reactions and driver efforts of that motion as functions of
 the numbers (the multipliers' solve, per output time, traced). A kinematic run depends on no
@@ -47,12 +47,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import paths
 from ..errors import ModelError
 from ..model import Model
-from .forward import forward_case
+from ._keywords import study_analysis
+from ._setup import Analysis, Setup
+from .forward import Forward
 from .integrators import INTEGRATORS
-from .mixed import mixed_case
-from .sweep import _leaf_getter
+from .inverse import Inverse
+from .kinematic import Kinematic, output_times
+from .mixed import Mixed
 
 
 @jax.custom_jvp
@@ -79,24 +83,12 @@ def _nan_if_failed_jvp(primals, tangents):
     return nan_if_failed(ok, y), dy * jnp.where(ok, 1.0, jnp.nan)
 
 
-#: The dynamic analyses :func:`differentiable` sets up (and ``"inverse"``).
-ANALYSES = {"forward": forward_case, "mixed": mixed_case}
-
-
-def _owner_group(model: Model, head: str) -> str:
-    if any(b.name == head for b in model.bodies):
-        return "bodies"
-    if any(f.name == head for f in model.forces):
-        return "forces"
-    return "joints or drivers"
-
-
 def differentiable(
     model: Model,
     t,
     params: Sequence[str],
     *,
-    analysis: str = "forward",
+    analysis: Analysis | str | None = None,
     derivatives: str = "reverse",
     **kwargs,
 ) -> tuple[Callable[[jax.Array], dict[str, jax.Array]], np.ndarray]:
@@ -106,33 +98,39 @@ def differentiable(
         model: the mechanism at the nominal numbers (where the run is set up).
         t: (N,) output times [time].
         params: paths of scalar numbers of bodies or force elements (``"slider.mass"``,
-            ``"crank.inertia"``, ``"F1.law.amplitude"``, ``"spring.stiffness"``), model
-            units. Numbers of joints and drivers (they shape the constraints and the start)
-            are refused.
-        analysis: ``"forward"`` (default), ``"mixed"`` or ``"inverse"``.
+            ``"crank.inertia"``, ``"F1.law.amplitude"``, ``"spring.stiffness"``: see
+            :mod:`mixdyn.paths`), model units. Numbers of joints and drivers (they shape the
+            constraints and the start) are refused.
+        analysis: the analysis value (:mod:`mixdyn.analyses`): ``Forward(...)`` (default:
+            ``Forward()``), ``Mixed(...)`` or ``Inverse(...)``, e.g.
+            ``analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10))``.
         derivatives: ``"reverse"`` (default: ``jax.grad``, ``jax.jacrev``) or ``"forward"``
             (``jax.jacfwd``, ``jax.jvp``).
-        **kwargs: the analysis' keywords (``method``, ``rtol``, ``prescribed``...).
+        **kwargs: deprecated (a DeprecationWarning names the value to give instead): the
+            analysis' keywords (``method``, ``rtol``, ``prescribed``...) with ``analysis`` an
+            analysis' name (``"forward"``, ``"mixed"`` or ``"inverse"``).
 
     Returns:
         ``(f, theta0)``: ``f(theta)`` with ``theta`` (P,) gives ``{"q": (N, nq), "qd": (N, nq),
         "w": (N, 2)}`` (positions, velocities and accumulated works at the output times,
-        model units; NaN if the run failed, and so are their derivatives); for
-        ``"inverse"`` ``{"q", "qd", "qdd"}`` (the prescribed motion) and every reaction and
+        model units; NaN if the run failed, and so are their derivatives); for an inverse
+        run ``{"q", "qd", "qdd"}`` (the prescribed motion) and every reaction and
         driver-effort column by name, each (N,)
         (``"B.Fx"``, ``"motor"``, as in :func:`~mixdyn.inverse`'s result); ``theta0`` (P,)
         the nominal numbers.
+
+    Raises:
+        ModelError: an analysis that is not differentiable (kinematic, static, a
+            generalized-alpha run), a bad path, or a number of a joint or driver.
     """
-    if analysis == "kinematic":
+    value, _ = study_analysis("md.differentiable", analysis, t, kwargs)
+    make = _DIFFERENTIABLE.get(type(value))
+    if make is None:
         raise ModelError(
-            "a kinematic run depends on no number of a body or force (only on the geometry "
-            "and the drivers): nothing to differentiate; use analysis='inverse' for efforts "
-            "and reactions",
+            f"a {value.name} analysis is not differentiable here; use Forward(...), "
+            "Mixed(...) or Inverse(...)",
             "analysis",
         )
-    if analysis not in (*ANALYSES, "inverse"):
-        known = ", ".join([*ANALYSES, "inverse"])
-        raise ModelError(f"unknown analysis {analysis!r}; choose from {known}")
     if derivatives not in ("reverse", "forward"):
         raise ModelError(
             f"derivatives must be 'reverse' or 'forward', got {derivatives!r}", "derivatives"
@@ -141,9 +139,8 @@ def differentiable(
         raise ModelError("give params as a list of paths, e.g. ['slider.mass']", "params")
     getters, theta0 = [], []
     for path in params:
-        get, shape = _leaf_getter(model, path)
-        group = _owner_group(model, path.partition(".")[0])
-        if group not in ("bodies", "forces"):
+        get, shape = paths.getter(model, path)
+        if paths.group(model, path) not in ("bodies", "forces"):
             raise ModelError(
                 "a joint's or driver's numbers shape the constraints and the consistent start: "
                 "not differentiable here; name a number of a body or a force element",
@@ -153,15 +150,30 @@ def differentiable(
             raise ModelError(f"a scalar number is needed, this one has shape {shape}", path)
         getters.append(get)
         theta0.append(float(get(model)))
-    if analysis == "inverse":
-        return _inverse(model, t, getters, kwargs), np.asarray(theta0)
-    case = ANALYSES[analysis](model, t, **kwargs)
-    if case.options.method == "generalized-alpha":
+    return make(value, model, t, getters, derivatives), np.asarray(theta0)
+
+
+def _kinematic(value: Kinematic, model, t, getters, derivatives):
+    raise ModelError(
+        "a kinematic run depends on no number of a body or force (only on the geometry "
+        "and the drivers): nothing to differentiate; use analysis=Inverse(...) for efforts "
+        "and reactions",
+        "analysis",
+    )
+
+
+def _integrated(value: Forward | Mixed, model: Model, t, getters, derivatives):
+    """``theta -> {"q", "qd", "w"}`` of a forward or mixed run: set up once, the integrator
+    traced (see the module's documentation)."""
+    if not value.method.differentiable:
         raise ModelError(
-            "generalized-alpha is not differentiable (its Newton iteration is a while_loop); "
-            "use method='projection', 'partitioning' or 'baumgarte'",
+            f"{value.method.method} is not differentiable (its Newton iteration is a "
+            "while_loop); use method='projection', 'partitioning' or 'baumgarte'",
             "method",
         )
+    ts = output_times(t)
+    setup: Setup = value._prepare(model, float(ts[0]))
+    case = value._case(setup, ts)
     integrate_one = INTEGRATORS[case.options.method]
     ts = jnp.asarray(case.ts, dtype=jnp.float64)
     options = case.options.as_argument()
@@ -178,27 +190,19 @@ def differentiable(
         ok = traj.status == 0
         return {k: nan_if_failed(ok, getattr(traj, k)) for k in ("q", "qd", "w")}
 
-    return f, np.asarray(theta0)
+    return f
 
 
-def _inverse(model: Model, t, getters, kwargs):
+def _inverse(value: Inverse, model: Model, t, getters, derivatives):
     """``theta -> columns`` of an inverse run: the kinematics made once, the multipliers'
     solve traced (see the module's documentation)."""
-    from ._prepare import prepare_kinematic
-    from ._problem import Problem
     from ._reactions import driver_efforts, reaction_columns
-    from ._simulate import _post_arrays, output_times, require_masses
-    from .kinematic import run_kinematic
+    from ._simulate import _post_arrays
 
     ts = output_times(t)
-    require_masses(model)
-    kw = dict(kwargs)
-    kw.pop("prepared", None)  # a check's set-up: made again here (the kinematics, once)
-    args = {k: kw.pop(k) for k in ("q0", "hold", "linear_solver") if k in kw}
-    assemble_first = kw.pop("assemble_first", True)
-    prep = prepare_kinematic(model, float(ts[0]), assemble_first=assemble_first, **args)
-    kin = run_kinematic(prep, ts, **kw)
-    problem = Problem(model, prep.constraints())
+    setup = value._prepare(model, float(ts[0]))
+    kin = value._kinematics(setup, ts)
+    problem = setup.problem
     Q, QD, QDD = (jnp.asarray(a) for a in (kin.q, kin.qd, kin.qdd))
     tj = jnp.asarray(ts)
     n_drivers = len(model.drivers)
@@ -220,4 +224,12 @@ def _inverse(model: Model, t, getters, kwargs):
     return f
 
 
-__all__ = ["differentiable"]
+#: The analyses :func:`differentiable` makes a function of, by class.
+_DIFFERENTIABLE = {
+    Forward: _integrated,
+    Mixed: _integrated,
+    Inverse: _inverse,
+    Kinematic: _kinematic,
+}
+
+__all__ = ["differentiable", "nan_if_failed"]

@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import ConvergenceError, ModelError
 from ..model import Model
+from ._setup import Analysis
 
 #: Reductions of a column over the output times, by name (JAX functions of (N,) arrays).
 REDUCTIONS = ("max", "min", "absmax", "mean", "rms", "first", "last", "range")
@@ -98,7 +99,7 @@ def optimize(
     bounds: Mapping[str, tuple[float, float]],
     *,
     start: Sequence[float] | None = None,
-    analysis: str = "forward",
+    analysis: Analysis | str | None = None,
     gtol: float = 1e-10,
     max_iterations: int = 500,
     **kwargs,
@@ -115,10 +116,14 @@ def optimize(
         params: paths of the numbers varied (``"spring.stiffness"``, ``"rod.mass"``).
         bounds: path -> ``(low, high)`` for every varied number.
         start: (P,) the first guess (default: the model's numbers, within the bounds).
-        analysis: ``"forward"`` (default), ``"mixed"`` or ``"inverse"``.
+        analysis: the analysis value (:mod:`mixdyn.analyses`): ``Forward(...)`` (default:
+            ``Forward()``), ``Mixed(...)`` or ``Inverse(...)``, e.g.
+            ``analysis=md.analyses.Inverse()``.
         gtol: L-BFGS-B's tolerance on the projected gradient.
         max_iterations: iterations at most.
-        **kwargs: the analysis' keywords (``rtol``, ``method``, ``q0``, ``hold``...).
+        **kwargs: deprecated (a DeprecationWarning names the value to give instead): the
+            analysis' keywords (``rtol``, ``method``, ``q0``, ``hold``...) with ``analysis``
+            an analysis' name (``"forward"``, ``"mixed"``, ``"inverse"``).
 
     Returns:
         An :class:`Optimum`.
@@ -132,10 +137,12 @@ def optimize(
     import jax.numpy as jnp
     from scipy.optimize import minimize
 
+    from ._keywords import study_analysis
     from .gradients import differentiable
 
     params = list(params)
-    f, theta0 = differentiable(model, t, params, analysis=analysis, **kwargs)
+    value, _ = study_analysis("md.optimize", analysis, t, kwargs)
+    f, theta0 = differentiable(model, t, params, analysis=value)
     lo_hi = np.zeros((len(params), 2))
     for k, p in enumerate(params):
         if p not in bounds:

@@ -1,10 +1,11 @@
 """Sweeps: one analysis over many variants of a mechanism, compiled once.
 
-Each member of a dynamic sweep (forward, mixed) is set up like a single run (its options
-checked, its start made consistent, its mobility analysed: :func:`~.forward.forward_case`,
-:func:`~.mixed.mixed_case`), or, where the varied numbers do not enter the start (masses,
-inertias, force numbers: :func:`shares_start`), takes the first member's set-up with its own
-numbers; all members share one structure, hence one compiled program.
+A sweep takes an analysis value (:mod:`mixdyn.analyses`). Each member of a forward or mixed
+sweep (an analysis that is integrated, :attr:`~._setup.Analysis.integrated`) is prepared like
+a single run (:func:`~._setup.prepare`: its start made consistent, its mobility analysed),
+or, where the varied numbers do not enter the start (masses, inertias, force numbers:
+:func:`shares_start`), takes the first member's set-up with its own numbers; all members share
+one structure, hence one compiled program.
 On a CPU the members are integrated one by one by the single run's program, from a thread
 per core (XLA runs without the GIL); with a ``batch_size`` (the default on an accelerator)
 the members' equations are stacked and one program integrates the whole batch
@@ -12,12 +13,13 @@ the members' equations are stacked and one program integrates the whole batch
 run: a failure or a broken energy balance is reported by member index and cause
 (:attr:`Sweep.errors`) without losing the others.
 
-A kinematic or inverse sweep runs the single analysis member by member (its programs are
-compiled for the first member and reused), from a thread per core.
+A kinematic, inverse or quasi-static sweep prepares and runs the single analysis member by
+member (its programs are compiled for the first member and reused), from a thread per core.
 
 Members differ in numbers only: masses, inertias, law and force parameters, start guesses
-(any float leaf of the model, named by a path such as ``"slider.mass"`` or
-``"F1.law.amplitude"``), or whole models built by the user with the same structure.
+(any float leaf of the model, named by a parameter path such as ``"slider.mass"`` or
+``"F1.law.amplitude"``: :mod:`mixdyn.paths`), or whole models built by the user with the same
+structure.
 """
 
 from __future__ import annotations
@@ -35,30 +37,19 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .. import paths
 from ..errors import MixdynError, ModelError
 from ..model import Model
 from ..runtime._programs import cached_jit
+from ._keywords import from_keywords, study_analysis
+from ._setup import Analysis, prepare, run
 from ._simulate import Case, _post_arrays, finish, integrate, require_masses
-from .forward import forward_case
 from .integrators import INTEGRATORS
-from .inverse import inverse
-from .kinematic import kinematic
-from .mixed import mixed_case
 from .result import Result
-from .statics import quasi_static
 
-#: The dynamic analyses a sweep runs, by name: their set-up functions.
-ANALYSES: dict[str, Callable[..., Case]] = {"forward": forward_case, "mixed": mixed_case}
-#: The analyses a sweep runs member by member, by name.
-MEMBERWISE: dict[str, Callable[..., Result]] = {
-    "kinematic": kinematic,
-    "inverse": inverse,
-    "statics": quasi_static,
-}
-
-#: Fields that hold geometry bound from body points: a number there would disagree with the
-#: bodies' points; vary the points by building the member models instead (``models=``).
-_BOUND = frozenset({"si", "sj", "s", "u", "points", "vectors"})
+#: The checked accessor of a parameter path, for the model-file layer's modules that read it
+#: here (the public one: :func:`mixdyn.paths.getter`).
+_leaf_getter = paths.getter
 
 
 def grid(**axes: Sequence[float]) -> dict[str, np.ndarray]:
@@ -92,72 +83,6 @@ def latin_hypercube(samples: int, seed: int = 0, **ranges: Sequence[float]) -> d
     return out
 
 
-def _locate(model: Model, head: str):
-    """A function ``m -> the body or element called head`` in a model of this structure."""
-    for k, b in enumerate(model.bodies):
-        if b.name == head:
-            return lambda m, k=k: m.bodies[k]
-    for group in ("joints", "drivers", "forces"):
-        for k, e in enumerate(getattr(model, group)):
-            if e.name == head:
-                return lambda m, g=group, k=k: getattr(m, g)[k]
-    known = [b.name for b in model.bodies]
-    known += [e.name for e in (*model.joints, *model.drivers, *model.forces)]
-    raise ModelError(
-        f"no body or element {head!r} to vary; known: {', '.join(known)}", f"vary {head!r}"
-    )
-
-
-def _leaf_getter(model: Model, path: str):
-    """``(m -> the array leaf at path, its shape)`` for a path ``"name.field[.field...]"``."""
-    head, _, rest = path.partition(".")
-    if not rest:
-        raise ModelError(
-            "a varied quantity is 'name.field' (a body's or element's field, e.g. "
-            "'slider.mass', 'F1.law.a')",
-            f"vary {path!r}",
-        )
-    locate = _locate(model, head)
-    obj = locate(model)
-    fields = rest.split(".")
-    for f in fields:
-        names = (
-            {x.name: x for x in dataclasses.fields(obj)} if dataclasses.is_dataclass(obj) else {}
-        )
-        if f in _BOUND:
-            raise ModelError(
-                f"{f!r} is geometry bound from the bodies' points; build the member models "
-                "with the points changed and pass them as models=[...]",
-                f"vary {path!r}",
-            )
-        if f not in names:
-            raise ModelError(
-                f"{type(obj).__name__} {getattr(obj, 'name', head)!r} has no field {f!r}; its "
-                f"fields: {', '.join(sorted(n for n in names if n != 'name'))}",
-                f"vary {path!r}",
-            )
-        if names[f].metadata.get("static", False):
-            raise ModelError(
-                f"field {f!r} is part of the structure (it decides the equations), not a "
-                "number; build the member models instead (models=[...])",
-                f"vary {path!r}",
-            )
-        obj = getattr(obj, f)
-    if not (eqx.is_array(obj) and jnp.issubdtype(jnp.asarray(obj).dtype, jnp.floating)):
-        raise ModelError(
-            f"{path!r} is not a number of the model ({type(obj).__name__}); name a numeric field",
-            f"vary {path!r}",
-        )
-
-    def get(m):
-        x = locate(m)
-        for f in fields:
-            x = getattr(x, f)
-        return x
-
-    return get, tuple(np.shape(obj))
-
-
 #: The bodies' fields that do not enter the kinematics (a forward run's start).
 _INERTIAL = ("mass", "inertia")
 
@@ -189,7 +114,7 @@ def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
         raise ModelError("nothing to vary: give vary={'body.mass': [...], ...}", "vary")
     getters, values, count = [], [], None
     for path, vals in vary.items():
-        get, shape = _leaf_getter(model, path)
+        get, shape = paths.getter(model, path)
         v = np.asarray(vals, dtype=float)
         if v.ndim == 0 or v.shape[1:] != shape:
             raise ModelError(
@@ -484,9 +409,10 @@ def _input_error(err: ModelError, i: int, describe: str) -> ModelError:
 def run_members(
     members: Sequence[Model],
     t,
-    analysis: str,
-    kwargs_of: Callable[[int], dict],
+    analysis: Analysis | str,
+    kwargs_of: Callable[[int], dict] | None = None,
     *,
+    recorded: dict | None = None,
     batch_size: int | None = None,
     threads: int | None = None,
     on_member: Callable[[int], None] | None = None,
@@ -500,8 +426,12 @@ def run_members(
     Args:
         members: the member models, of one structure.
         t: (N,) output times [time].
-        analysis: a key of :data:`ANALYSES` or :data:`MEMBERWISE`.
-        kwargs_of: member index -> the analysis' keywords for it.
+        analysis: the analysis value, the same for every member; or (the model-file
+            layer's spelling) an analysis' name (``"forward"``, ``"mixed"``, ``"kinematic"``,
+            ``"inverse"``, ``"statics"``) with ``kwargs_of(i)`` member ``i``'s keywords.
+        kwargs_of: member index -> the analysis' keywords for it (with a name only).
+        recorded: the integrator options the members' results record (``stats["options"]``;
+            default: the method object's own).
         batch_size, threads: as in :func:`sweep`.
         on_member: called with a member's index when it is done (from any thread).
         describe: member index -> words naming it in an error (its varied values).
@@ -520,12 +450,32 @@ def run_members(
             structures.
     """
     threads = threads or os.cpu_count() or 1
-    if analysis in MEMBERWISE:
-        run = MEMBERWISE[analysis]
+    if isinstance(analysis, Analysis):
+        values = [analysis] * len(members)
+        records: list[dict | None] = [recorded] * len(members)
+    else:  # the keyword spelling, member by member (its keywords may differ)
+        values, records = [], []
+        for i in range(len(members)):
+            try:
+                value, record = from_keywords(analysis, t, kwargs_of(i))
+            except ModelError as err:
+                raise _input_error(err, offset + i, describe(i)) from None
+            values.append(value)
+            records.append(record)
+    first_value = values[0] if values else analysis
+    t0 = float(np.atleast_1d(np.asarray(t, dtype=float))[0])
+
+    def setup_of(i: int):
+        setup = prepare(members[i], values[i], t0=t0)
+        if records[i] is not None:
+            setup = dataclasses.replace(setup, recorded=records[i])
+        return setup
+
+    if not first_value.integrated:
 
         def whole(i: int) -> Outcome:
             try:
-                return run(members[i], t, **kwargs_of(i)), None
+                return run(setup_of(i), t), None
             except ModelError as err:
                 raise _input_error(err, offset + i, describe(i)) from None
             except MixdynError as err:
@@ -533,23 +483,20 @@ def run_members(
 
         if batch_size is not None:
             raise ModelError(
-                f"a {analysis} sweep runs member by member: no batch_size", "batch_size"
+                f"a {first_value.name} sweep runs member by member: no batch_size", "batch_size"
             )
         return _in_threads(whole, list(range(len(members))), threads, on_member)
 
-    setup = ANALYSES[analysis]
     cases: dict[int, Case] = {}
     outcomes: dict[int, Outcome] = {}
     clock = time.perf_counter()
-    shared = same_start and analysis in ("forward", "mixed")
+    shared = same_start
     swap = None
+    first_setup = None
     for i, m in enumerate(members):
         try:
-            if shared and cases and analysis == "mixed":
-                # collocated forces (the partition solver takes only those): the solvability
-                # is structural, not a matter of the masses
-                p0 = cases[next(iter(cases))].problem
-                shared = bool(p0.collocated) or p0.solver == "partition"
+            if shared and first_setup is not None:
+                shared = first_value._shares_setup(first_setup)
             if shared and cases:
                 require_masses(m)
                 first = cases[next(iter(cases))]
@@ -560,7 +507,9 @@ def run_members(
                 if on_member is not None:
                     on_member(i)
             else:
-                cases[i] = setup(m, t, **kwargs_of(i))
+                setup = setup_of(i)
+                first_setup = first_setup or setup
+                cases[i] = values[i]._case(setup, t)
         except ModelError as err:
             raise _input_error(err, offset + i, describe(i)) from None
         except MixdynError as err:  # a start that cannot be made: this member fails
@@ -594,13 +543,13 @@ def run_members(
     return [outcomes[i] for i in range(len(members))]
 
 
-def _run_chunk(members: list[Model], t, analysis: str, kwargs: dict, first: int):
+def _run_chunk(members: list[Model], t, analysis: Analysis, recorded, first: int):
     """On a worker: set up and run ``members`` (the sweep's members ``first``...) member by
     member in one thread; an input error names its member."""
-    return run_members(members, t, analysis, lambda i: kwargs, threads=1, offset=first)
+    return run_members(members, t, analysis, recorded=recorded, threads=1, offset=first)
 
 
-def _on_cluster(client, members, t, analysis, kwargs, chunk_size, on_member=None):
+def _on_cluster(client, members, t, analysis, recorded, chunk_size, on_member=None):
     """The members run on a Dask ``client``'s workers, ``chunk_size`` at a time (default:
     four chunks per worker thread), gathered in order; ``on_member(i)`` for each member of a
     chunk as the chunk comes back."""
@@ -609,7 +558,7 @@ def _on_cluster(client, members, t, analysis, kwargs, chunk_size, on_member=None
         chunk_size = max(1, -(-len(members) // (4 * slots)))
     starts = range(0, len(members), chunk_size)
     futures = [
-        client.submit(_run_chunk, members[s : s + chunk_size], t, analysis, kwargs, s, pure=False)
+        client.submit(_run_chunk, members[s : s + chunk_size], t, analysis, recorded, s, pure=False)
         for s in starts
     ]
     if on_member is not None:
@@ -632,7 +581,7 @@ def sweep(
     *,
     vary: Mapping[str, Sequence] | None = None,
     models: Sequence[Model] | None = None,
-    analysis: str = "forward",
+    analysis: Analysis | str | None = None,
     batch_size: int | None = None,
     threads: int | None = None,
     client=None,
@@ -648,11 +597,14 @@ def sweep(
         vary: path -> values, one value (or row) per member, e.g.
             ``{"slider.mass": [1, 2, 3], "F1.law.a": [10, 10, 20]}`` (three members); a path
             names a body or element and a numeric field (model units), the fields of a law
-            included; :func:`grid` makes every combination of per-axis values,
-            :func:`latin_hypercube` a random spread over a box.
+            included (:mod:`mixdyn.paths`); :func:`grid` makes every combination of per-axis
+            values, :func:`latin_hypercube` a random spread over a box.
         models: instead of ``model`` and ``vary``: the member models themselves, all of one
             structure (the same bodies, elements and kinds of laws; any numbers).
-        analysis: ``"forward"`` (default), ``"mixed"``, ``"kinematic"`` or ``"inverse"``.
+        analysis: the analysis value, the same for every member (:mod:`mixdyn.analyses`):
+            ``Forward(...)`` (default: ``Forward()``), ``Mixed(...)``, ``Kinematic(...)``,
+            ``Inverse(...)`` or ``QuasiStatic(...)``, e.g.
+            ``analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10))``.
         batch_size: None (default): on a CPU member by member, each by the single run's
             program (compiled once), from ``threads`` threads; on an accelerator up to
             :data:`ACCELERATOR_BATCH` (32,768) members at a time. A
@@ -671,8 +623,10 @@ def sweep(
         on_member: called with a member's index as it is done (from the sweep's threads; on
             a cluster, for each member of a chunk as the chunk comes back), e.g. to advance a
             progress bar.
-        **kwargs: the analysis' own keywords (``method``, ``rtol``, ``prescribed``,
-            ``unknown``, ``q0``...), the same for every member (no ``progress``).
+        **kwargs: deprecated (a DeprecationWarning names the value to give instead): the
+            analysis' keywords (``method``, ``rtol``, ``prescribed``, ``unknown``, ``q0``...)
+            with ``analysis`` an analysis' name (``"forward"``, ``"mixed"``,
+            ``"kinematic"``, ``"inverse"`` or ``"statics"``, the quasi-static analysis).
 
     Returns:
         A :class:`Sweep`: per member a :class:`~mixdyn.Result` equal to the single run's, or
@@ -684,13 +638,11 @@ def sweep(
             structures, or a member's input error (named with the member's index).
     """
     started = time.perf_counter()
-    if analysis not in ANALYSES and analysis not in MEMBERWISE:
-        known = ", ".join([*ANALYSES, *MEMBERWISE])
-        raise ModelError(f"unknown analysis {analysis!r}; a sweep runs: {known}", "analysis")
     if "progress" in kwargs:
         raise ModelError("a sweep has no per-time progress callback (see on_member)", "progress")
     if t is None:
         raise ModelError("give the output times t", "t")
+    value, recorded = study_analysis("md.sweep", analysis, t, kwargs)
     if models is not None:
         if model is not None or vary is not None:
             raise ModelError("give either models=[...] or a model with vary=, not both", "models")
@@ -706,26 +658,27 @@ def sweep(
             for i in range(len(members))
         ]
     if client is not None:
-        if analysis in MEMBERWISE:
-            raise ModelError(f"a {analysis} sweep runs in this process: no client", "client")
-        outcomes = _on_cluster(client, members, t, analysis, kwargs, chunk_size, on_member)
+        if not value.integrated:
+            raise ModelError(f"a {value.name} sweep runs in this process: no client", "client")
+        outcomes = _on_cluster(client, members, t, value, recorded, chunk_size, on_member)
         results = [r for r, _ in outcomes]
         errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
         return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
     seconds: dict[str, float] = {}
+    same_start = (
+        models is None and value.integrated
+        and shares_start(model, vary or {}, value._start_forces())
+    )  # fmt: skip
     outcomes = run_members(
         members,
         t,
-        analysis,
-        lambda i: kwargs,
+        value,
+        recorded=recorded,
         batch_size=batch_size,
         threads=threads,
         on_member=on_member,
         describe=lambda i: _describe(params, i),
-        same_start=models is None
-        and shares_start(
-            model, vary or {}, kwargs.get("unknown", ()) if analysis == "mixed" else ()
-        ),
+        same_start=same_start,
         seconds=seconds,
     )
     results = [r for r, _ in outcomes]
@@ -745,8 +698,6 @@ def _rows(vary):
 
 
 __all__ = [
-    "ANALYSES",
-    "MEMBERWISE",
     "Sweep",
     "grid",
     "latin_hypercube",
