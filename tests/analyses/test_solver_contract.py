@@ -4,19 +4,21 @@
 return a ``Factor`` (``solve``, pivot ratio). Each is checked against NumPy's dense linear
 algebra (an independent implementation) on random well-conditioned systems on a real sparsity
 pattern, on a rank-deficient system (a parallelogram with a redundant link), on a
-near-singular one (two nearly dependent rows: the damped SVD solve), and for gradients
-against central finite differences.
+near-singular one (two nearly dependent rows: the damped SVD solve, to 1e-8 of a NumPy/SciPy
+computation of its definition by another route), and for gradients against central finite
+differences.
 """
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
+import scipy.linalg as sla
 
 from fixtures import parallelogram_with_extra_link, pendulum_chain, slider_crank
 from mixdyn.equations import Constraints
 from mixdyn.equations._jacobian import BandedJacobian, DenseJacobian
-from mixdyn.linalg._dense import SINGULAR_DAMPING, SINGULAR_RATIO
+from mixdyn.linalg._dense import SINGULAR_DAMPING, SINGULAR_DAMPING_FORMED, SINGULAR_RATIO
 
 PATHS = ("dense", "banded")
 
@@ -105,8 +107,6 @@ def test_partition_solves_the_dependent_block(chain, path):
     """``partition(D)``: ``x`` zero outside ``D`` with ``Phi_qD x_D = b`` (NumPy's solve of
     the block), and a ratio that sees the block's conditioning: a well-conditioned choice
     (column-pivoted QR) scores far above a block made nearly singular."""
-    import scipy.linalg as sla
-
     c, v = chain
     J = _dense_np(c, v)
     _, _, piv = sla.qr(J, pivoting=True)  # m well-conditioned columns (column pivoting)
@@ -175,26 +175,70 @@ def test_rank_deficient_minimum_norm(path):
     np.testing.assert_allclose(x, W * (J.T @ (np.linalg.pinv(S) @ r)), rtol=1e-6, atol=1e-9)
 
 
-@pytest.mark.parametrize("path", PATHS)
-def test_near_singular_reports_and_damps(chain, path):
-    """Two nearly dependent rows: the ratio falls below SINGULAR_RATIO on both paths, and the
-    guarded solve is the damped SVD solve (Tikhonov filter factors), computed here by NumPy."""
+def _damped_gram(F, b):
+    """The damped solve of ``S y = b``, ``S = F F^T``: ``S``'s singular values
+    ``s = sigma^2`` inverted as ``s / (s^2 + (SINGULAR_DAMPING s_max)^2)``, by SciPy through
+    another route than the solve's SVD of ``F``: a Householder QR ``F^T = Q R``
+    (``S = R^T R``), then LAPACK's ``gesvd`` of ``R^T``. ``S`` itself is not formed: its
+    small singular values would be rounding (``~eps s_max``)."""
+    _, R = sla.qr(F.T, mode="economic")
+    U, sigma, _ = sla.svd(R.T, lapack_driver="gesvd")
+    s = sigma**2
+    return U @ (s / (s**2 + (SINGULAR_DAMPING * s[0]) ** 2) * (U.T @ b))
+
+
+@pytest.mark.parametrize(("path", "depth"), [("dense", 1e-9), ("banded", 1e-9), ("banded", 1e-5)])
+def test_near_singular_reports_and_damps(chain, path, depth):
+    """Two nearly dependent rows (``sigma_min / sigma_max`` of ``Phi_q`` 8e-12; 8e-8 on the
+    banded path, whose Cholesky pivot ratio falls below SINGULAR_RATIO that far from the
+    singular position, and where the filter's sensitivity to rounding peaks): the ratio falls
+    below SINGULAR_RATIO, and the guarded solve is the damped solve of ``S = Phi_q W Phi_q^T``
+    (Tikhonov filter factors of ``S``'s singular values), equal to SciPy's to 1e-8 of its
+    largest component whatever LAPACK either runs on."""
     c, v = chain
     rows, cols = c.coo()
     J = _dense_np(c, v)
-    J[0] = J[1] + 1e-9 * J[0]  # rows 0 and 1 share the pattern (the same joint)
+    J[0] = J[1] + depth * J[0]  # rows 0 and 1 share the pattern (the same joint)
     v2 = jnp.asarray(J[rows, cols])
     op = _operator(path, c, v2)
-    W = np.ones(c.nq)
+    W = np.random.default_rng(3).uniform(0.5, 2.0, size=c.nq)
     f = op.schur(jnp.asarray(W), guard=True)
     assert float(f.ratio) < SINGULAR_RATIO
     b = np.random.default_rng(5).normal(size=c.m)
     y = np.asarray(f.solve(jnp.asarray(b)))
-    S = J @ J.T
-    U, s, Vt = np.linalg.svd(S)
-    ref = Vt.T @ (s / (s**2 + (SINGULAR_DAMPING * s[0]) ** 2) * (U.T @ b))
-    np.testing.assert_allclose(y, ref, rtol=1e-5, atol=1e-8 * np.abs(ref).max())
-    assert np.all(np.isfinite(y))
+    ref = _damped_gram(J * np.sqrt(W), b)
+    np.testing.assert_allclose(y, ref, rtol=0, atol=1e-8 * np.abs(ref).max())
+
+
+@pytest.mark.parametrize("path", PATHS)
+def test_near_singular_mixed_problem_damps_its_own_schur_complement(chain, path):
+    """A mixed problem with unknown forces of any direction (``B`` not along the prescribed
+    motions' gradients): ``S = C W G`` is not symmetric, and near a singular position (two
+    nearly dependent rows of ``C``, in ``G`` too) the guarded solve is the Tikhonov solution
+    of ``S mu = b`` with ``lambda = SINGULAR_DAMPING_FORMED s_max``, computed here by SciPy as
+    the least-squares solution of ``[S; lambda I] mu = [b; 0]``, to 1e-8 of its largest
+    component; ``x`` follows from ``mu``."""
+    c, v = chain
+    rows, cols = c.coo()
+    m, n, p = c.m, c.nq, 2
+    C = _dense_np(c, v)
+    C[0] = C[1] + 1e-9 * C[0]
+    rng = np.random.default_rng(12)
+    W = rng.uniform(0.5, 2.0, size=n)
+    B = rng.normal(size=(n, p))
+    r1, r2 = rng.normal(size=n), rng.normal(size=m)
+    op = _operator(path, c, jnp.asarray(C[rows, cols]))
+    kkt, ratio = op.kkt(jnp.asarray(W), jnp.asarray(B))
+    assert float(ratio) < SINGULAR_RATIO
+    x, mu = (np.asarray(a) for a in kkt(jnp.asarray(r1), jnp.asarray(r2)))
+    G = np.concatenate([C[: m - p].T, -B], axis=1)
+    S = C @ np.diag(W) @ G
+    lam = SINGULAR_DAMPING_FORMED * np.linalg.norm(S, 2)
+    rhs = np.concatenate([C @ (W * r1) - r2, np.zeros(m)])
+    ref = sla.lstsq(np.vstack([S, lam * np.eye(m)]), rhs)[0]
+    np.testing.assert_allclose(mu, ref, rtol=0, atol=1e-8 * np.abs(ref).max())
+    x_ref = W * r1 - W * (G @ ref)
+    np.testing.assert_allclose(x, x_ref, rtol=0, atol=1e-8 * np.abs(x_ref).max())
 
 
 def _batched_operator(path, c, v, batched):
@@ -208,7 +252,7 @@ def _batched_operator(path, c, v, batched):
 def test_batched_guard_equals_the_member_by_member_guard(chain, path, singular):
     """A sweep's guard (decided once per batch, ``custom_vmap``) gives each member of a
     ``vmap`` what the member's own guard gives it alone: the LU solve where regular, the damped
-    SVD solve where near-singular (checked against NumPy's SVD there)."""
+    SVD solve where near-singular (checked against SciPy's there)."""
     c, v = chain
     rows, cols = c.coo()
     rng = np.random.default_rng(8)
@@ -229,10 +273,8 @@ def test_batched_guard_equals_the_member_by_member_guard(chain, path, singular):
     alone = np.array([np.asarray(solve(False)(V[k], B[k])) for k in range(4)])
     np.testing.assert_allclose(together, alone, rtol=1e-12, atol=1e-12 * np.abs(alone).max())
     for k in singular:
-        J = _dense_np(c, V[k])
-        U, s, Vt = np.linalg.svd(J @ J.T)
-        ref = Vt.T @ (s / (s**2 + (SINGULAR_DAMPING * s[0]) ** 2) * (U.T @ np.asarray(B[k])))
-        np.testing.assert_allclose(together[k], ref, rtol=1e-5, atol=1e-8 * np.abs(ref).max())
+        ref = _damped_gram(_dense_np(c, V[k]), np.asarray(B[k]))
+        np.testing.assert_allclose(together[k], ref, rtol=0, atol=1e-8 * np.abs(ref).max())
     # unbatched (one member), the batched operator is the plain guard
     one = np.asarray(jax.jit(solve(True))(V[0], B[0]))
     np.testing.assert_allclose(one, alone[0], rtol=1e-12, atol=1e-12 * np.abs(alone[0]).max())

@@ -22,7 +22,8 @@ the pivot ratio (near 0: the matrix lost rank; comparable between the two paths)
 
 With ``guard=True`` a factorization whose pivot ratio falls below
 :data:`~mixdyn.linalg._dense.SINGULAR_RATIO` (a singular position) is solved instead by the
-damped SVD of ``S`` formed densely, on either path (:func:`~mixdyn.linalg._dense.guarded`).
+damped SVD solve, on either path (:func:`~mixdyn.linalg._dense.guarded`): from the SVD of the
+dense ``Phi_q W^(1/2)`` for the symmetric ``S``, of ``S`` itself for a mixed problem's.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
 
-from ..linalg._dense import Factor, factor_ranked, guarded, lu_factor_checked
+from ..linalg._dense import Factor, factor_ranked, gram_factor, guarded, lu_factor_checked
 
 #: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
 #: the steps of iterated regularization (see :meth:`BandedJacobian.schur`).
@@ -174,7 +175,8 @@ class DenseJacobian(JacobianOperator):
             S = S + shift * jnp.eye(S.shape[0])
         f = factor_ranked(S, self.rank)
         if guard and self.rank is None and S.shape[0]:
-            return guarded(f, lambda: S, batched=self.batched)
+            F = functools.partial(gram_factor, self.J, W, shift)
+            return guarded(f, F, batched=self.batched, gram=True)
         return f
 
     def min_norm(self, W=None, shift=None, refine=0, guard=False):
@@ -187,7 +189,8 @@ class DenseJacobian(JacobianOperator):
             S = S + shift * jnp.eye(S.shape[0])
         f = factor_ranked(S, self.rank)
         if guard and self.rank is None and S.shape[0]:
-            f = guarded(f, lambda: S, batched=self.batched)
+            F = functools.partial(gram_factor, self.J, W, shift)
+            f = guarded(f, F, batched=self.batched, gram=True)
         return Factor(lambda b: WJt @ f.solve(b), jnp.sqrt(f.ratio))
 
     def solver(self, refine=0):
@@ -218,23 +221,28 @@ class DenseJacobian(JacobianOperator):
         C = self.J
         m = C.shape[0]
         G = C.T if B is None else jnp.concatenate([C[: m - B.shape[1]].T, -B], axis=1)
-        f, WG = _kkt_factor(C, G, W, self.rank, self.batched)
+        sym = B is None
+        f, WG = _kkt_factor(C, G, W, self.rank, self.batched, sym)
 
         def solve(r1, r2):
             x, mu = jax.lax.stop_gradient(_kkt_apply(f, WG, C, W, r1, r2))
-            return _kkt_implicit(C, G, W, r1, r2, x, mu, self.rank, self.batched)
+            return _kkt_implicit(C, G, W, r1, r2, x, mu, self.rank, self.batched, sym)
 
         return solve, f.ratio
 
 
-def _kkt_factor(C, G, W, rank, batched):
+def _kkt_factor(C, G, W, rank, batched, sym):
     """The factor of ``S = C W G`` (guarded at singular positions) and ``W G``: C (m, n),
-    G (n, m), W (n,)."""
+    G (n, m), W (n,). With ``sym`` (static) ``G = C^T`` and the damped solve takes the SVD of
+    ``C W^(1/2)``, else (a mixed problem's unknown forces) that of ``S``."""
     WG = W[:, None] * G
     S = C @ WG
     f = factor_ranked(S, rank)
     if rank is None and C.shape[0]:
-        f = guarded(f, lambda: S, batched=batched)
+        if sym:
+            f = guarded(f, lambda: gram_factor(C, W), batched=batched, gram=True)
+        else:
+            f = guarded(f, lambda: S, batched=batched)
     return f, WG
 
 
@@ -244,8 +252,8 @@ def _kkt_apply(f, WG, C, W, r1, r2):
     return W * r1 - WG @ mu, mu
 
 
-@functools.partial(jax.custom_jvp, nondiff_argnums=(7, 8))
-def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched):
+@functools.partial(jax.custom_jvp, nondiff_argnums=(7, 8, 9))
+def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched, sym):
     """``(x, mu)``, the solution of ``W^-1 x + G mu = r1``, ``C x = r2`` (solved with the
     factor made once, its own derivative stopped), differentiated implicitly: the tangent
     is one more solve, not the derivative of the factorization."""
@@ -253,10 +261,10 @@ def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched):
 
 
 @_kkt_implicit.defjvp
-def _kkt_implicit_jvp(rank, batched, primals, tangents):
+def _kkt_implicit_jvp(rank, batched, sym, primals, tangents):
     C, G, W, _, _, x, mu = primals
     dC, dG, dW, dr1, dr2, _, _ = tangents
-    f, WG = _kkt_factor(C, G, W, rank, batched)
+    f, WG = _kkt_factor(C, G, W, rank, batched, sym)
     # d(W^-1 x + G mu - r1) = 0, d(C x - r2) = 0
     a = dr1 + dW / (W * W) * x - dG @ mu
     b = dr2 - dC @ x
@@ -340,7 +348,11 @@ class BandedJacobian(JacobianOperator):
 
             f = Factor(solve, ratio)
         if guard and c.m:
-            return guarded(f, lambda: self.schur_matrix(W), self.rank, c.batched)
+
+            def F():  # formed only where the guard takes the damped solve
+                return gram_factor(self.dense(), W, shift)
+
+            return guarded(f, F, self.rank, c.batched, gram=True)
         return f
 
     def solver(self, refine=0):
@@ -357,8 +369,8 @@ class BandedJacobian(JacobianOperator):
         """The banded block Cholesky factors of the symmetric ``C W C^T``: directly for
         ``p = 0`` and for collocated unknown forces (``B[:, a] = s_a Psi_q[b]^T``, so that
         ``G = C^T diag(1, -1/s)``), by a rank-``p`` Woodbury update for unknown forces of any
-        direction (:meth:`_woodbury`). Below ``SINGULAR_RATIO`` the damped SVD of ``S``
-        formed densely."""
+        direction (:meth:`_woodbury`). Below ``SINGULAR_RATIO`` the damped SVD solve of
+        ``C W C^T``, from the SVD of the dense ``C W^(1/2)``."""
         m = self.c.m
         if B is not None and not collocated:
             return self._woodbury(W, B)
