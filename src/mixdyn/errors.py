@@ -18,16 +18,20 @@ class ModelError(MixdynError, ValueError):
 
     Attributes:
         element: name of the offending element (body, joint, driver, force, run), if any.
+        field: the element's field at fault (``"length"``), if the fault is in one field:
+            a model file reports it at that field's line.
     """
 
-    def __init__(self, message: str, element: str | None = None):
+    def __init__(self, message: str, element: str | None = None, *, field: str | None = None):
         self.element = element
         self.message = message
+        self.field = field
         super().__init__(f"{element}: {message}" if element else message)
 
     def __reduce__(self):  # pickled whole (a sweep's member errors cross processes)
         notes = list(getattr(self, "__notes__", []))
-        return type(self), (self.message, self.element), {"__notes__": notes}
+        state = {"__notes__": notes, "field": self.field}
+        return type(self), (self.message, self.element), state
 
 
 class DegreesOfFreedomError(ModelError):

@@ -235,7 +235,8 @@ def _allowed_fields(data, path) -> list[str]:
     if not isinstance(cur, dict):
         return []
     best, score = None, 0
-    for obj in vars(s).values():
+    elements = [*s.JOINT_SPECS.values(), *s.DRIVER_SPECS.values(), *s.FORCE_SPECS.values()]
+    for obj in [*vars(s).values(), *elements]:
         if not (isinstance(obj, type) and issubclass(obj, s.Spec) and obj is not s.Spec):
             continue
         fields = obj.model_fields
@@ -319,6 +320,30 @@ class Builder:
                 if it.name == name:
                     return (section, i)
         return ()
+
+    def fault_path(self, path, error: ModelError) -> tuple:
+        """Where to report a model error of the element at ``path``: at its field's line
+        where the error names a field the file gives (``ModelError.field``), else at the
+        element's."""
+        path = tuple(path)
+        entry = self.data
+        for part in path:
+            try:
+                entry = entry[part]
+            except (KeyError, IndexError, TypeError):
+                return path
+        field = getattr(error, "field", None)
+        return (*path, field) if isinstance(entry, dict) and field in entry else path
+
+    def element_class(self, name: str) -> type | None:
+        """The model class of the joint, driver or force called ``name`` in the file (None:
+        no such element)."""
+        for section in ("joints", "drivers", "forces"):
+            for e in getattr(self.spec, section):
+                if e.name == name:
+                    kind = m.ELEMENTS[section].get(e.type)
+                    return kind.cls if kind is not None else None
+        return None
 
     # ----------------------------------------------------------------- values
     def scalar(self, value, kind, path, *, scale: float = 1.0) -> float:
@@ -582,7 +607,7 @@ class Builder:
             msg = str(e)
             if element and msg.startswith(f"{element}: "):
                 msg = msg[len(element) + 2 :]
-            self.fail(self.path_of(element) if element else (), msg)
+            self.fail(self.fault_path(self.path_of(element), e) if element else (), msg)
 
     def _check_names(self):
         seen: dict[str, tuple] = {}
@@ -641,7 +666,7 @@ class Builder:
         vectors = {k: self.direction(v, (*p, "vectors", k)) for k, v in b.vectors.items()}
         return m.Body(b.name, mass, inertia, q0=q0, points=points, vectors=vectors)
 
-    #: The model package, for the joint specs' ``build`` (``mixdyn.io.schema.JOINT_SPECS``).
+    #: The model package, for the element specs' ``build`` (``mixdyn.io.schema.JOINT_SPECS``).
     m = m
 
     def axis(self, axis, point_ref: str, path):
@@ -661,14 +686,6 @@ class Builder:
 
     def _joint(self, i, j) -> m.Joint:
         return j.build(self, ("joints", i))
-
-    def _two_points(self, p, e):
-        """An element's ``point_i`` and ``point_j``: both known, on two different bodies."""
-        self.point(e.point_i, (*p, "point_i"))
-        self.point(e.point_j, (*p, "point_j"))
-        bi, bj = e.point_i.split(".")[0], e.point_j.split(".")[0]
-        if bi == bj:
-            self.fail(p, f"both points are on {bi!r}", "connect two different bodies")
 
     def driver(self, d, p) -> m.Driver:
         """A driver from its description at path ``p`` (also used for prescribed motions)."""

@@ -199,13 +199,16 @@ class Spec(BaseModel):
 
 
 # --------------------------------------------------------------------------- declared elements
-#: What the ``name`` of an element of each section is used for (its description).
+#: What the ``name`` of an element of each section is used for (its description), unless
+#: the class says (``name_doc``); a contact joint's (``generic_reaction`` false) names its
+#: contact forces.
 _NAME_DOCS = {
     "joints": "Unique name of the joint; its reactions are the result columns ``name.Fx``, "
     "``name.Fy``, ``name.M``.",
-    "drivers": "Unique name of the driver; its effort is the result column ``name``.",
+    "drivers": "Unique name of the driver; its driving effort is the result column of that name.",
     "forces": "Unique name of the force element (used in a mixed run's ``unknown``).",
 }
+_CONTACT_NAME_DOC = "Unique name of the pair; its contact forces are result columns ``name.*``."
 _TYPE_DOCS = {"joints": "Joint", "drivers": "Driver", "forces": "Force"}
 
 
@@ -214,32 +217,60 @@ class _DeclaredSpec(Spec):
     fields, their kinds and docs, read once from the class."""
 
     def build(self, b, p):
-        """The element, every declared field read from the file at its own path."""
+        """The element, every declared field read from the file at its own path; a fault the
+        class finds in one field is reported at that field's line."""
         kind = self.declared
         values = {}
         for field, decl, _ in kind.fields():
             value, at = getattr(self, field), (*p, field)
             if isinstance(decl, _decl.Reference):
-                (b.body if decl.what == "body" else b.point)(value, at)
-            elif isinstance(decl, _decl.Quantity):
+                if value is not None and decl.what == "body":
+                    b.body(value, at)
+                elif value is not None and decl.what == "point":
+                    b.point(value, at)
+            elif isinstance(decl, _decl.Direction):
                 value = (
-                    b.law(value, decl.kind, at, state=decl.state)
+                    b.direction(value, at)
+                    if decl.on is None
+                    else b.axis(value, values[decl.on], at)
+                )
+            elif isinstance(decl, _decl.Coordinate):
+                values[decl.body], value = b.coordinate(value, at)
+            elif isinstance(decl, _decl.Quantity):
+                unit = _decl.quantity_kind(kind.cls, field, values, b.element_class)
+                value = (
+                    b.law(value, unit, at, state=decl.state)
                     if decl.law
-                    else b.scalar(value, decl.kind, at)
+                    else b.scalar(value, unit, at)
                 )
             values[field] = value
         try:
             return kind.cls(self.name, **values)
         except ModelError as e:
-            b.fail(p, _without_element(e, self.name))
+            b.fail(b.fault_path(p, e), _without_element(e, self.name))
 
     @classmethod
     def from_element(cls, e, d):
-        """The description of the element ``e`` (numbers in the model's units)."""
+        """The description of the element ``e`` (numbers in the model's units).
+
+        Raises:
+            ModelError: a reference a file cannot hold (a point given by coordinates).
+        """
         values = {}
         for field, decl, _ in cls.declared.fields():
             value = getattr(e, field)
-            if isinstance(decl, _decl.Quantity):
+            if isinstance(decl, _decl.Reference):
+                if value is not None and not isinstance(value, str):
+                    raise ModelError(
+                        f"{field}: a point given by coordinates cannot be written to a file; "
+                        "name it among its body's points",
+                        e.name,
+                    )
+            elif isinstance(decl, _decl.Direction):
+                value = d.axis(value)
+            elif isinstance(decl, _decl.Coordinate):
+                value = f"{getattr(e, decl.body)}.{value}"
+            elif isinstance(decl, _decl.Quantity):
                 value = d.law(value, e.name) if decl.law else float(value)
             values[field] = value
         return cls(type=cls.declared.file_name, name=e.name, **values)
@@ -251,17 +282,30 @@ def _without_element(error: ModelError, name: str) -> str:
     return text[len(name) + 2 :] if text.startswith(f"{name}: ") else text
 
 
+#: The annotation of a reference field, by what it names.
+_REFERENCE_TYPES = {"point": Ref, "body": Name, "joint": Name}
+
+
 def _declared_field(decl, default):
     """The pydantic annotation and field of a declared field."""
+    doc = decl.doc
     if isinstance(decl, _decl.Reference):
-        annotation = Name if decl.what == "body" else Ref
-        doc = decl.doc
+        annotation = _REFERENCE_TYPES[decl.what]
+        if default is None:
+            annotation = annotation | None
+    elif isinstance(decl, _decl.Direction):
+        annotation = Vec2 if decl.on is None else Vec2 | Name
+    elif isinstance(decl, _decl.Coordinate):
+        annotation = Ref
     elif isinstance(decl, _decl.Quantity):
         annotation = LawSpec if decl.law else Scalar
-        doc = f"{decl.doc} [{decl.kind.replace('_', ' ')}]"
+        doc = f"{decl.doc} [{decl.shown}]"
+        if decl.file_default is not None:
+            default = decl.file_default
+    elif decl.choices:
+        annotation = Literal[decl.choices]
     else:
         annotation = type(default) if default is not dataclasses.MISSING else str
-        doc = decl.doc
     if default is dataclasses.MISSING:
         return annotation, Field(description=doc)
     if hasattr(default, "shape"):  # a number the class converted to an array
@@ -272,12 +316,17 @@ def _declared_field(decl, default):
 def _declared_spec(kind) -> type[Spec]:
     """The file spec of a registered element class (:func:`mixdyn.model.element`)."""
     cls = kind.cls
+    name_doc = getattr(cls, "name_doc", None) or (
+        _CONTACT_NAME_DOC
+        if kind.group == "joints" and not cls.generic_reaction
+        else _NAME_DOCS[kind.group]
+    )
     fields = {
         "type": (
             Literal[kind.file_name],
             Field(description=f"{_TYPE_DOCS[kind.group]} type: ``{kind.file_name}``."),
         ),
-        "name": (Name, Field(description=_NAME_DOCS[kind.group])),
+        "name": (Name, Field(description=name_doc)),
     }
     for field, decl, default in kind.fields():
         fields[field] = _declared_field(decl, default)
@@ -289,11 +338,18 @@ def _declared_spec(kind) -> type[Spec]:
 
 
 def _declared_specs(group: str, registry: dict) -> None:
-    """Add to ``registry`` the spec of every element class of ``group`` that declares its
-    fields and has no spec written by hand."""
+    """Fill ``registry`` with the spec of every element class of ``group``: the spec written
+    by hand for it (already in ``registry``), else the one made from its declaration; in
+    the order the classes were registered."""
+    by_hand = dict(registry)
+    registry.clear()
     for kind in _decl.ELEMENTS[group].values():
-        if kind.cls.__name__ not in registry and kind.fields():
-            registry[kind.cls.__name__] = _declared_spec(kind)
+        name = kind.cls.__name__
+        if name in by_hand:
+            registry[name] = by_hand.pop(name)
+        elif kind.fields():
+            registry[name] = _declared_spec(kind)
+    registry.update(by_hand)
 
 
 # --------------------------------------------------------------------------- laws
@@ -512,10 +568,12 @@ class BodySpec(Spec):
 
 
 #: The element registries: an element kind (joint, driver, force) is one model class
-#: (``mixdyn.model``) and one spec class here, registered with :func:`element_kind`; the spec
-#: builds the element (``build``) and describes one (``from_element``). Loading, writing back
-#: and the schema's ``joints``, ``drivers`` and ``forces`` unions read these registries;
-#: nothing else in ``io`` names an element kind.
+#: (``mixdyn.model``) and one spec class, by the model class's name: the spec made from the
+#: class's declaration (:func:`_declared_specs`), or one written by hand here and registered
+#: with :func:`element_kind` (the cam's, whose profile law and follower kinds are more than
+#: declared fields). The spec builds the element (``build``) and describes one
+#: (``from_element``). Loading, writing back and the schema's ``joints``, ``drivers`` and
+#: ``forces`` unions read these registries; nothing else in ``io`` names an element kind.
 JOINT_SPECS: dict[str, type] = {}
 
 
@@ -540,351 +598,6 @@ def element_kind(model_class: str, registry: dict):
 def joint_kind(model_class: str):
     """Register a joint spec class for the model class named ``model_class``."""
     return element_kind(model_class, JOINT_SPECS)
-
-
-class _TwoPointJoint(Spec):
-    """Joints between two points: both checked, on two different bodies."""
-
-    def _points(self, b, p) -> None:
-        b._two_points(p, self)
-
-    @staticmethod
-    def _base(j) -> dict:
-        return {"name": j.name, "point_i": j.point_i, "point_j": j.point_j}
-
-
-@joint_kind("Revolute")
-class RevoluteSpec(_TwoPointJoint):
-    """A revolute (pin) joint: two points coincide; the bodies rotate freely."""
-
-    type: Literal["revolute"]
-    """Joint type: ``revolute``."""
-    name: Name
-    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
-    ``name.M``."""
-    point_i: Ref
-    """Point on body i: ``body.point``, ``body`` (centre of mass) or ``ground.point``."""
-    point_j: Ref
-    """Point on body j (another body), coinciding with ``point_i``."""
-
-    def build(self, b, p):
-        self._points(b, p)
-        return b.m.Revolute(self.name, self.point_i, self.point_j)
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="revolute", **cls._base(j))
-
-
-@joint_kind("Weld")
-class WeldSpec(_TwoPointJoint):
-    """A weld (rigid) joint: two points coincide and the relative angle is fixed."""
-
-    type: Literal["weld"]
-    """Joint type: ``weld``."""
-    name: Name
-    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
-    ``name.M``."""
-    point_i: Ref
-    """Point on body i: ``body.point``, ``body`` (centre of mass) or ``ground.point``."""
-    point_j: Ref
-    """Point on body j (another body), coinciding with ``point_i``."""
-    angle: Scalar = 0.0
-    """Fixed relative angle ``phi_j - phi_i`` [rad] (or with a unit, ``"30 deg"``). Default 0."""
-
-    def build(self, b, p):
-        self._points(b, p)
-        angle = b.scalar(self.angle, "angle", (*p, "angle"))
-        return b.m.Weld(self.name, self.point_i, self.point_j, angle)
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="weld", angle=float(j.angle), **cls._base(j))
-
-
-@joint_kind("Translational")
-class TranslationalSpec(_TwoPointJoint):
-    """A translational (sliding) joint: ``point_j`` moves on a line through ``point_i`` fixed in
-    body i; no relative rotation."""
-
-    type: Literal["translational"]
-    """Joint type: ``translational``."""
-    name: Name
-    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
-    ``name.M``."""
-    point_i: Ref
-    """Point of body i on the sliding line: ``body.point``, ``body`` or ``ground.point``."""
-    point_j: Ref
-    """Point of body j (another body) that moves on the line."""
-    axis: Vec2 | Name = (1.0, 0.0)
-    """Direction of the line in body i's frame: ``[x, y]`` or the name of one of body i's
-    ``vectors``. Default ``[1, 0]``."""
-    angle: Scalar = 0.0
-    """Fixed relative angle ``phi_j - phi_i`` [rad] (or with a unit). Default 0."""
-
-    def build(self, b, p):
-        self._points(b, p)
-        axis = b.axis(self.axis, self.point_i, (*p, "axis"))
-        angle = b.scalar(self.angle, "angle", (*p, "angle"))
-        return b.m.Translational(self.name, self.point_i, self.point_j, axis=axis, angle=angle)
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="translational", axis=d.axis(j.axis), angle=float(j.angle), **cls._base(j))
-
-
-@joint_kind("PinInSlot")
-class PinInSlotSpec(_TwoPointJoint):
-    """A pin-in-slot joint: ``point_j`` moves on a line through ``point_i`` fixed in body i; body
-    j rotates freely."""
-
-    type: Literal["pin_in_slot"]
-    """Joint type: ``pin_in_slot``."""
-    name: Name
-    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
-    ``name.M``."""
-    point_i: Ref
-    """Point of body i on the slot's line: ``body.point``, ``body`` or ``ground.point``."""
-    point_j: Ref
-    """Point (pin) of body j (another body) that moves in the slot."""
-    axis: Vec2 | Name = (1.0, 0.0)
-    """Direction of the slot in body i's frame: ``[x, y]`` or the name of one of body i's
-    ``vectors``. Default ``[1, 0]``."""
-
-    def build(self, b, p):
-        self._points(b, p)
-        axis = b.axis(self.axis, self.point_i, (*p, "axis"))
-        return b.m.PinInSlot(self.name, self.point_i, self.point_j, axis=axis)
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="pin_in_slot", axis=d.axis(j.axis), **cls._base(j))
-
-
-@joint_kind("Distance")
-class DistanceSpec(_TwoPointJoint):
-    """A distance constraint (massless rod): two points stay ``length`` apart."""
-
-    type: Literal["distance"]
-    """Joint type: ``distance``."""
-    name: Name
-    """Unique name of the joint; its reactions are the result columns ``name.Fx``, ``name.Fy``,
-    ``name.M``."""
-    point_i: Ref
-    """First point: ``body.point``, ``body`` or ``ground.point``."""
-    point_j: Ref
-    """Second point, on another body."""
-    length: Scalar
-    """Distance between the points [length], > 0, e.g. ``"120 mm"``."""
-
-    def build(self, b, p):
-        self._points(b, p)
-        length = b.scalar(self.length, "length", (*p, "length"))
-        if not length > 0:
-            b.fail((*p, "length"), f"length {length:g} is not positive", "give a length > 0")
-        return b.m.Distance(self.name, self.point_i, self.point_j, length=length)
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="distance", length=float(j.length), **cls._base(j))
-
-
-class _WheelsSpec(Spec):
-    """Two wheels (pitch circles) of two bodies, meshing or rolling."""
-
-    name: Name
-    """Unique name of the pair; its contact forces are result columns ``name.*``."""
-    body_i: Name
-    """Body i (the ring, if ``internal``)."""
-    body_j: Name
-    """Body j (another body)."""
-    radius_i: Scalar
-    """Pitch (or rolling) radius of body i [length], > 0, e.g. ``"40 mm"``."""
-    radius_j: Scalar
-    """Pitch (or rolling) radius of body j [length], > 0."""
-    internal: bool = False
-    """True for body j inside the ring of body i (``radius_i > radius_j``). Default false."""
-    carrier: Name = "ground"
-    """The body holding both centres (a planet carrier); default the ground."""
-    center_i: Ref | None = None
-    """Centre of body i's wheel, ``body_i.point`` (default: its origin)."""
-    center_j: Ref | None = None
-    """Centre of body j's wheel, ``body_j.point`` (default: its origin)."""
-
-    def _args(self, b, p) -> dict:
-        for key in ("body_i", "body_j", "carrier"):
-            b.body(getattr(self, key), (*p, key))
-        if self.body_i == self.body_j:
-            b.fail(p, f"both wheels are on {self.body_i!r}", "pair two different bodies")
-        for key in ("center_i", "center_j"):
-            ref = getattr(self, key)
-            if ref is not None:
-                b.point(ref, (*p, key))
-        radii = {}
-        for key in ("radius_i", "radius_j"):
-            radii[key] = b.scalar(getattr(self, key), "length", (*p, key))
-            if not radii[key] > 0:
-                b.fail((*p, key), f"radius {radii[key]:g} is not positive", "give a radius > 0")
-        if self.internal and not radii["radius_i"] > radii["radius_j"]:
-            b.fail(
-                (*p, "radius_i"),
-                "an internal pair needs radius_i > radius_j",
-                "make body i the ring",
-            )
-        return dict(
-            internal=self.internal,
-            carrier=self.carrier,
-            center_i=self.center_i,
-            center_j=self.center_j,
-            **radii,
-        )
-
-    @staticmethod
-    def _base(j) -> dict:
-        out = {
-            "name": j.name,
-            "body_i": j.body_i,
-            "body_j": j.body_j,
-            "radius_i": float(j.radius_i),
-            "radius_j": float(j.radius_j),
-        }
-        for key, default in (
-            ("internal", False),
-            ("carrier", "ground"),
-            ("center_i", None),
-            ("center_j", None),
-        ):
-            if getattr(j, key) != default:
-                out[key] = getattr(j, key)
-        return out
-
-
-@joint_kind("GearPair")
-class GearPairSpec(_WheelsSpec):
-    """A pair of spur gears (external, or internal with body i the ring gear), the centres
-    held by other joints. Ratio ``-radius_i / radius_j`` (internal: ``+``). Columns
-    ``name.Ft`` (tooth force on gear j), ``name.Fn`` (along the line of action), ``name.Fr``
-    (radial)."""
-
-    type: Literal["gear_pair"]
-    """Joint type: ``gear_pair``."""
-    pressure_angle: Scalar = "20 deg"
-    """Pressure angle [rad] (or ``"20 deg"``), below 90 degrees. Default 20 degrees."""
-
-    def build(self, b, p):
-        angle = b.scalar(self.pressure_angle, "angle", (*p, "pressure_angle"))
-        if not 0 <= angle < math.pi / 2:
-            b.fail((*p, "pressure_angle"), "the pressure angle must be in [0, 90) degrees")
-        return b.m.GearPair(
-            self.name, self.body_i, self.body_j, pressure_angle=angle, **self._args(b, p)
-        )
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="gear_pair", pressure_angle=float(j.pressure_angle), **cls._base(j))
-
-
-@joint_kind("RollingDisks")
-class RollingDisksSpec(_WheelsSpec):
-    """Two disks rolling on each other without slipping (external, or disk j inside the ring
-    of body i): their centres a sum (difference) of radii apart, no slip. Columns ``name.N``
-    (normal force on j) and ``name.T`` (friction force on j)."""
-
-    type: Literal["rolling_disks"]
-    """Joint type: ``rolling_disks``."""
-
-    def build(self, b, p):
-        return b.m.RollingDisks(self.name, self.body_i, self.body_j, **self._args(b, p))
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="rolling_disks", **cls._base(j))
-
-
-class _OnLineSpec(Spec):
-    """A wheel of one body on a straight line of another."""
-
-    name: Name
-    """Unique name of the pair; its contact forces are result columns ``name.*``."""
-    wheel: Name
-    """The body of the wheel (pinion, disk)."""
-    line_point: Ref
-    """A point of the line (rack's pitch line, track), ``body.point`` or ``ground.point``."""
-    axis: Vec2 | Name = (1.0, 0.0)
-    """Direction of the line in its body's frame: ``[x, y]`` or a vector's name. Default
-    ``[1, 0]``."""
-    radius: Scalar
-    """Pitch (rolling) radius of the wheel [length], > 0."""
-    center: Ref | None = None
-    """Centre of the wheel, ``wheel.point`` (default: the wheel body's origin)."""
-
-    def _args(self, b, p) -> dict:
-        b.body(self.wheel, (*p, "wheel"), ground=False)
-        b.point(self.line_point, (*p, "line_point"))
-        if self.center is not None:
-            b.point(self.center, (*p, "center"))
-        if self.line_point.split(".")[0] == self.wheel:
-            b.fail(p, "the wheel and its line are on the same body", "use two bodies")
-        radius = b.scalar(self.radius, "length", (*p, "radius"))
-        if not radius > 0:
-            b.fail((*p, "radius"), f"radius {radius:g} is not positive", "give a radius > 0")
-        axis = b.axis(self.axis, self.line_point, (*p, "axis"))
-        return dict(radius=radius, axis=axis, center=self.center)
-
-    @staticmethod
-    def _base(j, d) -> dict:
-        out = {
-            "name": j.name,
-            "wheel": j.wheel,
-            "line_point": j.line_point,
-            "radius": float(j.radius),
-            "axis": d.axis(j.axis),
-        }
-        if j.center is not None:
-            out["center"] = j.center
-        return out
-
-
-@joint_kind("RackPinion")
-class RackPinionSpec(_OnLineSpec):
-    """A rack (the line's body, pitch line through ``line_point`` along ``axis``) and a
-    pinion (``wheel``), the pinion's centre and the rack's guide held by other joints. The
-    rack moves ``radius`` per radian of the pinion. Columns ``name.Ft`` (tooth force on the
-    rack along ``axis``), ``name.Fn``, ``name.Fr``."""
-
-    type: Literal["rack_pinion"]
-    """Joint type: ``rack_pinion``."""
-    pressure_angle: Scalar = "20 deg"
-    """Pressure angle [rad] (or ``"20 deg"``), below 90 degrees. Default 20 degrees."""
-
-    def build(self, b, p):
-        angle = b.scalar(self.pressure_angle, "angle", (*p, "pressure_angle"))
-        if not 0 <= angle < math.pi / 2:
-            b.fail((*p, "pressure_angle"), "the pressure angle must be in [0, 90) degrees")
-        return b.m.RackPinion(
-            self.name, self.wheel, self.line_point, pressure_angle=angle, **self._args(b, p)
-        )
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="rack_pinion", pressure_angle=float(j.pressure_angle), **cls._base(j, d))
-
-
-@joint_kind("RollingOnLine")
-class RollingOnLineSpec(_OnLineSpec):
-    """A disk (``wheel``) rolling without slipping on a straight line (a track, an incline):
-    its centre a radius from the line, no slip. Columns ``name.N`` (normal force on the disk)
-    and ``name.T`` (friction force on the disk along ``axis``)."""
-
-    type: Literal["rolling_on_line"]
-    """Joint type: ``rolling_on_line``."""
-
-    def build(self, b, p):
-        return b.m.RollingOnLine(self.name, self.wheel, self.line_point, **self._args(b, p))
-
-    @classmethod
-    def from_element(cls, j, d):
-        return cls(type="rolling_on_line", **cls._base(j, d))
 
 
 @joint_kind("CamFollower")
@@ -1027,241 +740,12 @@ JointSpec = Annotated[
 """Any registered joint kind (:data:`JOINT_SPECS`), told apart by ``type``."""
 
 
-@element_kind("CoordinateDriver", DRIVER_SPECS)
-class CoordinateDriverSpec(Spec):
-    """Prescribes a body coordinate, ``coordinate: crank.phi``."""
-
-    type: Literal["coordinate"]
-    """Driver type: ``coordinate``."""
-    name: Name
-    """Unique name of the driver; its driving effort is the result column of that name."""
-    coordinate: Ref
-    """The driven body coordinate: ``body.x``, ``body.y`` [length] or ``body.phi`` [rad]."""
-    law: LawSpec
-    """The coordinate as a law of time, in length or rad, e.g. ``2*pi*t`` or ``{expr: 360*t,
-    unit: deg}``."""
-
-    def build(self, b, p):
-        body, coord = b.coordinate(self.coordinate, (*p, "coordinate"))
-        kind = "angle" if coord == "phi" else "length"
-        return b.m.CoordinateDriver(self.name, body, coord, law=b.law(self.law, kind, (*p, "law")))
-
-    @classmethod
-    def from_element(cls, e, d):
-        law = d.law(e.law, e.name)
-        return cls(type="coordinate", name=e.name, coordinate=f"{e.body}.{e.coordinate}", law=law)
-
-
-@element_kind("PointDriver", DRIVER_SPECS)
-class PointDriverSpec(Spec):
-    """Prescribes the global ``x`` or ``y`` coordinate of a body point."""
-
-    type: Literal["point"]
-    """Driver type: ``point``."""
-    name: Name
-    """Unique name of the driver; its driving effort is the result column of that name."""
-    point: Ref
-    """The driven point, ``body.point`` or ``body`` (not a ground point)."""
-    coordinate: Literal["x", "y"]
-    """Which global coordinate of the point: ``x`` or ``y``."""
-    law: LawSpec
-    """The coordinate [length] as a law of time, e.g. ``"10*sin(pi*t)"``."""
-
-    def build(self, b, p):
-        b.point(self.point, (*p, "point"), ground=False)
-        law = b.law(self.law, "length", (*p, "law"))
-        return b.m.PointDriver(self.name, self.point, self.coordinate, law=law)
-
-    @classmethod
-    def from_element(cls, e, d):
-        if not isinstance(e.point, str):
-            from ..errors import ModelError
-
-            raise ModelError("a point given by coordinates cannot be written", e.name)
-        law = d.law(e.law, e.name)
-        return cls(type="point", name=e.name, point=e.point, coordinate=e.coordinate, law=law)
-
-
-@element_kind("RelativeAngleDriver", DRIVER_SPECS)
-class RelativeAngleDriverSpec(Spec):
-    """Prescribes the angle ``phi_j - phi_i`` of body j relative to body i."""
-
-    type: Literal["relative_angle"]
-    """Driver type: ``relative_angle``."""
-    name: Name
-    """Unique name of the driver; its driving effort is the result column of that name."""
-    body_i: Name
-    """Body i (the reference body; may be ``ground``)."""
-    body_j: Name
-    """Body j, whose angle relative to body i is driven."""
-    law: LawSpec
-    """The angle ``phi_j - phi_i`` [rad] as a law of time, e.g. ``{expr: 90*t, unit: deg}``."""
-
-    def build(self, b, p):
-        b.body(self.body_i, (*p, "body_i"))
-        b.body(self.body_j, (*p, "body_j"))
-        if self.body_i == self.body_j:
-            b.fail(p, "body_i and body_j are the same body", "name two different bodies")
-        law = b.law(self.law, "angle", (*p, "law"))
-        return b.m.RelativeAngleDriver(self.name, self.body_i, self.body_j, law=law)
-
-    @classmethod
-    def from_element(cls, e, d):
-        law = d.law(e.law, e.name)
-        return cls(type="relative_angle", name=e.name, body_i=e.body_i, body_j=e.body_j, law=law)
-
-
-@element_kind("DistanceDriver", DRIVER_SPECS)
-class DistanceDriverSpec(Spec):
-    """Prescribes the distance between two points (a linear actuator)."""
-
-    type: Literal["distance"]
-    """Driver type: ``distance``."""
-    name: Name
-    """Unique name of the driver; its driving effort is the result column of that name."""
-    point_i: Ref
-    """First point: ``body.point``, ``body`` or ``ground.point``."""
-    point_j: Ref
-    """Second point, on another body."""
-    law: LawSpec
-    """The distance [length] as a law of time, e.g. ``100 + 20*t``."""
-
-    def build(self, b, p):
-        b._two_points(p, self)
-        law = b.law(self.law, "length", (*p, "law"))
-        return b.m.DistanceDriver(self.name, self.point_i, self.point_j, law=law)
-
-    @classmethod
-    def from_element(cls, e, d):
-        law = d.law(e.law, e.name)
-        return cls(type="distance", name=e.name, point_i=e.point_i, point_j=e.point_j, law=law)
-
-
 _declared_specs("drivers", DRIVER_SPECS)
 DriverSpec = Annotated[
     functools.reduce(operator.or_, DRIVER_SPECS.values()),
     Field(discriminator="type"),
 ]
 """Any registered driver kind (:data:`DRIVER_SPECS`), told apart by ``type``."""
-
-
-@element_kind("PointForce", FORCE_SPECS)
-class PointForceSpec(Spec):
-    """A force at a body point along a fixed direction."""
-
-    type: Literal["point_force"]
-    """Force type: ``point_force``."""
-    name: Name
-    """Unique name of the force element (used in a mixed run's ``unknown``)."""
-    point: Ref
-    """The loaded point, ``body.point`` or ``body`` (centre of mass)."""
-    along: Vec2 = (1.0, 0.0)
-    """Direction of the force ``[x, y]``, in the ground or body frame (``frame``). Default ``[1,
-    0]``."""
-    frame: Literal["ground", "body"] = "ground"
-    """Frame of ``along``: ``ground`` (fixed direction, default) or ``body`` (turns with the
-    body)."""
-    law: LawSpec = 0.0
-    """Magnitude [force] along ``along``: a law of time, which may also use body states
-    (``-c*slider.vx``). Default 0."""
-
-    def build(self, b, p):
-        b.point(self.point, (*p, "point"), ground=False)
-        return b.m.PointForce(
-            self.name,
-            self.point,
-            along=b.direction(self.along, (*p, "along")),
-            law=b.law(self.law, "force", (*p, "law"), state=True),
-            frame=self.frame,
-        )
-
-    @classmethod
-    def from_element(cls, e, d):
-        along = tuple(float(x) for x in e.along)
-        law = d.law(e.law, e.name)
-        return cls(
-            type="point_force", name=e.name, point=e.point, along=along, frame=e.frame, law=law
-        )
-
-
-@element_kind("Torque", FORCE_SPECS)
-class TorqueSpec(Spec):
-    """A torque on a body (counter-clockwise positive), optionally reacting on a second body."""
-
-    type: Literal["torque"]
-    """Force type: ``torque``."""
-    name: Name
-    """Unique name of the force element (used in a mixed run's ``unknown``)."""
-    body: Name
-    """The body the torque acts on."""
-    law: LawSpec = 0.0
-    """Magnitude [torque = force*length], counter-clockwise positive: a law of time, which may
-    also use body states (``-c*crank.omega``). Default 0."""
-    reaction: Name | None = None
-    """A body that receives the opposite torque (e.g. a motor housing); default none
-    (``ground``)."""
-
-    def build(self, b, p):
-        b.body(self.body, (*p, "body"), ground=False)
-        if self.reaction is not None:
-            b.body(self.reaction, (*p, "reaction"))
-            if self.reaction == self.body:
-                b.fail((*p, "reaction"), "the reaction acts on the same body", "")
-        return b.m.Torque(
-            self.name,
-            self.body,
-            law=b.law(self.law, "torque", (*p, "law"), state=True),
-            reaction=None if self.reaction in (None, "ground") else self.reaction,
-        )
-
-    @classmethod
-    def from_element(cls, e, d):
-        law = d.law(e.law, e.name)
-        return cls(type="torque", name=e.name, body=e.body, law=law, reaction=e.reaction)
-
-
-@element_kind("JointFriction", FORCE_SPECS)
-class JointFrictionSpec(Spec):
-    """Coulomb friction in a revolute, translational or pin-in-slot joint, with stick and slip
-    (the force from the joint's reaction: ``mu |N|`` along a slide, ``mu radius |R|`` about
-    a pin)."""
-
-    type: Literal["joint_friction"]
-    """Force type: ``joint_friction``."""
-    name: Name
-    """Unique name of the friction element (its result columns: the friction force or torque,
-    ``.normal``, ``.limit``, ``.speed``, ``.power``)."""
-    joint: Name
-    """The joint with friction: a revolute, translational or pin-in-slot joint."""
-    mu: Scalar
-    """Coulomb friction coefficient [1], >= 0."""
-    radius: Scalar = 0.0
-    """Pin radius [length], for a revolute joint: the friction torque is ``mu radius |R|``."""
-    v_stick: Scalar = 1e-6
-    """Stick band [velocity, or angular velocity for a revolute joint]: below this relative
-    speed the joint sticks while the friction can hold it. Default 1e-6 in the model's units."""
-
-    def build(self, b, p):
-        rotary = any(j.name == self.joint and j.type == "revolute" for j in b.spec.joints)
-        speed = "angular_velocity" if rotary else "velocity"
-        return b.m.JointFriction(
-            self.name,
-            self.joint,
-            mu=b.scalar(self.mu, "dimensionless", (*p, "mu")),
-            radius=b.scalar(self.radius, "length", (*p, "radius")),
-            v_stick=b.scalar(self.v_stick, speed, (*p, "v_stick")),
-        )
-
-    @classmethod
-    def from_element(cls, e, d):
-        return cls(
-            type="joint_friction",
-            name=e.name,
-            joint=e.joint,
-            mu=float(e.mu),
-            radius=float(e.radius),
-            v_stick=float(e.v_stick),
-        )
 
 
 _declared_specs("forces", FORCE_SPECS)

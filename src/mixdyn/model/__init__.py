@@ -64,6 +64,7 @@ def __getattr__(name: str):
         return registry
     raise AttributeError(f"module 'mixdyn.model' has no attribute {name!r}")
 
+
 __all__ = [
     "ELEMENTS",
     "BeltDrive",

@@ -36,11 +36,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ._declare import element, option, quantity, reference
-from ._element import Resolver, moving, static_direction
+from ._declare import direction, element, option, quantity, reference
+from ._element import Resolver, body_name, moving
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._joints import _UNBOUND, Joint, _f64
-from ._validate import finite
 
 
 def _start(r: Resolver, b: int, s) -> tuple[np.ndarray, float]:
@@ -71,10 +70,23 @@ def _wrap(a: float) -> float:
 TOOTH_KINDS = {"Ft": "force", "Fn": "force", "Fr": "force"}
 
 
+def _pressure_angle():
+    """The declaration of a mesh's pressure angle."""
+    return quantity(
+        "angle",
+        'Pressure angle (or ``"20 deg"``), below 90 degrees. Default 20 degrees.',
+        math.radians(20.0),
+        converter=_f64,
+        at_least=0.0,
+        file_default="20 deg",
+    )
+
+
 def _check_pressure_angle(joint) -> None:
-    finite(joint.pressure_angle, "pressure_angle", joint.name, at_least=0.0)
-    if not float(joint.pressure_angle) < math.pi / 2:
-        raise ModelError("the pressure angle must be below 90 degrees", joint.name)
+    if not np.all(np.asarray(joint.pressure_angle) < math.pi / 2):
+        raise ModelError(
+            "the pressure angle must be in [0, 90) degrees", joint.name, field="pressure_angle"
+        )
 
 
 def _tooth(Ft, pressure_angle) -> dict:
@@ -91,14 +103,32 @@ class _Wheels(Joint):
     """Two wheels (pitch circles of radii ``radius_i``, ``radius_j`` about body points
     ``center_i``, ``center_j``) meshing or rolling, on a carrier body (default the ground)."""
 
-    body_i: str = eqx.field(static=True)
-    body_j: str = eqx.field(static=True)
-    radius_i: object = eqx.field(default=1.0, converter=_f64)
-    radius_j: object = eqx.field(default=1.0, converter=_f64)
-    internal: bool = eqx.field(static=True, default=False)
-    carrier: str = eqx.field(static=True, default="ground")
-    center_i: str | None = eqx.field(static=True, default=None)
-    center_j: str | None = eqx.field(static=True, default=None)
+    body_i: str = reference("Body i (the ring, if ``internal``).", what="body")
+    body_j: str = reference("Body j (another body).", what="body")
+    radius_i: object = quantity(
+        "length",
+        'Pitch (or rolling) radius of body i, > 0, e.g. ``"40 mm"``.',
+        converter=_f64,
+        above=0.0,
+    )
+    radius_j: object = quantity(
+        "length", "Pitch (or rolling) radius of body j, > 0.", converter=_f64, above=0.0
+    )
+    internal: bool = option(
+        "True for body j inside the ring of body i (``radius_i > radius_j``). Default false.",
+        False,
+    )
+    carrier: str = reference(
+        "The body holding both centres (a planet carrier); default the ground.",
+        what="body",
+        default="ground",
+    )
+    center_i: str | None = reference(
+        "Centre of body i's wheel, ``body_i.point`` (default: its origin).", default=None
+    )
+    center_j: str | None = reference(
+        "Centre of body j's wheel, ``body_j.point`` (default: its origin).", default=None
+    )
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bc: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
@@ -110,12 +140,12 @@ class _Wheels(Joint):
     generic_reaction: ClassVar[bool] = False
 
     def __check_init__(self):
-        finite((self.radius_i, self.radius_j), "radius_i and radius_j", self.name, above=0.0)
-        if self.internal and not float(self.radius_i) > float(self.radius_j):
+        if self.internal and not np.all(np.asarray(self.radius_i) > np.asarray(self.radius_j)):
             raise ModelError(
                 f"an internal pair needs body i as the ring, radius_i > radius_j (got "
-                f"{float(self.radius_i):g} and {float(self.radius_j):g})",
+                f"{np.asarray(self.radius_i).tolist()} and {np.asarray(self.radius_j).tolist()})",
                 self.name,
+                field="radius_i",
             )
 
     @property
@@ -127,7 +157,11 @@ class _Wheels(Joint):
         bj, sj = r.point(self.center_j or self.body_j, self.name)
         bc = r.body(self.carrier, self.name)
         if bi == bj:
-            raise ModelError("a wheel pair needs two different bodies", self.name)
+            raise ModelError(
+                f"both wheels are on {body_name(self.center_i or self.body_i)!r}: a wheel pair "
+                "needs two different bodies",
+                self.name,
+            )
         ci, phi_i = _start(r, bi, si)
         cj, phi_j = _start(r, bj, sj)
         _, phi_c = _start(r, bc, np.zeros(2))
@@ -210,7 +244,7 @@ class GearPair(_Wheels):
     (see the module).
     """
 
-    pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
+    pressure_angle: object = _pressure_angle()
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
     contact_kinds: ClassVar[dict[str, str]] = TOOTH_KINDS
@@ -220,7 +254,6 @@ class GearPair(_Wheels):
     )
 
     def __check_init__(self):
-        super().__check_init__()
         _check_pressure_angle(self)
 
     def residual(self, q):
@@ -301,8 +334,8 @@ class BeltDrive(_Wheels):
         what="body",
     )
     body_j: str = reference("Pulley j: another body, held the same way.", what="body")
-    radius_i: object = quantity("length", "Pitch radius of pulley i.", converter=_f64)
-    radius_j: object = quantity("length", "Pitch radius of pulley j.", converter=_f64)
+    radius_i: object = quantity("length", "Pitch radius of pulley i.", converter=_f64, above=0.0)
+    radius_j: object = quantity("length", "Pitch radius of pulley j.", converter=_f64, above=0.0)
     crossed: bool = option(
         "A crossed belt: the pulleys turn opposite ways (default: open, the same way).", False
     )
@@ -312,7 +345,14 @@ class BeltDrive(_Wheels):
         "slack span carries nothing.",
         0.0,
         converter=_f64,
+        at_least=0.0,
     )
+    # Not fields of a file: a belt's pulleys turn about their bodies' origins, on the ground
+    # or a carrier given in Python; an open or crossed belt, not an internal pair.
+    internal: bool = eqx.field(static=True, default=False)
+    carrier: str = eqx.field(static=True, default="ground")
+    center_i: str | None = eqx.field(static=True, default=None)
+    center_j: str | None = eqx.field(static=True, default=None)
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("belt",)
     contact_kinds: ClassVar[dict[str, str]] = {
@@ -325,10 +365,6 @@ class BeltDrive(_Wheels):
     unilateral: ClassVar[str] = "T_slack"
     #: What pulls along the line of centres (see :class:`GearPair`).
     along_centres: ClassVar[str] = "the belt's spans pull the pulleys together"
-
-    def __check_init__(self):
-        super().__check_init__()
-        finite(self.initial_tension, "initial_tension", self.name, at_least=0.0)
 
     @property
     def _s(self) -> float:
@@ -377,13 +413,22 @@ class _OnLine(Joint):
     through ``line_point`` with direction ``axis`` (body j's frame); the wheel on the side of
     the line it starts on (at ``q0``)."""
 
-    wheel: str = eqx.field(static=True)
-    line_point: str = eqx.field(static=True)
-    radius: object = eqx.field(default=1.0, converter=_f64)
-    axis: str | tuple[float, ...] = eqx.field(
-        static=True, default=(1.0, 0.0), converter=static_direction
+    wheel: str = reference("The body of the wheel (pinion, disk).", what="body")
+    line_point: str = reference(
+        "A point of the line (rack's pitch line, track), ``body.point`` or ``ground.point``."
     )
-    center: str | None = eqx.field(static=True, default=None)
+    radius: object = quantity(
+        "length", "Pitch (rolling) radius of the wheel, > 0.", converter=_f64, above=0.0
+    )
+    axis: str | tuple[float, ...] = direction(
+        "Direction of the line in its body's frame: ``[x, y]`` or a vector's name. Default "
+        "``[1, 0]``.",
+        (1.0, 0.0),
+        on="line_point",
+    )
+    center: str | None = reference(
+        "Centre of the wheel, ``wheel.point`` (default: the wheel body's origin).", default=None
+    )
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     si: object = eqx.field(default=None, kw_only=True)
@@ -394,16 +439,16 @@ class _OnLine(Joint):
     body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj")
     generic_reaction: ClassVar[bool] = False
 
-    def __check_init__(self):
-        finite(self.radius, "radius", self.name, above=0.0)
-        if not isinstance(self.axis, str):
-            finite(self.axis, "axis", self.name)
-
     def bind(self, r: Resolver):
+        if r.body(self.wheel, self.name) == GROUND:
+            raise ModelError("the wheel cannot be the ground", self.name, field="wheel")
         bi, si = r.point(self.center or self.wheel, self.name)
         bj, sj = r.point(self.line_point, self.name)
         if bi == bj:
-            raise ModelError("the wheel and the line must be on two different bodies", self.name)
+            raise ModelError(
+                "the wheel and its line are on the same body: they must be on two different bodies",
+                self.name,
+            )
         u = r.vector(self.axis, bj, self.name)
         ci, phi_i = _start(r, bi, si)
         pj, phi_j = _start(r, bj, sj)
@@ -478,7 +523,7 @@ class RackPinion(_OnLine):
     (see the module).
     """
 
-    pressure_angle: object = eqx.field(default=math.radians(20.0), converter=_f64)
+    pressure_angle: object = _pressure_angle()
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("mesh",)
     contact_kinds: ClassVar[dict[str, str]] = TOOTH_KINDS
@@ -488,7 +533,6 @@ class RackPinion(_OnLine):
     )
 
     def __check_init__(self):
-        super().__check_init__()
         _check_pressure_angle(self)
 
     def residual(self, q):

@@ -17,8 +17,8 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
-from ._declare import element
-from ._element import Element, Resolver, moving
+from ._declare import coordinate, element, option, quantity, reference
+from ._element import Element, Resolver, body_name, moving
 from ._geometry import GROUND, angle, point
 from ._laws import Law, as_law
 
@@ -49,18 +49,38 @@ class Driver(Element):
 
 @element("coordinate", "drivers")
 class CoordinateDriver(Driver):
-    """Prescribes one absolute coordinate (``"x"``, ``"y"`` or ``"phi"``) of a body."""
+    """Prescribes one absolute coordinate (``"x"``, ``"y"`` or ``"phi"``) of a body; a file
+    names both, ``coordinate: crank.phi``."""
 
     body: str = eqx.field(static=True)
-    coordinate: str = eqx.field(static=True)
+    coordinate: str = coordinate(
+        "The driven body coordinate: ``body.x``, ``body.y`` [length] or ``body.phi`` [rad].",
+        body="body",
+    )
+    law: Law = quantity(
+        ("length", "angle"),
+        "The coordinate as a law of time, e.g. ``2*pi*t`` or ``{expr: 360*t, unit: deg}``.",
+        converter=as_law,
+        law=True,
+        kw_only=True,
+    )
     b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
+
+    @classmethod
+    def field_kind(cls, field: str, values, element_class) -> str:
+        """The law's kind: an angle for ``phi``, a length for ``x`` and ``y``."""
+        return "angle" if values["coordinate"] == "phi" else "length"
 
     def bind(self, r: Resolver):
         if self.coordinate not in _COORD:
-            raise ModelError(f"coordinate must be x, y or phi, got {self.coordinate!r}", self.name)
+            raise ModelError(
+                f"coordinate must be x, y or phi, got {self.coordinate!r}",
+                self.name,
+                field="coordinate",
+            )
         b = r.body(self.body, self.name)
         if b == GROUND:
-            raise ModelError("the ground cannot be driven", self.name)
+            raise ModelError("the ground cannot be driven", self.name, field="coordinate")
         return dataclasses.replace(self, b=b)
 
     @property
@@ -83,17 +103,28 @@ class CoordinateDriver(Driver):
 class PointDriver(Driver):
     """Prescribes the global ``"x"`` or ``"y"`` coordinate of a body point."""
 
-    point: str = eqx.field(static=True)
-    coordinate: str = eqx.field(static=True)
+    point: str = reference("The driven point, ``body.point`` or ``body`` (not a ground point).")
+    coordinate: str = option(
+        "Which global coordinate of the point: ``x`` or ``y``.", choices=("x", "y")
+    )
+    law: Law = quantity(
+        "length",
+        'The coordinate as a law of time, e.g. ``"10*sin(pi*t)"``.',
+        converter=as_law,
+        law=True,
+        kw_only=True,
+    )
     b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     s: jax.Array | None = eqx.field(default=None, kw_only=True)
 
     def bind(self, r: Resolver):
         if self.coordinate not in ("x", "y"):
-            raise ModelError(f"coordinate must be x or y, got {self.coordinate!r}", self.name)
+            raise ModelError(
+                f"coordinate must be x or y, got {self.coordinate!r}", self.name, field="coordinate"
+            )
         b, s = r.point(self.point, self.name)
         if b == GROUND:
-            raise ModelError("a ground point cannot be driven", self.name)
+            raise ModelError("a ground point cannot be driven", self.name, field="point")
         return dataclasses.replace(self, b=b, s=s)
 
     def body_indices(self):
@@ -107,8 +138,15 @@ class PointDriver(Driver):
 class RelativeAngleDriver(Driver):
     """Prescribes ``phi_j - phi_i`` [rad], the angle of body j relative to body i."""
 
-    body_i: str = eqx.field(static=True)
-    body_j: str = eqx.field(static=True)
+    body_i: str = reference("Body i (the reference body; may be ``ground``).", what="body")
+    body_j: str = reference("Body j, whose angle relative to body i is driven.", what="body")
+    law: Law = quantity(
+        "angle",
+        "The angle ``phi_j - phi_i`` as a law of time, e.g. ``{expr: 90*t, unit: deg}``.",
+        converter=as_law,
+        law=True,
+        kw_only=True,
+    )
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     measure_kind: ClassVar[str] = "angle"
@@ -116,7 +154,11 @@ class RelativeAngleDriver(Driver):
     def bind(self, r: Resolver):
         bi, bj = r.body(self.body_i, self.name), r.body(self.body_j, self.name)
         if bi == bj:
-            raise ModelError("a relative angle needs two different bodies", self.name)
+            raise ModelError(
+                f"body_i and body_j are the same body ({self.body_i!r}): a relative angle needs "
+                "two different bodies",
+                self.name,
+            )
         return dataclasses.replace(self, bi=bi, bj=bj)
 
     def body_indices(self):
@@ -130,8 +172,15 @@ class RelativeAngleDriver(Driver):
 class DistanceDriver(Driver):
     """Prescribes the distance ``|r_Pj - r_Pi|`` [length] between two points (an actuator)."""
 
-    point_i: str = eqx.field(static=True)
-    point_j: str = eqx.field(static=True)
+    point_i: str = reference("First point: ``body.point``, ``body`` or ``ground.point``.")
+    point_j: str = reference("Second point, on another body.")
+    law: Law = quantity(
+        "length",
+        "The distance as a law of time, e.g. ``100 + 20*t``.",
+        converter=as_law,
+        law=True,
+        kw_only=True,
+    )
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     si: jax.Array | None = eqx.field(default=None, kw_only=True)
@@ -141,7 +190,11 @@ class DistanceDriver(Driver):
         bi, si = r.point(self.point_i, self.name)
         bj, sj = r.point(self.point_j, self.name)
         if bi == bj:
-            raise ModelError("a distance driver needs points on two different bodies", self.name)
+            raise ModelError(
+                f"both points are on {body_name(self.point_i)!r}: a distance driver needs "
+                "points on two different bodies",
+                self.name,
+            )
         return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj)
 
     def body_indices(self):

@@ -11,6 +11,7 @@ import numpy as np
 from .._arrays import as_f64
 from ..errors import ModelError
 from ._body import GROUND_NAME
+from ._declare import check_declared
 from ._geometry import GROUND
 
 
@@ -26,6 +27,11 @@ class Element(eqx.Module):
     #: The fields holding body indices (filled by :meth:`bind`): the constraint set reads an
     #: element's bodies from a local vector through them (``mixdyn.equations``).
     body_fields: ClassVar[tuple[str, ...]] = ("b", "bi", "bj")
+
+    def __check_init__(self):
+        """Check the declared numbers: finite and in their declared ranges
+        (:func:`~mixdyn.model._declare.check_declared`)."""
+        check_declared(self)
 
     def bind(self, r: Resolver) -> Element:
         """Return a copy with every reference resolved (called by the model)."""
@@ -106,6 +112,14 @@ def static_direction(value):
     if isinstance(value, str):
         return value
     return tuple(float(x) for x in np.ravel(np.asarray(value, dtype=float)))
+
+
+def body_name(ref) -> str:
+    """The name of the body of a point reference (``"body.point"``, ``"body"`` or
+    ``("body", (x, y))``), for messages."""
+    if isinstance(ref, tuple | list) and ref and isinstance(ref[0], str):
+        return ref[0]
+    return str(ref).partition(".")[0]
 
 
 def moving(*bodies: int) -> tuple[int, ...]:

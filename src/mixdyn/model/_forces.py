@@ -18,11 +18,10 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
-from ._declare import element, quantity, reference
-from ._element import Element, Resolver, moving, static_direction
+from ._declare import direction, element, option, quantity, reference
+from ._element import Element, Resolver, moving
 from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._laws import Law, as_law
-from ._validate import finite
 
 _UNBOUND = -2
 
@@ -117,37 +116,52 @@ class ForceElement(Element):
 
 @element("point_force", "forces")
 class PointForce(ForceElement):
-    """A force at a body point along a fixed direction, of magnitude ``magnitude`` [force].
+    """A force at a body point along a fixed direction, of magnitude ``law`` [force].
 
     Args:
         name: unique name.
         point: ``"body.point"`` (or ``"body"`` for the centre of mass).
         along: (2,) direction, in the ground frame (``frame="ground"``) or the body frame.
-        magnitude: a law of time, a :class:`StateFunction`, or a number.
+        law: the magnitude: a law of time, a :class:`StateFunction`, or a number.
         frame: ``"ground"`` or ``"body"``.
     """
 
-    point: str = eqx.field(static=True)
-    along: tuple[float, ...] = eqx.field(
-        static=True, default=(1.0, 0.0), converter=static_direction
+    point: str = reference("The loaded point, ``body.point`` or ``body`` (centre of mass).")
+    along: tuple[float, ...] = direction(
+        "Direction of the force ``[x, y]``, in the ground or body frame (``frame``). Default "
+        "``[1, 0]``.",
+        (1.0, 0.0),
     )
-    law: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
-    frame: str = eqx.field(static=True, default="ground")
+    law: Law | StateFunction | None = quantity(
+        "force",
+        "Magnitude along ``along``: a law of time, which may also use body states "
+        "(``-c*slider.vx``). Default 0.",
+        0.0,
+        converter=_as_magnitude,
+        law=True,
+        state=True,
+    )
+    frame: str = option(
+        "Frame of ``along``: ``ground`` (fixed direction, default) or ``body`` (turns with the "
+        "body).",
+        "ground",
+        choices=("ground", "body"),
+    )
     b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     s: jax.Array | None = eqx.field(default=None, kw_only=True)
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
     has_magnitude = True
 
-    def __check_init__(self):
-        if not isinstance(self.along, str):
-            finite(self.along, "along", self.name)
-
     def bind(self, r: Resolver):
         if self.frame not in ("ground", "body"):
-            raise ModelError(f"frame must be 'ground' or 'body', got {self.frame!r}", self.name)
+            raise ModelError(
+                f"frame must be 'ground' or 'body', got {self.frame!r}", self.name, field="frame"
+            )
         b, s = r.point(self.point, self.name)
         if b == GROUND:
-            raise ModelError("a force on the ground has no effect; apply it to a body", self.name)
+            raise ModelError(
+                "a force on the ground has no effect; apply it to a body", self.name, field="point"
+            )
         u = r.vector(self.along, GROUND, self.name)
         return dataclasses.replace(self, b=b, s=s, u=u)
 
@@ -164,14 +178,27 @@ class PointForce(ForceElement):
 
 @element("torque", "forces")
 class Torque(ForceElement):
-    """A torque ``magnitude`` [torque] (counter-clockwise positive) on ``body``.
+    """A torque ``law`` [torque] (counter-clockwise positive) on ``body``.
 
     If ``reaction`` names a second body, the opposite torque acts on it.
     """
 
-    body: str = eqx.field(static=True)
-    law: Law | StateFunction | None = eqx.field(default=0.0, converter=_as_magnitude)
-    reaction: str | None = eqx.field(static=True, default=None)
+    body: str = reference("The body the torque acts on.", what="body")
+    law: Law | StateFunction | None = quantity(
+        "torque",
+        "Magnitude, counter-clockwise positive: a law of time, which may also use body states "
+        "(``-c*crank.omega``). Default 0.",
+        0.0,
+        converter=_as_magnitude,
+        law=True,
+        state=True,
+    )
+    reaction: str | None = reference(
+        "A body that receives the opposite torque (e.g. a motor housing); default none "
+        "(``ground``).",
+        what="body",
+        default=None,
+    )
     b: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     br: int = eqx.field(static=True, default=GROUND, kw_only=True)
     has_magnitude = True
@@ -179,8 +206,16 @@ class Torque(ForceElement):
     def bind(self, r: Resolver):
         b = r.body(self.body, self.name)
         if b == GROUND:
-            raise ModelError("a torque on the ground has no effect; apply it to a body", self.name)
+            raise ModelError(
+                "a torque on the ground has no effect; apply it to a body", self.name, field="body"
+            )
         br = r.body(self.reaction, self.name) if self.reaction else GROUND
+        if br == b:
+            raise ModelError(
+                "the reaction acts on the same body: name another body (or none)",
+                self.name,
+                field="reaction",
+            )
         return dataclasses.replace(self, b=b, br=br)
 
     def body_indices(self):
@@ -212,16 +247,16 @@ class SpringDamper(ForceElement):
     point_j: str = reference("Second attachment point, on another body.")
     stiffness: jax.Array = quantity(
         "stiffness",
-        "Spring stiffness, e.g. ``\"2 N/mm\"``. Tension ``stiffness (L - free_length) + "
+        'Spring stiffness, e.g. ``"2 N/mm"``. Tension ``stiffness (L - free_length) + '
         "damping dL/dt - actuator``. Default 0.",
         0.0,
         converter=_f64,
     )
     damping: jax.Array = quantity(
-        "damping", "Damping coefficient, e.g. ``\"5 N*s/m\"``. Default 0.", 0.0, converter=_f64
+        "damping", 'Damping coefficient, e.g. ``"5 N*s/m"``. Default 0.', 0.0, converter=_f64
     )
     free_length: jax.Array = quantity(
-        "length", "Unstretched length of the spring. Default 0.", 0.0, converter=_f64
+        "length", "Unstretched length of the spring. Default 0.", 0.0, converter=_f64, at_least=0.0
     )
     actuator: Law | StateFunction | None = quantity(
         "force",
@@ -237,10 +272,6 @@ class SpringDamper(ForceElement):
     si: jax.Array | None = eqx.field(default=None, kw_only=True)
     sj: jax.Array | None = eqx.field(default=None, kw_only=True)
     has_magnitude = True
-
-    def __check_init__(self):
-        finite((self.stiffness, self.damping), "stiffness and damping", self.name)
-        finite(self.free_length, "free_length", self.name, at_least=0.0)
 
     def bind(self, r: Resolver):
         bi, si = r.point(self.point_i, self.name)
@@ -317,7 +348,7 @@ class RotarySpringDamper(ForceElement):
     )
     stiffness: jax.Array = quantity(
         "rotational_stiffness",
-        "Rotational stiffness, e.g. ``\"500 N*mm/rad\"``. Default 0.",
+        'Rotational stiffness, e.g. ``"500 N*mm/rad"``. Default 0.',
         0.0,
         converter=_f64,
     )
@@ -342,13 +373,6 @@ class RotarySpringDamper(ForceElement):
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     has_magnitude = True
-
-    def __check_init__(self):
-        finite(
-            (self.stiffness, self.damping, self.free_angle),
-            "stiffness, damping and free_angle",
-            self.name,
-        )
 
     def bind(self, r: Resolver):
         bi, bj = r.body(self.body_i, self.name), r.body(self.body_j, self.name)

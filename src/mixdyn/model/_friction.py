@@ -32,15 +32,15 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
-from ._declare import element
+from ._declare import element, quantity, reference
 from ._element import Resolver
 from ._forces import ForceElement, _f64
-from ._validate import finite
 
 
 @element("joint_friction", "forces")
 class JointFriction(ForceElement):
-    """Coulomb friction in the revolute or translational joint named ``joint``.
+    """Coulomb friction, with stick and slip, in the revolute, translational or pin-in-slot
+    joint named ``joint``.
 
     Args:
         name: unique name.
@@ -51,21 +51,48 @@ class JointFriction(ForceElement):
             velocity for a revolute joint].
     """
 
-    joint: str = eqx.field(static=True)
-    mu: jax.Array = eqx.field(default=0.0, converter=_f64)
-    radius: jax.Array = eqx.field(default=0.0, converter=_f64)
-    v_stick: jax.Array = eqx.field(default=1e-6, converter=_f64)
+    joint: str = reference(
+        "The joint with friction: a revolute, translational or pin-in-slot joint.", what="joint"
+    )
+    mu: jax.Array = quantity(
+        "dimensionless", "Coulomb friction coefficient, >= 0.", converter=_f64, at_least=0.0
+    )
+    radius: jax.Array = quantity(
+        "length",
+        "Pin radius, for a revolute joint: the friction torque is ``mu radius |R|``.",
+        0.0,
+        converter=_f64,
+        at_least=0.0,
+    )
+    v_stick: jax.Array = quantity(
+        ("velocity", "angular_velocity"),
+        "Stick band (an angular velocity for a revolute joint): below this relative speed the "
+        "joint sticks while the friction can hold it. Default 1e-6 in the model's units.",
+        1e-6,
+        converter=_f64,
+        above=0.0,
+    )
     #: Whether the joint is revolute (a friction torque), set when the model is built.
     rotary: bool = eqx.field(static=True, default=False, kw_only=True)
     #: The element is evaluated by the analysis, with the reactions.
     needs_reactions: ClassVar[bool] = True
+    #: What the element's name is used for, in a model file's description.
+    name_doc: ClassVar[str] = (
+        "Unique name of the friction element (its result columns: the friction force or "
+        "torque, ``.normal``, ``.limit``, ``.speed``, ``.power``)."
+    )
 
-    def __check_init__(self):
-        finite((self.mu, self.radius, self.v_stick), "mu, radius and v_stick", self.name)
-        if jnp.any(jnp.asarray(self.mu) < 0) or jnp.any(jnp.asarray(self.radius) < 0):
-            raise ModelError("mu and radius must be >= 0", self.name)
-        if jnp.any(jnp.asarray(self.v_stick) <= 0):
-            raise ModelError("v_stick must be > 0 (the stick band's half-width)", self.name)
+    @classmethod
+    def field_kind(cls, field: str, values, element_class) -> str:
+        """The stick band's kind: an angular velocity in a revolute joint, else a velocity
+        (``element_class(name)``: the class of the model's element ``name``, or None)."""
+        from ._joints import Revolute
+
+        joint = element_class(values["joint"])
+        rotary = values.get("rotary", False) or (
+            isinstance(joint, type) and issubclass(joint, Revolute)
+        )
+        return "angular_velocity" if rotary else "velocity"
 
     def bind(self, r: Resolver):
         return self
@@ -83,6 +110,7 @@ class JointFriction(ForceElement):
                             f"friction in revolute joint {self.joint!r} needs the pin's radius "
                             "(radius > 0): the friction torque is mu * radius * |reaction|",
                             self.name,
+                            field="radius",
                         )
                     return dataclasses.replace(self, rotary=True)
                 if isinstance(j, Translational):
@@ -91,9 +119,10 @@ class JointFriction(ForceElement):
                     f"joint {self.joint!r} is a {type(j).__name__}: friction is modelled in "
                     "revolute, translational and pin-in-slot joints",
                     self.name,
+                    field="joint",
                 )
         known = ", ".join(j.name for j in joints) or "(none)"
-        raise ModelError(f"no joint {self.joint!r}; joints: {known}", self.name)
+        raise ModelError(f"no joint {self.joint!r}; joints: {known}", self.name, field="joint")
 
     def body_indices(self):
         return ()

@@ -18,10 +18,10 @@ import jax
 import jax.numpy as jnp
 
 from .._arrays import as_f64
-from ._declare import element
-from ._element import Element, Resolver, moving, static_direction
+from ..errors import ModelError
+from ._declare import direction, element, quantity, reference
+from ._element import Element, Resolver, body_name, moving
 from ._geometry import angle, cross, point, vector
-from ._validate import finite
 
 _UNBOUND = -2
 
@@ -76,8 +76,13 @@ class Joint(Element):
 
 
 class _TwoPoint(Joint):
-    point_i: str = eqx.field(static=True)
-    point_j: str = eqx.field(static=True)
+    """A joint between point ``point_i`` of body i and ``point_j`` of body j (two different
+    bodies)."""
+
+    point_i: str = reference(
+        "Point on body i: ``body.point``, ``body`` (centre of mass) or ``ground.point``."
+    )
+    point_j: str = reference("Point on body j (another body), coinciding with ``point_i``.")
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     bj: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
     si: jax.Array | None = eqx.field(default=None, kw_only=True)
@@ -87,9 +92,11 @@ class _TwoPoint(Joint):
         bi, si = r.point(self.point_i, self.name)
         bj, sj = r.point(self.point_j, self.name)
         if bi == bj:
-            from ..errors import ModelError
-
-            raise ModelError("a joint must connect two different bodies", self.name)
+            raise ModelError(
+                f"both points are on {body_name(self.point_i)!r}: a joint must connect two "
+                "different bodies",
+                self.name,
+            )
         return dict(bi=bi, bj=bj, si=si, sj=sj)
 
     def bind(self, r: Resolver):
@@ -130,12 +137,14 @@ class Weld(_TwoPoint):
     Equations (3): the revolute's two, and ``phi_j - phi_i - angle = 0``.
     """
 
-    angle: jax.Array = eqx.field(default=0.0, converter=_f64)
+    angle: jax.Array = quantity(
+        "angle",
+        'Fixed relative angle ``phi_j - phi_i`` (or with a unit, ``"30 deg"``). Default 0.',
+        0.0,
+        converter=_f64,
+    )
     n_equations: ClassVar[int] = 3
     equation_labels: ClassVar[tuple[str, ...]] = ("x", "y", "angle")
-
-    def __check_init__(self):
-        finite(self.angle, "angle", self.name)
 
     def residual(self, q):
         rel = angle(q, self.bj) - angle(q, self.bi) - self.angle
@@ -157,18 +166,25 @@ class Translational(_TwoPoint):
     ``phi_j - phi_i - angle = 0``.
     """
 
-    axis: str | tuple[float, ...] = eqx.field(
-        static=True, default=(1.0, 0.0), converter=static_direction
+    point_i: str = reference(
+        "Point of body i on the sliding line: ``body.point``, ``body`` or ``ground.point``."
     )
-    angle: jax.Array = eqx.field(default=0.0, converter=_f64)
+    point_j: str = reference("Point of body j (another body) that moves on the line.")
+    axis: str | tuple[float, ...] = direction(
+        "Direction of the line in body i's frame: ``[x, y]`` or the name of one of body i's "
+        "``vectors``. Default ``[1, 0]``.",
+        (1.0, 0.0),
+        on="point_i",
+    )
+    angle: jax.Array = quantity(
+        "angle",
+        "Fixed relative angle ``phi_j - phi_i`` (or with a unit). Default 0.",
+        0.0,
+        converter=_f64,
+    )
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
     n_equations: ClassVar[int] = 2
     equation_labels: ClassVar[tuple[str, ...]] = ("normal", "angle")
-
-    def __check_init__(self):
-        finite(self.angle, "angle", self.name)
-        if not isinstance(self.axis, str):
-            finite(self.axis, "axis", self.name)
 
     def bind(self, r: Resolver):
         kw = self._bind_points(r)
@@ -196,6 +212,18 @@ class PinInSlot(Translational):
     may rotate freely. Equation (1): ``u_i x (r_Pj - r_Pi) = 0``.
     """
 
+    point_i: str = reference(
+        "Point of body i on the slot's line: ``body.point``, ``body`` or ``ground.point``."
+    )
+    point_j: str = reference("Point (pin) of body j (another body) that moves in the slot.")
+    axis: str | tuple[float, ...] = direction(
+        "Direction of the slot in body i's frame: ``[x, y]`` or the name of one of body i's "
+        "``vectors``. Default ``[1, 0]``.",
+        (1.0, 0.0),
+        on="point_i",
+    )
+    #: Not a field of a file: the pin turns freely, no relative angle is held.
+    angle: jax.Array = eqx.field(default=0.0, converter=_f64)
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("normal",)
 
@@ -217,12 +245,16 @@ class Distance(_TwoPoint):
     Its multiplier is the rod's compression force [force].
     """
 
-    length: jax.Array = eqx.field(default=1.0, converter=_f64)
+    point_i: str = reference("First point: ``body.point``, ``body`` or ``ground.point``.")
+    point_j: str = reference("Second point, on another body.")
+    length: jax.Array = quantity(
+        "length",
+        'Distance between the points, > 0, e.g. ``"120 mm"``.',
+        converter=_f64,
+        above=0.0,
+    )
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("length",)
-
-    def __check_init__(self):
-        finite(self.length, "length", self.name, above=0.0)
 
     def residual(self, q):
         return (jnp.linalg.norm(self._d(q)) - self.length)[None]
