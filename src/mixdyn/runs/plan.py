@@ -13,20 +13,15 @@ import dataclasses
 
 import numpy as np
 
-from .. import model as m
 from .. import paths
 from ..errors import ModelError
 from ..io import schema as s
 from ..io._errors import FileError
+from ..model._declare import number_kind as declared_number_kind
 
-#: Kinds of quantity of the numbers of bodies and force elements, by field.
-_NUMBER_KINDS = {
-    "mass": "mass",
-    "inertia": "inertia",
-    "free_length": "length",
-    "stiffness": "stiffness",
-    "damping": "damping",
-}
+#: Kinds of quantity of the numbers of bodies, by field (an element's are declared by its
+#: class: :func:`mixdyn.model._declare.number_kind`).
+_BODY_KINDS = {"mass": "mass", "inertia": "inertia"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -124,20 +119,16 @@ def study_base(runner, index: int, r, kinds: tuple[str, ...], verb: str) -> Plan
 
 
 def number_kind(runner, path: str) -> str | None:
-    """The kind of quantity of a body's or force element's number ``"name.field"`` (a mass, a
-    spring's stiffness...), for its values with units; None (model units) for a law's number
-    or a field of no fixed kind."""
+    """The kind of quantity of a body's or element's number ``"name.field"`` (a mass, a
+    spring's stiffness...), for its values with units: a body's by :data:`_BODY_KINDS`, an
+    element's as its class declares it; None (model units) for a law's number or a field of
+    no declared kind."""
     head, _, field = path.rpartition(".")
     if "." in head:  # a law's number: its unit is the law's
         return None
-    kinds = dict(_NUMBER_KINDS)
-    rotary = head not in runner.b.body_index and isinstance(
-        runner.model.element(head), m.RotarySpringDamper
-    )
-    if rotary:
-        kinds.update(stiffness="rotational_stiffness", damping="rotational_damping")
-        kinds["free_angle"] = "angle"
-    return kinds.get(field)
+    if head in runner.b.body_index:
+        return _BODY_KINDS.get(field)
+    return declared_number_kind(runner.model.element(head), field, runner.model)
 
 
 def model_number(runner, name: str, path, verb: str) -> str | None:
