@@ -215,7 +215,7 @@ def quantity(
 def direction(doc: str, default: Any = dataclasses.MISSING, *, on: str | None = None):
     """A static field holding a direction (see :class:`Direction`), stored as a tuple of
     floats or a vector's name (:func:`~mixdyn.model._element.static_direction`)."""
-    from ._element import static_direction
+    from ._geometry import static_direction
 
     return eqx.field(
         static=True,

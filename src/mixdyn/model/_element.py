@@ -12,7 +12,7 @@ from .._arrays import as_f64
 from ..errors import ModelError
 from ._body import GROUND_NAME
 from ._declare import check_declared
-from ._geometry import GROUND
+from ._geometry import GROUND, static_direction  # noqa: F401  (re-exported)
 
 
 class Element(eqx.Module):
@@ -104,14 +104,6 @@ class Resolver:
         if not np.isfinite(n) or n == 0:
             raise ModelError(f"direction {ref!r} has zero length", element)
         return as_f64(v / n)
-
-
-def static_direction(value):
-    """A direction given as the name of a body vector (kept as is) or as numbers, stored as a
-    tuple of floats: static fields must be hashable, which NumPy and JAX arrays are not."""
-    if isinstance(value, str):
-        return value
-    return tuple(float(x) for x in np.ravel(np.asarray(value, dtype=float)))
 
 
 def body_name(ref) -> str:

@@ -8,6 +8,7 @@ coordinates ``[0, 0, 0]``.
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 
 GROUND = -1
 
@@ -45,3 +46,11 @@ def angle(q, b: int):
 def cross(a, b):
     """z component of the planar cross product ``a x b``."""
     return a[0] * b[1] - a[1] * b[0]
+
+
+def static_direction(value):
+    """A direction given as the name of a body vector (kept as is) or as numbers, stored as a
+    tuple of floats: static fields must be hashable, which NumPy and JAX arrays are not."""
+    if isinstance(value, str):
+        return value
+    return tuple(float(x) for x in np.ravel(np.asarray(value, dtype=float)))
