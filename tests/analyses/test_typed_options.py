@@ -16,7 +16,7 @@ import mixdyn as md
 import mixdyn.io as mio
 from fixtures import new_traces, pendulum, slider_crank, traced_now
 from mixdyn.analysis.methods import FIXED_STEP, OPTIONS
-from mixdyn.io import settings
+from mixdyn.runs import checks
 from mixdyn.runtime import _programs
 
 TS = np.linspace(0.0, 0.2, 5)
@@ -330,11 +330,11 @@ def test_a_model_file_run_makes_the_same_object(kind, lines, expected, monkeypat
     assert type(seen["options"]) is type(expected)
     assert seen["energy_tol"] == (1e-3 if "energy_tol" in lines else "auto")
     # the names a file's run may give are the class's fields but the run's own settings
-    known = settings.known_options(spec.runs[0])
-    fields = set(expected.defaults()) - set(settings.RUN_SETTINGS)
+    known = checks.known_options(spec.runs[0])
+    fields = set(expected.defaults()) - set(checks.RUN_SETTINGS)
     if kind == "mixed":
         fields.discard("solver")  # a mixed run's 'solver' is the mixed solver
-    assert set(known) == fields | set(settings.DYNAMIC_OPTIONS)
+    assert set(known) == fields | set(checks.DYNAMIC_OPTIONS)
 
 
 # ------------------------------------------------------------------ tracing

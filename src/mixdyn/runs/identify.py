@@ -175,6 +175,7 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
     import equinox as eqx
     import jax.numpy as jnp
 
+    from ..analysis._keywords import from_keywords
     from ..analysis.fit import fit
 
     r: s.IdentifyRunSpec = plan.spec
@@ -183,6 +184,8 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
     nominal = [float(paths.getter(model, p)[0](model)) for p in params]
     x0 = [plan.start.get(p, v) for p, v in zip(params, nominal, strict=True)]
     try:
+        # the repeated run's analysis as a value (its keywords read once)
+        value, _ = from_keywords(analysis, plan.times, kwargs)
         result = fit(
             model,
             plan.times,
@@ -191,9 +194,8 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
             noise=plan.noise,
             start=x0,
             bounds=plan.bounds or None,
-            analysis=analysis,
+            analysis=value,
             max_evaluations=r.max_evaluations,
-            **kwargs,
         )
     except ModelError as e:
         runner.fail(plan.path, str(e), "")

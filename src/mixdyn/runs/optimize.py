@@ -118,6 +118,7 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
     import equinox as eqx
     import jax.numpy as jnp
 
+    from ..analysis._keywords import from_keywords
     from ..analysis.optimize import optimize
 
     r: s.OptimizeRunSpec = plan.spec
@@ -137,6 +138,8 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
             for p, v in zip(params, nominal, strict=True)
         ]
     try:
+        # the repeated run's analysis as a value (its keywords read once)
+        value, _ = from_keywords(analysis, plan.times, kwargs)
         opt = optimize(
             model,
             plan.times,
@@ -144,9 +147,8 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
             params,
             plan.bounds,
             start=start,
-            analysis=analysis,
+            analysis=value,
             max_iterations=r.max_iterations,
-            **kwargs,
         )
     except ModelError as e:
         runner.fail(plan.path, str(e), "")
