@@ -164,3 +164,18 @@ def test_values_are_immutable_equal_and_hashable():
         md.run("setup", TS)
     with pytest.raises(md.ModelError, match="no per-time progress"):
         md.run(md.prepare(slider_crank(), Kinematic()), [0.0, 0.1], progress=print)
+
+
+def test_values_pickle_whole():
+    """A value crosses a process boundary whole (a Dask sweep sends it to its workers), a
+    fixed-step method's options included; made again by pickle, it is equal."""
+    import pickle
+
+    values = [
+        Forward(method=md.Baumgarte(dt=1e-3), qd0={"bob.phi": 1.0}),
+        Mixed(prescribed=[md.CoordinateDriver("x", "slider", "x", law=1.0)], unknown="F1"),
+        Inverse(q0=[0.0, 0.1, 0.2]),
+        QuasiStatic(tol=1e-9),
+    ]
+    for value in values:
+        assert pickle.loads(pickle.dumps(value)) == value

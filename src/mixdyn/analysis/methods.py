@@ -88,8 +88,12 @@ class IntegratorOptions(eqx.Module):
                 "IntegratorOptions is the base of the methods' options: make a Projection, "
                 "Partitioning, Baumgarte or GeneralizedAlpha"
             )
-        check(cls, kwargs)
+        check(cls, kwargs, step=False)  # the step: once made (a copy is made without kwargs)
         return super().__new__(cls, *args, **kwargs)
+
+    def __check_init__(self):
+        if self.fixed_step and getattr(self, "dt", None) is None:
+            check(type(self), {})  # a fixed-step method without its step
 
     @classmethod
     def defaults(cls) -> dict[str, object]:
@@ -248,7 +252,7 @@ OPTIONS: dict[str, type[IntegratorOptions]] = {
 FIXED_STEP = tuple(name for name, c in OPTIONS.items() if c.fixed_step)
 
 
-def check(cls: type[IntegratorOptions], given: dict, ts=None) -> None:
+def check(cls: type[IntegratorOptions], given: dict, ts=None, step: bool = True) -> None:
     """Check the options ``given`` to method ``cls``: known names, values in range, and the
     step of a fixed-step method.
 
@@ -256,6 +260,7 @@ def check(cls: type[IntegratorOptions], given: dict, ts=None) -> None:
         cls: the method's options class.
         given: the options given (a value None: the option's default where that is None).
         ts: (N,) output times [time], for the example step of the message, or None.
+        step: whether a fixed-step method's ``dt`` is required among ``given``.
 
     Raises:
         ModelError: an unknown option (with close matches), a value out of range or of the
@@ -276,7 +281,7 @@ def check(cls: type[IntegratorOptions], given: dict, ts=None) -> None:
         problem = value_problem(name, value)
         if problem:
             raise ModelError(f"{name} {problem}, got {value!r}", name)
-    if cls.fixed_step and given.get("dt") is None:
+    if step and cls.fixed_step and given.get("dt") is None:
         example = "" if ts is None else f", e.g. dt={(ts[-1] - ts[0]) / 2000:.3g}"
         raise ModelError(
             f"the {cls.method} integrator has a fixed step: give dt [time]{example}", "dt"
