@@ -72,6 +72,28 @@ def test_mixdyn_programs_are_compiled_with_the_options(monkeypatch):
         _programs.cached_jit(triple)(jnp.asarray(1.5))
 
 
+def test_a_program_called_inside_another_takes_the_outer_options():
+    """XLA takes compile options for a whole program only: a mixdyn function called inside
+    another jitted function (with traced or with constant arguments) is part of that program,
+    with the cache on and off."""
+    import jax
+
+    def double(x):
+        return 2.0 * x
+
+    f = _programs.cached_jit(double)
+    assert f.options  # mixdyn's own options for a program of its own
+    folder = _programs.cache_folder()
+    try:
+        for cache in (False, folder):
+            _programs.set_cache(cache)
+            assert float(jax.jit(lambda x: f(x) + 1.0)(1.0)) == 3.0
+            assert float(jax.jit(lambda x: f(jnp.ones(2)).sum() + x)(1.0)) == 5.0
+            assert float(f(jnp.asarray(1.5))) == 3.0
+    finally:
+        _programs.set_cache(folder or False)
+
+
 def test_optional_flags_are_added_only_for_the_jaxlibs_checked():
     """A flag of :data:`IF_KNOWN` is added for the jaxlib versions in which it was checked to
     exist (XLA aborts the process on an unknown flag), not before nor after them, and never

@@ -326,12 +326,27 @@ class _CachedJit:
         self.name = f"{fn.__module__}.{fn.__qualname__}"
         self.fn = _counting(fn, self.name)
         self.options = {**_xla.compile_options(), **({} if optimize else QUICK)} or None
-        self.jit = eqx.filter_jit(self.fn, compiler_options=self.options)
+        self.top = eqx.filter_jit(self.fn, compiler_options=self.options)
+        self.nested = eqx.filter_jit(self.fn)  # inside another program: that one's options
         self.programs: dict = {}
         functools.update_wrapper(self, fn, updated=())
 
     def __get__(self, obj, objtype=None):  # pragma: no cover - used on plain functions
         return self if obj is None else types.MethodType(self, obj)
+
+    def jit(self, *args, **kwargs):
+        """The call traced by ``equinox.filter_jit``: with this function's compile options
+        (:attr:`options`) as a program of its own, without them inside another program
+        (XLA takes options only for a whole program: the outer one's hold)."""
+        leaves = jax.tree_util.tree_leaves((args, kwargs))
+        if self.options is None or any(isinstance(x, jax.core.Tracer) for x in leaves):
+            return self.nested(*args, **kwargs)
+        try:
+            return self.top(*args, **kwargs)
+        except ValueError as e:  # called inside another trace with constant arguments only
+            if "top-level" not in str(e):
+                raise
+            return self.nested(*args, **kwargs)
 
     @staticmethod
     def _key(args, kwargs):
