@@ -144,7 +144,10 @@ def test_value_equals_the_forward_run_and_failure_is_nan(paper):
     f, th0 = md.differentiable(paper, TS, PARAMS, rtol=1e-10, atol=1e-10)
     ref = md.forward(paper, TS, rtol=1e-10, atol=1e-10)
     out = f(th0)
-    np.testing.assert_array_equal(np.asarray(out["q"]), ref.q)
+    # The same equations and steps; md.forward's programs carry mixdyn's XLA options, a
+    # program around md.differentiable's function is compiled with JAX's: the last bits only.
+    scale = np.max(np.abs(ref.q))
+    np.testing.assert_allclose(np.asarray(out["q"]), ref.q, rtol=0, atol=1e-13 * scale)
     # a heavier slider moves less: the numbers reach the equations
     heavier = np.asarray(f(th0 * np.array([10.0, 1.0, 1.0, 1.0]))["q"])[-1, SLIDER_X]
     assert abs(heavier - ref["slider.x"][-1]) > 1e-3
