@@ -2,7 +2,7 @@
 the switches, the range of every number and the step count of a fixed-step run.
 
 The options themselves are typed objects (:mod:`.methods`), checked against this vocabulary
-when made; the model-file checks (:mod:`mixdyn.io.settings`) use it too.
+when made; the model-file checks (:mod:`mixdyn.runs.checks`) use it too.
 """
 
 from __future__ import annotations
