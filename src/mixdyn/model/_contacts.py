@@ -440,9 +440,10 @@ class _OnLine(Joint):
     generic_reaction: ClassVar[bool] = False
 
     def bind(self, r: Resolver):
-        if r.body(self.wheel, self.name) == GROUND:
-            raise ModelError("the wheel cannot be the ground", self.name, field="wheel")
         bi, si = r.point(self.center or self.wheel, self.name)
+        if bi == GROUND:
+            field = "center" if self.center else "wheel"
+            raise ModelError("the wheel cannot be on the ground", self.name, field=field)
         bj, sj = r.point(self.line_point, self.name)
         if bi == bj:
             raise ModelError(
