@@ -23,7 +23,7 @@ import pytest
 
 import mixdyn as md
 from fixtures import ROOT, TESTS, new_traces, paper_mechanism, pendulum, traced_now
-from mixdyn.runtime import _private, _programs
+from mixdyn.runtime import _private, _programs, _xla
 
 TS = np.linspace(0.0, 0.2, 11)
 HOLD = ("crank.phi", "coupler.phi")
@@ -154,8 +154,9 @@ def test_a_quick_program_is_compiled_so_with_the_cache_on_and_off(cache):
     weights[[2, 5]] = 0.0
     args = (c, q, qd, np.asarray(0.1), weights)
     fn = _velocity_fix.fn.__wrapped__
-    assert _velocity_fix.options == _programs.QUICK  # declared so in mixdyn.analysis._start
-    off = eqx.filter_jit(fn, compiler_options=_programs.QUICK)(*args)
+    # declared so in mixdyn.analysis._start; with mixdyn's XLA options (runtime._xla)
+    assert _velocity_fix.options == {**_xla.compile_options(), **_programs.QUICK}
+    off = eqx.filter_jit(fn, compiler_options=_velocity_fix.options)(*args)
     exported = _programs.cached_jit(fn, optimize=False)(*args)
     reread = _programs.cached_jit(optimize=False)(fn)(*args)
     optimized = eqx.filter_jit(fn)(*args)
