@@ -41,6 +41,9 @@ from typing import Any
 
 import equinox as eqx
 
+from ._geometry import static_direction
+from ._validate import finite
+
 #: The key of a declared field's metadata.
 KEY = "mixdyn"
 
@@ -215,8 +218,6 @@ def quantity(
 def direction(doc: str, default: Any = dataclasses.MISSING, *, on: str | None = None):
     """A static field holding a direction (see :class:`Direction`), stored as a tuple of
     floats or a vector's name (:func:`~mixdyn.model._element.static_direction`)."""
-    from ._geometry import static_direction
-
     return eqx.field(
         static=True,
         default=default,
@@ -286,8 +287,6 @@ def check_declared(element_obj: Any) -> None:
     number of an element is finite and in its declared range, and every direction given by
     numbers is finite (called by :class:`~mixdyn.model._element.Element` when an element is
     made)."""
-    from ._validate import finite
-
     for name, decl, _ in declared_fields(type(element_obj)):
         value = getattr(element_obj, name)
         if isinstance(decl, Quantity) and not decl.law:
