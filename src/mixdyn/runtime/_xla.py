@@ -85,6 +85,4 @@ def compile_options() -> dict[str, bool]:
     ``$XLA_FLAGS``; none with ``MIXDYN_KEEP_XLA_FLAGS=1``. Read once per process."""
     if os.environ.get(KEEP_ENV, "").strip() not in ("", "0"):
         return {}
-    return {
-        name.lstrip("-"): value == "true" for name, value in flags_to_add(user_flags()).items()
-    }
+    return {name.lstrip("-"): value == "true" for name, value in flags_to_add(user_flags()).items()}
