@@ -10,7 +10,7 @@ which an analysis takes the constraint rows its solver needs
 The analysis values make theirs in :func:`~mixdyn.prepare` (:mod:`._setup`), which carries
 it in its :class:`~._setup.Setup`. A :class:`Prepared` made here beforehand is also taken by
 the analysis functions' deprecated ``prepared=`` keyword (the model-file runner,
-:mod:`mixdyn.io.runs`, checks a run on the start the run then starts from):
+:mod:`mixdyn.runs`, checks a run on the start the run then starts from):
 :func:`use_prepared` refuses one made for another call (model, drivers, start time, rough
 start, held coordinates, linear solver).
 """

@@ -7,7 +7,7 @@ The figure worker of ``mixdyn run`` is started as early as the command line allo
 no JAX). Importing matplotlib and drawing a first figure costs the worker ~0.5 s; started
 when the command begins, before mixdyn imports JAX (:func:`start_for_command_line`, called
 first thing by ``mixdyn/__init__.py``), the worker is ready by the time the first run ends.
-:func:`worker` hands it to :class:`mixdyn.cli._Painter` (or starts one then). A worker
+:func:`worker` hands it to :class:`mixdyn.viz.painter.Painter` (or starts one then). A worker
 nobody took is stopped when the process exits.
 
 ``mixdyn run FILE`` reads the programs its last run of the file used (its manifest:
