@@ -76,15 +76,15 @@ def test_a_second_sweep_with_other_numbers_traces_nothing(paper):
 
 def _count_setups(monkeypatch, analysis: str) -> list:
     """A list that grows by one at each set-up of a member of a sweep of ``analysis``."""
-    sweep_module = importlib.import_module("mixdyn.analysis.sweep")
-    calls, real = [], sweep_module.prepare
+    members_module = importlib.import_module("mixdyn.analysis._members")
+    calls, real = [], members_module.prepare
 
     def counting(model, value, **k):
         if value.name == analysis:
             calls.append(1)
         return real(model, value, **k)
 
-    monkeypatch.setattr(sweep_module, "prepare", counting)
+    monkeypatch.setattr(members_module, "prepare", counting)
     return calls
 
 

@@ -25,12 +25,9 @@ structure.
 from __future__ import annotations
 
 import dataclasses
-import functools
 import itertools
-import os
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 
 import equinox as eqx
 import jax
@@ -40,11 +37,13 @@ import numpy as np
 from .. import paths
 from ..errors import MixdynError, ModelError
 from ..model import Model
-from ..runtime._programs import cached_jit
-from ._keywords import from_keywords, study_analysis
-from ._setup import Analysis, prepare, run
-from ._simulate import Case, _post_arrays, finish, integrate, require_masses
-from .integrators import INTEGRATORS
+from ._cluster import _on_cluster
+from ._keywords import study_analysis
+from ._members import model_swapper as model_swapper
+from ._members import run_members
+from ._schedule import ACCELERATOR_BATCH as ACCELERATOR_BATCH
+from ._schedule import for_batch as for_batch
+from ._setup import Analysis
 from .result import Result
 
 #: The checked accessor of a parameter path, for the model-file layer's modules that read it
@@ -93,7 +92,7 @@ def shares_start(model: Model, vary: Mapping[str, Sequence], unknown: Sequence[s
     solvability): a body's mass or inertia, or any number of a force element but the
     ``unknown`` forces of a mixed run (their geometry gives the directions the solvability
     check reads). Such members share the nominal model's set-up, made once
-    (:func:`run_members`)."""
+    (:func:`~._members.run_members`)."""
     forces = {f.name for f in model.forces} - set(unknown)
     bodies = {b.name for b in model.bodies}
     for path in vary:
@@ -153,72 +152,6 @@ def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
 
 class _Marker:
     """A leaf put where a varied number sits (:func:`vary_models`)."""
-
-
-def for_batch(problem):
-    """``problem`` solved in a sweep's one vectorized program: its guard at singular
-    positions decides once per batch (:meth:`~mixdyn.equations.Constraints.for_batch`)."""
-    return eqx.tree_at(lambda p: p.c, problem, problem.c.for_batch())
-
-
-def model_swapper(problem):
-    """A function ``model -> problem`` with that model (of the same structure) in place of
-    ``problem``'s own: the problem's leaves are the model's followed by the constraint set's,
-    read once here (one unflatten a member; ``eqx.tree_at`` takes 2.5 ms)."""
-    c_leaves = jax.tree_util.tree_leaves(problem.c)
-    treedef = jax.tree_util.tree_structure(problem)
-    n_model = len(jax.tree_util.tree_leaves(problem.model))
-    if treedef.num_leaves != n_model + len(c_leaves):  # pragma: no cover - a new field
-        return lambda model: eqx.tree_at(lambda p: p.model, problem, model)
-    return lambda model: jax.tree_util.tree_unflatten(
-        treedef, jax.tree_util.tree_leaves(model) + c_leaves
-    )
-
-
-def _integrate_batch(method: str, batch_size: int, problems, ts, q0, qd0, options):
-    """The trajectories of a batch of cases of one structure (leading axis: the member)."""
-    integrate_one = INTEGRATORS[method]
-
-    def one(x):
-        p, a, b = x
-        return integrate_one(p, ts, a, b, options, progress=None)
-
-    return jax.lax.map(one, (problems, q0, qd0), batch_size=batch_size)
-
-
-_integrate_batch_jit = cached_jit(_integrate_batch)
-
-
-def _post_batch(batch_size: int, problems, ts, Q, QD):
-    """The post-processing's arrays (:func:`~._simulate._post_arrays`) of a batch of members
-    (leading axis: the member), in one program, ``batch_size`` members at a time
-    vectorized."""
-
-    def one(x):
-        p, q, qd = x
-        return _post_arrays(p, ts, q, qd)
-
-    return jax.lax.map(one, (problems, Q, QD), batch_size=batch_size)
-
-
-_post_batch_jit = cached_jit(_post_batch)
-
-
-@functools.cache
-def _default_batch_size() -> int | None:
-    """None on a CPU: member by member, each by the single run's program (compiled once for
-    every sweep), from a thread per core (measured on the paper's model, 2 cores, 128
-    members: 13.4 ms a member so; 8.4 ms in one vectorized program, but that program is
-    compiled per number of members, ~10 s the first time); on an accelerator
-    :data:`ACCELERATOR_BATCH` (an H200, the paper's model: 0.45 ms a member in a batch of
-    1,024, 0.10 ms of 10,000, 0.08-0.09 ms of 30,000 to 100,000; ``benchmarks/gpu_sweep.py``)."""
-    return None if jax.default_backend() == "cpu" else ACCELERATOR_BATCH
-
-
-#: Members vectorized at a time on an accelerator by default: wider batches cost less a member
-#: up to ~30,000 (each loop iteration's fixed cost is shared), then no more; ~65 kB of outputs
-#: a member of the paper's model (201 times), ~2 GB for a full batch.
-ACCELERATOR_BATCH = 32768
 
 
 @dataclasses.dataclass
@@ -322,259 +255,6 @@ class Sweep:
         )
 
 
-Outcome = tuple[Result | None, MixdynError | None]
-
-
-def _finish(case: Case, traj, arrays=None) -> Outcome:
-    try:
-        return finish(case, traj, arrays), None
-    except MixdynError as err:
-        return None, err
-
-
-def _in_threads(work: Callable[[int], Outcome], indices: list[int], threads: int, on_member):
-    """``work(i)`` for each index, the first alone (it compiles the programs the others
-    reuse), the others from ``threads`` threads (XLA runs without the GIL); ``on_member(i)``
-    after each."""
-
-    def run(i):
-        out = work(i)
-        if on_member is not None:
-            on_member(i)
-        return out
-
-    if not indices:
-        return []
-    first = run(indices[0])
-    rest = indices[1:]
-    if threads <= 1 or len(rest) <= 1:
-        return [first, *map(run, rest)]
-    with ThreadPoolExecutor(threads) as pool:
-        return [first, *pool.map(run, rest)]
-
-
-def _stack_column(col) -> np.ndarray:
-    """One leaf of every member stacked (leading axis: the member); a leaf that is the same
-    object in every member (a shared start's constraint set, the numbers not varied) is read
-    once and broadcast: on an accelerator each read is a transfer."""
-    if all(x is col[0] for x in col):
-        a = np.asarray(col[0])
-        return np.broadcast_to(a, (len(col), *a.shape))
-    return np.stack([np.asarray(x) for x in col])
-
-
-def _batched(cases: list[Case], batch_size: int, seconds: dict | None = None) -> list[Outcome]:
-    """The members integrated by one program (``batch_size`` at a time vectorized), then
-    finished one by one (``seconds``: filled with the times of both)."""
-    clock = time.perf_counter()
-    if batch_size < 1:
-        raise ModelError(f"batch_size must be >= 1, got {batch_size}", "batch_size")
-    first = cases[0]
-    # Stacked leaf by leaf (NumPy), under the structure of the batched problem (for_batch
-    # changes a static field only: the leaves are the same).
-    treedef = jax.tree_util.tree_structure(for_batch(first.problem))
-    rows = [jax.tree_util.tree_leaves(c.problem) for c in cases]
-    problems = jax.tree_util.tree_unflatten(
-        treedef, [_stack_column(col) for col in zip(*rows, strict=True)]
-    )
-    ts = np.asarray(first.ts, dtype=np.float64)
-    trajs = _integrate_batch_jit(
-        first.options.method,
-        int(min(batch_size, len(cases))),
-        problems,
-        ts,
-        _stack_column([c.q0 for c in cases]),
-        _stack_column([c.qd0 for c in cases]),
-        first.options.as_argument(),
-    )
-    trajs = jax.tree.map(np.asarray, trajs)
-    middle = time.perf_counter()
-    arrays = _post_batch_jit(int(min(batch_size, len(cases))), problems, ts, trajs.q, trajs.qd)
-    arrays = jax.tree.map(np.asarray, arrays)
-    done = [
-        _finish(c, *(jax.tree.map(lambda x, i=i: x[i], a) for a in (trajs, arrays)))
-        for i, c in enumerate(cases)
-    ]
-    if seconds is not None:
-        seconds["integration"] = middle - clock
-        seconds["finishing"] = time.perf_counter() - middle
-    return done
-
-
-def _input_error(err: ModelError, i: int, describe: str) -> ModelError:
-    err.add_note(f"in member {i} of the sweep{describe}")
-    return err
-
-
-def run_members(
-    members: Sequence[Model],
-    t,
-    analysis: Analysis | str,
-    kwargs_of: Callable[[int], dict] | None = None,
-    *,
-    recorded: dict | None = None,
-    batch_size: int | None = None,
-    threads: int | None = None,
-    on_member: Callable[[int], None] | None = None,
-    describe: Callable[[int], str] = lambda i: "",
-    offset: int = 0,
-    same_start: bool = False,
-    seconds: dict | None = None,
-) -> list[Outcome]:
-    """Each member's ``(Result, None)`` or ``(None, its numerical error)``, in order.
-
-    Args:
-        members: the member models, of one structure.
-        t: (N,) output times [time].
-        analysis: the analysis value, the same for every member; or (the model-file
-            layer's spelling) an analysis' name (``"forward"``, ``"mixed"``, ``"kinematic"``,
-            ``"inverse"``, ``"statics"``) with ``kwargs_of(i)`` member ``i``'s keywords.
-        kwargs_of: member index -> the analysis' keywords for it (with a name only).
-        recorded: the integrator options the members' results record (``stats["options"]``;
-            default: the method object's own).
-        batch_size, threads: as in :func:`sweep`.
-        on_member: called with a member's index when it is done (from any thread).
-        describe: member index -> words naming it in an error (its varied values).
-        offset: the sweep's index of ``members[0]`` (a chunk of a larger sweep), for errors.
-        same_start: the members differ only in numbers that do not enter a forward or mixed
-            run's start (:func:`shares_start`): the first member is set up and the others
-            take its start and constraint set with their own model (their masses checked). A
-            mixed run whose unknown forces are not collocated with its prescribed motions is
-            still set up member by member (its solvability, the rank of ``C M^-1 G``, may
-            depend on the masses).
-        seconds: if given, filled with the wall time of the set-up, the integration and the
-            finishing [s].
-
-    Raises:
-        ModelError: a member's input error (named with its index), or members of different
-            structures.
-    """
-    threads = threads or os.cpu_count() or 1
-    if isinstance(analysis, Analysis):
-        values = [analysis] * len(members)
-        records: list[dict | None] = [recorded] * len(members)
-    else:  # the keyword spelling, member by member (its keywords may differ)
-        values, records = [], []
-        for i in range(len(members)):
-            try:
-                value, record = from_keywords(analysis, t, kwargs_of(i))
-            except ModelError as err:
-                raise _input_error(err, offset + i, describe(i)) from None
-            values.append(value)
-            records.append(record)
-    first_value = values[0] if values else analysis
-    t0 = float(np.atleast_1d(np.asarray(t, dtype=float))[0])
-
-    def setup_of(i: int):
-        setup = prepare(members[i], values[i], t0=t0)
-        if records[i] is not None:
-            setup = dataclasses.replace(setup, recorded=records[i])
-        return setup
-
-    if not first_value.integrated:
-
-        def whole(i: int) -> Outcome:
-            try:
-                return run(setup_of(i), t), None
-            except ModelError as err:
-                raise _input_error(err, offset + i, describe(i)) from None
-            except MixdynError as err:
-                return None, err
-
-        if batch_size is not None:
-            raise ModelError(
-                f"a {first_value.name} sweep runs member by member: no batch_size", "batch_size"
-            )
-        return _in_threads(whole, list(range(len(members))), threads, on_member)
-
-    cases: dict[int, Case] = {}
-    outcomes: dict[int, Outcome] = {}
-    clock = time.perf_counter()
-    shared = same_start
-    swap = None
-    first_setup = None
-    for i, m in enumerate(members):
-        try:
-            if shared and first_setup is not None:
-                shared = first_value._shares_setup(first_setup)
-            if shared and cases:
-                require_masses(m)
-                first = cases[next(iter(cases))]
-                swap = swap or model_swapper(first.problem)
-                cases[i] = dataclasses.replace(first, problem=swap(m))
-            elif shared and outcomes:  # the shared start could not be made
-                outcomes[i] = outcomes[next(iter(outcomes))]
-                if on_member is not None:
-                    on_member(i)
-            else:
-                setup = setup_of(i)
-                first_setup = first_setup or setup
-                cases[i] = values[i]._case(setup, t)
-        except ModelError as err:
-            raise _input_error(err, offset + i, describe(i)) from None
-        except MixdynError as err:  # a start that cannot be made: this member fails
-            outcomes[i] = (None, err)
-            if on_member is not None:
-                on_member(i)
-    if seconds is not None:
-        seconds["setup"] = time.perf_counter() - clock
-    if cases:
-        k0 = next(iter(cases))
-        first = cases[k0]
-        tree = jax.tree.structure(first.problem)
-        for i, c in cases.items():
-            if jax.tree.structure(c.problem) != tree or c.options != first.options:
-                raise ModelError(
-                    f"member {i} differs from member {k0} in structure (its bodies, elements, "
-                    "kinds of laws or constraint rows): a sweep varies numbers only",
-                    "models",
-                )
-        order = list(cases)
-        if batch_size is None and _default_batch_size() is None:
-            done = _in_threads(
-                lambda i: _finish(cases[i], integrate(cases[i])), order, threads, on_member
-            )
-        else:
-            done = _batched([cases[i] for i in order], batch_size or _default_batch_size(), seconds)
-            if on_member is not None:
-                for i in order:
-                    on_member(i)
-        outcomes.update(zip(order, done, strict=True))
-    return [outcomes[i] for i in range(len(members))]
-
-
-def _run_chunk(members: list[Model], t, analysis: Analysis, recorded, first: int):
-    """On a worker: set up and run ``members`` (the sweep's members ``first``...) member by
-    member in one thread; an input error names its member."""
-    return run_members(members, t, analysis, recorded=recorded, threads=1, offset=first)
-
-
-def _on_cluster(client, members, t, analysis, recorded, chunk_size, on_member=None):
-    """The members run on a Dask ``client``'s workers, ``chunk_size`` at a time (default:
-    four chunks per worker thread), gathered in order; ``on_member(i)`` for each member of a
-    chunk as the chunk comes back."""
-    if chunk_size is None:
-        slots = sum(client.nthreads().values()) or 1
-        chunk_size = max(1, -(-len(members) // (4 * slots)))
-    starts = range(0, len(members), chunk_size)
-    futures = [
-        client.submit(_run_chunk, members[s : s + chunk_size], t, analysis, recorded, s, pure=False)
-        for s in starts
-    ]
-    if on_member is not None:
-        from distributed import as_completed
-
-        first = {f.key: s for f, s in zip(futures, starts, strict=True)}
-        for done in as_completed(futures):
-            s = first[done.key]
-            for i in range(s, min(s + chunk_size, len(members))):
-                on_member(i)
-    out = []
-    for chunk in client.gather(futures):
-        out.extend(chunk)
-    return out
-
-
 def sweep(
     model: Model | None = None,
     t=None,
@@ -607,7 +287,7 @@ def sweep(
             ``analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10))``.
         batch_size: None (default): on a CPU member by member, each by the single run's
             program (compiled once), from ``threads`` threads; on an accelerator up to
-            :data:`ACCELERATOR_BATCH` (32,768) members at a time. A
+            :data:`~._schedule.ACCELERATOR_BATCH` (32,768) members at a time. A
             number (forward and mixed sweeps): every member integrated by one program,
             ``batch_size`` members at a time vectorized (``vmap``): on a CPU faster once
             compiled (8.4 ms a member against 13.4 ms member by member, 128 members of the
