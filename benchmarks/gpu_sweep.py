@@ -51,9 +51,9 @@ def main() -> None:
 
     import mixdyn as md
     from fixtures import paper_under_loads
+    from mixdyn.analysis._schedule import _integrate_batch_jit, for_batch
     from mixdyn.analysis._simulate import finish, integrate
     from mixdyn.analysis.forward import forward_case
-    from mixdyn.analysis._schedule import _integrate_batch_jit, for_batch
 
     if a.variant == "nofallback":
         import mixdyn.equations._jacobian as jac
