@@ -135,7 +135,10 @@ class _Wheels(Joint):
     si: object = eqx.field(default=None, kw_only=True)
     sj: object = eqx.field(default=None, kw_only=True)
     e0: object = eqx.field(default=None, kw_only=True)  # line of centres at q0, carrier frame
-    c0: object = eqx.field(default=None, kw_only=True)  # the no-slip constant [length*rad]
+    # The wheels' angles from the line of centres at q0 (2,) [rad]: the no-slip constant
+    # (c0) is made from them and the radii where it is used, so that a radius varied by a
+    # study (a sweep, a fit) gives the constant of a model built with it.
+    a0: object = eqx.field(default=None, kw_only=True)
     body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj", "bc")
     generic_reaction: ClassVar[bool] = False
 
@@ -175,11 +178,16 @@ class _Wheels(Joint):
         theta = math.atan2(d[1], d[0])
         c, s = math.cos(phi_c), math.sin(phi_c)
         e0 = np.array([[c, s], [-s, c]]) @ (d / np.linalg.norm(d))
-        Ri, Rj = float(self.radius_i), float(self.radius_j)
-        c0 = Ri * (phi_i - theta) + self._s * Rj * (phi_j - theta)
+        a0 = np.array([phi_i - theta, phi_j - theta])
         return dataclasses.replace(
-            self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, e0=_f64(e0), c0=_f64(c0)
+            self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, e0=_f64(e0), a0=_f64(a0)
         )
+
+    @property
+    def c0(self):
+        """The no-slip constant ``R_i (phi_i - theta) + s R_j (phi_j - theta)`` at the rough
+        start [length * rad], from the radii as they are (numbers or traced)."""
+        return self.radius_i * self.a0[0] + self._s * self.radius_j * self.a0[1]
 
     def body_indices(self):
         return moving(self.bi, self.bj, self.bc)
@@ -435,7 +443,10 @@ class _OnLine(Joint):
     sj: object = eqx.field(default=None, kw_only=True)
     u: object = eqx.field(default=None, kw_only=True)
     side: float = eqx.field(static=True, default=1.0, kw_only=True)
-    c0: object = eqx.field(default=None, kw_only=True)
+    # The centre's position along the line [length] and the angle of the wheel relative to
+    # the line's body [rad] at q0 (2,): the no-slip constant (c0) is made from them and the
+    # radius where it is used (a varied radius gives the constant of a model built with it).
+    a0: object = eqx.field(default=None, kw_only=True)
     body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj")
     generic_reaction: ClassVar[bool] = False
 
@@ -463,8 +474,14 @@ class _OnLine(Joint):
                 self.name,
             )
         side = 1.0 if h > 0 else -1.0
-        c0 = float(np.dot(ci - pj, ug)) + side * float(self.radius) * (phi_i - phi_j)
-        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u, side=side, c0=_f64(c0))
+        a0 = np.array([float(np.dot(ci - pj, ug)), phi_i - phi_j])
+        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u, side=side, a0=_f64(a0))
+
+    @property
+    def c0(self):
+        """The no-slip constant ``x + side R (phi_i - phi_j)`` at the rough start [length],
+        from the radius as it is (a number or traced)."""
+        return self.a0[0] + self.side * self.radius * self.a0[1]
 
     def body_indices(self):
         return moving(self.bi, self.bj)

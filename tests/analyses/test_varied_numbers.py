@@ -1,0 +1,74 @@
+"""A number varied by a study is a number of a model like any other: a sweep's member, a
+fit's or optimization's candidate and a model built with that number give the same
+mechanism (the constants derived from the number follow it), and a value the model's
+constructors refuse is refused as a member or a bound too, before any computing."""
+
+import numpy as np
+
+import mixdyn as md
+
+T = np.linspace(0.0, 1.0, 11)
+
+
+def _gears(radius_1=0.03, phi=(0.4, -0.3)):
+    """Two gears on ground pins 0.09 apart (radii ``radius_1`` and 0.06), started at the
+    angles ``phi`` (their teeth mesh there), gear 1 turned at 2 rad/s; a rack on gear 2."""
+    x2 = 0.09
+    return md.Model(
+        bodies=[
+            md.Body("g1", 0.1, 2e-4, q0=(0.0, 0.0, phi[0])),
+            md.Body("g2", 0.2, 4e-4, q0=(x2, 0.0, phi[1])),
+            md.Body("rack", 0.3, 1e-3, q0=(x2 + 0.06 + 0.02, 0.01, 0.0)),
+        ],
+        ground={"O1": (0.0, 0.0), "O2": (x2, 0.0), "G": (x2 + 0.08, 0.0)},
+        joints=[
+            md.Revolute("O1", "ground.O1", "g1"),
+            md.Revolute("O2", "ground.O2", "g2"),
+            md.Translational("guide", "ground.G", "rack", axis=(0.0, 1.0)),
+            md.GearPair("mesh", "g1", "g2", radius_1, 0.06),
+            md.RackPinion("rack_mesh", "g2", "rack", radius=0.05, axis=(0.0, 1.0)),
+        ],
+        drivers=[md.CoordinateDriver("motor", "g1", "phi", law=md.Ramp(0.4, 2.0))],
+        units=md.SI,
+    )
+
+
+def test_a_swept_gear_radius_gives_the_mechanism_built_with_it():
+    """No slip from the start angles: ``R1 (phi1 - phi1_0) = -R2 (phi2 - phi2_0)`` and the
+    rack moves up ``R (phi2 - phi2_0)``: the closed form, and single runs of models built with
+    each radius, agree with the sweep's members (and with a model whose number is replaced
+    by its path) to 1e-12."""
+    radii = [0.02, 0.03, 0.045]
+    nominal = _gears()
+    sweep = md.sweep(
+        nominal,
+        T,
+        vary={"mesh.radius_i": radii, "rack_mesh.radius": [0.05, 0.04, 0.03]},
+        analysis=md.analyses.Kinematic(),
+    )
+    assert not sweep.errors
+    for i, (r1, rr) in enumerate(zip(radii, [0.05, 0.04, 0.03], strict=True)):
+        member = sweep[i]
+        phi2 = -0.3 - r1 / 0.06 * 2.0 * T
+        np.testing.assert_allclose(member["g2.phi"], phi2, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(
+            member["rack.y"] - member["rack.y"][0], rr * (phi2 + 0.3), rtol=0, atol=1e-12
+        )
+        built = _gears(radius_1=r1)
+        built = md.Model(
+            bodies=built.bodies,
+            ground={"O1": (0.0, 0.0), "O2": (0.09, 0.0), "G": (0.17, 0.0)},
+            joints=[
+                *built.joints[:4],
+                md.RackPinion("rack_mesh", "g2", "rack", radius=rr, axis=(0.0, 1.0)),
+            ],
+            drivers=built.drivers,
+            units=md.SI,
+        )
+        single = md.kinematic(built, T)
+        replaced = md.paths.replace(
+            md.paths.replace(nominal, "mesh.radius_i", r1), "rack_mesh.radius", rr
+        )
+        for other in (single, md.kinematic(replaced, T)):
+            for col in ("g2.phi", "g2.omega", "rack.y", "rack.vy"):
+                np.testing.assert_allclose(member[col], other[col], rtol=0, atol=1e-12)
