@@ -18,13 +18,15 @@ instead (build the models with the change: ``md.sweep(models=[...])``).
   the same structure (``get(member)``);
 * :func:`get` and :func:`replace`: read one number, or a model with one number replaced;
 * :func:`shape` and :func:`group`: the number's shape and the kind of its owner (``"bodies"``,
-  ``"joints"``, ``"drivers"``, ``"forces"``).
+  ``"joints"``, ``"drivers"``, ``"forces"``);
+* :func:`check`: candidate values of numbers (a sweep's members, an optimization's bounds)
+  put through the checks of the constructors that own them, before any computing.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 
 import equinox as eqx
 import jax
@@ -32,7 +34,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from .errors import ModelError
-from .model import Model
+from .model import Body, Model
+from .model._body import check_inertial
 
 #: Fields that hold geometry bound from body points: a number there would disagree with the
 #: bodies' points; vary the points by building the models instead (``models=``).
@@ -165,4 +168,109 @@ def group(model: Model, path: str) -> str:
     raise AssertionError("unreachable")  # pragma: no cover
 
 
-__all__ = ["BOUND", "GROUPS", "get", "getter", "group", "replace", "shape"]
+def _remake(obj, changes: dict):
+    """``obj`` made again by its constructor with ``changes`` (field -> value, or field ->
+    the changes of the object in that field), so that its own checks see them: a body's
+    mass and inertia by :func:`~mixdyn.model._body.check_inertial`, an element or a law by
+    its class (declared ranges, :func:`~mixdyn.model._declare.check_declared`, and the
+    class's checks between fields)."""
+    made = {
+        f: _remake(getattr(obj, f), c) if isinstance(c, dict) else c for f, c in changes.items()
+    }
+    if isinstance(obj, Body):
+        for label in ("mass", "inertia"):
+            if label in made:
+                check_inertial(label, made[label], obj.name)
+        return obj
+    return dataclasses.replace(obj, **made)
+
+
+def _changes(fields_values: list[tuple[list[str], np.ndarray]], rows) -> dict:
+    """The nested changes of one owner: its fields' values at ``rows`` (an index: one
+    member's value; a slice: the members' values stacked along the first axis)."""
+    out: dict = {}
+    for fields, v in fields_values:
+        node = out
+        for f in fields[:-1]:
+            node = node.setdefault(f, {})
+        node[fields[-1]] = jnp.asarray(v[rows])
+    return out
+
+
+def check(
+    model: Model,
+    values: Mapping[str, object],
+    label: Callable[[int], str] = lambda i: f"member {i}",
+    where: Callable[[str], str] = lambda path: f"vary {path!r}",
+) -> None:
+    """Put candidate values of numbers through the checks a model built with them meets:
+    each row ``i`` of ``values`` (path -> (B, *shape) values) made into the body or element
+    that owns the number by its constructor (an element's declared ranges,
+    :func:`~mixdyn.model._declare.check_declared`, and its class's checks between fields;
+    a body's mass and inertia finite and >= 0), all rows at once, the first one refused
+    then found by halving.
+
+    Args:
+        model: the nominal mechanism (the other numbers of each owner as they are there).
+        values: path -> (B, *shape) candidate values [model units], one row per candidate.
+        label: row index -> words naming it (``"member 3"``, ``"the low bound"``).
+        where: path -> the error's place (default ``"vary 'path'"``).
+
+    Raises:
+        ModelError: the first row (in the order of the owners, then of the rows) that its
+            owner refuses, naming the row, the path, the value and the owner's reason.
+    """
+    owners: dict[str, list[tuple[str, list[str], np.ndarray]]] = {}
+    for path, v in values.items():
+        getter(model, path)  # a bad path is named as such
+        head, _, rest = path.partition(".")
+        owners.setdefault(head, []).append((path, rest.split("."), np.asarray(v, dtype=float)))
+    for head, entries in owners.items():
+        obj = _locate(model, head)(model)
+        fields_values = [(fields, v) for _, fields, v in entries]
+        count = len(entries[0][2])
+
+        def refused(rows, obj=obj, fields_values=fields_values) -> ModelError | None:
+            try:
+                _remake(obj, _changes(fields_values, rows))
+            except ModelError as refusal:
+                return refusal
+            return None
+
+        def stacked(stop: int) -> bool:
+            """Whether the rows before ``stop``, made at once, are refused (a check not
+            written for stacked values counts as refusing them: the rows are then made one
+            by one)."""
+            try:
+                return refused(slice(0, stop)) is not None
+            except (TypeError, ValueError):
+                return True
+
+        if not stacked(count):
+            continue
+        lo, hi = 0, count  # the first refused row is in [lo, hi)
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            lo, hi = (lo, mid) if stacked(mid) else (mid, hi)
+        err, first = None, lo
+        for first in range(lo, count):  # a stacked refusal no single row shares: none refused
+            try:
+                err = refused(first)
+            except (TypeError, ValueError):  # pragma: no cover - an owner its class cannot remake
+                err = None
+            if err is not None:
+                break
+        if err is None:
+            continue
+        named = [p for p, fields, _ in entries if len(fields) == 1 and fields[0] == err.field]
+        named = named or [p for p, _, _ in entries]
+        shown = ", ".join(f"{p} = {_shown(v[first])}" for p, _, v in entries if p in named)
+        raise ModelError(f"{label(first)}: {shown} is refused: {err}", where(named[0]))
+
+
+def _shown(v) -> str:
+    a = np.asarray(v)
+    return f"{float(a):g}" if a.ndim == 0 else str(a.tolist())
+
+
+__all__ = ["BOUND", "GROUPS", "check", "get", "getter", "group", "replace", "shape"]

@@ -4,8 +4,10 @@ mechanism (the constants derived from the number follow it), and a value the mod
 constructors refuse is refused as a member or a bound too, before any computing."""
 
 import numpy as np
+import pytest
 
 import mixdyn as md
+from mixdyn.errors import ModelError
 
 T = np.linspace(0.0, 1.0, 11)
 
@@ -72,3 +74,57 @@ def test_a_swept_gear_radius_gives_the_mechanism_built_with_it():
         for other in (single, md.kinematic(replaced, T)):
             for col in ("g2.phi", "g2.omega", "rack.y", "rack.vy"):
                 np.testing.assert_allclose(member[col], other[col], rtol=0, atol=1e-12)
+
+
+def _friction_slider(v_stick=1e-3):
+    """A slider on a guide with joint friction, pushed by a force."""
+    return md.Model(
+        bodies=[md.Body("slider", 1.0, 0.1)],
+        ground={"G": (0.0, 0.0)},
+        joints=[md.Translational("guide", "ground.G", "slider", axis=(1.0, 0.0))],
+        forces=[
+            md.PointForce("push", "slider", law=2.0, along=(1.0, 0.0)),
+            md.JointFriction("fr", "guide", mu=0.1, v_stick=v_stick),
+        ],
+        units=md.SI,
+    )
+
+
+@pytest.mark.parametrize(
+    ("model", "vary", "member", "words", "built"),
+    [
+        (
+            _gears,
+            {"mesh.radius_i": [0.03, 0.02, 0.0, -1.0]},
+            2,
+            "mesh.radius_i = 0 ",
+            lambda: _gears(radius_1=0.0),
+        ),
+        (_gears, {"g2.mass": [0.1, -0.2]}, 1, "g2.mass = -0.2 ", lambda: md.Body("g2", -0.2)),
+        (
+            _friction_slider,
+            {"fr.v_stick": [1e-3, 1e-4, 0.0]},
+            2,
+            "fr.v_stick = 0 ",
+            lambda: _friction_slider(v_stick=0.0),
+        ),
+        (
+            _friction_slider,
+            {"fr.mu": [0.1, -0.1, 0.2]},
+            1,
+            "fr.mu = -0.1 ",
+            lambda: md.JointFriction("fr", "guide", mu=-0.1),
+        ),
+    ],
+)
+def test_a_member_with_a_number_its_model_refuses_is_refused_before_computing(
+    model, vary, member, words, built
+):
+    """The value a model's constructor refuses (the one a model file refuses at its line)
+    is refused as a member, naming the member, the path and the value, with the
+    constructor's reason, before any run (a stick band of 0 ran for minutes)."""
+    with pytest.raises(ModelError) as truth:
+        built()
+    with pytest.raises(ModelError, match=f"member {member}: {words}") as err:
+        md.sweep(model(), T, vary=vary)
+    assert truth.value.message in str(err.value)

@@ -25,6 +25,15 @@ def _points(points, owner: str) -> dict[str, jax.Array]:
     return out
 
 
+def check_inertial(label: str, value, body: str) -> None:
+    """Raise a :class:`ModelError` unless a body's ``mass`` or ``inertia`` (``label``) is
+    finite and ``>= 0`` (an array: every entry, e.g. a sweep's candidates)."""
+    a = np.asarray(value, dtype=float)
+    if not (np.all(np.isfinite(a)) and np.all(a >= 0)):
+        shown = f"{float(a.ravel()[0]):g}" if a.size == 1 else str(a.tolist())
+        raise ModelError(f"{label} must be a finite number >= 0, got {shown}", body)
+
+
 class Ground(eqx.Module):
     """The fixed frame. Its points are given in global coordinates [length].
 
@@ -69,8 +78,8 @@ class Body(eqx.Module):
             raise ModelError(f"{GROUND_NAME!r} is reserved for the fixed frame")
         self.name = name
         for label, v in (("mass", mass), ("inertia", inertia)):
-            if not np.isfinite(float(v)) or float(v) < 0:
-                raise ModelError(f"{label} must be a finite number >= 0, got {v!r}", name)
+            float(v)  # one number
+            check_inertial(label, v, name)
         self.mass = as_f64(float(mass))
         self.inertia = as_f64(float(inertia))
         q0 = np.asarray(q0, dtype=float)
