@@ -132,6 +132,9 @@ def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
         count = len(v)
         getters.append(get)
         values.append(v)
+    # Each member's numbers meet the checks of a model built with them (their owners'
+    # constructors): a value a model file refuses is refused here, naming its member.
+    paths.check(model, dict(zip(vary, values, strict=True)))
     # Each varied number's position among the model's leaves (found by putting a marker
     # there), then each member unflattened from the nominal leaves with its numbers: one
     # unflatten a member instead of a tree_at per member and number (5 ms a member).
