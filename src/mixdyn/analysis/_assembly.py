@@ -164,12 +164,20 @@ def assemble(
             bandwidth, see :mod:`mixdyn.linalg`).
 
     Raises:
+        ModelError: ``q`` of the wrong shape, or holding a NaN or an infinity.
         AssemblyError: naming the joint equations that could not be closed.
     """
     # NumPy between the compiled programs (a JAX operation outside them is a program too).
     q = np.asarray(start_q(model) if q is None else q, dtype=np.float64)
     if q.shape != (model.nq,):
         raise ModelError(f"q must have shape ({model.nq},), got {tuple(q.shape)}", model.name)
+    if not np.all(np.isfinite(q)):
+        k = int(np.argmax(~np.isfinite(q)))
+        raise ModelError(
+            f"the starting pose holds {q[k]}: give finite numbers (a rough pose is enough; "
+            "assembly closes the joints from it)",
+            model.coordinate_names[k],
+        )
     hold = tuple(hold)
     c = Constraints(
         model.joints,

@@ -4,9 +4,15 @@ and run member by member on its worker, the outcomes gathered in order.
 
 from __future__ import annotations
 
+import contextlib
+
+from ..errors import ModelError
 from ..model import Model
 from ._members import run_members
 from ._setup import Analysis
+
+#: How long a sweep waits for a Dask scheduler given by its address [s].
+CONNECT_TIMEOUT = 5.0
 
 
 def _run_chunk(members: list[Model], t, analysis: Analysis, recorded, first: int):
@@ -15,10 +21,54 @@ def _run_chunk(members: list[Model], t, analysis: Analysis, recorded, first: int
     return run_members(members, t, analysis, recorded=recorded, threads=1, offset=first)
 
 
+@contextlib.contextmanager
+def connected(client):
+    """The Dask client of ``client``: a ``distributed.Client`` as it is, or a scheduler's
+    address (``"tcp://host:8786"``) connected within :data:`CONNECT_TIMEOUT` and closed
+    after the sweep.
+
+    Raises:
+        ModelError: not a client nor an address, distributed not installed, or no scheduler
+            answering at the address.
+    """
+    if not isinstance(client, str):
+        if not (hasattr(client, "submit") and hasattr(client, "gather")):
+            raise ModelError(
+                f"a Dask distributed.Client or a scheduler's address, got {client!r:.60}",
+                "client",
+            )
+        yield client
+        return
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ModelError(
+            "a sweep on a cluster needs Dask's distributed, which is not installed",
+            "client",
+        ) from None
+    try:
+        own = Client(client, timeout=CONNECT_TIMEOUT, set_as_default=False)
+    except (OSError, TimeoutError, ValueError, TypeError) as e:
+        raise ModelError(
+            f"no Dask scheduler answers at {client!r} within {CONNECT_TIMEOUT:g} s ({e}); "
+            "check the address and that the scheduler runs, or leave client out to run here",
+            "client",
+        ) from None
+    try:
+        yield own
+    finally:
+        own.close()
+
+
 def _on_cluster(client, members, t, analysis, recorded, chunk_size, on_member=None):
-    """The members run on a Dask ``client``'s workers, ``chunk_size`` at a time (default:
-    four chunks per worker thread), gathered in order; ``on_member(i)`` for each member of a
-    chunk as the chunk comes back."""
+    """The members run on a Dask ``client``'s workers (a client or a scheduler's address:
+    :func:`connected`), ``chunk_size`` at a time (default: four chunks per worker thread),
+    gathered in order; ``on_member(i)`` for each member of a chunk as the chunk comes back."""
+    with connected(client) as c:
+        return _on_client(c, members, t, analysis, recorded, chunk_size, on_member)
+
+
+def _on_client(client, members, t, analysis, recorded, chunk_size, on_member=None):
     if chunk_size is None:
         slots = sum(client.nthreads().values()) or 1
         chunk_size = max(1, -(-len(members) // (4 * slots)))

@@ -96,6 +96,37 @@ def _selectors(model: Model, measured: Mapping[str, Sequence[float]], n: int):
     return out
 
 
+#: The smallest noise of a measured column relative to its largest value: float64's
+#: resolution (2.2e-16). Below it the noise is finer than the rounding of the values
+#: themselves, and the weighted residuals' squares may overflow.
+RESOLUTION = float(np.finfo(np.float64).eps)
+
+
+def check_noise(column: str, values, sigma: float, row=lambda k: f"row {k}") -> None:
+    """Refuse a noise that float64 cannot tell from the rounding of the measured values.
+
+    Args:
+        column: the measured column, for the message.
+        values: (N,) its finite measured values [model units].
+        sigma: its noise (standard deviation) [model units], > 0.
+        row: the name of a row from its index, for the message.
+
+    Raises:
+        ModelError: ``sigma`` below :data:`RESOLUTION` times the largest ``|value|``, naming
+            that value's row.
+    """
+    v = np.abs(np.asarray(values, dtype=float))
+    k = int(np.argmax(v)) if v.size else 0
+    top = float(v[k]) if v.size else 0.0
+    if top * RESOLUTION > sigma:
+        raise ModelError(
+            f"the noise {sigma:.3g} is finer than float64 resolves the value {top:.3g} in "
+            f"{row(k)} (to {top * RESOLUTION:.3g}): the noise cannot be told from rounding; "
+            "check the noise's unit and that value",
+            f"noise of {column!r}",
+        )
+
+
 def fit(
     model: Model,
     t,
@@ -136,7 +167,8 @@ def fit(
         A :class:`Fit`.
 
     Raises:
-        ModelError: a bad column, path, bound or start (before any computing).
+        ModelError: a bad column, path, bound or start, or a noise finer than float64
+            resolves the measured values (:func:`check_noise`), before any computing.
         ConvergenceError: the fit did not converge, or its Jacobian is rank-deficient (the
             measurements do not determine the numbers: name fewer, or measure more).
     """
@@ -152,11 +184,13 @@ def fit(
     if not measured:
         raise ModelError("nothing measured: give measured={'slider.x': [...], ...}", "measured")
     sel = _selectors(model, measured, len(ts))
+    measured_values = {col: v for col, _, _, v in sel}
     sigma = {}
     for col, *_ in sel:
         s = noise.get(col, None) if isinstance(noise, Mapping) else noise
         if s is None or not np.isfinite(float(s)) or float(s) <= 0:
             raise ModelError(f"the noise must be a number > 0, got {s!r}", f"noise of {col!r}")
+        check_noise(col, measured_values[col], float(s))
         sigma[col] = float(s)
     value, _ = study_analysis("md.fit", analysis, ts, kwargs)
     f, theta0 = differentiable(model, ts, params, analysis=value, derivatives="forward")
@@ -181,15 +215,22 @@ def fit(
 
     res, jac = jax.jit(residuals), jax.jit(jax.jacfwd(residuals))
     started = time.perf_counter()
-    sol = least_squares(
-        lambda th: np.asarray(res(th)),
-        x0,
-        jac=lambda th: np.asarray(jac(th)),
-        bounds=(lo, hi),
-        x_scale="jac",
-        xtol=xtol,
-        max_nfev=max_evaluations,
-    )
+    try:
+        sol = least_squares(
+            lambda th: np.asarray(res(th)),
+            x0,
+            jac=lambda th: np.asarray(jac(th)),
+            bounds=(lo, hi),
+            x_scale="jac",
+            xtol=xtol,
+            max_nfev=max_evaluations,
+        )
+    except ValueError as e:  # scipy refuses residuals or a Jacobian that are not finite
+        raise ConvergenceError(
+            f"the fit's weighted residuals or their derivatives are not finite ({e}): a run "
+            "failed on the way, or a noise is too small for the motion; give a closer start, "
+            "bounds or larger noises"
+        ) from None
     seconds = time.perf_counter() - started
     if not sol.success or not np.all(np.isfinite(sol.x)) or not np.all(np.isfinite(sol.fun)):
         raise ConvergenceError(

@@ -57,6 +57,7 @@ from ._reactions import (
     reaction_kinds,
 )
 from ._setup import Setup
+from .kinematic import output_times
 from .result import Result
 
 
@@ -357,7 +358,7 @@ class QuasiStatic(_Equilibria):
     def _run(self, setup: Setup, t, progress=None) -> Result:
         _setup.no_progress(self, progress)
         model = setup.model
-        ts = np.atleast_1d(np.asarray(t, dtype=float))
+        ts = output_times(t, minimum=1)
         _setup.check_start(setup, ts)
         rows, smallest, iters = [], [], 0
         for k, tk in enumerate(ts):
@@ -418,7 +419,7 @@ def quasi_static(
     see the module docstring). (The start is always assembled, and the dense path taken:
     ``assemble_first`` and ``linear_solver`` are accepted for the model-file runner's sake.)"""
     del assemble_first, linear_solver
-    ts = np.atleast_1d(np.asarray(t, dtype=float))
+    ts = output_times(t, minimum=1)
     analysis = QuasiStatic(q0=q0, hold=hold, tol=tol, max_iter=max_iter)
     return analysis._run(analysis._prepare(model, float(ts[0])), ts)
 

@@ -57,17 +57,40 @@ def grid(**axes: Sequence[float]) -> dict[str, np.ndarray]:
     ``md.grid(**{"slider.mass": [1, 2], "F1.law.a": [5, 10, 20]})`` gives 6 members."""
     names = list(axes)
     combos = list(itertools.product(*(np.asarray(axes[n], dtype=float) for n in names)))
+#: The most samples :func:`latin_hypercube` draws (80 MB a range).
+MAX_SAMPLES = 10_000_000
+
+
+def _bytes(n: float) -> str:
+    """``n`` bytes in binary units (``7.28 TiB``)."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if n < 1024 or unit == "PiB":
+            return f"{n:.3g} {unit}"
+        n /= 1024
+    return f"{n:.3g} PiB"  # pragma: no cover
+
+
     return {n: np.asarray([c[k] for c in combos]) for k, n in enumerate(names)}
 
 
 def latin_hypercube(samples: int, seed: int = 0, **ranges: Sequence[float]) -> dict:
     """``samples`` members spread over the box ``ranges`` (path -> ``(low, high)``) by Latin
     hypercube sampling: each range cut into ``samples`` equal strata, each stratum sampled once
+    At most :data:`MAX_SAMPLES` samples.
     (uniformly within it) per path, the strata of different paths paired at random
     (``numpy.random.default_rng(seed)``: the same seed, the same members). Returns the flat
     columns of a ``vary=`` mapping, e.g. ``md.latin_hypercube(100, **{"slider.mass": (1, 2)})``.
     """
-    if int(samples) != samples or samples < 1:
+    whole = isinstance(samples, int | np.integer | float | np.floating) and float(samples) >= 1
+    if not whole or not float(samples).is_integer():
+    if samples > MAX_SAMPLES:
+        size = 8 * float(samples) * len(ranges)
+        raise ModelError(
+            f"{samples:,.0f} samples of {len(ranges)} range(s) would take {_bytes(size)} "
+            f"(8 bytes a value), more than the limit of {MAX_SAMPLES:,} samples; a sweep "
+            "runs each sample: give fewer",
+            "samples",
+        )
         raise ModelError(f"samples must be a whole number >= 1, got {samples!r}", "samples")
     if not ranges:
         raise ModelError("give at least one range: path=(low, high)", "ranges")
@@ -106,15 +129,30 @@ def shares_start(model: Model, vary: Mapping[str, Sequence], unknown: Sequence[s
     return bool(vary)
 
 
+    if not isinstance(vary, Mapping):
+        raise ModelError(
+            f"vary must be a mapping path -> values, got {type(vary).__name__} {vary!r:.60}",
+            "vary",
+        )
 def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
     """The member models of ``vary`` (path -> (B,) or (B, ...) values, one row per member):
     ``model`` with the named numbers replaced, member by member."""
     if not vary:
+        if not isinstance(path, str):
+            raise ModelError(f"a path is a string such as 'slider.mass', got {path!r}", "vary")
         raise ModelError("nothing to vary: give vary={'body.mass': [...], ...}", "vary")
     getters, values, count = [], [], None
     for path, vals in vary.items():
         get, shape = paths.getter(model, path)
-        v = np.asarray(vals, dtype=float)
+        try:
+            if isinstance(vals, str | bytes):
+                raise ValueError(vals)
+            v = np.asarray(vals, dtype=float)
+        except (TypeError, ValueError):
+            raise ModelError(
+                f"values {vals!r:.60}: give numbers, one value (or row) per member",
+                f"vary {path!r}",
+            ) from None
         if v.ndim == 0 or v.shape[1:] != shape:
             raise ModelError(
                 f"values of shape {v.shape}: one row of shape {shape} per member expected",
@@ -298,9 +336,9 @@ def sweep(
         threads: threads of the member-by-member path (default: one per core).
         client: a Dask ``distributed.Client``: the members run on its workers (each sets up
             and runs its chunk member by member; a local cluster,
-            ``Client(LocalCluster(n_workers=2, threads_per_worker=1))``, or a scheduler's
-            address for a real one). Results come back in order; a member's input error is
-            raised with its index.
+            ``Client(LocalCluster(n_workers=2, threads_per_worker=1))``), or a scheduler's
+            address (``"tcp://host:8786"``: connected within 5 s, else a ModelError).
+            Results come back in order; a member's input error is raised with its index.
         chunk_size: members per task on the cluster (default: four tasks per worker
             thread).
         on_member: called with a member's index as it is done (from the sweep's threads; on
@@ -322,6 +360,10 @@ def sweep(
     """
     started = time.perf_counter()
     if "progress" in kwargs:
+    counts = {"batch_size": batch_size, "threads": threads, "chunk_size": chunk_size}
+    for name, count in counts.items():
+        if count is not None and (not isinstance(count, int | np.integer) or count < 1):
+            raise ModelError(f"{name} must be a whole number >= 1 or None, got {count!r}", name)
         raise ModelError("a sweep has no per-time progress callback (see on_member)", "progress")
     if t is None:
         raise ModelError("give the output times t", "t")
