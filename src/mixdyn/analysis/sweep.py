@@ -57,6 +57,9 @@ def grid(**axes: Sequence[float]) -> dict[str, np.ndarray]:
     ``md.grid(**{"slider.mass": [1, 2], "F1.law.a": [5, 10, 20]})`` gives 6 members."""
     names = list(axes)
     combos = list(itertools.product(*(np.asarray(axes[n], dtype=float) for n in names)))
+    return {n: np.asarray([c[k] for c in combos]) for k, n in enumerate(names)}
+
+
 #: The most samples :func:`latin_hypercube` draws (80 MB a range).
 MAX_SAMPLES = 10_000_000
 
@@ -70,19 +73,19 @@ def _bytes(n: float) -> str:
     return f"{n:.3g} PiB"  # pragma: no cover
 
 
-    return {n: np.asarray([c[k] for c in combos]) for k, n in enumerate(names)}
-
-
 def latin_hypercube(samples: int, seed: int = 0, **ranges: Sequence[float]) -> dict:
     """``samples`` members spread over the box ``ranges`` (path -> ``(low, high)``) by Latin
     hypercube sampling: each range cut into ``samples`` equal strata, each stratum sampled once
-    At most :data:`MAX_SAMPLES` samples.
     (uniformly within it) per path, the strata of different paths paired at random
     (``numpy.random.default_rng(seed)``: the same seed, the same members). Returns the flat
     columns of a ``vary=`` mapping, e.g. ``md.latin_hypercube(100, **{"slider.mass": (1, 2)})``.
+    At most :data:`MAX_SAMPLES` samples.
     """
     whole = isinstance(samples, int | np.integer | float | np.floating) and float(samples) >= 1
     if not whole or not float(samples).is_integer():
+        raise ModelError(f"samples must be a whole number >= 1, got {samples!r}", "samples")
+    if not ranges:
+        raise ModelError("give at least one range: path=(low, high)", "ranges")
     if samples > MAX_SAMPLES:
         size = 8 * float(samples) * len(ranges)
         raise ModelError(
@@ -91,9 +94,6 @@ def latin_hypercube(samples: int, seed: int = 0, **ranges: Sequence[float]) -> d
             "runs each sample: give fewer",
             "samples",
         )
-        raise ModelError(f"samples must be a whole number >= 1, got {samples!r}", "samples")
-    if not ranges:
-        raise ModelError("give at least one range: path=(low, high)", "ranges")
     rng = np.random.default_rng(seed)
     out = {}
     for name, bounds in ranges.items():
@@ -129,20 +129,20 @@ def shares_start(model: Model, vary: Mapping[str, Sequence], unknown: Sequence[s
     return bool(vary)
 
 
+def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
+    """The member models of ``vary`` (path -> (B,) or (B, ...) values, one row per member):
+    ``model`` with the named numbers replaced, member by member."""
     if not isinstance(vary, Mapping):
         raise ModelError(
             f"vary must be a mapping path -> values, got {type(vary).__name__} {vary!r:.60}",
             "vary",
         )
-def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
-    """The member models of ``vary`` (path -> (B,) or (B, ...) values, one row per member):
-    ``model`` with the named numbers replaced, member by member."""
     if not vary:
-        if not isinstance(path, str):
-            raise ModelError(f"a path is a string such as 'slider.mass', got {path!r}", "vary")
         raise ModelError("nothing to vary: give vary={'body.mass': [...], ...}", "vary")
     getters, values, count = [], [], None
     for path, vals in vary.items():
+        if not isinstance(path, str):
+            raise ModelError(f"a path is a string such as 'slider.mass', got {path!r}", "vary")
         get, shape = paths.getter(model, path)
         try:
             if isinstance(vals, str | bytes):
@@ -360,13 +360,13 @@ def sweep(
     """
     started = time.perf_counter()
     if "progress" in kwargs:
+        raise ModelError("a sweep has no per-time progress callback (see on_member)", "progress")
+    if t is None:
+        raise ModelError("give the output times t", "t")
     counts = {"batch_size": batch_size, "threads": threads, "chunk_size": chunk_size}
     for name, count in counts.items():
         if count is not None and (not isinstance(count, int | np.integer) or count < 1):
             raise ModelError(f"{name} must be a whole number >= 1 or None, got {count!r}", name)
-        raise ModelError("a sweep has no per-time progress callback (see on_member)", "progress")
-    if t is None:
-        raise ModelError("give the output times t", "t")
     value, recorded = study_analysis("md.sweep", analysis, t, kwargs)
     if models is not None:
         if model is not None or vary is not None:
