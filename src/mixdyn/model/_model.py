@@ -32,6 +32,12 @@ def _unique(items, what):
         seen.add(it.name)
 
 
+def _bind_force(force: ForceElement, r: Resolver, joints) -> ForceElement:
+    """``force`` bound to the bodies of ``r`` and, where it acts in a joint, to ``joints``."""
+    bound = force.bind(r)
+    return bound.with_joint(joints) if hasattr(force, "with_joint") else bound
+
+
 class Model(eqx.Module):
     """A planar mechanism: bodies, joints, drivers and forces, in one unit system.
 
@@ -96,10 +102,7 @@ class Model(eqx.Module):
         self.bodies = bodies
         self.joints = tuple(j.bind(r) for j in joints)
         self.drivers = tuple(d.bind(r) for d in drivers)
-        self.forces = tuple(
-            f.bind(r).with_joint(self.joints) if hasattr(f, "with_joint") else f.bind(r)
-            for f in forces
-        )
+        self.forces = tuple(_bind_force(f, r, self.joints) for f in forces)
         self.ground = ground
         try:
             g = np.asarray(gravity, dtype=float)
@@ -197,6 +200,11 @@ class Model(eqx.Module):
         )
         args.update(changes)
         return Model(**args)
+
+    def bind_force(self, force: ForceElement) -> ForceElement:
+        """``force`` bound to this model's bodies, points and joints, as the constructor
+        binds its forces (a model file's sweep builds one force a member again)."""
+        return _bind_force(force, Resolver(self.ground, self.bodies), self.joints)
 
     def point_position(self, q, ref) -> jax.Array:
         """Global position (2,) [length] of a point reference (``"body.point"``) at ``q``."""
