@@ -19,8 +19,9 @@ instead (build the models with the change: ``md.sweep(models=[...])``).
 * :func:`get` and :func:`replace`: read one number, or a model with one number replaced;
 * :func:`shape` and :func:`group`: the number's shape and the kind of its owner (``"bodies"``,
   ``"joints"``, ``"drivers"``, ``"forces"``);
-* :func:`check`: candidate values of numbers (a sweep's members, an optimization's bounds)
-  put through the checks of the constructors that own them, before any computing.
+* :func:`check` and :func:`check_bounds`: candidate values of numbers (a sweep's members,
+  a fit's or an optimization's bounds) put through the checks of the constructors that own
+  them, before any computing.
 """
 
 from __future__ import annotations
@@ -268,9 +269,44 @@ def check(
         raise ModelError(f"{label(first)}: {shown} is refused: {err}", where(named[0]))
 
 
+#: Words naming the ends of bounds ``(low, high)``, by index.
+BOUND_ENDS = ("the low bound", "the high bound")
+
+
+def check_bounds(model: Model, path: str, bounds, where: str | None = None) -> None:
+    """Refuse bounds ``(low, high)`` of the number at ``path`` with a finite end that a model
+    built with it would refuse (:func:`check`): a search within them would compute with
+    impossible numbers (a negative mass).
+
+    Raises:
+        ModelError: naming the end, its value and the owner's reason, at ``where`` (default
+            ``"bounds of 'path'"``).
+    """
+    ends = [(k, float(v)) for k, v in enumerate(bounds) if np.isfinite(v)]
+    if not ends:
+        return
+    check(
+        model,
+        {path: np.asarray([v for _, v in ends])},
+        label=lambda i: BOUND_ENDS[ends[i][0]],
+        where=lambda p: where or f"bounds of {p!r}",
+    )
+
+
 def _shown(v) -> str:
     a = np.asarray(v)
     return f"{float(a):g}" if a.ndim == 0 else str(a.tolist())
 
 
-__all__ = ["BOUND", "GROUPS", "check", "get", "getter", "group", "replace", "shape"]
+__all__ = [
+    "BOUND",
+    "BOUND_ENDS",
+    "GROUPS",
+    "check",
+    "check_bounds",
+    "get",
+    "getter",
+    "group",
+    "replace",
+    "shape",
+]

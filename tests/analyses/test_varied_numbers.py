@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 
 import mixdyn as md
+import mixdyn.io as mio
+from fixtures import EXAMPLES
 from mixdyn.errors import ModelError
 
 T = np.linspace(0.0, 1.0, 11)
@@ -128,3 +130,70 @@ def test_a_member_with_a_number_its_model_refuses_is_refused_before_computing(
     with pytest.raises(ModelError, match=f"member {member}: {words}") as err:
         md.sweep(model(), T, vary=vary)
     assert truth.value.message in str(err.value)
+
+
+def _no_search(*args, **kwargs):
+    raise AssertionError("the search started")
+
+
+@pytest.mark.parametrize(
+    ("params", "bounds", "words", "built"),
+    [
+        (
+            ["rod.mass"],
+            {"rod.mass": (-10.0, 10.0)},
+            "the low bound: rod.mass = -10 is refused",
+            lambda: md.Body("rod", -10.0),
+        ),
+        (
+            ["spring.stiffness", "spring.free_length"],
+            {"spring.stiffness": (0.0, 10.0), "spring.free_length": (-5.0, 1000.0)},
+            "the low bound: spring.free_length = -5 is refused",
+            lambda: md.SpringDamper("spring", "ground.O", "slider", free_length=-5.0),
+        ),
+    ],
+)
+def test_optimization_bounds_a_model_refuses_are_refused_before_searching(
+    monkeypatch, params, bounds, words, built
+):
+    """Bounds whose end a model built with it refuses (the truth: that constructor) are an
+    input error naming the bounds, not an optimum at a negative mass."""
+    import scipy.optimize
+
+    spec = mio.read(EXAMPLES / "slider_crank_spring.yaml")
+    model, t = mio.build(spec), mio.Runner(spec).plans["revolution"].times
+    monkeypatch.setattr(scipy.optimize, "minimize", _no_search)
+    with pytest.raises(ModelError) as truth:
+        built()
+    path = next(p for p in params if bounds[p][0] < 0)
+    with pytest.raises(ModelError, match=words) as err:
+        md.optimize(
+            model,
+            t,
+            lambda o: o["motor"][0] ** 2,
+            params,
+            bounds,
+            analysis=md.analyses.Inverse(),
+        )
+    assert err.value.element == f"bounds of {path!r}"
+    assert truth.value.message in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "words"),
+    [
+        (dict(bounds={"rod.mass": (-10.0, 10.0)}), "the low bound: rod.mass = -10 is refused"),
+        (dict(bounds={"rod.mass": (-np.inf, -1.0)}, start=[-2.0]), "the high bound: rod.mass"),
+        (dict(start=[-2.0]), "the start: rod.mass = -2 is refused"),
+    ],
+)
+def test_fit_bounds_and_starts_a_model_refuses_are_refused_before_fitting(
+    monkeypatch, kwargs, words
+):
+    import scipy.optimize
+
+    monkeypatch.setattr(scipy.optimize, "least_squares", _no_search)
+    model = mio.build(mio.read(EXAMPLES / "identify_slider_crank.yaml"))
+    with pytest.raises(ModelError, match=words) as err:
+        md.fit(model, T, {"slider.x": np.full(len(T), 0.3)}, ["rod.mass"], **kwargs)
+    assert "mass must be a finite number >= 0" in str(err.value)

@@ -18,6 +18,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
+from .. import paths
 from ..errors import ConvergenceError, ModelError
 from ..model import Model
 from ._setup import Analysis
@@ -167,8 +168,9 @@ def fit(
         A :class:`Fit`.
 
     Raises:
-        ModelError: a bad column, path, bound or start, or a noise finer than float64
-            resolves the measured values (:func:`check_noise`), before any computing.
+        ModelError: a bad column, path, bound or start, a bound or start the number cannot
+            take (a model built with it is refused: a negative mass), or a noise finer than
+            float64 resolves the measured values (:func:`check_noise`), before any search.
         ConvergenceError: the fit did not converge, or its Jacobian is rank-deficient (the
             measurements do not determine the numbers: name fewer, or measure more).
     """
@@ -208,6 +210,9 @@ def fit(
             raise ModelError(f"a bound (low, high) with low < high, got {(a, b)!r}", path)
         if not lo[k] <= x0[k] <= hi[k]:
             raise ModelError(f"the start {x0[k]:g} is outside its bounds {(a, b)!r}", path)
+        paths.check_bounds(model, path, (lo[k], hi[k]))  # values a model may take
+    if start is not None and len(x0) == len(params):  # a start a model may take
+        paths.check(model, {p: x0[k : k + 1] for k, p in enumerate(params)}, lambda i: "the start")
 
     def residuals(theta):
         out = f(theta)

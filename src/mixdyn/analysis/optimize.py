@@ -16,6 +16,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from .. import paths
 from ..errors import ConvergenceError, ModelError
 from ..model import Model
 from ._setup import Analysis
@@ -129,7 +130,8 @@ def optimize(
         An :class:`Optimum`.
 
     Raises:
-        ModelError: a bad path, bound or start (before any computing).
+        ModelError: a bad path, bound or start, or a bound the number cannot take (a model
+            built with it is refused: a negative mass), before any search.
         ConvergenceError: a run failed during the search (its objective not finite), or the
             search did not converge.
     """
@@ -154,6 +156,8 @@ def optimize(
     extra = set(bounds) - set(params)
     if extra:
         raise ModelError(f"bounds of numbers not varied: {', '.join(sorted(extra))}", "bounds")
+    for p, ends in zip(params, lo_hi, strict=True):  # values a model may take, or refused
+        paths.check_bounds(model, p, ends)
     x0 = np.clip(theta0, lo_hi[:, 0], lo_hi[:, 1]) if start is None else np.asarray(start, float)
     if x0.shape != theta0.shape or not np.all((x0 >= lo_hi[:, 0]) & (x0 <= lo_hi[:, 1])):
         raise ModelError(f"start must be {len(params)} numbers within the bounds", "start")

@@ -37,7 +37,7 @@ from . import setup
 from .console import esc
 from .kinds import KINDS, RunKind, register
 from .outputs import write_study_run
-from .plan import Plan, model_number, study_base
+from .plan import Plan, check_value, model_number, study_base
 
 
 @dataclasses.dataclass(frozen=True)
@@ -104,6 +104,8 @@ def plan(runner, index: int, r: s.OptimizeRunSpec) -> OptimizePlan:
         hi = runner.b.scalar(v.bounds[1], kind, (*vp, "bounds", 1))
         if not hi > lo:
             runner.fail((*vp, "bounds"), f"the bounds [{lo:g}, {hi:g}] are empty", "")
+        for k, end in enumerate((lo, hi)):  # values a model may take, or refused here
+            check_value(runner, name, end, paths.BOUND_ENDS[k], (*vp, "bounds", k))
         bounds[name] = (lo, hi)
         if v.start is not None:
             x = runner.b.scalar(v.start, kind, (*vp, "start"))
