@@ -316,9 +316,12 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
 
         try:
             from .io import FileError, read
+            from .io.tables import parquet_module
             from .runs import Runner
             from .runs.checks import require_size
 
+            if parquet:  # refused before anything runs
+                parquet_module(file, "writing", "--parquet")
             spec = read(file)
             require_size(spec, file)
             runner = Runner(spec)
@@ -380,6 +383,7 @@ def plot(
         from ._hints import did_you_mean
         from .io import FileError, read_result
         from .io.results import column_in_unit
+        from .io.tables import require_numbers
         from .runs.outputs import check_output
         from .viz import PLOT_SUFFIXES, plot_columns
 
@@ -398,6 +402,8 @@ def plot(
                 hint=did_you_mean(missing[0], table.columns)
                 + " (the first line of results.csv lists them all)",
             )
+        require_numbers(table, [x], results, "--x")
+        require_numbers(table, columns, results, "--column")
         if output is None:
             folder = results if results.is_dir() else results.parent
             stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", "_".join(columns))[:80]

@@ -46,7 +46,7 @@ from .integrators._common import (
 )
 from .kinematic import output_times
 from .methods import IntegratorOptions, Projection, as_method, check_steps, resolve
-from .result import Result
+from .result import Partial, Result
 
 #: Default tolerance of a dynamic run's energy balance (see :func:`energy_tolerance`).
 ENERGY_TOL = "auto"
@@ -465,8 +465,18 @@ def _integrator_args(case: Case) -> tuple:
 
 def finish(case: Case, traj, arrays=None) -> Result:
     """The result of ``case`` from its trajectory ``traj``, in physical terms; a failed or
-    unbalanced run raises its named error (:class:`~mixdyn.errors.NumericalError`).
+    unbalanced run raises its named error (:class:`~mixdyn.errors.NumericalError`), which
+    carries as ``partial`` the states computed up to its time (:class:`~.result.Partial`).
     ``arrays``: the post-processing's arrays (:func:`_post_arrays`) if already computed."""
+    try:
+        return _finish(case, traj, arrays)
+    except NumericalError as e:
+        if getattr(e, "partial", None) is None:
+            e.partial = Partial.before(case.problem.model, case.ts, traj.q, traj.qd, e.time)
+        raise
+
+
+def _finish(case: Case, traj, arrays=None) -> Result:
     problem, ts, options = case.problem, case.ts, case.options
     method = options.method
     if int(traj.status) != 0:

@@ -208,3 +208,52 @@ class Result:
             f"Result({self.kind}, {self.model.name}, {len(self.t)} times "
             f"{self.t[0]:.4g}..{self.t[-1]:.4g}, {len(self.columns())} columns)"
         )
+
+
+@dataclasses.dataclass(frozen=True)
+class Partial:
+    """What a failed dynamic run computed before it failed: the bodies' coordinates and
+    velocities at the output times up to the failure (carried by its
+    :class:`~mixdyn.errors.NumericalError` as ``partial``; the other columns of a
+    :class:`Result`, which come after the integration, were never computed).
+
+    Attributes:
+        model: the mechanism.
+        t: (K,) the output times up to the failure [time].
+        q, qd: (K, nq) coordinates and velocities there [model units].
+    """
+
+    model: Model
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+
+    @classmethod
+    def before(cls, model: Model, ts, q, qd, t_fail: float | None) -> Partial:
+        """The rows of ``ts`` (N,), ``q``, ``qd`` (N, nq) at times up to ``t_fail`` (all
+        where None) whose states are finite."""
+        ts, q, qd = np.asarray(ts, float), np.asarray(q, float), np.asarray(qd, float)
+        keep = ts <= t_fail if t_fail is not None else np.ones(len(ts), bool)
+        keep &= np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(qd), axis=1)
+        k = int(np.argmin(keep)) if not keep.all() else len(ts)  # the first row not kept
+        return cls(model, ts[:k], q[:k], qd[:k])
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """``t`` and each body's ``x, y, phi, vx, vy, omega``, each (K,)."""
+        cols = {"t": self.t}
+        for b, body in enumerate(self.model.bodies):
+            for suffix, src, k, _ in _BODY_COLUMNS[:6]:
+                cols[f"{body.name}.{suffix}"] = getattr(self, src)[:, 3 * b + k]
+        return cols
+
+    def kind_of(self, name: str) -> str | None:
+        """The kind of quantity of a column (as :meth:`Result.kind_of`)."""
+        if name == "t":
+            return "time"
+        suffix = name.rpartition(".")[2]
+        return next((kind for s, _, _, kind in _BODY_COLUMNS if s == suffix), None)
+
+    def units(self) -> dict[str, str]:
+        """The unit of every column in the model's unit system."""
+        u = self.model.units
+        return {c: u.label(self.kind_of(c)) for c in self.columns()}

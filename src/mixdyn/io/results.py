@@ -108,11 +108,75 @@ def write_result(
         "output_units": dict(output_units or {}),
         "settings": jsonable(settings or {}),
         "stats": jsonable(result.stats),
+        "status": "ok",
     }
     meta.update(jsonable(extra or {}))
     path = folder / META_JSON
     tmp = path.with_suffix(".json.tmp")
     tmp.write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+    written.append(path)
+    return written
+
+
+def write_failure(
+    error: NumericalError,
+    folder,
+    *,
+    settings: dict | None = None,
+    extra: dict | None = None,
+    output_units: dict | None = None,
+) -> list[pathlib.Path]:
+    """Write what a failed run computed: ``folder/results.csv`` with the states up to the
+    failure (the error's ``partial``, :class:`mixdyn.analysis.result.Partial`: ``t`` and
+    the bodies' coordinates and velocities; no file where it has none) and
+    ``folder/meta.json`` with ``status: failed`` and ``failure``: the time (in the model's
+    time unit, named as ``time_unit``), the error's class, its message and the elements
+    involved.
+
+    Returns:
+        The files written.
+    """
+    from .. import __version__
+
+    folder = pathlib.Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    partial = getattr(error, "partial", None)
+    names, units = [], {}
+    rows = 0
+    if partial is not None and len(partial.t):
+        cols, units = in_units(partial, partial.columns(), partial.units(), output_units)
+        names = list(cols)
+        table = np.column_stack([np.asarray(cols[n]) for n in names])
+        rows = len(table)
+        csv = folder / RESULTS_CSV
+        _write_csv(csv, names, table)
+        written.append(csv)
+    model = getattr(partial, "model", None)
+    meta = {
+        "mixdyn_version": __version__,
+        "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "model": None if model is None else model.name,
+        "status": "failed",
+        "failure": {
+            "time": error.time,
+            "time_unit": None if model is None else model.units.label("time"),
+            "error": type(error).__name__,
+            "cause": error.message,
+            "elements": list(error.elements),
+        },
+        "unit_system": None if model is None else _unit_system(model.units),
+        "rows": rows,
+        "columns": names,
+        "units": {c: units.get(c, "") for c in names},
+        "output_units": dict(output_units or {}),
+        "settings": jsonable(settings or {}),
+    }
+    meta.update(jsonable(extra or {}))
+    path = folder / META_JSON
+    tmp = path.with_suffix(".json.tmp")
+    tmp.write_text(json.dumps(jsonable(meta), indent=2) + "\n", encoding="utf-8")
     os.replace(tmp, path)
     written.append(path)
     return written
@@ -138,8 +202,10 @@ def _unit_system(units) -> dict:
 def _write_parquet(df, path: pathlib.Path, units: dict, system: dict | None) -> None:
     """``df`` to Parquet with the columns' units and the unit system in the schema metadata
     (``PARQUET_KEY``), so that the file alone says what its numbers are."""
+    from .tables import parquet_module
+
+    papq = parquet_module(path, "writing")
     import pyarrow as pa
-    import pyarrow.parquet as papq
 
     table = pa.Table.from_pandas(df, preserve_index=False)
     entry = {"units": {c: units.get(c, "") for c in df.columns}, "unit_system": system}
@@ -150,9 +216,12 @@ def _write_parquet(df, path: pathlib.Path, units: dict, system: dict | None) -> 
 
 def parquet_units(path) -> dict:
     """The units a Parquet file written by mixdyn carries (``{}`` if none)."""
-    import pyarrow.parquet as papq
+    from .tables import parquet_module
 
-    meta = papq.read_schema(path).metadata or {}
+    try:
+        meta = parquet_module(path, "reading").read_schema(path).metadata or {}
+    except (OSError, ValueError):  # not Parquet (pyarrow's ArrowInvalid): no units
+        return {}
     return json.loads(meta[PARQUET_KEY]).get("units", {}) if PARQUET_KEY in meta else {}
 
 
@@ -249,6 +318,7 @@ def write_sweep(
         "rows": len(table),
         "seconds": sweep.seconds,
         "settings": jsonable(settings or {}),
+        "status": "ok",
     }
     meta.update(jsonable(extra or {}))
     path = folder / META_JSON
@@ -271,8 +341,10 @@ def read_result(path):
 
     Raises:
         FileNotFoundError: no results there.
+        FileError: a file that is not a regular file, not UTF-8 CSV or not Parquet, or
+            Parquet without pyarrow installed.
     """
-    import pandas as pd
+    from .tables import read_csv, read_parquet
 
     p = pathlib.Path(path)
     if p.is_dir():
@@ -284,14 +356,30 @@ def read_result(path):
         folder = p.parent
     if not p.exists():
         raise FileNotFoundError(f"no results at {path} (expected {RESULTS_CSV} or a run folder)")
-    df = pd.read_parquet(p) if p.suffix == ".parquet" else pd.read_csv(p)
+    df = read_parquet(p) if p.suffix == ".parquet" else read_csv(p)
     meta_path = folder / META_JSON
-    meta = json.loads(meta_path.read_text(encoding="utf-8")) if meta_path.exists() else {}
+    meta = _read_meta(meta_path) if meta_path.exists() else {}
     units = meta.get("units", {})
     if not units and p.suffix == ".parquet":
         units = parquet_units(p)
     df.attrs["units"] = units
     return df, meta
+
+
+def _read_meta(path: pathlib.Path) -> dict:
+    """A run's ``meta.json``, or the :class:`~mixdyn.io.FileError` saying it is not JSON."""
+    from ._errors import FileError
+    from .tables import read_bytes
+
+    try:
+        meta = json.loads(read_bytes(path).decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise FileError(
+            f"is not JSON ({e})", file=str(path), hint="write the run again, or remove it"
+        ) from None
+    if not isinstance(meta, dict):
+        raise FileError("is not a JSON object", file=str(path), hint="write the run again")
+    return meta
 
 
 def read_motion(path, model, file) -> tuple[np.ndarray, np.ndarray]:
@@ -390,6 +478,7 @@ __all__ = [
     "point_columns",
     "read_motion",
     "read_result",
+    "write_failure",
     "write_result",
     "write_sweep",
 ]

@@ -34,14 +34,15 @@ import numpy as np
 
 from .. import paths
 from ..analysis import Result
-from ..analysis.fit import _RATES, Fit
+from ..analysis.fit import _RATES, Fit, check_noise
 from ..errors import ModelError
 from ..io import schema as s
+from ..io._errors import FileError
 from . import setup
 from .console import esc
-from .kinds import KINDS, RunKind, register
+from .kinds import RunKind, register
 from .outputs import write_study_run
-from .plan import Plan, check_value, model_number, study_base
+from .plan import Plan, model_number, study_base
 
 #: Kinds of quantity of a measured column, by its suffix.
 _KINDS = {
@@ -93,15 +94,20 @@ def _data_path(runner, name: str) -> pathlib.Path:
 
 
 def _read_data(runner, r: s.IdentifyRunSpec, path):
+    """The recording: a regular CSV file of at most :data:`~mixdyn.io.tables.MAX_DATA_BYTES`
+    bytes (:func:`mixdyn.io.tables.read_csv`)."""
     import pandas as pd
 
+    from ..io import tables
+
     file = _data_path(runner, r.data)
+    hint = "thin the recording (every k-th row) to a file that size"
     try:
-        table = pd.read_csv(file)
-    except FileNotFoundError:
-        runner.fail((*path, "data"), f"no data file {str(file)!r}", "give a CSV file's path")
-    except (OSError, ValueError, pd.errors.ParserError) as e:
-        runner.fail((*path, "data"), f"{str(file)!r} cannot be read as CSV: {e}", "")
+        table = tables.read_csv(file, limit=tables.MAX_DATA_BYTES, hint=hint)
+    except FileError as e:
+        if e.problem == "no such file":
+            runner.fail((*path, "data"), f"no data file {str(file)!r}", "give a CSV file's path")
+        runner.fail((*path, "data"), f"data file {str(file)!r}: {e.problem}", e.hint)
     if "t" not in table.columns:
         runner.fail((*path, "data"), f"{str(file)!r} has no column 't'", "add the times as 't'")
     t = pd.to_numeric(table["t"], errors="coerce").to_numpy(dtype=float)
@@ -152,6 +158,10 @@ def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
         sigma = runner.b.scalar(m.noise, _KINDS[suffix], (*mp, "noise"))
         if not sigma > 0:
             runner.fail((*mp, "noise"), "the noise must be > 0", "")
+        try:
+            check_noise(m.column, v, sigma, lambda k: f"line {k + 2} of {str(file)!r}")
+        except ModelError as e:
+            runner.fail((*mp, "noise"), e.message, "")
         measured[m.column], noise[m.column] = v, sigma
     start, bounds = {}, {}
     for name, f in r.fit.items():
@@ -159,14 +169,11 @@ def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
         kind = model_number(runner, name, fp, "fit")
         if f.start is not None:
             start[name] = runner.b.scalar(f.start, kind, (*fp, "start"))
-            check_value(runner, name, start[name], "the start", (*fp, "start"))
         if f.bounds is not None:
             lo = runner.b.scalar(f.bounds[0], kind, (*fp, "bounds", 0))
             hi = runner.b.scalar(f.bounds[1], kind, (*fp, "bounds", 1))
             if not hi > lo:
                 runner.fail((*fp, "bounds"), f"the bounds [{lo:g}, {hi:g}] are empty", "")
-            for k, end in enumerate((lo, hi)):  # values a model may take, or refused here
-                check_value(runner, name, end, paths.BOUND_ENDS[k], (*fp, "bounds", k))
             bounds[name] = (lo, hi)
     return IdentifyPlan(
         r, index, t, (), base=base, measured=measured, noise=noise, start=start, bounds=bounds
@@ -188,7 +195,7 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
     x0 = [plan.start.get(p, v) for p, v in zip(params, nominal, strict=True)]
     try:
         # the repeated run's analysis as a value (its keywords read once)
-        value, _ = from_keywords(analysis, plan.times, kwargs)
+        value, recorded = from_keywords(analysis, plan.times, kwargs)
         result = fit(
             model,
             plan.times,
@@ -206,7 +213,7 @@ def execute(runner, plan: IdentifyPlan) -> FileFit:
     for p, v in zip(params, result.values, strict=True):
         get, _ = paths.getter(fitted, p)
         fitted = eqx.tree_at(get, fitted, jnp.asarray(float(v)))
-    run = KINDS[analysis].analysis(fitted, plan.times, **kwargs)
+    run = setup.RunAnalysis(analysis, fitted, value, recorded).run(plan.times)
     return FileFit(plan, result, run)
 
 

@@ -1,6 +1,10 @@
-"""What ``mixdyn run`` writes: each run's folder, checked before anything runs and written as
-the run ends, by its kind (:meth:`.kinds.RunKind.write`); the figures drawn by the figure
-worker (:class:`mixdyn.viz.painter.Painter`) while the next runs compute.
+"""What ``mixdyn run`` writes: each run's folder, checked before anything runs, cleared of
+the run's previous outputs as it starts (:func:`clear_outputs`) and written as the run ends,
+by its kind (:meth:`.kinds.RunKind.write`); the figures drawn by the figure worker
+(:class:`mixdyn.viz.painter.Painter`) while the next runs compute. A run that fails
+numerically writes what it computed up to the failure and a ``meta.json`` saying
+``status: failed``, with the failure's time and cause (:func:`write_failed`); a run that
+succeeds says ``status: ok``.
 """
 
 from __future__ import annotations
@@ -10,6 +14,7 @@ import dataclasses
 import os
 import pathlib
 
+from ..errors import NumericalError
 from ..io._errors import FileError
 from . import execute as _execute
 from .console import RunProgress
@@ -134,6 +139,46 @@ def animation_targets(outputs, file) -> list[pathlib.Path]:
     return targets
 
 
+#: The files a run writes in some invocations only (``--parquet``, ``--netcdf``), by a file
+#: its kind always writes.
+_FORMAT_FILES = {"results.csv": ("results.parquet",), "table.csv": ("table.parquet", "sweep.nc")}
+
+
+def run_outputs(runner, plan) -> list[str]:
+    """Every file the run writes in its folder in any invocation: its kind's
+    (:meth:`.kinds.RunKind.output_files`, figures included) and those of the optional
+    formats (``results.parquet``; a sweep's ``table.parquet`` and ``sweep.nc``)."""
+    names = list(kind_of(plan).output_files(runner, plan, True))
+    for name in list(names):
+        names += [n for n in _FORMAT_FILES.get(name, ()) if n not in names]
+    return names
+
+
+def clear_outputs(runner, plan, folder: pathlib.Path) -> None:
+    """Remove the run's previous outputs from its folder before it runs, so that a failed
+    run leaves no earlier answer beside its own: only the files it writes
+    (:func:`run_outputs`), and only files (a folder of that name is left as it is)."""
+    for name in run_outputs(runner, plan):
+        path = folder / name
+        if path.is_symlink() or path.is_file():
+            path.unlink()
+
+
+def write_failed(runner, plan, error, outputs: Outputs) -> list[pathlib.Path]:
+    """A failed run's folder: the states computed up to the failure and ``meta.json`` with
+    ``status: failed``, the failure's time and cause (:func:`mixdyn.io.results.write_failure`)."""
+    from ..io.results import run_settings, write_failure
+
+    extra = {"file": str(outputs.file), "run": plan.name, "kind": plan.spec.kind}
+    return write_failure(
+        error,
+        outputs.folder(plan),
+        settings=run_settings(plan.spec),
+        extra=extra,
+        output_units=runner.output_units,
+    )
+
+
 def draws(runner, plans, figures: bool) -> bool:
     """Whether any of the runs draws a figure or an animation (with ``figures``)."""
     return figures and any(kind_of(p).draws(runner, p) for p in plans)
@@ -155,8 +200,13 @@ def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]
     """
     written: list[pathlib.Path] = []
     painter = outputs.painter
+    by_name = {p.name: p for p in plans}
     try:
         with RunProgress(plans, mode) as progress:
+
+            def start(plan):
+                clear_outputs(runner, plan, outputs.folder(plan))
+                progress.start(plan)
 
             def done(plan, result, seconds):
                 progress.done(plan)
@@ -164,13 +214,19 @@ def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]
                 written.extend(kind.write(runner, plan, result, seconds, outputs))
                 progress.say(kind.done(plan, result, seconds, outputs.folder(plan)))
 
-            _execute.execute(
-                runner,
-                [p.name for p in plans],
-                progress=progress.hook,
-                on_start=progress.start,
-                on_done=done,
-            )
+            try:
+                _execute.execute(
+                    runner,
+                    [p.name for p in plans],
+                    progress=progress.hook,
+                    on_start=start,
+                    on_done=done,
+                )
+            except NumericalError as e:
+                plan = by_name.get(getattr(e, "run", None))
+                if plan is not None:
+                    written.extend(write_failed(runner, plan, e, outputs))
+                raise
         if painter is not None:  # in order: the first failure is raised, as if drawn in turn
             written.extend(painter.results())
     except KeyboardInterrupt:
@@ -218,7 +274,10 @@ __all__ = [
     "animation_targets",
     "check_output",
     "check_run_outputs",
+    "clear_outputs",
     "draws",
+    "run_outputs",
+    "write_failed",
     "write_runs",
     "write_study_run",
 ]

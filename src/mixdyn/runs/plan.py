@@ -23,6 +23,9 @@ from ..model._declare import number_kind as declared_number_kind
 #: class: :func:`mixdyn.model._declare.number_kind`).
 _BODY_KINDS = {"mass": "mass", "inertia": "inertia"}
 
+#: The most output times a run's ``time`` may give (as ``n`` allows).
+MAX_OUTPUT_TIMES = 1_000_000
+
 
 @dataclasses.dataclass(frozen=True)
 class Plan:
@@ -86,10 +89,23 @@ def times(runner, t: s.TimeSpec, path) -> np.ndarray:
     step = b.scalar(t.step, "time", (*path, "step"))
     if not step > 0:
         runner.fail((*path, "step"), "the step must be positive", "")
-    n = int(np.floor((t1 - t0) / step * (1 + 1e-12))) + 1
-    if n > 1_000_000:
-        runner.fail((*path, "step"), f"{n} output times are too many", "use a larger step")
-    return t0 + step * np.arange(n)
+    count = (t1 - t0) / step * (1 + 1e-12)  # inf for a step near the smallest float
+    if not count < MAX_OUTPUT_TIMES:
+        runner.fail(
+            (*path, "step"),
+            f"a step of {step:.3g} gives {count:.3g} output times over the span "
+            f"[{t0:g}, {t1:g}], more than {MAX_OUTPUT_TIMES:,}",
+            f"use a step of at least {(t1 - t0) / (MAX_OUTPUT_TIMES - 1):.3g}",
+        )
+    times = t0 + step * np.arange(int(np.floor(count)) + 1)
+    if not np.all(np.diff(times) > 0):
+        runner.fail(
+            (*path, "step"),
+            f"a step of {step:.3g} is below the resolution of the times near {t1:g}: "
+            "successive output times are equal",
+            "use a larger step",
+        )
+    return times
 
 
 def study_base(runner, index: int, r, kinds: tuple[str, ...], verb: str) -> Plan:
@@ -148,19 +164,6 @@ def model_number(runner, name: str, path, verb: str) -> str | None:
     return number_kind(runner, name)
 
 
-def check_value(runner, name: str, value: float, what: str, path) -> None:
-    """Refuse a value a study would give the number ``name`` (``what``: ``"the low bound"``,
-    ``"the start"``) that a model built with it refuses (:func:`mixdyn.paths.check`: the
-    check the file meets with that number written in), at ``path`` in the file; an infinite
-    bound (no bound) passes."""
-    if not np.isfinite(value):
-        return
-    try:
-        paths.check(runner.model, {name: [value]}, label=lambda i: what, where=lambda p: p)
-    except ModelError as e:
-        runner.fail(path, e.message, f"give {name} a value a model may have")
-
-
 def check_cycles(runner) -> None:
     """Refuse runs that replay each other's motion in a cycle."""
     state: dict[str, int] = {}
@@ -211,13 +214,4 @@ def order(runner, names=None) -> list[Plan]:
     return [runner.plans[n] for n in out]
 
 
-__all__ = [
-    "Plan",
-    "check_cycles",
-    "check_value",
-    "model_number",
-    "number_kind",
-    "order",
-    "study_base",
-    "times",
-]
+__all__ = ["Plan", "check_cycles", "model_number", "number_kind", "order", "study_base", "times"]
