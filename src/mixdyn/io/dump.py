@@ -15,6 +15,7 @@ import yaml
 
 from .. import model as m
 from ..errors import ModelError
+from ..model._declare import TIME, Variable
 from . import schema as s
 from .expressions import ExpressionFunction, ExpressionLaw
 
@@ -158,7 +159,19 @@ class _Describer:
         self.model = model
         self.parameters: dict[str, float] = {}
 
-    def law(self, law, element: str):
+    def law(self, law, element: str, variable: Variable = TIME):
+        """A law's description; a law of another variable than time (a cam's angle) names
+        it in its expression."""
+        out = self._law(law, element)
+        if variable == TIME:
+            return out
+        if isinstance(out, str):
+            return re.sub(r"\bt\b", variable.name, out)
+        if isinstance(out, dict) and "expr" in out:
+            return {**out, "expr": re.sub(r"\bt\b", variable.name, out["expr"])}
+        return out
+
+    def _law(self, law, element: str):
         if law is None:
             return 0.0
         if isinstance(law, m.StateFunction):

@@ -31,6 +31,7 @@ from .. import model as m
 from ..analysis._options import suggestions
 from ..errors import ModelError
 from ..model._body import GROUND_NAME
+from ..model._declare import TIME, Variable
 from ..units import UnitSystem
 from . import schema as s
 from ._errors import FileError
@@ -452,9 +453,14 @@ class Builder:
         return parts[0], parts[1]
 
     # ----------------------------------------------------------------- laws
-    def law(self, spec, kind, path, *, state: bool = False):
-        """A :class:`mixdyn.Law` (or, with ``state``, possibly a StateFunction) of ``kind``."""
+    def law(self, spec, kind, path, *, state: bool = False, variable: Variable = TIME):
+        """A :class:`mixdyn.Law` (or, with ``state``, possibly a StateFunction) of ``kind``,
+        a function of ``variable`` (default time; a law of another variable, such as a cam's
+        angle ``theta``, names it in its expressions, and its coefficients and knots are per
+        that variable's kind)."""
         path = tuple(path)
+        if variable != TIME:
+            spec = self._renamed(spec, variable, path)
         if isinstance(spec, int | float):
             return m.Constant(float(spec))
         if isinstance(spec, str):
@@ -484,7 +490,7 @@ class Builder:
         if isinstance(spec, s.PolynomialSpec):
             f = 1.0 if spec.unit is None else self.factor(spec.unit, kind, (*path, "unit"))
             coeffs = [
-                self.scalar(c, _per_time(dim, k), (*path, "polynomial", k), scale=f)
+                self.scalar(c, _per(dim, variable, k), (*path, "polynomial", k), scale=f)
                 for k, c in enumerate(spec.polynomial)
             ]
             return m.Polynomial(coeffs)
@@ -492,20 +498,20 @@ class Builder:
             p = (*path, "ramp")
             return m.Ramp(
                 self.scalar(spec.ramp.start, kind, (*p, "start")),
-                self.scalar(spec.ramp.rate, _per_time(dim, 1), (*p, "rate")),
+                self.scalar(spec.ramp.rate, _per(dim, variable, 1), (*p, "rate")),
             )
         if isinstance(spec, s.HarmonicSpec):
             h, p = spec.harmonic, (*path, "harmonic")
             return m.Harmonic(
                 self.scalar(h.amplitude, kind, (*p, "amplitude")),
-                self.scalar(h.omega, "angular_velocity", (*p, "omega")),
+                self.scalar(h.omega, _rate_of_angle(variable), (*p, "omega")),
                 self.scalar(h.phase, "angle", (*p, "phase")),
                 self.scalar(h.offset, kind, (*p, "offset")),
             )
         if isinstance(spec, s.SplineSpec):
             a, p = spec.spline, (*path, "spline")
             f = 1.0 if a.unit is None else self.factor(a.unit, kind, (*p, "unit"))
-            t = self.times(a.t, (*p, "t"))
+            t = self.times(a.t, (*p, "t"), variable.kind)
             y = [self.scalar(v, kind, (*p, "y", k), scale=f) for k, v in enumerate(a.y)]
             if len(y) != len(t):
                 self.fail((*p, "y"), f"{len(y)} values for {len(t)} times", "give one per time")
@@ -516,11 +522,11 @@ class Builder:
         if isinstance(spec, s.HermiteSpec):
             a, p = spec.hermite, (*path, "hermite")
             f = 1.0 if a.unit is None else self.factor(a.unit, kind, (*p, "unit"))
-            t = self.times(a.t, (*p, "t"))
+            t = self.times(a.t, (*p, "t"), variable.kind)
             cols = []
             for k, key in enumerate(("y", "yd", "ydd")):
                 vals = [
-                    self.scalar(v, _per_time(dim, k), (*p, key, i), scale=f)
+                    self.scalar(v, _per(dim, variable, k), (*p, key, i), scale=f)
                     for i, v in enumerate(getattr(a, key))
                 ]
                 if len(vals) != len(t):
@@ -542,11 +548,29 @@ class Builder:
             return m.PiecewisePolynomial(breaks, np.asarray(a.coeffs, dtype=float))
         raise AssertionError(type(spec))  # pragma: no cover
 
-    def times(self, values, path) -> list[float]:
-        t = [self.scalar(v, "time", (*path, k)) for k, v in enumerate(values)]
+    def times(self, values, path, kind="time") -> list[float]:
+        """Knots of a law (times, or values of its variable of ``kind``), increasing."""
+        t = [self.scalar(v, kind, (*path, k)) for k, v in enumerate(values)]
         if any(b <= a for a, b in itertools.pairwise(t)):
-            self.fail(path, "times must be strictly increasing", "sort them and drop repeats")
+            what = "times" if kind == "time" else "knots"
+            self.fail(path, f"{what} must be strictly increasing", "sort them and drop repeats")
         return t
+
+    def _renamed(self, spec, variable: Variable, path):
+        """A law's description whose expression names ``variable`` written with ``t`` (the
+        variable of an expression law); a ``t`` of its own is refused."""
+        text = spec if isinstance(spec, str) else getattr(spec, "expr", None)
+        if text is None:
+            return spec
+        if re.search(r"\bt\b", text):
+            at = path if isinstance(spec, str) else (*path, "expr")
+            self.fail(
+                at,
+                f"this law is a law of {variable.name} [{variable.kind}], not of time t",
+                f"write it with {variable.name}",
+            )
+        text = re.sub(rf"\b{variable.name}\b", "t", text)
+        return text if isinstance(spec, str) else spec.model_copy(update={"expr": text})
 
     def expression(self, text, unit, kind, path, state: bool):
         scale = 1.0 if unit is None else self.factor(unit, kind, (*path[:-1], "unit"))
@@ -695,9 +719,16 @@ class Builder:
         return f.build(self, ("forces", i))
 
 
-def _per_time(dim, k: int) -> tuple[int, int, int]:
-    """The dimension of ``dim`` per time**k."""
-    return (dim[0], dim[1], dim[2] - k)
+def _per(dim, variable: Variable, k: int) -> tuple[int, int, int]:
+    """The dimension of ``dim`` per (the kind of ``variable``)**k."""
+    return tuple(d - k * v for d, v in zip(dim, dimension(variable.kind), strict=True))
+
+
+def _rate_of_angle(variable: Variable):
+    """The kind of an angle per unit of ``variable`` (a harmonic's ``omega``)."""
+    if variable == TIME:
+        return "angular_velocity"
+    return _per(dimension("angle"), variable, 1)
 
 
 __all__ = ["Builder", "FileError", "Source", "build", "element_name", "load", "read", "reads"]

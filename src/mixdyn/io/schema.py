@@ -21,6 +21,7 @@ import functools
 import math
 import operator
 import re
+import warnings
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -236,18 +237,24 @@ class _DeclaredSpec(Spec):
                 )
             elif isinstance(decl, _decl.Coordinate):
                 values[decl.body], value = b.coordinate(value, at)
-            elif isinstance(decl, _decl.Quantity):
+            elif isinstance(decl, _decl.Quantity) and value is not None:
                 unit = _decl.quantity_kind(kind.cls, field, values, b.element_class)
                 value = (
-                    b.law(value, unit, at, state=decl.state)
+                    b.law(value, unit, at, state=decl.state, variable=decl.variable)
                     if decl.law
                     else b.scalar(value, unit, at)
                 )
             values[field] = value
         try:
-            return kind.cls(self.name, **values)
+            with warnings.catch_warnings():
+                # What the class only warns of in Python (a deprecated default) a file has
+                # to give.
+                warnings.simplefilter("error", DeprecationWarning)
+                return kind.cls(self.name, **values)
         except ModelError as e:
             b.fail(b.fault_path(p, e), _without_element(e, self.name))
+        except DeprecationWarning as w:
+            b.fail(p, _without_element(ModelError(str(w)), self.name))
 
     @classmethod
     def from_element(cls, e, d):
@@ -270,8 +277,8 @@ class _DeclaredSpec(Spec):
                 value = d.axis(value)
             elif isinstance(decl, _decl.Coordinate):
                 value = f"{getattr(e, decl.body)}.{value}"
-            elif isinstance(decl, _decl.Quantity):
-                value = d.law(value, e.name) if decl.law else float(value)
+            elif isinstance(decl, _decl.Quantity) and value is not None:
+                value = d.law(value, e.name, decl.variable) if decl.law else float(value)
             values[field] = value
         return cls(type=cls.declared.file_name, name=e.name, **values)
 
@@ -299,6 +306,8 @@ def _declared_field(decl, default):
         annotation = Ref
     elif isinstance(decl, _decl.Quantity):
         annotation = LawSpec if decl.law else Scalar
+        if default is None and not decl.law:
+            annotation = annotation | None
         doc = f"{decl.doc} [{decl.shown}]"
         if decl.file_default is not None:
             default = decl.file_default
@@ -338,18 +347,12 @@ def _declared_spec(kind) -> type[Spec]:
 
 
 def _declared_specs(group: str, registry: dict) -> None:
-    """Fill ``registry`` with the spec of every element class of ``group``: the spec written
-    by hand for it (already in ``registry``), else the one made from its declaration; in
-    the order the classes were registered."""
-    by_hand = dict(registry)
+    """Fill ``registry`` with the spec made from the declaration of every element class of
+    ``group`` that declares its fields, in the order the classes were registered."""
     registry.clear()
     for kind in _decl.ELEMENTS[group].values():
-        name = kind.cls.__name__
-        if name in by_hand:
-            registry[name] = by_hand.pop(name)
-        elif kind.fields():
-            registry[name] = _declared_spec(kind)
-    registry.update(by_hand)
+        if kind.fields():
+            registry[kind.cls.__name__] = _declared_spec(kind)
 
 
 # --------------------------------------------------------------------------- laws
@@ -568,168 +571,17 @@ class BodySpec(Spec):
 
 
 #: The element registries: an element kind (joint, driver, force) is one model class
-#: (``mixdyn.model``) and one spec class, by the model class's name: the spec made from the
-#: class's declaration (:func:`_declared_specs`), or one written by hand here and registered
-#: with :func:`element_kind` (the cam's, whose profile law and follower kinds are more than
-#: declared fields). The spec builds the element (``build``) and describes one
-#: (``from_element``). Loading, writing back and the schema's ``joints``, ``drivers`` and
-#: ``forces`` unions read these registries; nothing else in ``io`` names an element kind.
+#: (``mixdyn.model``) and the spec made from the class's declaration
+#: (:func:`_declared_specs`), by the model class's name. The spec builds the element
+#: (``build``) and describes one (``from_element``). Loading, writing back and the schema's
+#: ``joints``, ``drivers`` and ``forces`` unions read these registries; nothing else in
+#: ``io`` names an element kind.
 JOINT_SPECS: dict[str, type] = {}
 
 
 #: The driver and force registries, as :data:`JOINT_SPECS`.
 DRIVER_SPECS: dict[str, type] = {}
 FORCE_SPECS: dict[str, type] = {}
-
-
-def element_kind(model_class: str, registry: dict):
-    """Register an element spec class (``build``, ``from_element``) for the model class named
-    ``model_class`` in ``registry`` (:data:`JOINT_SPECS`, :data:`DRIVER_SPECS`,
-    :data:`FORCE_SPECS`)."""
-
-    def register(cls):
-        cls.element_class = model_class
-        registry[model_class] = cls
-        return cls
-
-    return register
-
-
-def joint_kind(model_class: str):
-    """Register a joint spec class for the model class named ``model_class``."""
-    return element_kind(model_class, JOINT_SPECS)
-
-
-@joint_kind("CamFollower")
-class CamFollowerSpec(Spec):
-    """A cam (``cam``, turning about ``center``) driving a translating follower (``follower``,
-    its point ``point`` along ``axis``) by a displacement law of the cam angle ``theta``
-    [rad]: ``(P - C) . axis = base + law(theta)``. The follower's guide is a joint of its
-    own. Columns ``name.F`` (the force along the axis, > 0 in contact; a run where it would
-    pull fails, naming the time the follower leaves the cam), ``name.alpha`` (pressure
-    angle), ``name.Fn`` (normal contact force)."""
-
-    type: Literal["cam_follower"]
-    """Joint type: ``cam_follower``."""
-    name: Name
-    """Unique name of the cam pair."""
-    cam: Name
-    """The cam's body."""
-    follower: Name
-    """The follower's body."""
-    law: LawSpec
-    """Displacement [length] (an oscillating follower: its angle [rad]) as a law of the cam
-    angle: an expression of ``theta`` [rad] (``h/2*(1 - cos(theta))``), a polynomial or spline
-    in ``theta`` [model units]."""
-    base: Scalar | None = None
-    """Distance from the cam's centre to the follower's point at zero displacement [length]
-    (the prime circle: base circle plus roller); a translating follower needs it."""
-    motion: Literal["translating", "oscillating"] = "translating"
-    """``translating`` (default: along ``axis``) or ``oscillating`` (about ``pivot``)."""
-    pivot: Ref | None = None
-    """An oscillating follower's pivot, a point of ``frame``."""
-    sense: Literal[1, -1] = 1
-    """+1 if an oscillating follower's angle grows as the cam lifts it, -1 if it falls."""
-    axis: Vec2 | Name = (0.0, 1.0)
-    """Direction of the follower's motion away from the cam, in ``frame``'s frame. Default
-    ``[0, 1]``."""
-    follower_type: Literal["knife", "roller", "flat"] = "knife"
-    """``knife`` (default), ``roller`` (give ``roller``) or ``flat`` (flat-faced)."""
-    roller: Scalar = 0.0
-    """The roller's radius [length]."""
-    frame: Name = "ground"
-    """The body of the follower's guide. Default the ground."""
-    center: Ref | None = None
-    """The cam's centre, ``cam.point`` (default its origin)."""
-    point: Ref | None = None
-    """The follower's point (knife edge or roller centre), ``follower.point`` (default its
-    origin)."""
-
-    def build(self, b, p):
-        import re as _re
-
-        b.body(self.cam, (*p, "cam"), ground=False)
-        b.body(self.follower, (*p, "follower"), ground=False)
-        b.body(self.frame, (*p, "frame"))
-        for key in ("center", "point"):
-            if getattr(self, key) is not None:
-                b.point(getattr(self, key), (*p, key))
-        law = self.law
-        src = law if isinstance(law, str) else getattr(law, "expr", None)
-        if src is not None:
-            if _re.search(r"\bt\b", src):
-                b.fail(
-                    (*p, "law"),
-                    "a cam law is a law of the cam angle theta, not of time t",
-                    "write it with theta [rad], e.g. 'h/2*(1 - cos(theta))'",
-                )
-            src = _re.sub(r"\btheta\b", "t", src)
-            law = src if isinstance(law, str) else law.model_copy(update={"expr": src})
-        oscillating = self.motion == "oscillating"
-        if oscillating and self.pivot is None:
-            b.fail(p, "an oscillating follower needs its pivot", "give pivot: frame.point")
-        if oscillating:
-            b.point(self.pivot, (*p, "pivot"))
-            if self.follower_type == "flat":
-                b.fail(
-                    (*p, "follower_type"),
-                    "a flat-faced follower here translates",
-                    "give knife or roller",
-                )
-        if not oscillating and self.base is None:
-            b.fail(p, "a translating follower needs its base distance", "give base: ...")
-        base = 1.0 if self.base is None else b.scalar(self.base, "length", (*p, "base"))
-        roller = b.scalar(self.roller, "length", (*p, "roller"))
-        if not base > 0:
-            b.fail((*p, "base"), f"base {base:g} is not positive", "give a distance > 0")
-        if self.follower_type == "roller" and not 0 < roller < (math.inf if oscillating else base):
-            b.fail((*p, "roller"), "a roller follower needs 0 < roller < base", "")
-        kind = "angle" if oscillating else "length"
-        return b.m.CamFollower(
-            self.name,
-            self.cam,
-            self.follower,
-            law=b.law(law, kind, (*p, "law")),
-            base=base,
-            motion=self.motion,
-            pivot=self.pivot,
-            sense=float(self.sense),
-            axis=b.axis(self.axis, f"{self.frame}.", (*p, "axis")),
-            follower_type=self.follower_type,
-            roller=roller,
-            frame=self.frame,
-            center=self.center,
-            point=self.point,
-        )
-
-    @classmethod
-    def from_element(cls, j, d):
-        import re as _re
-
-        law = d.law(j.law, j.name)
-        if isinstance(law, str):
-            law = _re.sub(r"\bt\b", "theta", law)
-        elif isinstance(law, dict) and "expr" in law:
-            law = {**law, "expr": _re.sub(r"\bt\b", "theta", law["expr"])}
-        out = {
-            "type": "cam_follower",
-            "name": j.name,
-            "cam": j.cam,
-            "follower": j.follower,
-            "law": law,
-            "axis": d.axis(j.axis),
-            "follower_type": j.follower_type,
-            "roller": float(j.roller),
-            "frame": j.frame,
-            "motion": j.motion,
-            "sense": int(j.sense),
-        }
-        if j.motion == "translating":
-            out["base"] = float(j.base)
-        else:
-            out["pivot"] = j.pivot
-        out.update({k: getattr(j, k) for k in ("center", "point") if getattr(j, k)})
-        return cls(**out)
 
 
 _declared_specs("joints", JOINT_SPECS)

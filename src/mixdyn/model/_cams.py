@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from typing import ClassVar
 
 import equinox as eqx
@@ -43,27 +44,41 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ._declare import element
-from ._element import Resolver, moving, static_direction
-from ._geometry import angle, cross, point, vector
+from ._declare import Variable, direction, element, option, quantity, reference
+from ._element import Resolver, moving
+from ._geometry import GROUND, angle, cross, point, vector
 from ._joints import _UNBOUND, Joint, _f64
 from ._laws import Law, as_law
-from ._validate import finite
 
 FOLLOWERS = ("knife", "roller", "flat")
 MOTIONS = ("translating", "oscillating")
 
 
+#: The variable of a cam's law: the cam angle, ``theta`` in a file's expressions.
+CAM_ANGLE = Variable("theta", "angle")
+
+
+def _optional_f64(x):
+    return None if x is None else _f64(x)
+
+
 @element("cam_follower", "joints")
 class CamFollower(Joint):
-    """A cam driving a translating follower by the displacement law ``law`` (see the module).
+    """A cam (``cam``, turning about ``center``) driving a follower (``follower``, its point
+    ``point``) by a displacement law of the cam angle ``theta`` [rad]: a translating follower
+    along ``axis``, ``(P - C) . axis = base + law(theta)``, or one oscillating about
+    ``pivot``. The follower's guide is a joint of its own. Columns ``name.F`` (the force
+    along the axis, > 0 in contact; a run where it would pull fails, naming the time the
+    follower leaves the cam), ``name.alpha`` (pressure angle), ``name.Fn`` (normal contact
+    force); an oscillating follower's ``name.M`` (the cam's moment on it).
 
     Args:
         name: unique name.
         cam: the cam's body.
         follower: the follower's body.
         law: ``s(theta)`` [length], a law of the cam angle [rad].
-        base: distance from the cam's centre to the follower's point at ``s = 0`` [length].
+        base: distance from the cam's centre to the follower's point at ``s = 0`` [length]
+            (a translating follower needs it).
         axis: the follower's direction of motion (away from the cam), in ``frame``'s frame.
         follower_type: ``"knife"``, ``"roller"`` (give ``roller``) or ``"flat"``.
         roller: the roller's radius [length] (0 for knife-edge and flat-faced followers).
@@ -76,21 +91,79 @@ class CamFollower(Joint):
         sense: +1 if an oscillating follower's angle grows as it lifts, -1 if it falls.
     """
 
-    cam: str = eqx.field(static=True)
-    follower: str = eqx.field(static=True)
-    law: Law = eqx.field(converter=as_law, kw_only=True)
-    base: object = eqx.field(default=1.0, converter=_f64, kw_only=True)
-    axis: str | tuple[float, ...] = eqx.field(
-        static=True, default=(0.0, 1.0), converter=static_direction, kw_only=True
+    cam: str = reference("The cam's body.", what="body")
+    follower: str = reference("The follower's body.", what="body")
+    motion: str = option(
+        "``translating`` (default: along ``axis``) or ``oscillating`` (about ``pivot``).",
+        "translating",
+        choices=MOTIONS,
+        kw_only=True,
     )
-    follower_type: str = eqx.field(static=True, default="knife", kw_only=True)
-    roller: object = eqx.field(default=0.0, converter=_f64, kw_only=True)
-    frame: str = eqx.field(static=True, default="ground", kw_only=True)
-    center: str | None = eqx.field(static=True, default=None, kw_only=True)
-    point: str | None = eqx.field(static=True, default=None, kw_only=True)
-    motion: str = eqx.field(static=True, default="translating", kw_only=True)
-    pivot: str | None = eqx.field(static=True, default=None, kw_only=True)
-    sense: float = eqx.field(static=True, default=1.0, kw_only=True)
+    law: Law = quantity(
+        ("length", "angle"),
+        "Displacement (an oscillating follower: its angle) as a law of the cam angle "
+        "``theta`` [rad], given over one turn: an expression of ``theta`` "
+        "(``h/2*(1 - cos(theta))``), a polynomial or spline in ``theta``; continuous with "
+        "its slope over the turn and across ``theta = 2 pi``.",
+        converter=as_law,
+        law=True,
+        variable=CAM_ANGLE,
+        kw_only=True,
+    )
+    base: object = quantity(
+        "length",
+        "Distance from the cam's centre to the follower's point at zero displacement (the "
+        "prime circle: base circle plus roller); a translating follower needs it.",
+        None,
+        converter=_optional_f64,
+        above=0.0,
+        kw_only=True,
+    )
+    follower_type: str = option(
+        "``knife`` (default), ``roller`` (give ``roller``) or ``flat`` (flat-faced).",
+        "knife",
+        choices=FOLLOWERS,
+        kw_only=True,
+    )
+    roller: object = quantity(
+        "length",
+        "The roller's radius (a roller follower: > 0, and less than ``base`` when it translates).",
+        0.0,
+        converter=_f64,
+        at_least=0.0,
+        kw_only=True,
+    )
+    frame: str = reference(
+        "The body of the follower's guide. Default the ground.",
+        what="body",
+        default="ground",
+        kw_only=True,
+    )
+    axis: str | tuple[float, ...] = direction(
+        "Direction of the follower's motion away from the cam, in ``frame``'s frame.",
+        (0.0, 1.0),
+        on="frame",
+        kw_only=True,
+    )
+    center: str | None = reference(
+        "The cam's centre, ``cam.point`` (default its origin).", default=None, kw_only=True
+    )
+    point: str | None = reference(
+        "The follower's point (knife edge or roller centre), ``follower.point`` (default "
+        "its origin).",
+        default=None,
+        kw_only=True,
+    )
+    pivot: str | None = reference(
+        "An oscillating follower's pivot, a point of ``frame``.", default=None, kw_only=True
+    )
+    sense: float = option(
+        "+1 if an oscillating follower's angle grows as the cam lifts it, -1 if it falls.",
+        1,
+        choices=(1, -1),
+        converter=float,
+        kw_only=True,
+    )
     psi0: object = eqx.field(default=0.0, converter=_f64, kw_only=True)
     draw0: tuple = eqx.field(static=True, default=(), kw_only=True)  # for profile()
     sp: object = eqx.field(default=None, kw_only=True)
@@ -105,6 +178,21 @@ class CamFollower(Joint):
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("cam",)
 
+    @classmethod
+    def field_kind(cls, field: str, values, element_class) -> str:
+        """The law's kind: an angle for an oscillating follower, else a length."""
+        return "angle" if values.get("motion") == "oscillating" else "length"
+
+    def __post_init__(self):
+        if self.base is None and self.motion != "oscillating":
+            warnings.warn(
+                f"{self.name}: a translating follower needs its base distance: give base "
+                "(its default, 1 length unit, is deprecated)",
+                DeprecationWarning,
+                stacklevel=3,
+            )
+            self.base = _f64(1.0)
+
     @property
     def contact_kinds(self) -> dict[str, str]:
         if self.motion == "oscillating":
@@ -117,30 +205,42 @@ class CamFollower(Joint):
         return "M" if self.motion == "oscillating" else "F"
 
     def __check_init__(self):
-        finite(self.base, "base", self.name, above=0.0)
-        finite(self.roller, "roller", self.name, at_least=0.0)
         if self.follower_type not in FOLLOWERS:
             raise ModelError(
                 f"follower_type must be one of {', '.join(FOLLOWERS)}, got {self.follower_type!r}",
                 self.name,
+                field="follower_type",
             )
-        if self.follower_type == "roller" and not float(self.roller) > 0:
-            raise ModelError("a roller follower needs its roller's radius > 0", self.name)
         if self.motion not in MOTIONS:
             raise ModelError(
-                f"motion must be one of {', '.join(MOTIONS)}, got {self.motion!r}", self.name
+                f"motion must be one of {', '.join(MOTIONS)}, got {self.motion!r}",
+                self.name,
+                field="motion",
+            )
+        if self.follower_type == "roller" and not float(self.roller) > 0:
+            raise ModelError(
+                "a roller follower needs its roller's radius > 0", self.name, field="roller"
             )
         if self.motion == "oscillating":
             if self.pivot is None:
                 raise ModelError(
-                    "an oscillating follower needs its pivot (a point of the frame)", self.name
+                    "an oscillating follower needs its pivot (a point of the frame): give pivot",
+                    self.name,
                 )
             if self.sense not in (1.0, -1.0):
-                raise ModelError("sense must be +1 or -1", self.name)
+                raise ModelError("sense must be +1 or -1", self.name, field="sense")
         elif float(self.roller) >= float(self.base):
-            raise ModelError("the roller must be smaller than the base distance", self.name)
+            raise ModelError(
+                f"the roller's radius {float(self.roller):g} must be smaller than the base "
+                f"distance {float(self.base):g} (the prime circle: base circle plus roller)",
+                self.name,
+                field="roller",
+            )
 
     def bind(self, r: Resolver):
+        for field in ("cam", "follower"):
+            if r.body(getattr(self, field), self.name) == GROUND:
+                raise ModelError(f"the {field} cannot be the ground", self.name, field=field)
         bi, si = r.point(self.center or self.cam, self.name)
         bj, sj = r.point(self.point or self.follower, self.name)
         bc = r.body(self.frame, self.name)

@@ -6,7 +6,8 @@ An element class registers its file name with :func:`element` and declares the f
 file gives, each with its doc:
 
 - :func:`reference`: a point or body by name (or another joint, ``what="joint"``);
-- :func:`quantity`: a number of a kind of quantity, or a law of time, with its range;
+- :func:`quantity`: a number of a kind of quantity, or a law (of time, or of another
+  variable such as a cam's angle: :class:`Variable`), with its range;
 - :func:`direction`: a direction, two numbers or the name of a body's vector;
 - :func:`coordinate`: a body coordinate, written ``body.phi`` in a file;
 - :func:`option`: a flag or a word (one of ``choices``).
@@ -64,15 +65,31 @@ class Reference:
 
 
 @dataclasses.dataclass(frozen=True)
+class Variable:
+    """The argument of a law field: its name in a file's expressions (``t``, ``theta``) and
+    its kind of quantity (a key of :data:`mixdyn.units.DIMENSIONS`). A law's coefficients and
+    knots are per this kind (a polynomial's ``c_k`` in the law's unit per ``kind**k``), and a
+    file's expression names it by ``name`` alone (any other law variable is refused there)."""
+
+    name: str
+    kind: str
+
+
+#: The variable of a law of time.
+TIME = Variable("t", "time")
+
+
+@dataclasses.dataclass(frozen=True)
 class Quantity:
     """A field holding a number of a kind of quantity (a key of
-    :data:`mixdyn.units.DIMENSIONS`), or with ``law`` a law of time in that kind (``state``:
-    the law may read body states).
+    :data:`mixdyn.units.DIMENSIONS`), or with ``law`` a law of ``variable`` (default time)
+    in that kind (``state``: the law may read body states).
 
     ``kind`` is one kind, or a tuple of the kinds the field may take (the class's
     ``field_kind`` picks one). A number is finite, and ``> above`` / ``>= at_least`` where
-    given. ``file_default`` is the default as a file shows it (``"20 deg"``), where it is
-    not the class's default number.
+    given; a field whose default is None is optional (None: not given, left unchecked).
+    ``file_default`` is the default as a file shows it (``"20 deg"``), where it is not the
+    class's default number.
     """
 
     kind: str | tuple[str, ...]
@@ -82,6 +99,7 @@ class Quantity:
     above: float | None = None
     at_least: float | None = None
     file_default: Any = None
+    variable: Variable = TIME
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -114,7 +132,8 @@ class Coordinate:
 
 @dataclasses.dataclass(frozen=True)
 class Option:
-    """A field holding a flag or a word (one of ``choices`` where given), read as it is."""
+    """A field holding a flag, a word or a number (one of ``choices`` where given), read as
+    it is."""
 
     doc: str
     choices: tuple = ()
@@ -187,10 +206,13 @@ def kind_of(cls: type) -> ElementKind | None:
     return None
 
 
-def reference(doc: str, *, what: str = "point", default: Any = dataclasses.MISSING):
+def reference(
+    doc: str, *, what: str = "point", default: Any = dataclasses.MISSING, kw_only: bool = False
+):
     """A static field naming a point (a body, ``what="body"``; another joint,
     ``what="joint"``); ``default=None``: an optional one."""
-    return eqx.field(static=True, default=default, metadata={KEY: Reference(doc, what)})
+    kwargs: dict[str, Any] = {"kw_only": True} if kw_only else {}
+    return eqx.field(static=True, default=default, metadata={KEY: Reference(doc, what)}, **kwargs)
 
 
 def quantity(
@@ -204,25 +226,31 @@ def quantity(
     above: float | None = None,
     at_least: float | None = None,
     file_default: Any = None,
+    variable: Variable = TIME,
     kw_only: bool = False,
 ):
-    """A field holding a number of ``kind`` (or a law of time in that kind), finite and
-    ``> above`` / ``>= at_least`` where given (see :class:`Quantity`)."""
+    """A field holding a number of ``kind`` (or a law of ``variable``, default time, in that
+    kind), finite and ``> above`` / ``>= at_least`` where given (see :class:`Quantity`);
+    ``default=None``: an optional number."""
     kwargs: dict[str, Any] = {} if converter is None else {"converter": converter}
     if kw_only:
         kwargs["kw_only"] = True
-    decl = Quantity(kind, doc, law, state, above, at_least, file_default)
+    decl = Quantity(kind, doc, law, state, above, at_least, file_default, variable)
     return eqx.field(default=default, metadata={KEY: decl}, **kwargs)
 
 
-def direction(doc: str, default: Any = dataclasses.MISSING, *, on: str | None = None):
+def direction(
+    doc: str, default: Any = dataclasses.MISSING, *, on: str | None = None, kw_only: bool = False
+):
     """A static field holding a direction (see :class:`Direction`), stored as a tuple of
     floats or a vector's name (:func:`~mixdyn.model._element.static_direction`)."""
+    kwargs: dict[str, Any] = {"kw_only": True} if kw_only else {}
     return eqx.field(
         static=True,
         default=default,
         converter=static_direction,
         metadata={KEY: Direction(doc, on)},
+        **kwargs,
     )
 
 
@@ -232,9 +260,21 @@ def coordinate(doc: str, *, body: str = "body"):
     return eqx.field(static=True, metadata={KEY: Coordinate(doc, body)})
 
 
-def option(doc: str, default: Any = dataclasses.MISSING, *, choices: tuple = ()):
-    """A static field holding a flag or a word (one of ``choices`` where given)."""
-    return eqx.field(static=True, default=default, metadata={KEY: Option(doc, tuple(choices))})
+def option(
+    doc: str,
+    default: Any = dataclasses.MISSING,
+    *,
+    choices: tuple = (),
+    converter=None,
+    kw_only: bool = False,
+):
+    """A static field holding a flag, a word or a number (one of ``choices`` where given;
+    ``converter``: how the class stores it, e.g. ``float`` for the choices ``(1, -1)``)."""
+    kwargs: dict[str, Any] = {} if converter is None else {"converter": converter}
+    if kw_only:
+        kwargs["kw_only"] = True
+    decl = Option(doc, tuple(choices))
+    return eqx.field(static=True, default=default, metadata={KEY: decl}, **kwargs)
 
 
 @functools.cache
@@ -289,7 +329,7 @@ def check_declared(element_obj: Any) -> None:
     made)."""
     for name, decl, _ in declared_fields(type(element_obj)):
         value = getattr(element_obj, name)
-        if isinstance(decl, Quantity) and not decl.law:
+        if isinstance(decl, Quantity) and not decl.law and value is not None:
             finite(
                 value,
                 name,
@@ -307,6 +347,7 @@ __all__ = [
     "GROUPS",
     "KEY",
     "REFERENCES",
+    "TIME",
     "Coordinate",
     "Declaration",
     "Direction",
@@ -314,6 +355,7 @@ __all__ = [
     "Option",
     "Quantity",
     "Reference",
+    "Variable",
     "check_declared",
     "coordinate",
     "declared_fields",

@@ -1,0 +1,135 @@
+"""The cam follower in a model file, made from its class's declaration: each check lives in
+the class and a file meets it at the field's line with the same words as Python; its law is
+a law of the cam angle ``theta`` (knots in degrees converted to radians, ``t`` refused); a
+model built in Python writes to a file that builds the same equations back."""
+
+import math
+
+import numpy as np
+import pytest
+
+import mixdyn as md
+import mixdyn.io as mio
+from mixdyn.equations import Constraints
+
+FILE = """\
+mixdyn: 1
+units: {length: mm, mass: kg, time: s}
+ground:
+  points: {O: [0, 0]}
+bodies:
+  - {name: cam, mass: 1, inertia: 100}
+  - {name: follower, mass: 0.3, inertia: 20, q0: [0, 50, 0]}
+joints:
+  - {type: revolute, name: O, point_i: ground.O, point_j: cam}
+  - {type: translational, name: guide, point_i: ground.O, point_j: follower, axis: [0, 1]}
+  - type: cam_follower
+    name: cam_pair
+    cam: cam
+    follower: follower
+    law: 10*(1 - cos(theta))
+    base: 50 mm
+    follower_type: roller
+    roller: 10 mm
+drivers:
+  - {type: coordinate, name: motor, coordinate: cam.phi, law: 2*pi*t}
+"""
+
+
+def sub(old: str, new: str, text: str = FILE) -> str:
+    assert old in text, old
+    return text.replace(old, new, 1)
+
+
+def line_of(text: str, fragment: str) -> int:
+    return next(i for i, line in enumerate(text.splitlines(), 1) if fragment in line)
+
+
+def refused(text: str) -> mio.FileError:
+    with pytest.raises(mio.FileError) as e:
+        mio.build(mio.reads(text))
+    return e.value
+
+
+def test_the_roller_against_the_base_is_one_check():
+    """A roller as large as the base distance: the class refuses it, and a file reports the
+    class's own words at the roller's line."""
+    text = sub("roller: 10 mm", "roller: 50 mm")
+    e = refused(text)
+    assert e.line == line_of(text, "roller: 50 mm")
+    with pytest.raises(md.ModelError) as py:
+        md.CamFollower(
+            "cam_pair", "cam", "follower", law=1.0, base=50.0, follower_type="roller", roller=50.0
+        )
+    assert py.value.field == "roller"
+    assert py.value.message in str(e)
+
+
+def test_a_translating_follower_needs_its_base():
+    e = refused(sub("    base: 50 mm\n", ""))
+    assert "base" in str(e) and e.line == line_of(FILE, "type: cam_follower")
+    with pytest.warns(DeprecationWarning, match="give base"):
+        pair = md.CamFollower("c", "cam", "follower", law=1.0)
+    assert float(pair.base) == 1.0
+
+
+def test_a_cam_law_of_time_is_refused():
+    text = sub("10*(1 - cos(theta))", "10*(1 - cos(t))")
+    e = refused(text)
+    assert "not of time t" in str(e) and e.line == line_of(text, "cos(t)")
+
+
+def test_spline_knots_are_angles():
+    """A spline through 73 samples of ``10 (1 - cos theta)`` [mm], knots in degrees: the law
+    at 90 and 180 degrees is the harmonic's there."""
+    deg = np.arange(0, 361, 5)
+    y = 10 * (1 - np.cos(np.radians(deg)))
+    spline = (
+        "{spline: {t: ["
+        + ", ".join(f"{d} deg" for d in deg)
+        + "], y: ["
+        + ", ".join(f"{v:.12g}" for v in y)
+        + "]}}"
+    )
+    model = mio.build(mio.reads(sub("10*(1 - cos(theta))", spline)))
+    law = model.element("cam_pair").law
+    np.testing.assert_allclose(
+        [float(law(math.pi / 2)), float(law(math.pi))], [10.0, 20.0], atol=1e-4
+    )
+
+
+def test_a_cam_built_in_python_writes_back():
+    """An oscillating flat-faced follower (which a file may hold: the class draws and runs
+    it) with an expression law: written with ``theta``, read back to the same residual."""
+    law = mio.expressions.ExpressionLaw("0.1/2*(1 - cos(t))", {})
+    model = md.Model(
+        bodies=[
+            md.Body("cam", 1.0, 1e-3),
+            md.Body("arm", 0.2, 2e-3, q0=(0.1, 0.06, 0.0), points={"face": (-0.1, -0.02)}),
+        ],
+        ground={"O": (0.0, 0.0), "P": (0.1, 0.06)},
+        joints=[
+            md.Revolute("O", "ground.O", "cam"),
+            md.Revolute("P", "ground.P", "arm"),
+            md.CamFollower(
+                "pair",
+                "cam",
+                "arm",
+                law=law,
+                motion="oscillating",
+                pivot="ground.P",
+                sense=-1.0,
+                point="arm.face",
+                follower_type="flat",
+            ),
+        ],
+        drivers=[md.CoordinateDriver("motor", "cam", "phi", law=md.Ramp(0.0, 1.0))],
+        units=md.SI,
+    )
+    text = mio.dumps(model)
+    assert "0.1/2*(1 - cos(theta))" in text and "sense: -1" in text and "base" not in text
+    back = mio.build(mio.reads(text))
+    assert mio.dumps(back) == text
+    q = np.random.default_rng(3).uniform(-1, 1, model.nq)
+    c, c_back = Constraints.of(model), Constraints.of(back)
+    np.testing.assert_allclose(c.full(q, 0.3), c_back.full(q, 0.3), rtol=0, atol=1e-15)
