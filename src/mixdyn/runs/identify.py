@@ -42,7 +42,7 @@ from . import setup
 from .console import esc
 from .kinds import RunKind, register
 from .outputs import write_study_run
-from .plan import Plan, model_number, study_base
+from .plan import Plan, check_value, model_number, study_base
 
 #: Kinds of quantity of a measured column, by its suffix.
 _KINDS = {
@@ -169,11 +169,14 @@ def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
         kind = model_number(runner, name, fp, "fit")
         if f.start is not None:
             start[name] = runner.b.scalar(f.start, kind, (*fp, "start"))
+            check_value(runner, name, start[name], "the start", (*fp, "start"))
         if f.bounds is not None:
             lo = runner.b.scalar(f.bounds[0], kind, (*fp, "bounds", 0))
             hi = runner.b.scalar(f.bounds[1], kind, (*fp, "bounds", 1))
             if not hi > lo:
                 runner.fail((*fp, "bounds"), f"the bounds [{lo:g}, {hi:g}] are empty", "")
+            for k, end in enumerate((lo, hi)):  # values a model may take, or refused here
+                check_value(runner, name, end, paths.BOUND_ENDS[k], (*fp, "bounds", k))
             bounds[name] = (lo, hi)
     return IdentifyPlan(
         r, index, t, (), base=base, measured=measured, noise=noise, start=start, bounds=bounds

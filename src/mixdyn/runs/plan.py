@@ -164,6 +164,19 @@ def model_number(runner, name: str, path, verb: str) -> str | None:
     return number_kind(runner, name)
 
 
+def check_value(runner, name: str, value: float, what: str, path) -> None:
+    """Refuse a value a study would give the number ``name`` (``what``: ``"the low bound"``,
+    ``"the start"``) that a model built with it refuses (:func:`mixdyn.paths.check`: the
+    check the file meets with that number written in), at ``path`` in the file; an infinite
+    bound (no bound) passes."""
+    if not np.isfinite(value):
+        return
+    try:
+        paths.check(runner.model, {name: [value]}, label=lambda i: what, where=lambda p: p)
+    except ModelError as e:
+        runner.fail(path, e.message, f"give {name} a value a model may have")
+
+
 def check_cycles(runner) -> None:
     """Refuse runs that replay each other's motion in a cycle."""
     state: dict[str, int] = {}
@@ -214,4 +227,13 @@ def order(runner, names=None) -> list[Plan]:
     return [runner.plans[n] for n in out]
 
 
-__all__ = ["Plan", "check_cycles", "model_number", "number_kind", "order", "study_base", "times"]
+__all__ = [
+    "Plan",
+    "check_cycles",
+    "check_value",
+    "model_number",
+    "number_kind",
+    "order",
+    "study_base",
+    "times",
+]
