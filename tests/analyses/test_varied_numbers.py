@@ -197,3 +197,18 @@ def test_fit_bounds_and_starts_a_model_refuses_are_refused_before_fitting(
     with pytest.raises(ModelError, match=words) as err:
         md.fit(model, T, {"slider.x": np.full(len(T), 0.3)}, ["rod.mass"], **kwargs)
     assert "mass must be a finite number >= 0" in str(err.value)
+
+
+def test_a_swept_start_gives_the_mesh_phase_of_a_model_built_with_it():
+    """A gear's start angle is where its teeth mesh: a member with gear 2 started at
+    ``phi2_0`` turns as ``phi2_0 - R1 / R2 (phi1 - phi1_0)`` (the closed form), as a model
+    built with that start does."""
+    starts = [(0.09, 0.0, -0.3), (0.09, 0.0, 0.2), (0.09, 0.0, 1.0)]
+    sweep = md.sweep(_gears(), T, vary={"g2.q0": starts}, analysis=md.analyses.Kinematic())
+    for i, q0 in enumerate(starts):
+        np.testing.assert_allclose(
+            sweep[i]["g2.phi"], q0[2] - 0.03 / 0.06 * 2.0 * T, rtol=0, atol=1e-12
+        )
+        single = md.kinematic(_gears(phi=(0.4, q0[2])), T)
+        for col in ("g2.phi", "rack.y"):
+            np.testing.assert_allclose(sweep[i][col], single[col], rtol=0, atol=1e-12)
