@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 import pathlib
+import re
 import time
 from collections.abc import Callable
 
@@ -48,7 +49,7 @@ from ..io.load import Builder
 from . import checks, setup
 from .console import esc
 from .kinds import RunKind, register
-from .plan import Plan, number_kind, study_base
+from .plan import Plan, number_kind, study_base, times
 from .runner import Runner
 
 #: Most members a sweep may have.
@@ -62,9 +63,18 @@ class SweepPlan(Plan):
     Attributes:
         values: varied name -> (M,) its value for each member [model units]; ``base`` is
             the plan of the run swept.
+        member_times: each member's output times, where the swept run's ``time`` is written
+            with a swept parameter and they differ between members; None: every member
+            has the swept run's times (``times``).
     """
 
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
+    member_times: tuple[np.ndarray, ...] | None = None
+
+    def times_of(self, i: int) -> np.ndarray:
+        """Member ``i``'s output times [model time unit]: the swept run's, or its own where
+        the swept run's ``time`` is written with a swept parameter (:attr:`member_times`)."""
+        return self.times if self.member_times is None else self.member_times[i]
 
     @property
     def spec_outputs(self) -> list[str]:
@@ -202,6 +212,8 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
         if count > MAX_MEMBERS:
             runner.fail((*path, "vary"), f"{count} members are too many", "sample fewer values")
         values = grid(**axes)
+    _check_numbers(runner, path, values)
+    member_times = _member_times(runner, path, base, values)
     names = set(r.vary)
     taken = {"member", "status", "error", "t_error", "t"}
     seen: set[str] = set()
@@ -217,6 +229,13 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
         pp = (*path, "plots", k)
         if p.band is not None:
             checks.check_column(runner, p.band, base.spec, (*pp, "band"))
+            if member_times is not None:
+                runner.fail(
+                    (*pp, "band"),
+                    "a band needs every member at the same output times, and the members' "
+                    f"times differ (run {base.name!r}'s time is written with a swept parameter)",
+                    "plot a summary against the swept parameter instead",
+                )
             continue
         for key in ("x", "by"):
             v = getattr(p, key)
@@ -227,7 +246,71 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
         if p.y not in seen:
             known = ", ".join(seen) or "(none: add summaries)"
             runner.fail((*pp, "y"), f"{p.y!r} is not a summary", f"summaries: {known}")
-    return SweepPlan(r, index, base.times, (), base=base, values=values)
+    return SweepPlan(r, index, base.times, (), base=base, values=values, member_times=member_times)
+
+
+def _check_numbers(runner: Runner, path, values: dict[str, np.ndarray]) -> None:
+    """Refuse a member whose body or element number (``slider.mass``) the model's
+    constructors refuse (the check a file with that number meets,
+    :func:`mixdyn.paths.check`), at the ``vary`` line of the number; members made from file
+    parameters meet them when each is built from its file."""
+    numbers = {k: v for k, v in values.items() if "." in k}
+    try:
+        paths.check(runner.model, numbers, where=lambda name: name)
+    except ModelError as e:
+        runner.fail((*path, "vary", e.element), e.message, "narrow the swept values")
+
+
+#: A name in a file's text (a parameter is named like this in an expression or a quantity).
+_NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
+
+
+def _time_parameters(spec: s.ModelFile, time_spec) -> set[str]:
+    """The file parameters a run's ``time`` is written with, directly or through other
+    parameters."""
+    known = set(spec.parameters)
+    found = set(_NAME.findall(repr(time_spec.model_dump()))) & known
+    todo = list(found)
+    while todo:
+        for name in set(_NAME.findall(str(spec.parameters[todo.pop()]))) & known - found:
+            found.add(name)
+            todo.append(name)
+    return found
+
+
+@dataclasses.dataclass(frozen=True)
+class _Reader:
+    """What :func:`.plan.times` reads a run's times with: a member's builder."""
+
+    b: Builder
+
+    def fail(self, path, problem, hint=""):
+        self.b.fail(path, problem, hint)
+
+
+def _member_times(runner: Runner, path, base: Plan, values: dict[str, np.ndarray]):
+    """Each member's output times, where the swept run's ``time`` is written with a swept
+    parameter and they differ between members (None: every member has the swept run's
+    times); a member whose times are refused is named at the sweep's ``vary``."""
+    reach = _time_parameters(runner.spec, base.spec.time) & set(values)
+    if not reach:
+        return None
+    out = []
+    for i in range(len(next(iter(values.values())))):
+        params = {k: float(values[k][i]) for k in reach}
+        spec = runner.spec.model_copy(update={"parameters": {**runner.spec.parameters, **params}})
+        try:
+            out.append(times(_Reader(Builder(spec)), base.spec.time, (*base.path, "time")))
+        except FileError as e:
+            shown = ", ".join(f"{k} = {v:.6g}" for k, v in params.items())
+            runner.fail(
+                (*path, "vary"),
+                f"member {i} ({shown}): its output times are refused: {_message(e)}",
+                "narrow the swept values",
+            )
+    if all(len(t) == len(base.times) and np.array_equal(t, base.times) for t in out):
+        return None
+    return tuple(out)
 
 
 def _check_name(runner: Runner, name: str, path) -> str | None:
@@ -297,15 +380,18 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
         kwargs.append(kw)
     built = time.perf_counter()
     try:
-        outcomes = run_members(
-            models,
-            plan.times,
-            analysis,
-            lambda i: kwargs[i],
-            batch_size=r.batch_size,
-            on_member=progress,
-            describe=lambda i: f" ({plan.describe(i)})",
-        )
+        if plan.member_times is not None:
+            outcomes = _at_own_times(plan, models, analysis, kwargs, progress)
+        else:
+            outcomes = run_members(
+                models,
+                plan.times,
+                analysis,
+                lambda i: kwargs[i],
+                batch_size=r.batch_size,
+                on_member=progress,
+                describe=lambda i: f" ({plan.describe(i)})",
+            )
     except ModelError as e:
         notes = " ".join(getattr(e, "__notes__", []))
         runner.fail((*plan.path, "vary"), f"{_message(e)} {notes}".strip(), "narrow the values")
@@ -317,6 +403,24 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     summaries, units = _summaries(runner, plan, results)
     seconds = {"build": built - started, "run": done - built}
     return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
+
+
+def _at_own_times(plan: SweepPlan, models, analysis: str, kwargs, progress) -> list:
+    """The members run one by one, each over its own output times
+    (:attr:`SweepPlan.member_times`; members with as many times share a compiled program)."""
+    outcomes = []
+    for i, model in enumerate(models):
+        outcomes += run_members(
+            [model],
+            plan.times_of(i),
+            analysis,
+            lambda _, i=i: kwargs[i],
+            batch_size=plan.spec.batch_size,
+            on_member=None if progress is None else lambda _, i=i: progress(i),
+            describe=lambda _, i=i: f" ({plan.describe(i)})",
+            offset=i,
+        )
+    return outcomes
 
 
 _REDUCE = {

@@ -1,0 +1,126 @@
+"""A sweep run's member is the swept run of the file with the member's numbers, its output
+times included, and a member whose number the model file would refuse is refused at the
+sweep's line before any computing (exit 2)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+import mixdyn.io as mio
+from fixtures import EXAMPLES
+from mixdyn.cli import app
+
+MODEL = (EXAMPLES / "antonya_sweep.yaml").read_text().split("\nruns:")[0]
+MODEL = MODEL.replace("parameters:\n", "parameters:\n  t_end: 1\n", 1)
+
+BASE = """
+runs:
+  - name: forward
+    kind: forward
+    time: {span: [0, t_end], n: 11}
+    rtol: 1.0e-8
+    atol: 1.0e-10
+"""
+
+SWEEP = """
+  - name: sweep
+    kind: sweep
+    run: forward
+    vary:
+      t_end: {values: [0.5, 1.0, 1.5]}
+    summaries:
+      - {name: x_end, column: slider.x, reduce: last}
+"""
+
+
+def _run(tmp_path, text: str):
+    path = tmp_path / "sweep.yaml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--run", "sweep"])
+    return res, out
+
+
+def test_each_member_runs_to_its_own_end(tmp_path):
+    """A swept end time: each member's times are those of the file with its end written in
+    (its last time is its end), its motion that of the single run, in the tables too."""
+    res, out = _run(tmp_path, MODEL + BASE + SWEEP)
+    assert res.exit_code == 0, res.output
+    swept = mio.execute(mio.reads(MODEL + BASE + SWEEP), ["sweep"])["sweep"]
+    assert not swept.sweep.errors
+    table = pd.read_csv(out / "sweep" / "table.csv")
+    members = pd.read_csv(out / "sweep" / "members.csv")
+    for i, t_end in enumerate([0.5, 1.0, 1.5]):
+        member = swept.sweep[i]
+        single = mio.execute(mio.reads(MODEL.replace("t_end: 1\n", f"t_end: {t_end}\n") + BASE))
+        single = single["forward"]
+        np.testing.assert_allclose(member.t, np.linspace(0.0, t_end, 11), rtol=0, atol=1e-15)
+        assert member.t[-1] == t_end
+        scale = float(np.max(np.abs(single["slider.x"])))
+        np.testing.assert_allclose(member["slider.x"], single["slider.x"], atol=1e-10 * scale)
+        rows = table[table["member"] == i]
+        assert rows["t"].max() == pytest.approx(t_end, abs=1e-12)
+        assert members["x_end"][i] == pytest.approx(float(single["slider.x"][-1]), rel=1e-9)
+
+
+def test_a_band_over_members_at_different_times_is_refused(tmp_path):
+    res, _ = _run(
+        tmp_path, MODEL + BASE + SWEEP + "    plots:\n      - {file: b.png, band: slider.x}\n"
+    )
+    assert res.exit_code == 2, res.output
+    assert "a band needs every member at the same output times" in res.output
+
+
+def _line(text: str, words: str) -> int:
+    return next(k for k, line in enumerate(text.splitlines(), 1) if words in line)
+
+
+@pytest.mark.parametrize(
+    ("example", "vary", "written", "words"),
+    [
+        (
+            "gear_train.yaml",
+            "mesh12.radius_i: {values: [20, 0]}",
+            ("body_j: idler, radius_i: R1", "body_j: idler, radius_i: 0"),
+            "radius_i 0 is not positive",
+        ),
+        (
+            "friction.yaml",
+            "hold1.v_stick: {values: [1.0e-6, 0]}",
+            ("joint: slide1, mu: mu}", "joint: slide1, mu: mu, v_stick: 0}"),
+            "v_stick 0 is not positive",
+        ),
+        (
+            "friction.yaml",
+            "pin_friction.mu: {values: [0.2, -0.1]}",
+            ("joint: pin, mu: 0.2", "joint: pin, mu: -0.1"),
+            "mu must be >= 0, got -0.1",
+        ),
+    ],
+)
+def test_a_member_number_a_file_refuses_is_refused_at_its_line(
+    tmp_path, example, vary, written, words
+):
+    """A member's number that the file refuses when written in (the truth: the file with
+    that number, checked) is refused at its line in the sweep with the same reason, naming
+    the member and the value, before any computing (a stick band of 0 ran for minutes)."""
+    text = (EXAMPLES / example).read_text()
+    assert written[0] in text
+    (tmp_path / "single.yaml").write_text(text.replace(written[0], written[1], 1))
+    single = CliRunner().invoke(app, ["check", str(tmp_path / "single.yaml")])
+    assert single.exit_code == 2 and words in single.output, single.output
+    run = text.split("\nruns:")[1].split("name:")[1].split(",")[0].split("\n")[0].strip()
+    text += f"""
+  - name: sweep
+    kind: sweep
+    run: {run}
+    vary:
+      {vary}
+"""
+    res, _ = _run(tmp_path, text)
+    assert res.exit_code == 2, res.output
+    assert "member 1" in res.output and words in res.output
+    assert f"sweep.yaml:{_line(text, vary)}" in res.output
