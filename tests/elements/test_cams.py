@@ -83,8 +83,11 @@ def test_cycloidal_rise():
     w, beta = 4.0, math.pi
     import jax.numpy as jnp
 
-    def cycloidal(th):
+    def rise(th):
         return H * (th / beta - jnp.sin(2 * jnp.pi * th / beta) / (2 * jnp.pi))
+
+    def cycloidal(th):  # the rise over [0, beta], the same return over [beta, 2 beta]
+        return jnp.where(th < beta, rise(th), rise(2 * beta - th))
 
     law = md.FunctionLaw(cycloidal)
     model = cam_model(law, w, spring=False)
@@ -114,7 +117,7 @@ def test_cam_equations_against_finite_differences():
                 "c",
                 "cam",
                 "fol",
-                law=md.Harmonic(0.05, 1.3, 0.2, 0.01),
+                law=md.Harmonic(0.05, 2.0, 0.2, 0.01),
                 base=0.3,
                 axis=(0.3, 1.0),
                 frame="frame",

@@ -220,7 +220,8 @@ def _time(t0) -> float:
 
 
 def check_start(setup: Setup, ts: np.ndarray) -> None:
-    """Refuse output times ``ts`` (N,) that do not start at the set-up's ``t0``."""
+    """Refuse output times ``ts`` (N,) that do not start at the set-up's ``t0``, and drivers
+    whose laws jump in value or slope over them (:meth:`~mixdyn.model.Driver.check_law`)."""
     if float(ts[0]) != setup.t0:
         raise ModelError(
             f"the set-up was made from t0 = {setup.t0:g} but the output times start at "
@@ -228,6 +229,9 @@ def check_start(setup: Setup, ts: np.ndarray) -> None:
             f"t0={float(ts[0]):g}",
             "t",
         )
+    drivers = setup.model.drivers if setup.start is None else setup.start.drivers
+    for driver in drivers:
+        driver.check_law(float(ts[0]), float(ts[-1]))
 
 
 def no_progress(analysis: Analysis, progress) -> None:

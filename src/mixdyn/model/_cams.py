@@ -44,6 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from . import _smoothness as smoothness
 from ._declare import Variable, direction, element, option, quantity, reference
 from ._element import Resolver, moving
 from ._geometry import GROUND, angle, cross, point, vector
@@ -274,6 +275,15 @@ class CamFollower(Joint):
                 "psi0": _f64(phi_j - phi_c - self.sense * s0),
                 "draw0": tuple(float(v) for v in draw0),
             }
+        smoothness.check(
+            self.law,
+            0.0,
+            2 * math.pi,
+            element=self.name,
+            moved="the follower",
+            variable="theta",
+            periodic=True,
+        )
         return dataclasses.replace(self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, u=u, **extra)
 
     def body_indices(self):

@@ -17,6 +17,7 @@ import jax
 import jax.numpy as jnp
 
 from ..errors import ModelError
+from . import _smoothness as smoothness
 from ._declare import coordinate, element, option, quantity, reference
 from ._element import Element, Resolver, body_name, moving
 from ._geometry import GROUND, angle, point
@@ -40,6 +41,18 @@ class Driver(Element):
     def residual(self, q, t):
         """``g(q) - f(t)``, shape (1,)."""
         return (self.measure(q) - self.law(t))[None]
+
+    def check_law(self, t0: float, t1: float) -> None:
+        """Refuse a law that jumps in value or slope between the times ``t0`` and ``t1``
+        [time] (a run's span): the driven quantity would move, or change its speed, in no
+        time. Its second derivative may jump (the accelerations then jump, finite).
+
+        Raises:
+            ModelError: naming the law, the time and the jump (:mod:`._smoothness`).
+        """
+        smoothness.check(
+            self.law, float(t0), float(t1), element=self.name, moved="the driven quantity"
+        )
 
     @property
     def effort_kind(self) -> str:

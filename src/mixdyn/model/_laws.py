@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import abc
 from collections.abc import Callable
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -26,6 +27,10 @@ def _f64(x) -> jax.Array:
 
 class Law(eqx.Module):
     """Abstract scalar function of time."""
+
+    #: Smooth by construction (value and every derivative continuous): not sampled for
+    #: jumps (:mod:`mixdyn.model._smoothness`) over an interval.
+    smooth: ClassVar[bool] = False
 
     @abc.abstractmethod
     def __call__(self, t: jax.Array) -> jax.Array:
@@ -45,6 +50,8 @@ class Law(eqx.Module):
 class Constant(Law):
     """``f(t) = value``."""
 
+    smooth: ClassVar[bool] = True
+
     value: jax.Array
 
     def __init__(self, value):
@@ -57,6 +64,8 @@ class Constant(Law):
 
 class Polynomial(Law):
     """``f(t) = sum_k coeffs[k] * t**k`` (coefficients in ascending powers)."""
+
+    smooth: ClassVar[bool] = True
 
     coeffs: jax.Array
 
@@ -75,6 +84,8 @@ def Ramp(start=0.0, rate=1.0) -> Polynomial:
 
 class Harmonic(Law):
     """``f(t) = offset + amplitude * sin(omega * t + phase)``, ``omega`` in rad per time unit."""
+
+    smooth: ClassVar[bool] = True
 
     amplitude: jax.Array
     omega: jax.Array

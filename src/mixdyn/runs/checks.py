@@ -241,15 +241,17 @@ def _check_arrows(runner, plan: Plan, forces, path) -> None:
 
 def check_laws(runner, plan: Plan) -> None:
     """Every expression law of the run's drivers, prescribed motions and known forces finite
-    at its output times."""
+    at its output times; the drivers' and prescribed motions' laws continuous with their
+    slopes over the run (:meth:`~mixdyn.model.Driver.check_law`)."""
     r = plan.spec
     used = None if r.drivers is None else set(r.drivers)
     unknown = set(getattr(r, "unknown", ()))
-    laws = [
-        (("drivers", i, "law"), d.law)
+    drivers = [
+        (("drivers", i, "law"), d)
         for i, d in enumerate(runner.model.drivers)
         if used is None or d.name in used
     ]
+    laws = [(path, d.law) for path, d in drivers]
     for i, f in enumerate(runner.model.forces):
         key = "actuator" if hasattr(f, "actuator") else "law"
         if f.name not in unknown:
@@ -257,10 +259,17 @@ def check_laws(runner, plan: Plan) -> None:
     for k, p in enumerate(r.prescribed):
         if p.law is not None:
             path = (*plan.path, "prescribed", k)
-            laws.append(((*path, "law"), setup.prescribed_driver(runner, p, path).law))
+            driver = setup.prescribed_driver(runner, p, path)
+            laws.append(((*path, "law"), driver.law))
+            drivers.append(((*path, "law"), driver))
     for path, law in laws:
         if isinstance(law, ExpressionLaw):
             _finite_law(runner, law, plan.times, path)
+    for path, driver in drivers:
+        try:
+            driver.check_law(plan.times[0], plan.times[-1])
+        except ModelError as e:
+            runner.fail(path, e.message, "")
 
 
 def check_replays(runner) -> None:

@@ -1,0 +1,291 @@
+"""Is a law smooth enough? Jumps in a law's value or slope, found before any computing.
+
+A law whose value jumps moves a body by a finite distance in no time; one whose slope jumps
+(a kink: piecewise linear segments, ``abs``) gives it an infinite acceleration. Neither can
+be integrated, and the accelerations and forces an analysis reports would miss the jump's
+impulse. :func:`jumps` finds them on an interval (for a cam, over its turn and across the
+wrap-around ``theta = 2 pi -> 0``).
+
+The law and its first three derivatives (exact, forward-mode AD) are sampled on a grid of
+``n`` steps ``h``. Over a step ``[x_i, x_{i+1}]`` of a function ``g`` (the law, ``k = 0``,
+or its slope, ``k = 1``) the trapezoidal rule of its derivative, ``r = |g(x_{i+1}) - g(x_i)
+- h (g'(x_i) + g'(x_{i+1})) / 2|``, is ``h**3/12 |g'''|`` where ``g`` is smooth, at most
+about ``h |jump of g'| / 2`` where ``g'`` jumps (a jump one order up), and the jump itself
+where ``g`` jumps (the sampled derivatives are one-sided, finite). A step whose ``r`` is
+beyond what the derivatives sampled at its ends allow,
+
+    r > h**(2-k) (|g''_i| + |g''_{i+1}|) + h**(3-k) (|g'''_i| + |g'''_{i+1}|) / 6 + floor
+
+(``g''`` the law's derivative of order ``k + 2``), is looked at ``n`` times closer, three
+times over (to ``h / n**3``): a jump stays a jump at every scale, a steep smooth stretch
+resolves. What is left is a jump, placed within ``h / n**3``; a jump in value explains a
+kink's share of ``r`` first. Jumps smaller than ``rtol`` times the law's scale (its range;
+for the slope, its largest slope) are left (rounded coefficients of segments that meet).
+
+The second derivative may jump (a constant-acceleration segment): the accelerations and
+forces then jump too, finite, and are reported as they are.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ModelError
+from ._validate import _traced
+
+#: What a jump of each order does to what the law moves, in messages.
+_EFFECT = (
+    "would move in no time",
+    "would change its speed in no time (an infinite acceleration)",
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class Jump:
+    """A jump of a law: ``order`` 0 in its value, 1 in its slope; ``at`` the place (in the
+    law's variable, within ``resolution``), ``size`` its size (after minus before; the law's
+    unit per the variable's unit**order); ``finite`` False where the law or a derivative is
+    not finite there (``size`` nan)."""
+
+    order: int
+    at: float
+    size: float
+    resolution: float
+    finite: bool = True
+
+
+def _samples(law, x: np.ndarray) -> np.ndarray:
+    """``(4, len(x))``: the law and its first three derivatives at ``x`` (one compiled
+    program per law and grid size)."""
+    return np.asarray(_derivatives(law, jnp.asarray(x, dtype=jnp.float64)), dtype=float).T
+
+
+@eqx.filter_jit
+def _derivatives(law, x):
+    def derivs(s):
+        def d1(u):
+            return jax.jvp(law, (u,), (jnp.ones_like(u),))
+
+        def d2(u):
+            (f, fd), (_, fdd) = jax.jvp(d1, (u,), (jnp.ones_like(u),))
+            return f, fd, fdd
+
+        (f, fd, fdd), (_, _, fddd) = jax.jvp(d2, (s,), (jnp.ones_like(s),))
+        return jnp.stack([f, fd, fdd, fddd])
+
+    return jax.vmap(derivs)(x)
+
+
+class _Turn(eqx.Module):
+    """A law read within its period: ``law(start + (x - start) mod period)``."""
+
+    law: object
+    start: float
+    period: float
+
+    def __call__(self, x):
+        return self.law(self.start + jnp.mod(x - self.start, self.period))
+
+
+def _residuals(x: np.ndarray, d: np.ndarray, floors) -> tuple[np.ndarray, np.ndarray]:
+    """Per step ``(2, n)``: the residual ``r`` of the value and of the slope, and what the
+    derivatives at the step's ends allow."""
+    h = np.diff(x)
+    a = np.abs(np.nan_to_num(d, nan=0.0, posinf=0.0, neginf=0.0))
+    r, allowed = [], []
+    for k in (0, 1):
+        g, g1 = d[k], d[k + 1]
+        r.append(np.abs(np.diff(g) - h * (g1[:-1] + g1[1:]) / 2))
+        c2 = a[k + 2][:-1] + a[k + 2][1:]
+        c3 = a[3][:-1] + a[3][1:] if k == 0 else 0.0
+        allowed.append(h ** (2 - k) * c2 + h ** (3 - k) * c3 / 6 + floors[k])
+    return np.array(r), np.array(allowed)
+
+
+def jumps(
+    law,
+    start: float,
+    stop: float,
+    *,
+    periodic: bool = False,
+    n: int = 2048,
+    zooms: int = 3,
+    rtol: float = 1e-6,
+    limit: int | None = None,
+) -> list[Jump]:
+    """The jumps in value and slope of ``law`` on ``[start, stop]`` (see the module).
+
+    Args:
+        law: a scalar function of one variable, JAX-traceable (a :class:`~mixdyn.Law`).
+        start, stop: the interval, in the law's variable.
+        periodic: the law is read ``start + (x - start) mod (stop - start)`` (a cam's turn):
+            the step that ends at ``stop`` compares the law before ``stop`` with the law at
+            ``start`` (the wrap-around).
+        n: steps of the grid, and of each closer look.
+        zooms: closer looks at a step that seems to jump.
+        rtol: jumps smaller than this times the law's scale are left.
+        limit: stop after this many jumps (default: find them all).
+
+    Returns:
+        The jumps found, by place; empty for a law that is continuous with its slope (or
+        when the law cannot be sampled, or its numbers are being traced).
+    """
+    if _traced(law) or (getattr(law, "smooth", False) and not periodic) or not stop > start:
+        return []
+    key = _key(law, start, stop, periodic, n, zooms, rtol, limit)
+    if key is not None and key in _FOUND:
+        return list(_FOUND[key])
+    found = _jumps(law, start, stop, periodic, n, zooms, rtol, limit)
+    if key is not None:
+        if len(_FOUND) >= 256:
+            _FOUND.pop(next(iter(_FOUND)))
+        _FOUND[key] = tuple(found)
+    return found
+
+
+#: The jumps found, by law and interval (a sweep's members share their laws).
+_FOUND: dict = {}
+
+
+def _key(law, *args):
+    """A hashable key of a law's structure and numbers, or None."""
+    leaves, treedef = jax.tree_util.tree_flatten(law)
+    try:
+        key = (treedef, *(np.asarray(x).tobytes() for x in leaves), *args)
+        hash(key)
+    except TypeError:
+        return None
+    return key
+
+
+def _jumps(law, start, stop, periodic, n, zooms, rtol, limit) -> list[Jump]:
+    period = stop - start
+    f = _Turn(law, start, period) if periodic else law
+
+    x = np.linspace(start, stop, n + 1)
+    try:
+        d = _samples(f, x)
+    except Exception:  # a law that cannot be sampled fails, named, when it is run
+        return []
+    bad = ~np.all(np.isfinite(d[:3]), axis=0)
+    if bad.any():
+        i = int(np.argmax(bad))
+        return [Jump(0, float(x[i]), math.nan, 0.0, finite=False)]
+    scale0 = float(np.ptp(d[0]))
+    scale1 = float(np.max(np.abs(d[1]))) + scale0 / period
+    floors = (rtol * scale0 + 1e-300, rtol * scale1 + 1e-300)
+    r, allowed = _residuals(x, d, floors)
+    found = []
+    for i in np.flatnonzero(np.any(r > allowed, axis=0)):
+        jump = _closer(f, x[i], x[i + 1], n, zooms, floors)
+        if jump is not None:
+            found.append(jump)
+            if limit is not None and len(_merged(found, 2 * period / n)) >= limit:
+                break
+    return _merged(found, 2 * period / n)
+
+
+def _closer(f, a: float, b: float, n: int, zooms: int, floors) -> Jump | None:
+    """The jump within ``[a, b]``, looked at ``zooms`` times closer (None: none there)."""
+    for _ in range(zooms):
+        x = np.linspace(a, b, n + 1)
+        d = _samples(f, x)
+        if not np.all(np.isfinite(d[:3])):
+            i = int(np.argmax(~np.all(np.isfinite(d[:3]), axis=0)))
+            return Jump(0, float(x[i]), math.nan, float(b - a), finite=False)
+        r, allowed = _residuals(x, d, floors)
+        h = x[1] - x[0]
+        value = r[0] > allowed[0] + h * r[1]
+        slope = r[1] > allowed[1]
+        if value.any():
+            i = int(np.argmax(r[0] * value))
+            order = 0
+        elif slope.any():
+            i = int(np.argmax(r[1] * slope))
+            order = 1
+        else:
+            return None
+        a, b = x[i], x[i + 1]
+    size = float(d[order][i + 1] - d[order][i])
+    return Jump(order, float((a + b) / 2), size, float(b - a))
+
+
+def _merged(found: list[Jump], within: float) -> list[Jump]:
+    """One jump per place (neighbouring steps may both see one at their common end)."""
+    out: list[Jump] = []
+    for j in sorted(found, key=lambda j: j.at):
+        if out and abs(j.at - out[-1].at) <= within:
+            if j.order < out[-1].order:
+                out[-1] = j
+            continue
+        out.append(j)
+    return out
+
+
+def check(
+    law,
+    start: float,
+    stop: float,
+    *,
+    element: str,
+    moved: str,
+    variable: str = "t",
+    periodic: bool = False,
+    field: str = "law",
+) -> None:
+    """Refuse a law that jumps in value or slope on ``[start, stop]`` (see :func:`jumps`):
+    a :class:`~mixdyn.errors.ModelError` of ``element`` at ``field`` naming the law, the
+    place (``variable = ...``; an angle [rad] also in degrees) and the jump, and what it
+    does to what the law ``moved`` (``"the follower"``).
+
+    Raises:
+        ModelError: the first jump found.
+    """
+    found = jumps(law, start, stop, periodic=periodic, limit=1)
+    if not found:
+        return
+    j = found[0]
+    place = f"{variable} = {j.at:.6g}"
+    if variable != "t":
+        place += f" rad ({math.degrees(j.at):.6g} deg)"
+    if periodic and abs(j.at - stop) <= 2 * (stop - start) / 2048:
+        place += f", where the turn wraps around to {variable} = {start:g}"
+    if not j.finite:
+        problem = (
+            f"the law {_shown(law, variable)} or its slope or curvature is not finite at {place}"
+        )
+    else:
+        problem = (
+            f"the law {_shown(law, variable)} jumps by {j.size:+.6g} (model units) in its "
+            f"{'value' if j.order == 0 else 'slope'} at {place}: {moved} {_EFFECT[j.order]}"
+        )
+    over = (
+        f"over the turn, {variable} = {start:g} to {stop:.6g} (at the end its value and slope "
+        "at the start)"
+        if periodic
+        else f"over the run, {variable} = {start:g} to {stop:g}"
+    )
+    raise ModelError(
+        f"{problem}; give a law continuous with its slope {over}; its second derivative may jump",
+        element,
+        field=field,
+    )
+
+
+def _shown(law, variable: str) -> str:
+    """The law in words: an expression's text (its variable named ``variable``), else its
+    kind."""
+    source = getattr(law, "source", None)
+    if isinstance(source, str):
+        return repr(re.sub(r"\bt\b", variable, source) if variable != "t" else source)
+    return f"({type(law).__name__})"
+
+
+__all__ = ["Jump", "check", "jumps"]

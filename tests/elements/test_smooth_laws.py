@@ -1,0 +1,172 @@
+"""Laws that jump are input errors: a cam's law over its turn (and across the wrap-around
+``theta = 2 pi -> 0``) and a driver's law over a run must be continuous with their slopes.
+The jumps found are checked against the laws' own definitions (the place of a ``where``'s
+switch, the size of a step or of a kink from the segments' closed-form slopes); smooth laws
+made of segments that meet with equal value and slope (cycloidal, 3-4-5 polynomial, a
+constant-acceleration law whose second derivative jumps) pass, and so does a steep smooth
+bump narrower than the first grid."""
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+from mixdyn.model._smoothness import jumps
+
+TWO_PI = 2 * math.pi
+H, BASE = 0.02, 0.05
+RESOLUTION = TWO_PI / 2048  # the coarse grid: every jump is placed much closer than this
+
+
+def cam_model(law):
+    """A cam on a pin at the origin, a knife-edge follower on a vertical guide above it."""
+    return md.Model(
+        bodies=[
+            md.Body("cam", 1.0, 1e-3, q0=(0, 0, 0)),
+            md.Body("follower", 0.5, 1e-4, q0=(0, BASE, 0)),
+        ],
+        ground={"O": (0.0, 0.0)},
+        joints=[
+            md.Revolute("O", "ground.O", "cam"),
+            md.Translational("guide", "ground.O", "follower", axis=(0, 1)),
+            md.CamFollower("cam_pair", "cam", "follower", law=md.FunctionLaw(law), base=BASE),
+        ],
+        drivers=[md.CoordinateDriver("motor", "cam", "phi", law=md.Ramp(0.0, 2.0))],
+        units=md.SI,
+    )
+
+
+def turn(law):
+    return jumps(md.FunctionLaw(law), 0.0, TWO_PI, periodic=True)
+
+
+def step(th):
+    return jnp.where(th < math.pi, 0.0, H)
+
+
+def sawtooth(th):
+    return H * (th / TWO_PI - jnp.floor(th / TWO_PI))
+
+
+def linear_rise_dwell_return(th):
+    """Rise over the first third, dwell, return over the last third: continuous, with
+    kinks (slope 3H/(2 pi), then 0, then -3H/(2 pi))."""
+    a, b = TWO_PI / 3, 2 * TWO_PI / 3
+    return jnp.where(th < a, H * th / a, jnp.where(th < b, H, H * (TWO_PI - th) / a))
+
+
+def cycloidal_rise_dwell_return(th):
+    """Cycloidal rise over [0, 2 pi/3], dwell, cycloidal return over [4 pi/3, 2 pi]: equal
+    value, slope and second derivative where the segments meet."""
+    beta = TWO_PI / 3
+    u = th / beta
+    w = (th - 2 * beta) / beta
+    rise = H * (u - jnp.sin(TWO_PI * u) / TWO_PI)
+    back = H * (1 - (w - jnp.sin(TWO_PI * w) / TWO_PI))
+    return jnp.where(th < beta, rise, jnp.where(th < 2 * beta, H, back))
+
+
+def polynomial_345(th):
+    """3-4-5 polynomial rise over the first half turn, the mirror image back."""
+    u = jnp.where(th < math.pi, th / math.pi, (TWO_PI - th) / math.pi)
+    return H * (10 * u**3 - 15 * u**4 + 6 * u**5)
+
+
+def constant_acceleration(th):
+    """Parabolic rise and return (constant accelerations +-a): continuous with its slope,
+    its second derivative jumps at every quarter turn."""
+    q = math.pi / 2
+    return jnp.where(
+        th < q,
+        2 * H * (th / math.pi) ** 2,
+        jnp.where(
+            th < math.pi,
+            H - 2 * H * ((math.pi - th) / math.pi) ** 2,
+            jnp.where(
+                th < 3 * q,
+                H - 2 * H * ((th - math.pi) / math.pi) ** 2,
+                2 * H * ((TWO_PI - th) / math.pi) ** 2,
+            ),
+        ),
+    )
+
+
+def narrow_bump(th):
+    """A Gaussian bump 1e-3 rad wide (a third of the first grid's step): smooth."""
+    return H * jnp.exp(-(((th - 2.0) / 1e-3) ** 2))
+
+
+def test_a_step_is_refused_where_it_steps():
+    (j,) = [j for j in turn(step) if j.at < 6]  # the second jump is the wrap, H -> 0
+    assert j.order == 0 and j.size == pytest.approx(H)
+    assert abs(j.at - math.pi) < RESOLUTION / 2048**2
+    with pytest.raises(md.ModelError, match=r"cam_pair.*jumps by \+0\.02 .* in its value") as e:
+        cam_model(step)
+    assert e.value.field == "law" and "theta = 3.14159 rad (180 deg)" in str(e.value)
+
+
+def test_a_sawtooth_is_refused_at_the_wrap():
+    (j,) = turn(sawtooth)
+    assert j.order == 0 and j.size == pytest.approx(-H)
+    assert TWO_PI - j.at < RESOLUTION
+    with pytest.raises(md.ModelError, match="where the turn wraps around to theta = 0"):
+        cam_model(sawtooth)
+    # the same with the law given over the turn alone (the cam reads it theta mod 2 pi)
+    (j,) = turn(lambda th: H * th / TWO_PI)
+    assert j.order == 0 and j.size == pytest.approx(-H)
+
+
+def test_a_kinked_law_is_refused_with_its_slope_jump():
+    found = turn(linear_rise_dwell_return)
+    slope = 3 * H / TWO_PI
+    assert [j.order for j in found] == [1, 1, 1]
+    np.testing.assert_allclose([j.at for j in found], [TWO_PI / 3, 2 * TWO_PI / 3, TWO_PI])
+    np.testing.assert_allclose([j.size for j in found], [-slope, -slope, 2 * slope], rtol=1e-9)
+    with pytest.raises(md.ModelError, match=r"in its slope at theta = 2\.0944 rad \(120 deg\)"):
+        cam_model(linear_rise_dwell_return)
+
+
+@pytest.mark.parametrize(
+    "law",
+    [cycloidal_rise_dwell_return, polynomial_345, constant_acceleration, narrow_bump],
+    ids=lambda f: f.__name__,
+)
+def test_smooth_laws_pass(law):
+    assert turn(law) == []
+    cam_model(law)
+
+
+def test_an_infinite_slope_is_refused():
+    (j,) = turn(lambda th: H * jnp.sqrt(th / TWO_PI) * (1 - th / TWO_PI))
+    assert not j.finite and j.at == 0.0
+
+
+def driven(law):
+    """A crank on a pin driven by ``law``."""
+    return md.Model(
+        bodies=[md.Body("crank", 1.0, 0.1, q0=(0, 0, 0))],
+        joints=[md.Revolute("O", "ground", "crank")],
+        drivers=[md.CoordinateDriver("motor", "crank", "phi", law=md.FunctionLaw(law))],
+        units=md.SI,
+    )
+
+
+def test_a_driver_that_jumps_is_refused_when_run():
+    model = driven(lambda t: jnp.where(t < 0.3, 2 * t, 2 * t + 0.1))
+    with pytest.raises(md.ModelError, match=r"motor.*jumps by \+0\.1 .* value at t = 0\.3"):
+        md.kinematic(model, np.linspace(0, 1, 5))
+    # over a span before the jump it runs
+    res = md.kinematic(model, np.linspace(0, 0.25, 5))
+    np.testing.assert_allclose(res["crank.phi"], 2 * np.linspace(0, 0.25, 5), atol=1e-12)
+
+
+def test_a_driver_with_a_kink_is_refused_and_one_with_an_acceleration_jump_runs():
+    kink = driven(lambda t: jnp.where(t < 0.5, t, 0.5 + 3 * (t - 0.5)))
+    with pytest.raises(md.ModelError, match=r"jumps by \+2 .* slope at t = 0\.5"):
+        md.kinematic(kink, np.linspace(0, 1, 5))
+    # trapezoidal speed: accelerate at 4 rad/s^2 to t = 0.25, then turn at 1 rad/s
+    trapezoid = driven(lambda t: jnp.where(t < 0.25, 2 * t**2, 0.125 + (t - 0.25)))
+    res = md.kinematic(trapezoid, np.array([0.0, 0.1, 0.5]))
+    np.testing.assert_allclose(res["crank.alpha"], [4.0, 4.0, 0.0], atol=1e-9)
