@@ -1,15 +1,20 @@
 """The cam follower in a model file, made from its class's declaration: each check lives in
 the class and a file meets it at the field's line with the same words as Python; its law is
 a law of the cam angle ``theta`` (knots in degrees converted to radians, ``t`` refused); a
-model built in Python writes to a file that builds the same equations back."""
+model built in Python writes to a file that builds the same equations back. ``mixdyn check``
+refuses a cam's or a driver's law that jumps at the law's line (exit 2) and passes the
+shipped cam examples."""
 
 import math
 
 import numpy as np
 import pytest
+from typer.testing import CliRunner
 
 import mixdyn as md
 import mixdyn.io as mio
+from fixtures import EXAMPLES
+from mixdyn.cli import app
 from mixdyn.equations import Constraints
 
 FILE = """\
@@ -133,3 +138,46 @@ def test_a_cam_built_in_python_writes_back():
     q = np.random.default_rng(3).uniform(-1, 1, model.nq)
     c, c_back = Constraints.of(model), Constraints.of(back)
     np.testing.assert_allclose(c.full(q, 0.3), c_back.full(q, 0.3), rtol=0, atol=1e-15)
+
+
+RUN = """\
+runs:
+  - {name: kin, kind: kinematic, time: {span: [0, 1], n: 5}}
+"""
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "expected"),
+    [
+        (
+            "10*(1 - cos(theta))",
+            "where(theta < pi, 0, 20)",
+            "jumps by +20 (model units) in its value at theta = 3.14159 rad (180 deg)",
+        ),
+        (
+            "10*(1 - cos(theta))",
+            "20*theta/(2*pi)",
+            "where the turn wraps around to theta = 0",
+        ),
+        (
+            "law: 2*pi*t}",
+            "law: 'where(t < 0.5, 2*pi*t, 4*pi*t - pi)'}",
+            "driver 'motor', law: the law 'where(t < 0.5, 2*pi*t, 4*pi*t - pi)' jumps by "
+            "+6.28319 (model units) in its slope at t = 0.5",
+        ),
+    ],
+    ids=["cam-step", "cam-sawtooth", "driver-kink"],
+)
+def test_mixdyn_check_refuses_a_law_that_jumps_at_its_line(tmp_path, old, new, expected):
+    text = sub(old, new, FILE + RUN)
+    path = tmp_path / "jump.yaml"
+    path.write_text(text, encoding="utf-8")
+    res = CliRunner().invoke(app, ["check", str(path)])
+    assert res.exit_code == 2 and "Traceback" not in res.output, res.output
+    assert f"{path}:{line_of(text, new)}:" in res.stderr and expected in res.stderr, res.stderr
+
+
+@pytest.mark.parametrize("name", ["cam_follower", "cam_rocker"])
+def test_the_cam_examples_pass_mixdyn_check(name):
+    res = CliRunner().invoke(app, ["check", str(EXAMPLES / f"{name}.yaml")])
+    assert res.exit_code == 0, res.output
