@@ -24,7 +24,7 @@ import jax.scipy.linalg as jsl
 import numpy as np
 
 from ..equations import Constraints, applied_forces, force_directions, potential_energy
-from ..equations import _friction as fr
+from ..equations import _reaction_dependent as rd
 from ..equations._jacobian import JacobianOperator
 from ..linalg import lu_solve_checked, min_pivot
 from ..model import Model
@@ -52,7 +52,8 @@ class Stages(NamedTuple):
         phi: (m,) constraint residuals ``Phi(q, t)``.
         J: the operator ``Phi_q(q, t)`` of the set's path.
         qdd: (nq,) accelerations; mu: (m,) multipliers; ratio: the pivot ratio of the solve.
-        friction: the joint friction's ``(f, normal, limit, v, D)`` of the same solve, or None.
+        dependent: the reaction-dependent forces ``f`` (nf,) and relative speeds ``v`` (nf,)
+            of the same solve, or None without them.
     """
 
     q: jax.Array
@@ -63,7 +64,7 @@ class Stages(NamedTuple):
     qdd: jax.Array
     mu: jax.Array
     ratio: jax.Array
-    friction: tuple | None = None
+    dependent: tuple | None = None
 
 
 class Problem(eqx.Module):
@@ -100,7 +101,7 @@ class Problem(eqx.Module):
         self.i_index = tuple(int(i) for i in i_index)
         self.collocated = tuple(int(i) for i in collocated)
         if solver == "partition":
-            fr.check_supported(model, "the partition method", "use solver='augmented'")
+            rd.check_supported(model, "the partition method", "use solver='augmented'")
 
     @property
     def p(self) -> int:
@@ -148,38 +149,37 @@ class Problem(eqx.Module):
             return self._partition(q, qd, t, J.dense(), gam, Q)
         solve, ratio = self.kkt(q, qd, t, J)
         qdd, mu = solve(Q, gam)
-        if self.friction:
-            qdd, mu, _ = self._with_friction(q, qd, t, solve, qdd, mu)
+        if self.reaction_dependent:
+            qdd, mu, _ = self._with_dependent(q, qd, t, solve, qdd, mu)
         return qdd, mu, ratio
 
-    def _accelerations_and_friction(self, q, qd, t, J):
-        """As :meth:`accelerations` at ``(q, t)`` with the operator ``J``, and the joint
-        friction's record ``(f, normal, limit, v, D)`` of the same solve (None without
-        friction)."""
-        if not self.friction:
+    def _accelerations_and_dependent(self, q, qd, t, J):
+        """As :meth:`accelerations` at ``(q, t)`` with the operator ``J``, and the
+        reaction-dependent forces' record ``(f, v)`` of the same solve (None without them)."""
+        if not self.reaction_dependent:
             return (*self.accelerations(q, qd, t, J=J), None)
         solve, ratio = self.kkt(q, qd, t, J)
         qdd, mu = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
-        qdd, mu, record = self._with_friction(q, qd, t, solve, qdd, mu)
+        qdd, mu, record = self._with_dependent(q, qd, t, solve, qdd, mu)
         return qdd, mu, ratio, record
 
-    # ------------------------------------------------------------------ joint friction
+    # ------------------------------------------------------------------ reaction-dependent forces
     @property
-    def friction(self) -> tuple:
-        """The model's joint-friction elements (static)."""
-        return fr.friction_elements(self.model)
+    def reaction_dependent(self) -> tuple:
+        """The model's reaction-dependent force elements (static)."""
+        return rd.elements(self.model)
 
-    def _friction_solve(self, q, qd, t, solve, qdd0, mu0, stopped=None):
-        """The joint friction at one state from the KKT solve factorized once
-        (:mod:`mixdyn.equations._friction`): ``(f, stick, A, Mu_f, H, v, D)``, the friction
-        forces (nf,), which joints stick (nf,), the constrained responses to a unit force
-        along each joint ``A`` (nq, nf) and ``Mu_f`` (m, nf), ``H = D^T A`` (nf, nf), the
+    def _dependent_solve(self, q, qd, t, solve, qdd0, mu0, stopped=None):
+        """The reaction-dependent forces at one state from the KKT solve factorized once
+        (:mod:`mixdyn.equations._reaction_dependent`): ``(f, stick, A, Mu_f, H, v, D)``, the
+        forces (nf,), which elements stick (nf,), the constrained responses to a unit force
+        along each element ``A`` (nq, nf) and ``Mu_f`` (m, nf), ``H = D^T A`` (nf, nf), the
         relative speeds ``v`` (nf,) and the directions ``D`` (nq, nf). ``stopped`` (nf,),
-        bool: joints taken as inside the stick band whatever their speed (default none)."""
-        elements = self.friction
-        pos = fr.rows(self.model, self.c, elements)
+        bool: elements taken as inside the stick band whatever their speed (default none)."""
+        elements = self.reaction_dependent
+        pos = rd.rows(self.model, self.c, elements)
         # D (nq, nf) and its rate along the motion, in one pass: dd = qd^T (dD/dq) qd
-        D, D_rate = jax.jvp(lambda qq: fr.directions(self.model, elements, qq), (q,), (qd,))
+        D, D_rate = jax.jvp(lambda qq: rd.directions(self.model, elements, qq), (q,), (qd,))
         v = D.T @ qd
         dd = D_rate.T @ qd
         zeros = jnp.zeros(mu0.shape[0], qdd0.dtype)
@@ -190,43 +190,40 @@ class Problem(eqx.Module):
         a0 = D.T @ qdd0 + dd
         h_free = jnp.sum(D**2 * self.Minv[:, None], axis=0)
         v_band = v if stopped is None else jnp.where(stopped, 0.0, v)
-        f, stick = fr.solve_friction(elements, pos, v_band, a0, H, mu0, Mu_f, h_free)
+        f, stick = rd.solve(elements, pos, v_band, a0, H, mu0, Mu_f, h_free)
         return f, stick, A, Mu_f, H, v, D
 
-    def _with_friction(self, q, qd, t, solve, qdd0, mu0):
-        """Accelerations and multipliers with the joint friction forces, from the KKT
-        solve factorized once (:meth:`_friction_solve`); and the friction record
-        ``(f, normal, limit, v, D)``."""
-        f, _, A, Mu_f, _, v, D = self._friction_solve(q, qd, t, solve, qdd0, mu0)
-        mu = mu0 + Mu_f @ f
-        lim, normal = fr.limits(self.friction, fr.rows(self.model, self.c, self.friction), mu)
-        return qdd0 + A @ f, mu, (f, normal, lim, v, D)
+    def _with_dependent(self, q, qd, t, solve, qdd0, mu0):
+        """Accelerations and multipliers with the reaction-dependent forces, from the KKT
+        solve factorized once (:meth:`_dependent_solve`); and their record ``(f, v)``."""
+        f, _, A, Mu_f, _, v, _ = self._dependent_solve(q, qd, t, solve, qdd0, mu0)
+        return qdd0 + A @ f, mu0 + Mu_f @ f, (f, v)
 
     def halt_sticking(self, q, qd, w, t, q_start, qd_start):
         """The velocities ``qd`` (nq,) and works ``w`` (2,) at the end of a step with every
-        sticking friction joint brought to rest.
+        sticking reaction-dependent element brought to rest.
 
-        A joint sticks at ``(q, qd, t)`` where it has stopped, inside the stick band or with
-        its relative speed reversed since the step's start ``(q_start, qd_start)`` (it
-        stopped within the step), and its static friction holds it within its limit
-        (:func:`~mixdyn.equations._friction.solve_friction`). The sticking joints get the
+        An element sticks at ``(q, qd, t)`` where it has stopped, inside its stick band or
+        with its relative speed reversed since the step's start ``(q_start, qd_start)`` (it
+        stopped within the step), and it holds within its limit
+        (:func:`~mixdyn.equations._reaction_dependent.solve`). The sticking elements get the
         impulse ``A y`` along their directions that makes their relative speeds exactly 0
         (``H_ss y_s = -v_s``), the constraints' velocities kept (``C A = 0``). The stick
-        force then holds their relative accelerations at 0, so that a stopped joint stays
-        where it stopped instead of creeping on at the speed it was left with (up to
-        ``v_stick`` inside the band, a step's worth of deceleration past a reversal). The
-        kinetic energy the impulse takes out, the friction's work in the stop, is added to
-        the nonconservative work ``w[0]``. ``(qd, w)`` themselves without friction."""
-        if not self.friction:
+        force then holds their relative accelerations at 0, so that a stopped element stays
+        where it stopped instead of creeping on at the speed it was left with (up to its
+        stick band, a step's worth of deceleration past a reversal). The kinetic energy the
+        impulse takes out, the elements' work in the stop, is added to the nonconservative
+        work ``w[0]``. ``(qd, w)`` themselves without reaction-dependent elements."""
+        if not self.reaction_dependent:
             return qd, w
-        elements = self.friction
-        v_start = fr.directions(self.model, elements, q_start).T @ qd_start
-        v_end = fr.directions(self.model, elements, q).T @ qd
+        elements = self.reaction_dependent
+        v_start = rd.directions(self.model, elements, q_start).T @ qd_start
+        v_end = rd.directions(self.model, elements, q).T @ qd
         J = self.c.jacobian(q, t)
         solve, _ = self.kkt(q, qd, t, J)
         qdd0, mu0 = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
         reversed_ = v_start * v_end < 0.0
-        _, stick, A, _, H, v, _ = self._friction_solve(q, qd, t, solve, qdd0, mu0, reversed_)
+        _, stick, A, _, H, v, _ = self._dependent_solve(q, qd, t, solve, qdd0, mu0, reversed_)
         both = stick[:, None] & stick[None, :]
         y = jnp.linalg.solve(jnp.where(both, H, jnp.eye(H.shape[0])), jnp.where(stick, -v, 0.0))
         halted = qd + A @ jnp.where(stick, y, 0.0)
@@ -234,21 +231,16 @@ class Problem(eqx.Module):
         work = 0.5 * (jnp.dot(mass * halted, halted) - jnp.dot(mass * qd, qd))
         return halted, w.at[0].add(work)
 
-    def friction_columns(self, record) -> dict:
-        """The friction elements' result columns at one state from its friction ``record``
-        (:attr:`Stages.friction`): ``name`` (the friction force or torque), ``name.normal``,
-        ``name.limit``, ``name.speed``, ``name.power``."""
-        if record is None:
+    def dependent_columns(self, st: Stages) -> dict:
+        """The reaction-dependent elements' result columns at the state of ``st``
+        (:func:`~mixdyn.equations._reaction_dependent.columns`: ``name``, the element's own,
+        ``name.speed``, ``name.power``)."""
+        if st.dependent is None:
             return {}
-        f, normal, lim, v, _ = record
-        out = {}
-        for k, e in enumerate(self.friction):
-            out[e.name] = f[k]
-            out[f"{e.name}.normal"] = normal[k]
-            out[f"{e.name}.limit"] = lim[k]
-            out[f"{e.name}.speed"] = v[k]
-            out[f"{e.name}.power"] = f[k] * v[k]
-        return out
+        f, v = st.dependent
+        elements = self.reaction_dependent
+        pos = rd.rows(self.model, self.c, elements)
+        return rd.columns(elements, pos, f, v, st.mu)
 
     def stages(self, q, qd, t) -> Stages:
         """The state record of ``(q, qd, t)`` filled stage by stage (positions: ``Phi`` and
@@ -256,8 +248,8 @@ class Problem(eqx.Module):
         evaluated once for everything that reads it (reactions, powers, checks)."""
         J = self.c.jacobian(q, t)
         phi = self.c(q, t)
-        qdd, mu, ratio, friction = self._accelerations_and_friction(q, qd, t, J)
-        return Stages(q, qd, t, phi, J, qdd, mu, ratio, friction)
+        qdd, mu, ratio, dependent = self._accelerations_and_dependent(q, qd, t, J)
+        return Stages(q, qd, t, phi, J, qdd, mu, ratio, dependent)
 
     def _partition(self, q, qd, t, C, gam, Q):
         """The paper's method, eqs. (28)–(29), with ``j`` the prescribed coordinates."""
@@ -315,17 +307,17 @@ class Problem(eqx.Module):
 
         By the equations of motion the constraint forces (joints, drivers, unknown forces) on
         the bodies are ``-G mu = M qdd - Q``, so their power needs no Jacobian:
-        ``(M qdd - Q) . qd``. With joint friction, whose forces are part of ``Q`` but are
-        solved with the accelerations, the multipliers ``mu`` of the same state (if given)
+        ``(M qdd - Q) . qd``. With reaction-dependent forces, part of ``Q`` but solved with
+        the accelerations, the multipliers ``mu`` of the same state (if given)
         give the constraints' power ``-(G mu) . qd`` directly and the applied forces' the
-        rest, ``(M qdd + dV/dq) . qd`` less it: no second solve for the friction.
+        rest, ``(M qdd + dV/dq) . qd`` less it: no second solve for those forces.
         """
         dV = jax.grad(lambda qq: potential_energy(self.model, qq))(q)
-        if self.friction and mu is not None:
+        if self.reaction_dependent and mu is not None:
             p_c = jnp.sum(self.powers(q, qd, t, mu))
             p_nc = jnp.dot(self.model.mass_diagonal * qdd + dV, qd) - p_c
             return jnp.stack([p_nc, p_c])
-        if self.friction:  # the multipliers of this state, then as above
+        if self.reaction_dependent:  # the multipliers of this state, then as above
             return self.work_rates(q, qd, t, qdd, self.accelerations(q, qd, t)[1])
         Q = self.known_forces(q, qd, t)
         p_nc = jnp.dot(Q + dV, qd)

@@ -13,7 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import force_output_kinds, force_outputs, kinetic_energy, potential_energy
-from ..equations._friction import check_supported
+from ..equations._reaction_dependent import check_supported
 from ..errors import (
     EnergyBalanceError,
     ModelError,
@@ -56,11 +56,12 @@ ENERGY_PER_RTOL = 1e3
 ENERGY_TOL_RANGE = (1e-9, 1e-4)
 
 
-def refuse_friction_in(model: Model, options: IntegratorOptions) -> None:
-    """Joint friction is solved with the accelerations of the explicit integrators; a method
-    whose iteration does not include it (generalized-alpha's Newton iteration:
-    :attr:`~.methods.IntegratorOptions.friction` false) refuses it (named input error)."""
-    if not options.friction:
+def refuse_reaction_dependent_in(model: Model, options: IntegratorOptions) -> None:
+    """Reaction-dependent forces are solved with the accelerations of the explicit
+    integrators; a method whose iteration does not include them (generalized-alpha's Newton
+    iteration: :attr:`~.methods.IntegratorOptions.reaction_dependent` false) refuses them
+    (named input error)."""
+    if not options.reaction_dependent:
         check_supported(
             model,
             f"the {options.method} method",
@@ -104,7 +105,7 @@ def _post_arrays(problem: Problem, ts, Q, QD):
         viol = jnp.max(jnp.abs(st.phi)) if c.m else jnp.zeros(())
         forces = force_outputs(problem.model, q, qd, t, exclude=problem.unknown)
         forces.update(contact_columns(c, q, st.mu[: c.m]))
-        forces.update(problem.friction_columns(st.friction))
+        forces.update(problem.dependent_columns(st))
         return st.qdd, st.mu, st.ratio, R, powers, jnp.stack([T, V, T + V]), viol, forces
 
     return jax.lax.map(one, (Q, QD, ts))

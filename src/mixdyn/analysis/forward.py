@@ -13,7 +13,7 @@ from ._simulate import (
     Case,
     Integrated,
     output_times,
-    refuse_friction_in,
+    refuse_reaction_dependent_in,
     require_masses,
     simulate,
 )
@@ -50,7 +50,7 @@ class Forward(Integrated):
     name: ClassVar[str] = "forward"
 
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
-        refuse_friction_in(model, self.method)
+        refuse_reaction_dependent_in(model, self.method)
         require_masses(model)
         if given is None:
             prep = prepare_dynamic(model, t0, **self._start())

@@ -74,8 +74,9 @@ class IntegratorOptions(eqx.Module):
     #: independent constraint rows (a regular ``Phi_q``); the others solve redundant rows in
     #: the least-squares sense.
     independent_rows: ClassVar[bool] = False
-    #: Whether the method's step includes joint friction (solved with the accelerations).
-    friction: ClassVar[bool] = True
+    #: Whether the method's step includes the reaction-dependent forces (solved with the
+    #: accelerations).
+    reaction_dependent: ClassVar[bool] = True
     #: Whether a run is differentiable (``jax.grad``, ``jax.jvp``) through the method's loop.
     differentiable: ClassVar[bool] = True
     #: Whether the method damps unresolved high frequencies by design (energy lost on
@@ -228,7 +229,7 @@ class GeneralizedAlpha(IntegratorOptions):
 
     method: ClassVar[str] = "generalized-alpha"
     fixed_step: ClassVar[bool] = True
-    friction: ClassVar[bool] = False
+    reaction_dependent: ClassVar[bool] = False
     differentiable: ClassVar[bool] = False
     damps: ClassVar[bool] = True
     _arrays: ClassVar[tuple[str, ...]] = ("dt", "rho_inf", "tol")

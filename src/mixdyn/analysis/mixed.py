@@ -42,7 +42,7 @@ from ._simulate import (
     Case,
     Integrated,
     output_times,
-    refuse_friction_in,
+    refuse_reaction_dependent_in,
     require_masses,
     simulate,
 )
@@ -284,7 +284,7 @@ class Mixed(Integrated):
         """Everything a mixed run does before integrating: checks, consistent start,
         problem (the start and its mobility analysis checked on ``given`` where given)."""
         solver, method = self.solver, self.method
-        refuse_friction_in(model, method)
+        refuse_reaction_dependent_in(model, method)
         require_masses(model)
         unknown = self.unknown
         prescribed = bind_prescribed(model, self.prescribed)

@@ -42,7 +42,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import applied_forces
-from ..equations._friction import check_supported
+from ..equations._reaction_dependent import check_supported
 from ..errors import ConvergenceError, ModelError
 from ..linalg import DenseSolver, LinearSolver
 from ..model import Model
@@ -135,7 +135,7 @@ class _Equilibria(_setup.Analysis):
     def _equilibrium_start(self, model: Model, t0: float):
         """The assembled start of an equilibrium at ``t0`` (dense path; the drivers'
         balance not required: free degrees of freedom settle)."""
-        check_supported(model, "statics (an equilibrium with friction is a set, not a point)")
+        check_supported(model, "statics (its equilibrium leaves out the joint reactions)")
         return prepare_kinematic(
             model, t0, q0=self.q0, hold=self.hold, balanced=False, linear_solver=DenseSolver()
         )

@@ -39,7 +39,7 @@ def force_outputs(model: Model, q, qd, t, exclude: tuple[str, ...] = ()) -> dict
     ``name.power = Q . qd`` [power]. Values () each."""
     out = {}
     for f in model.forces:
-        if f.name in exclude or f.needs_reactions:  # joint friction: the analysis' columns
+        if f.name in exclude or f.needs_reactions:  # reaction-dependent: the analysis' columns
             continue
         for suffix, v in f.outputs(q, qd, t).items():
             out[f"{f.name}.{suffix}" if suffix else f.name] = v

@@ -35,6 +35,7 @@ from ._laws import (
     as_law,
 )
 from ._model import Model
+from ._reaction_dependent import ReactionDependent
 
 #: The element registries that :data:`ELEMENTS` replaced, by their old names and the section
 #: and file names they held.
@@ -93,6 +94,7 @@ __all__ = [
     "QuinticHermite",
     "RackPinion",
     "Ramp",
+    "ReactionDependent",
     "RelativeAngleDriver",
     "Revolute",
     "RollingDisks",

@@ -74,8 +74,9 @@ class ForceElement(Element):
 
     #: Whether the element has a scalar magnitude that may be declared unknown.
     has_magnitude = False
-    #: Whether the element's force depends on the joint reactions (joint friction): the
-    #: analysis evaluates it with the accelerations; ``generalized`` gives zero.
+    #: Whether the element's force depends on the joint reactions (a
+    #: :class:`~mixdyn.model._reaction_dependent.ReactionDependent`): the analysis evaluates
+    #: it with the accelerations; ``generalized`` gives zero.
     needs_reactions = False
 
     def passive(self, q, qd, t, nq: int) -> jax.Array:

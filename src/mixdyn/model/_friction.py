@@ -1,8 +1,8 @@
 """Coulomb friction in a revolute or translational joint.
 
-The friction force depends on the joint's reaction, which the analysis computes together with
-the accelerations: the element holds the coefficients, the analysis evaluates it
-(:mod:`mixdyn.equations._friction`).
+The friction force depends on the joint's reaction: a reaction-dependent force
+(:class:`~mixdyn.model._reaction_dependent.ReactionDependent`), which the analysis solves
+together with the accelerations and the reactions.
 
 - Revolute joint: a friction torque of at most ``mu * radius * |R|`` between the two bodies
   (``R`` the reaction force of the pin, ``radius`` the pin's radius [length]).
@@ -30,15 +30,18 @@ from typing import ClassVar
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 
 from ..errors import ModelError
 from ._declare import element, quantity, reference
 from ._element import Resolver
-from ._forces import ForceElement, _f64
+from ._forces import _f64
+from ._geometry import angle, vector
+from ._reaction_dependent import ReactionDependent
 
 
 @element("joint_friction", "forces")
-class JointFriction(ForceElement):
+class JointFriction(ReactionDependent):
     """Coulomb friction, with stick and slip, in the revolute, translational or pin-in-slot
     joint named ``joint``.
 
@@ -74,8 +77,7 @@ class JointFriction(ForceElement):
     )
     #: Whether the joint is revolute (a friction torque), set when the model is built.
     rotary: bool = eqx.field(static=True, default=False, kw_only=True)
-    #: The element is evaluated by the analysis, with the reactions.
-    needs_reactions: ClassVar[bool] = True
+    kind_name: ClassVar[str] = "joint friction"
     #: What the element's name is used for, in a model file's description.
     name_doc: ClassVar[str] = (
         "Unique name of the friction element (its result columns: the friction force or "
@@ -127,9 +129,51 @@ class JointFriction(ForceElement):
     def body_indices(self):
         return ()
 
-    def generalized(self, q, qd, t, nq):
-        """Zero: the friction force is the analysis' (it needs the reactions)."""
-        return jnp.zeros(nq)
+    def reaction_rows(self) -> tuple[str, ...]:
+        """The pin's reaction ``joint.x, joint.y``, or the slide's ``joint.normal``."""
+        return tuple(f"{self.joint}.{lab}" for lab in (("x", "y") if self.rotary else ("normal",)))
+
+    def relative_coordinate(self, model, q):
+        """A pin's ``phi_j - phi_i`` [rad]; a slide's ``u_i . (r_Pj - r_Pi)`` [length]."""
+        j = model.element(self.joint)  # checked to be such a joint when the model was built
+        if self.rotary:
+            return angle(q, j.bj) - angle(q, j.bi)
+        return jnp.dot(vector(q, j.bi, j.u), j._d(q))
+
+    def normal(self, reactions):
+        """The normal reaction ``|R|`` or ``|N|`` [force] from the joint's multipliers (k,)."""
+        return jnp.sqrt(jnp.maximum(sum(r**2 for r in reactions), 1e-300))
+
+    def holding_limit(self, reactions):
+        """``mu radius |R|`` (a pin) or ``mu |N|`` (a slide)."""
+        return self.mu * (self.radius if self.rotary else 1.0) * self.normal(reactions)
+
+    def slip_force(self, v, reactions):
+        """The limit against the motion, ``-limit sign(v)``."""
+        return -self.holding_limit(reactions) * jnp.sign(v)
+
+    def stick_band(self):
+        return self.v_stick
+
+    def reaction_outputs(self, reactions):
+        return {"normal": self.normal(reactions), "limit": self.holding_limit(reactions)}
+
+    @property
+    def no_arrow(self):
+        return "is a pin's friction torque" if self.rotary else None
+
+    def arrow(self, model, q):
+        """A slide's friction on body j at the joint's point, along the axis turning with
+        body i; a pin's friction torque has none."""
+        if self.rotary:
+            return None
+        j = model.element(self.joint)
+        u = np.asarray(j.u, dtype=float)
+        if j.bi >= 0:
+            phi = q[:, 3 * j.bi + 2]
+            c, sn = np.cos(phi), np.sin(phi)
+            u = np.stack([c * u[0] - sn * u[1], sn * u[0] + c * u[1]], axis=-1)
+        return j.bj, j.sj, np.broadcast_to(u, (len(q), 2))
 
     @property
     def magnitude_kind(self):

@@ -210,8 +210,8 @@ def _check_arrows(runner, plan: Plan, forces, path) -> None:
 
     known = [j.name for j in runner.model.joints]
     known += [f.name for f in runner.model.forces if isinstance(f, PointForce)]
-    friction = {f.name: f for f in runner.model.forces if f.needs_reactions}
-    known += [name for name, f in friction.items() if not f.rotary]
+    dependent = {f.name: f for f in runner.model.forces if f.needs_reactions}
+    known += [name for name, f in dependent.items() if f.no_arrow is None]
     contacts = {
         j.name: j
         for j in runner.model.joints
@@ -225,10 +225,10 @@ def _check_arrows(runner, plan: Plan, forces, path) -> None:
                 f"{name!r} acts by a moment: it has no arrow",
                 f"plot its contact forces instead ({cols})",
             )
-        if name in friction and friction[name].rotary:
+        if name in dependent and dependent[name].no_arrow is not None:
             runner.fail(
                 (*path, k),
-                f"{name!r} is a pin's friction torque: it has no arrow",
+                f"{name!r} {dependent[name].no_arrow}: it has no arrow",
                 f"plot its column instead ({name})",
             )
         if name not in known:

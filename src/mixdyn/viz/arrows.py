@@ -29,15 +29,16 @@ def _place(q: np.ndarray, b: int, s) -> np.ndarray:
 def force_arrows(result, names=True) -> list[dict]:
     """The forces of a result as arrows.
 
-    A translational joint's friction (:class:`~mixdyn.model.JointFriction`) is drawn on body j
-    at the joint's point, along the slide; a pin's friction torque has no arrow.
+    A reaction-dependent force (:class:`~mixdyn.model.ReactionDependent`) is drawn where its
+    element puts it (its ``arrow``), or not at all where it has none.
 
     Args:
         result: a :class:`mixdyn.Result` of a forward, inverse or mixed run.
         names: ``True`` for every joint's reaction and every point force; or the names of
             joints (their reaction on body j, at the joint; a contact's force at its contact
             point: a gear's tooth force on gear j, a rolling disk's or a pinion's force on the
-            wheel, a cam's push on its follower) and of point forces.
+            wheel, a cam's push on its follower), of point forces and of reaction-dependent
+            forces.
 
     Returns:
         Per arrow: ``name``, ``color``, ``at`` (N, 2) [length], ``F`` (N, 2) [force] and
@@ -45,7 +46,7 @@ def force_arrows(result, names=True) -> list[dict]:
 
     Raises:
         ValueError: a kinematic result (no forces), or a name that is neither a joint, a
-            point force nor a slide's friction of the model.
+            point force nor a reaction-dependent force of the model.
     """
     model = result.model
     if result.kind == "kinematic":
@@ -54,9 +55,8 @@ def force_arrows(result, names=True) -> list[dict]:
         )
     joints = {j.name: j for j in model.joints}
     forces = {f.name: f for f in model.forces if isinstance(f, PointForce)}
-    # joint friction along a slide (a pin's friction torque has no arrow)
-    slides = {f.name: f for f in model.forces if f.needs_reactions}
-    wanted = list(joints) + list(forces) + list(slides) if names is True else list(names)
+    dependent = {f.name: f for f in model.forces if f.needs_reactions}
+    wanted = list(joints) + list(forces) + list(dependent) if names is True else list(names)
     cols, units = result.columns(), result.units()
     q = np.asarray(result.q)
     out = []
@@ -83,17 +83,11 @@ def force_arrows(result, names=True) -> list[dict]:
             b, s = joints[name].reaction_point()
             F = np.stack([cols[f"{name}.Fx"], cols[f"{name}.Fy"]], axis=-1)
             unit = units[f"{name}.Fx"]
-        elif name in slides:
-            f = slides[name]
-            if f.rotary or name not in cols:
+        elif name in dependent:
+            drawn = dependent[name].arrow(model, q)
+            if drawn is None or name not in cols:
                 continue
-            j = joints[f.joint]
-            b, s = j.bj, j.sj  # on body j at its point, along the axis turning with body i
-            u = np.asarray(j.u, dtype=float)
-            if j.bi >= 0:
-                phi = q[:, 3 * j.bi + 2]
-                c, sn = np.cos(phi), np.sin(phi)
-                u = np.stack([c * u[0] - sn * u[1], sn * u[0] + c * u[1]], axis=-1)
+            b, s, u = drawn
             F = np.asarray(cols[name])[:, None] * u
             unit = units[name]
         elif name in forces:
@@ -113,7 +107,7 @@ def force_arrows(result, names=True) -> list[dict]:
 
             raise ValueError(
                 f"cannot draw the force {name!r}: it is neither a joint, a point force nor "
-                "a slide's friction; " + did_you_mean(name, [*joints, *forces, *slides])
+                "a reaction-dependent force; " + did_you_mean(name, [*joints, *forces, *dependent])
             )
         out.append(
             {

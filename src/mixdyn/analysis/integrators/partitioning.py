@@ -74,7 +74,7 @@ def _finish(problem: Problem, tol, fixed: bool, t0, t1, y0, z1, z_err, data):
     # as the one the motion is on.
     q_ref = q0 + qd0 * (t1 - t0)
     q, qd, ratio = _complete(problem, q_ref, D, I, v, vd, t1, tol)
-    qd, w = problem.halt_sticking(q, qd, w, t1, q0, qd0)  # sticking friction joints at rest
+    qd, w = problem.halt_sticking(q, qd, w, t1, q0, qd0)  # sticking elements at rest
     viol = jnp.max(jnp.abs(problem.c(q, t1))) if problem.c.m else jnp.zeros(())
     err = None if fixed else _full_error(problem, q0, t0, D, I, z_err)
 

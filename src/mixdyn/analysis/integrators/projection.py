@@ -16,9 +16,10 @@ from ._common import Trajectory
 @eqx.filter_jit  # traced once, however often diffrax traces its loop's body
 def _project(p: Problem, q, qd, w, t, tol, start):
     """Positions, then velocities, projected on the constraints at ``t``, the sticking
-    friction joints brought to rest (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`,
-    ``start``: the step's starting ``(q, qd)``; their stops' work added to ``w``); the
-    position residual after and the violation before [length]."""
+    reaction-dependent elements brought to rest
+    (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`, ``start``: the step's starting
+    ``(q, qd)``; their stops' work added to ``w``); the position residual after and the
+    violation before [length]."""
     viol = jnp.max(jnp.abs(p.c(q, t))) if p.c.m else jnp.zeros(())
     q, residual = p.project_positions(q, t, tol)
     qd, w = p.halt_sticking(q, p.project_velocities(q, qd, t), w, t, *start)
