@@ -12,9 +12,22 @@ from typer.testing import CliRunner
 import mixdyn.io as mio
 from fixtures import EXAMPLES
 from mixdyn.cli import app
+from mixdyn.runs import Runner
 
-MODEL = (EXAMPLES / "antonya_sweep.yaml").read_text().split("\nruns:")[0]
-MODEL = MODEL.replace("parameters:\n", "parameters:\n  t_end: 1\n", 1)
+MODEL = """
+mixdyn: 1
+name: pendulum
+units: {length: m, mass: kg, time: s}
+gravity: [0, -9.81]
+parameters:
+  t_end: 1
+ground:
+  points: {O: [0, 0]}
+bodies:
+  - {name: bob, mass: 1, inertia: 0.01, q0: [0.5, 0, 0], points: {O: [-0.5, 0]}}
+joints:
+  - {type: revolute, name: pin, point_i: ground.O, point_j: bob.O}
+"""
 
 BASE = """
 runs:
@@ -32,43 +45,46 @@ SWEEP = """
     vary:
       t_end: {values: [0.5, 1.0, 1.5]}
     summaries:
-      - {name: x_end, column: slider.x, reduce: last}
+      - {name: y_end, column: bob.y, reduce: last}
 """
 
 
-def _run(tmp_path, text: str):
+def _run(tmp_path, text: str, *options: str):
     path = tmp_path / "sweep.yaml"
     path.write_text(text)
     out = tmp_path / "out"
-    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--run", "sweep"])
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--run", "sweep", *options])
     return res, out
 
 
+@pytest.mark.slow  # ~12 s on two cores: the forward run's program is compiled
 def test_each_member_runs_to_its_own_end(tmp_path):
     """A swept end time: each member's times are those of the file with its end written in
-    (its last time is its end), its motion that of the single run, in the tables too."""
-    res, out = _run(tmp_path, MODEL + BASE + SWEEP)
+    (its last time is its end), its motion that of the single run, in the tables and the
+    NetCDF file too (``t`` a coordinate per member)."""
+    xr = pytest.importorskip("xarray")
+    res, out = _run(tmp_path, MODEL + BASE + SWEEP, "--netcdf")
     assert res.exit_code == 0, res.output
-    swept = mio.execute(mio.reads(MODEL + BASE + SWEEP), ["sweep"])["sweep"]
-    assert not swept.sweep.errors
+    ds = xr.load_dataset(out / "sweep" / "sweep.nc", engine="scipy")
     table = pd.read_csv(out / "sweep" / "table.csv")
     members = pd.read_csv(out / "sweep" / "members.csv")
+    assert list(members["status"]) == ["ok"] * 3
     for i, t_end in enumerate([0.5, 1.0, 1.5]):
-        member = swept.sweep[i]
-        single = mio.execute(mio.reads(MODEL.replace("t_end: 1\n", f"t_end: {t_end}\n") + BASE))
-        single = single["forward"]
-        np.testing.assert_allclose(member.t, np.linspace(0.0, t_end, 11), rtol=0, atol=1e-15)
-        assert member.t[-1] == t_end
-        scale = float(np.max(np.abs(single["slider.x"])))
-        np.testing.assert_allclose(member["slider.x"], single["slider.x"], atol=1e-10 * scale)
+        text = MODEL.replace("t_end: 1\n", f"t_end: {t_end}\n") + BASE
+        single = Runner(mio.reads(text)).execute(["forward"])["forward"]
+        np.testing.assert_allclose(single.t, np.linspace(0.0, t_end, 11), rtol=0, atol=1e-15)
         rows = table[table["member"] == i]
-        assert rows["t"].max() == pytest.approx(t_end, abs=1e-12)
-        assert members["x_end"][i] == pytest.approx(float(single["slider.x"][-1]), rel=1e-9)
+        np.testing.assert_allclose(rows["t"], single.t, rtol=1e-15)
+        scale = float(np.max(np.abs(single["bob.y"])))
+        np.testing.assert_allclose(rows["bob.y"], single["bob.y"], atol=1e-10 * scale)
+        assert members["y_end"][i] == pytest.approx(float(single["bob.y"][-1]), rel=1e-9)
+        np.testing.assert_allclose(ds["t"].values[i], rows["t"], rtol=1e-15)
+        np.testing.assert_allclose(ds["bob.y"].values[i], rows["bob.y"], rtol=1e-15)
 
 
 def test_a_band_over_members_at_different_times_is_refused(tmp_path):
     res, _ = _run(
-        tmp_path, MODEL + BASE + SWEEP + "    plots:\n      - {file: b.png, band: slider.x}\n"
+        tmp_path, MODEL + BASE + SWEEP + "    plots:\n      - {file: b.png, band: bob.y}\n"
     )
     assert res.exit_code == 2, res.output
     assert "a band needs every member at the same output times" in res.output

@@ -134,11 +134,41 @@ class FileSweep:
     def dataset(self):
         """The table's columns as an ``xarray.Dataset`` on (member, t) with the varied numbers
         and the status as coordinates, in the file's ``output_units``
-        (:meth:`mixdyn.analysis.sweep.Sweep.dataset`)."""
-        ds = self.sweep.dataset(self.plan.spec_outputs, self.output_units)
+        (:meth:`mixdyn.analysis.sweep.Sweep.dataset`); members at their own output times
+        (:attr:`SweepPlan.member_times`): on (member, step), with ``t`` a coordinate on both
+        (NaN past a member's last time)."""
+        if self.plan.member_times is None:
+            ds = self.sweep.dataset(self.plan.spec_outputs, self.output_units)
+        else:
+            ds = self._at_own_times()
         return ds.assign_coords(
             {name: ("member", np.asarray(v, dtype=float)) for name, v in self.plan.values.items()}
         )
+
+    def _at_own_times(self):
+        """The dataset of members at their own output times (see :meth:`dataset`)."""
+        import xarray as xr
+
+        names = [c for c in self.plan.spec_outputs if c != "t"]
+        n, steps = self.plan.members, max(len(t) for t in self.plan.member_times)
+        data = {c: np.full((n, steps), np.nan) for c in ("t", *names)}
+        for i, res in enumerate(self.sweep.results):
+            if res is not None:
+                cols = _columns(res, names, self.output_units)
+                for c, values in data.items():
+                    values[i, : len(cols[c])] = cols[c]
+        errors = self.sweep.errors
+        status = [type(errors[i]).__name__ if i in errors else "ok" for i in range(n)]
+        coords = {
+            "member": np.arange(n),
+            "step": np.arange(steps),
+            "t": (("member", "step"), data["t"], {"units": self.units.get("t", "")}),
+            "status": ("member", status),
+        }
+        variables = {
+            c: (("member", "step"), data[c], {"units": self.units.get(c, "")}) for c in names
+        }
+        return xr.Dataset(variables, coords=coords, attrs={"model": self.plan.base.name})
 
     def table(self):
         """The long table: a row per member and output time, with the member index, its
