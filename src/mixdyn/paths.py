@@ -133,10 +133,12 @@ def get(model: Model, path: str) -> jax.Array:
 
 def replace(model: Model, path: str, value) -> Model:
     """``model`` with the number at ``path`` replaced by ``value`` [model units], of the
-    same shape (a float64 array).
+    same shape (a float64 array): the model built with that number (its owner's checks met,
+    :func:`check`; a start bound again, as :func:`mixdyn.sweep` binds a member's).
 
     Raises:
-        ModelError: a bad path (:func:`getter`), or a value of another shape.
+        ModelError: a bad path (:func:`getter`), a value of another shape, or one a model
+            built with it refuses.
     """
     get_, shape_ = getter(model, path)
     v = jnp.asarray(value, dtype=jnp.float64)
@@ -144,7 +146,19 @@ def replace(model: Model, path: str, value) -> Model:
         raise ModelError(
             f"a value of shape {shape_} expected, got shape {v.shape}", f"vary {path!r}"
         )
-    return eqx.tree_at(get_, model, v)
+    check(model, {path: np.asarray(v)[None]}, label=lambda i: "the value")
+    out = eqx.tree_at(get_, model, v)
+    if path.split(".")[1] == "q0":  # the elements' constants from the start follow it
+        out = bound_again(out)
+    return out
+
+
+def bound_again(model: Model) -> Model:
+    """``model`` with its elements bound again to its bodies, as its constructor binds them:
+    the constants an element takes from the bodies' start (a gear mesh's phase, a rolling
+    disk's side) follow a start that was replaced."""
+    m = model
+    return Model(m.bodies, m.joints, m.drivers, m.forces, m.ground, m.gravity, m.units, m.name)
 
 
 def shape(model: Model, path: str) -> tuple[int, ...]:
@@ -302,6 +316,7 @@ __all__ = [
     "BOUND",
     "BOUND_ENDS",
     "GROUPS",
+    "bound_again",
     "check",
     "check_bounds",
     "get",

@@ -212,3 +212,17 @@ def test_a_swept_start_gives_the_mesh_phase_of_a_model_built_with_it():
         single = md.kinematic(_gears(phi=(0.4, q0[2])), T)
         for col in ("g2.phi", "rack.y"):
             np.testing.assert_allclose(sweep[i][col], single[col], rtol=0, atol=1e-12)
+
+
+def test_a_number_replaced_by_path_is_the_model_built_with_it():
+    """``md.paths.replace`` gives the model built with the number: a start's mesh phase
+    follows it (the single run of the model built with it, to 1e-12), and a value the
+    constructor refuses is refused with its reason."""
+    replaced = md.paths.replace(_gears(), "g2.q0", (0.09, 0.0, 0.7))
+    built = _gears(phi=(0.4, 0.7))
+    for col in ("g2.phi", "rack.y"):
+        np.testing.assert_allclose(
+            md.kinematic(replaced, T)[col], md.kinematic(built, T)[col], rtol=0, atol=1e-12
+        )
+    with pytest.raises(ModelError, match=r"the value: mesh.radius_i = 0 is refused: .* > 0"):
+        md.paths.replace(_gears(), "mesh.radius_i", 0.0)

@@ -191,13 +191,8 @@ def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
     if any(path.split(".")[1] == "q0" for path in vary):
         # The elements' constants that come from the bodies' start (a gear mesh's phase, a
         # rolling disk's side) follow a member's start: its elements bound to it again.
-        members = [_bound_again(m) for m in members]
+        members = [paths.bound_again(m) for m in members]
     return members
-
-
-def _bound_again(m: Model) -> Model:
-    """``m`` with its elements bound again to its bodies (as its constructor binds them)."""
-    return Model(m.bodies, m.joints, m.drivers, m.forces, m.ground, m.gravity, m.units, m.name)
 
 
 class _Marker:
