@@ -170,3 +170,35 @@ def test_a_driver_with_a_kink_is_refused_and_one_with_an_acceleration_jump_runs(
     trapezoid = driven(lambda t: jnp.where(t < 0.25, 2 * t**2, 0.125 + (t - 0.25)))
     res = md.kinematic(trapezoid, np.array([0.0, 0.1, 0.5]))
     np.testing.assert_allclose(res["crank.alpha"], [4.0, 4.0, 0.0], atol=1e-9)
+
+
+@pytest.mark.parametrize(
+    ("law", "periodic"),
+    [
+        (md.PiecewisePolynomial([0.0, 1.0, 2.0], [[1.0, 0.0], [0.0, 1.0]]), False),  # a kink
+        (md.PiecewisePolynomial([0.0, 1.0, 2.0], [[1.0, 0.0], [0.0, 2.0]]), False),  # a step
+        (md.Spline(np.linspace(0, TWO_PI, 13), 1 - np.cos(np.linspace(0, TWO_PI, 13))), True),
+        (md.Spline(np.linspace(0, TWO_PI, 13), np.linspace(0, TWO_PI, 13)), True),
+        (md.QuinticHermite([0.0, 1.0, 2.0], [0.0, 1.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0, 0]), False),
+    ],
+    ids=["kink", "step", "spline-wrap-slope", "spline-wrap-value", "hermite"],
+)
+def test_piecewise_polynomials_are_read_from_their_pieces_as_sampled(law, periodic):
+    """A piecewise polynomial's jumps, read from its pieces at the breaks, are those found by
+    sampling the same law (a second method)."""
+    stop = TWO_PI if periodic else 2.0
+    pieces = jumps(law, 0.0, stop, periodic=periodic)
+    sampled = jumps(md.FunctionLaw(lambda x: law(x)), 0.0, stop, periodic=periodic)
+    assert [j.order for j in pieces] == [j.order for j in sampled]
+    for a, b in zip(pieces, sampled, strict=True):
+        assert abs(a.at - b.at) <= b.resolution + 1e-12
+        assert a.size == pytest.approx(b.size, rel=1e-6)
+
+
+def test_which_expressions_are_smooth_by_their_form():
+    from mixdyn.io.expressions import ExpressionLaw
+
+    smooth = ["w*t", "10*sin(pi*t/2)", "3*t**2 + 1", "exp(-t)*cos(3*t)", "step5(t, 0, 0, 1, 5)"]
+    sampled = ["where(t < 1, 0, 1)", "abs(t - 1)", "1/t", "sqrt(t)", "t**0.5", "t % 1"]
+    assert [ExpressionLaw(s, {"w": 2.0}).smooth for s in smooth] == [True] * len(smooth)
+    assert [ExpressionLaw(s, {}).smooth for s in sampled] == [False] * len(sampled)

@@ -570,6 +570,63 @@ class ExpressionLaw(Law):
         """The parameters it uses with their values."""
         return {n: float(v) for n, v in zip(self.names, np.asarray(self.values), strict=True)}
 
+    @property
+    def smooth(self) -> bool:
+        """Continuous with its slope for every ``t`` by its form (sums, products, quotients
+        by constants, whole powers, ``sin cos sinh cosh tanh exp atan`` and ``step``,
+        ``step5`` blends of such terms; no ``where``, ``abs``, ``floor``, comparisons...),
+        so that :mod:`mixdyn.model._smoothness` need not sample it."""
+        return _smooth(self.tree)
+
+
+#: The functions that are smooth (every derivative continuous) wherever their arguments are.
+_SMOOTH_FUNCTIONS = frozenset({"sin", "cos", "sinh", "cosh", "tanh", "exp", "atan"})
+
+
+def _has_t(tree) -> bool:
+    if tree[0] in ("t", "s"):
+        return True
+    return any(isinstance(x, tuple) and x and _has_t(x) for x in _children(tree))
+
+
+def _children(tree) -> tuple:
+    tag = tree[0]
+    if tag == "u":
+        return (tree[2],)
+    if tag in ("b", "k"):
+        return (tree[2], tree[3])
+    if tag == "f":
+        return tuple(tree[2])
+    return ()
+
+
+def _smooth(tree) -> bool:
+    """An expression tree continuous with its first derivative in ``t`` for every ``t``."""
+    tag = tree[0]
+    if not _has_t(tree):
+        return True
+    if tag == "t":
+        return True
+    if tag == "u":
+        return _smooth(tree[2])
+    if tag == "b":
+        op, a, b = tree[1], tree[2], tree[3]
+        if op in ("+", "-", "*"):
+            return _smooth(a) and _smooth(b)
+        if op == "/":
+            return _smooth(a) and not _has_t(b)
+        if op == "**":
+            whole = b[0] == "c" and float(b[1]) >= 0 and float(b[1]).is_integer()
+            return (_smooth(a) and whole) or (not _has_t(a) and _smooth(b))
+        return False
+    if tag == "f":
+        name, args = tree[1], tuple(tree[2])
+        if name in _SMOOTH_FUNCTIONS:
+            return all(_smooth(a) for a in args)
+        if name in ("step", "step5"):  # C1 and C2 blends of x between constant ends
+            return _smooth(args[0]) and not any(_has_t(a) for a in args[1:])
+    return False
+
 
 @dataclasses.dataclass(frozen=True)
 class ExpressionFunction:

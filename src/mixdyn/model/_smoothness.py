@@ -38,6 +38,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ._laws import PiecewisePolynomial
 from ._validate import _traced
 
 #: What a jump of each order does to what the law moves, in messages.
@@ -139,10 +140,14 @@ def jumps(
     """
     if _traced(law) or (getattr(law, "smooth", False) and not periodic) or not stop > start:
         return []
+    if isinstance(law, PiecewisePolynomial):
+        return _piecewise(law, start, stop, periodic, rtol, n)[:limit]
     key = _key(law, start, stop, periodic, n, zooms, rtol, limit)
     if key is not None and key in _FOUND:
         return list(_FOUND[key])
     found = _jumps(law, start, stop, periodic, n, zooms, rtol, limit)
+    if found is None:  # a law that cannot be sampled (here) fails, named, when it is run
+        return []
     if key is not None:
         if len(_FOUND) >= 256:
             _FOUND.pop(next(iter(_FOUND)))
@@ -152,6 +157,41 @@ def jumps(
 
 #: The jumps found, by law and interval (a sweep's members share their laws).
 _FOUND: dict = {}
+
+
+def _piecewise(law, start, stop, periodic, rtol, n) -> list[Jump]:
+    """The jumps of a piecewise polynomial, from its pieces: at each break inside the span
+    its pieces' values and slopes meet (and, ``periodic``, the law's at ``stop`` and at
+    ``start``), within what :func:`jumps` sees (a slope jump less than the curvatures either
+    side times a step of ``n`` over the span is not seen)."""
+    x = np.asarray(law.breaks, dtype=float)
+    c = np.asarray(law.coeffs, dtype=float)
+    m = c.shape[1]  # pieces
+
+    def at(i, u, k):  # the k-th derivative of piece i at u
+        return float(np.polyval(np.polyder(c[:, i], k), u - x[i]))
+
+    def piece(u):
+        return int(np.clip(np.searchsorted(x, u, side="right") - 1, 0, m - 1))
+
+    pairs = [(b, i - 1, i, b) for i, b in enumerate(x[1:m], start=1) if start < b < stop]
+    if periodic:
+        pairs.append((stop, piece(stop), piece(start), start))
+    ends = [start, stop, *(b for b, *_ in pairs)]
+    values = [at(piece(u), u, 0) for u in ends]
+    slopes = [at(piece(u), u, 1) for u in ends]
+    scale0 = float(np.ptp(values))
+    floors = (rtol * scale0, rtol * (float(np.max(np.abs(slopes))) + scale0 / (stop - start)))
+    found = []
+    h = (stop - start) / n
+    for b, i, j, b_right in pairs:
+        bends = abs(at(i, b, 2)) + abs(at(j, b_right, 2))
+        for k in (0, 1):
+            size = at(j, b_right, k) - at(i, b, k)
+            if abs(size) > floors[k] + k * h * bends or not math.isfinite(size):
+                found.append(Jump(k, float(b), size, 0.0))
+                break
+    return found
 
 
 def _key(law, *args):
@@ -165,15 +205,15 @@ def _key(law, *args):
     return key
 
 
-def _jumps(law, start, stop, periodic, n, zooms, rtol, limit) -> list[Jump]:
+def _jumps(law, start, stop, periodic, n, zooms, rtol, limit) -> list[Jump] | None:
+    """:func:`jumps` of a law (None: it cannot be sampled, e.g. while a program is traced)."""
     period = stop - start
     f = _Turn(law, start, period) if periodic else law
-
     x = np.linspace(start, stop, n + 1)
     try:
         d = _samples(f, x)
-    except Exception:  # a law that cannot be sampled fails, named, when it is run
-        return []
+    except Exception:
+        return None
     bad = ~np.all(np.isfinite(d[:3]), axis=0)
     if bad.any():
         i = int(np.argmax(bad))
