@@ -24,6 +24,12 @@ for the slope, its largest slope) are left (rounded coefficients of segments tha
 
 The second derivative may jump (a constant-acceleration segment): the accelerations and
 forces then jump too, finite, and are reported as they are.
+
+A piecewise polynomial (a spline, a Hermite motion) is read from its pieces instead: at each
+break their values must meet, and their slopes within a step's worth of their curvatures.
+A law smooth by its form (``Law.smooth``: a constant, polynomial or harmonic; an expression
+of smooth terms) is not sampled over an interval, only across a turn's wrap-around. What is
+found is kept by law and interval, so that models that share a law check it once.
 """
 
 from __future__ import annotations
