@@ -51,9 +51,9 @@ def main() -> None:
 
     import mixdyn as md
     from fixtures import paper_under_loads
+    from mixdyn.analysis._keywords import from_keywords
     from mixdyn.analysis._schedule import _integrate_batch_jit, for_batch
     from mixdyn.analysis._simulate import finish, integrate
-    from mixdyn.analysis.forward import forward_case
 
     if a.variant == "nofallback":
         import mixdyn.equations._jacobian as jac
@@ -69,8 +69,13 @@ def main() -> None:
     model = paper_under_loads()
     get_m, _ = md.paths.getter(model, "slider.mass")
     get_a, _ = md.paths.getter(model, "F1.law.amplitude")
-    base = forward_case(model, ts, **opts)
-    value = md.analyses.Forward(method=base.options)
+    value, _ = from_keywords("forward", ts, opts)
+
+    def case_of(m):
+        """The integrator's case of member ``m``: prepared, not yet integrated."""
+        return value._case(md.prepare(m, value, t0=ts[0]), ts)
+
+    base = case_of(model)
     argument = base.options.as_argument()
 
     def members(n):
@@ -99,7 +104,7 @@ def main() -> None:
     for i in range(n_check):
         mi = eqx.tree_at(lambda m: (get_m(m), get_a(m)), model, (mass[i], amp[i]))
         t0 = time.perf_counter()
-        case = forward_case(mi, ts, **opts)
+        case = case_of(mi)
         t1 = time.perf_counter()
         traj = jax.block_until_ready(integrate(case))
         t2 = time.perf_counter()

@@ -82,7 +82,7 @@ def test_a_set_up_serves_two_time_grids_without_being_made_again(monkeypatch):
     model = pendulum(theta0=0.4)
     setup = md.prepare(model, Forward(method=md.Projection(rtol=1e-10)), t0=0.0)
     forward_module = importlib.import_module("mixdyn.analysis.forward")
-    monkeypatch.setattr(forward_module, "prepare_dynamic", lambda *a, **k: pytest.fail("again"))
+    monkeypatch.setattr(forward_module, "dynamic_start", lambda *a, **k: pytest.fail("again"))
     coarse, fine = np.linspace(0.0, 0.2, 3), np.linspace(0.0, 0.4, 41)
     a, b = md.run(setup, coarse), md.run(setup, fine)
     monkeypatch.undo()
@@ -107,10 +107,8 @@ def test_a_set_up_carries_its_value_and_start():
 def test_prepared_warns_with_prepare_and_run():
     """The analysis functions' ``prepared=`` (a start made beforehand) still works, checked,
     with a DeprecationWarning naming ``mixdyn.prepare`` and ``mixdyn.run``."""
-    from mixdyn.analysis._prepare import prepare_dynamic
-
     model = pendulum(theta0=0.3)
-    prep = prepare_dynamic(model, 0.0)
+    prep = md.prepare(model, Forward()).start
     with pytest.warns(DeprecationWarning, match=r"mixdyn\.prepare\(model, .*mixdyn\.run"):
         res = md.forward(model, TS, prepared=prep)
     assert_bitwise(res, md.forward(model, TS))

@@ -13,7 +13,6 @@ import pytest
 
 import mixdyn as md
 from fixtures import pendulum_chain
-from mixdyn.analysis._prepare import prepare_dynamic
 from mixdyn.analysis._problem import Problem
 from mixdyn.analysis.integrators import INTEGRATORS
 from mixdyn.analysis.methods import OPTIONS
@@ -58,7 +57,7 @@ def _final_angle_coordinate(method, mass, **options):
     """The last body's x at the end of 0.3 s of a two-pendulum chain, as a function of the
     first body's mass [model units], through the integrator alone (differentiable)."""
     model = pendulum_chain(2)
-    prep = prepare_dynamic(model, 0.0)
+    prep = md.prepare(model, md.analyses.Forward()).start
     model = eqx.tree_at(lambda m: m.bodies[0].mass, model, mass)
     problem = Problem(model, prep.constraints(method == "partitioning"))
     ts = jnp.linspace(0.0, 0.3, 4)

@@ -113,7 +113,7 @@ def test_bad_options_are_input_errors_before_computing(kwargs, match, monkeypatc
     def reached(*a, **k):
         raise AssertionError("computing started before the options were checked")
 
-    monkeypatch.setattr(fw, "prepare_dynamic", reached)
+    monkeypatch.setattr(fw, "dynamic_start", reached)
     model = free_four_bar()
     with pytest.raises(md.ModelError, match=match):
         md.forward(model, TS, qd0={"crank.phi": 1.0}, **kwargs)

@@ -45,6 +45,26 @@ def test_a_sweep_of_the_value_equals_the_keyword_spelling():
     assert err.value.element == "rtol"
 
 
+def test_run_members_warns_with_the_sweep_of_the_value():
+    """``mixdyn.analysis.sweep.run_members`` (an analysis' name and each member's keywords)
+    still runs, with a DeprecationWarning naming ``mixdyn.sweep(models=...)``: the same
+    outcomes, bit for bit, as the sweep of the members with the analysis value."""
+    from mixdyn.analysis.sweep import run_members
+
+    model = pendulum(theta0=0.3)
+    members = vary_models(model, {"bob.mass": [2.0, 3.0]})
+    value = Forward(method=md.Projection(rtol=1e-9, atol=1e-10))
+    swept = md.sweep(models=members, t=TS, analysis=value)
+    with pytest.warns(DeprecationWarning, match=r"mixdyn\.sweep\(models=\[\.\.\.\]"):
+        outcomes = run_members(members, TS, "forward", lambda i: dict(rtol=1e-9, atol=1e-10))
+    for i, (res, err) in enumerate(outcomes):
+        assert err is None
+        assert_bitwise(res, swept[i])
+    with pytest.warns(DeprecationWarning), pytest.raises(md.ModelError) as bad:
+        run_members(members, TS, "forward", lambda i: dict(rtoll=1e-9))
+    assert "in member 0 of the sweep" in " ".join(bad.value.__notes__)
+
+
 def test_memberwise_sweeps_take_the_value():
     model = slider_crank()
     t = np.linspace(0.0, 0.5, 6)

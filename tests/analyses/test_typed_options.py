@@ -156,7 +156,7 @@ def test_bad_options_are_refused_when_made(kwargs, match, monkeypatch):
         cls(**kwargs)
     assert made.value.element == list(kwargs)[-1]  # the option at fault
     fw = importlib.import_module("mixdyn.analysis.forward")
-    monkeypatch.setattr(fw, "prepare_dynamic", lambda *a, **k: pytest.fail("computing began"))
+    monkeypatch.setattr(fw, "dynamic_start", lambda *a, **k: pytest.fail("computing began"))
     with pytest.raises(md.ModelError) as keywords:
         md.forward(pendulum(), TS, method=cls.method, **kwargs)
     assert str(keywords.value) == str(made.value)

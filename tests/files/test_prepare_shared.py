@@ -1,11 +1,13 @@
-"""One set-up per run: the model-file check makes the start and the mobility analysis a run
-starts from (``Runner.prepare``), and the analysis, handed it (``prepared=``), neither
-assembles nor analyses again; the results are those of the analyses called directly; a set-up
-made for another call is refused."""
+"""One start per run: the model-file check makes the start and the mobility analysis a run
+starts from (``Runner.prepare``), and the run, prepared from it
+(``mixdyn.prepare(model, analysis, start=...)``), neither assembles nor analyses again; the
+results are those of the analyses called directly; a start made for another set-up is
+refused."""
 
 import collections
 import pathlib
 
+import jax
 import numpy as np
 import pytest
 
@@ -16,8 +18,7 @@ import mixdyn.analysis._start as start_module
 import mixdyn.analysis._structure as structure_module
 import mixdyn.io as mio
 from fixtures import DATA, ROOT, antonya_mixed
-from mixdyn.analysis._prepare import prepare_dynamic, prepare_kinematic
-from mixdyn.analysis.mixed import bind_prescribed
+from mixdyn.analyses import Forward, Kinematic, Mixed
 from mixdyn.errors import DegreesOfFreedomError, ModelError
 
 ANTONYA = ROOT / "examples" / "antonya.yaml"
@@ -155,61 +156,90 @@ def test_execute_without_the_check_prepares_each_run_itself(counts):
     assert dict(counts) == {"assemble": 1, "analyse": 1}
 
 
-# ------------------------------------------------------------------ a set-up for another call
+# ------------------------------------------------------------------ a start for another set-up
 @pytest.fixture(scope="module")
 def antonya():
     model = mio.load(ANTONYA)
     hold = ("crank.phi", "coupler.phi")
-    return model, hold, prepare_dynamic(model, 0.0, hold=hold)
+    return model, hold, md.prepare(model, Forward(hold=hold)).start
 
 
-def test_a_mismatched_set_up_is_refused(antonya):
-    model, hold, prep = antonya
-    t = np.linspace(0.0, 0.1, 3)
+def test_a_start_is_taken_by_an_analysis_that_makes_the_same(antonya, counts):
+    """A forward analysis with another integration method, the same model and start
+    settings, takes the start of a set-up: neither assembled nor analysed again, the same
+    start and equations, bit for bit, as the set-up that makes its own."""
+    model, hold, start = antonya
+    other = Forward(method=md.Baumgarte(dt=1e-3), hold=hold)
+    before = dict(counts)
+    setup = md.prepare(model, other, start=start)
+    assert dict(counts) == before  # nothing assembled or analysed
+    assert setup.start is start
+    own = md.prepare(model, other)
+    assert dict(counts) != before  # the set-up without a start makes its own
+    for a, b in ((setup.start.q, own.start.q), (setup.start.qd, own.start.qd)):
+        np.testing.assert_array_equal(a, b)
+    assert setup.start.keep == own.start.keep
+    mine, theirs = (jax.tree_util.tree_flatten(x.problem) for x in (setup, own))
+    assert mine[1] == theirs[1]
+    for a, b in zip(mine[0], theirs[0], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_a_start_made_otherwise_is_refused(antonya):
+    model, hold, start = antonya
     wrong = {
         "another model": dict(model=model.replace(gravity=np.array([0.0, -9.81]))),
-        "another start time": dict(t=t + 0.5),
+        "another start time": dict(t0=0.5),
         "another rough start": dict(q0=np.asarray(model.q0) + 0.1),
-        "another rough start ": dict(hold=("crank.phi",)),
-        "the linear solver": dict(linear_solver="dense"),
+        "other held coordinates": dict(hold=("crank.phi",)),
+        "another linear solver": dict(linear_solver="dense"),
         "other drivers": dict(
             model=model.replace(drivers=[md.CoordinateDriver("m", "crank", "phi", law=0.0)])
         ),
     }
     for why, change in wrong.items():
-        kw = dict(model=model, t=t, hold=hold)
+        kw = dict(model=model, t0=0.0, hold=hold)
         kw.update(change)
-        with pytest.raises(ModelError, match=f"prepared: .*{why.strip()}"):
-            md.forward(kw.pop("model"), kw.pop("t"), prepared=prep, **kw)
-    with pytest.raises(ModelError, match="a dynamic run's start"):
-        md.kinematic(model, t, hold=hold, prepared=prep)
-    with pytest.raises(ModelError, match=r"prepared: .*Prepared\), got dict"):
-        md.forward(model, t, hold=hold, prepared={})
+        m, t0 = kw.pop("model"), kw.pop("t0")
+        with pytest.raises(ModelError, match=r"start: the start was made for another") as e:
+            md.prepare(m, Forward(**kw), t0=t0, start=start)
+        assert "start settings (q0, qd0, hold" in str(e.value), why
+    with pytest.raises(ModelError, match="start: the start was made for another"):
+        md.prepare(model, Kinematic(hold=hold), start=start)  # a dynamic start
+    with pytest.raises(ModelError, match=r"start: .*setup\.start.*got dict"):
+        md.prepare(model, Forward(hold=hold), start={})
+    t = np.linspace(0.0, 0.1, 3)
+    with (
+        pytest.warns(DeprecationWarning, match=r"start=\.\.\."),  # the deprecated spelling
+        pytest.raises(ModelError, match="start: the start was made for another"),
+    ):
+        md.forward(model, t, hold=("crank.phi",), prepared=start)
 
 
-def test_a_mixed_run_refuses_a_set_up_for_other_prescribed_motions(antonya):
+def test_a_mixed_run_refuses_a_start_for_other_prescribed_motions(antonya):
     model, _, _ = antonya
     hold = ("crank.phi",)  # the slider follows its prescribed motion
     motion = md.CoordinateDriver("x", "slider", "x", law=80.0)
-    bound = bind_prescribed(model, [motion])
-    prep = prepare_dynamic(model, 0.0, drivers=(*model.drivers, *bound), hold=hold)
+    start = md.prepare(model, Mixed(prescribed=[motion], unknown=["F1"], hold=hold)).start
     other = md.CoordinateDriver("x", "slider", "x", law=81.0)
-    t = np.linspace(0.0, 0.1, 3)
-    kw = dict(unknown=["F1"], hold=hold, prepared=prep)
-    with pytest.raises(ModelError, match=r"prepared: .*other drivers"):
-        md.mixed(model, t, prescribed=[other], **kw)
-    with pytest.raises(ModelError, match=r"prepared: .*other drivers"):
-        md.check_mixed(model, [other], ["F1"], hold=hold, prepared=prep)
-    md.check_mixed(model, [motion], ["F1"], hold=hold, prepared=prep)  # its own: checked
+    with pytest.raises(ModelError, match=r"start: .*other drivers"):
+        md.prepare(model, Mixed(prescribed=[other], unknown=["F1"], hold=hold), start=start)
+    with (
+        pytest.warns(DeprecationWarning, match="prepared= is deprecated"),
+        pytest.raises(ModelError, match=r"start: .*other drivers"),
+    ):
+        md.check_mixed(model, [other], ["F1"], hold=hold, prepared=start)
+    with pytest.warns(DeprecationWarning, match="prepared= is deprecated"):
+        md.check_mixed(model, [motion], ["F1"], hold=hold, prepared=start)  # its own: checked
 
 
-def test_a_kinematic_set_up_that_is_not_balanced_is_refused():
-    """A set-up made without the balance check (the runner reports the balance itself) is
-    refused by the analysis as the analysis' own set-up would be."""
+def test_a_kinematic_start_that_is_not_balanced_is_refused():
+    """A start made without the balance check (the runner reports the balance itself,
+    :meth:`Analysis._initial`) is refused by the analysis as its own start would be."""
     model = mio.load(SLIDER_CRANK)
     free = model.replace(drivers=())
-    prep = prepare_kinematic(free, 0.0, balanced=False)
+    start = Kinematic()._initial(free, 0.0)
     with pytest.raises(DegreesOfFreedomError, match="1 degree"):
-        md.kinematic(free, [0.0, 0.1], prepared=prep)
+        md.prepare(free, Kinematic(), start=start)
     with pytest.raises(DegreesOfFreedomError, match="1 degree"):
         md.kinematic(free, [0.0, 0.1])

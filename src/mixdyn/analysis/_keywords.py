@@ -4,13 +4,14 @@ value in one place.
 The studies (:func:`~mixdyn.sweep`, :func:`~mixdyn.differentiable`, :func:`~mixdyn.fit`,
 :func:`~mixdyn.optimize`) take an analysis value; their spelling ``analysis="forward",
 rtol=1e-10`` is deprecated and read here (:func:`study_analysis`: a DeprecationWarning names
-the value to give). The model-file layer hands its runs to a sweep by name
-(:func:`~.sweep.run_members`, :func:`from_keywords`).
+the value to give). The model-file layer reads its runs' settings here
+(:func:`from_keywords`, :func:`member_values`).
 """
 
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable, Sequence
 
 from ..errors import ModelError
 from ._options import suggestions
@@ -66,6 +67,43 @@ def from_keywords(name: str, t, kwargs: dict) -> tuple[Analysis, dict | None]:
     return analysis_class(name)._from_keywords(t, dict(kwargs))
 
 
+def member_values(
+    name: str,
+    t,
+    kwargs: Sequence[dict],
+    describe: Callable[[int], str] = lambda i: "",
+    offset: int = 0,
+) -> tuple[list[Analysis], list[dict | None]]:
+    """The analysis values of a sweep's members given by keywords (the model-file layer's
+    members, whose settings may differ), and the integrator options each result records
+    (:func:`from_keywords`); keywords given as one object for several members are read
+    once.
+
+    Args:
+        name: a key of :data:`NAMES`.
+        t: (N,) the output times [time].
+        kwargs: per member, the analysis function's keywords.
+        describe: member index -> words naming it in an error (its varied values).
+        offset: the sweep's index of the first member (a chunk of a larger sweep).
+
+    Raises:
+        ModelError: an unknown option or a bad value, with a note naming the member.
+    """
+    read: dict[int, tuple[Analysis, dict | None]] = {}
+    values, records = [], []
+    for i, kw in enumerate(kwargs):
+        if id(kw) not in read:
+            try:
+                read[id(kw)] = from_keywords(name, t, kw)
+            except ModelError as err:
+                err.add_note(f"in member {offset + i} of the sweep{describe(i)}")
+                raise
+        value, record = read[id(kw)]
+        values.append(value)
+        records.append(record)
+    return values, records
+
+
 def study_analysis(study: str, analysis, t, kwargs: dict) -> tuple[Analysis, dict | None]:
     """The analysis value a study runs, and the integrator options its results record.
 
@@ -108,4 +146,4 @@ def study_analysis(study: str, analysis, t, kwargs: dict) -> tuple[Analysis, dic
     return from_keywords(name, t, kwargs)
 
 
-__all__ = ["NAMES", "analysis_class", "from_keywords", "study_analysis"]
+__all__ = ["NAMES", "analysis_class", "from_keywords", "member_values", "study_analysis"]

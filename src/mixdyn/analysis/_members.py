@@ -17,7 +17,6 @@ import numpy as np
 
 from ..errors import MixdynError, ModelError
 from ..model import Model
-from ._keywords import from_keywords
 from ._schedule import Outcome, _batched, _default_batch_size, _finish, _in_threads
 from ._setup import Analysis, prepare, run
 from ._simulate import Case, integrate, require_masses
@@ -45,10 +44,9 @@ def _input_error(err: ModelError, i: int, describe: str) -> ModelError:
 def run_members(
     members: Sequence[Model],
     t,
-    analysis: Analysis | str,
-    kwargs_of: Callable[[int], dict] | None = None,
+    analysis: Analysis | Sequence[Analysis],
     *,
-    recorded: dict | None = None,
+    recorded: dict | Sequence[dict | None] | None = None,
     batch_size: int | None = None,
     threads: int | None = None,
     on_member: Callable[[int], None] | None = None,
@@ -62,12 +60,11 @@ def run_members(
     Args:
         members: the member models, of one structure.
         t: (N,) output times [time].
-        analysis: the analysis value, the same for every member; or (the model-file
-            layer's spelling) an analysis' name (``"forward"``, ``"mixed"``, ``"kinematic"``,
-            ``"inverse"``, ``"statics"``) with ``kwargs_of(i)`` member ``i``'s keywords.
-        kwargs_of: member index -> the analysis' keywords for it (with a name only).
+        analysis: the analysis value, the same for every member, or one value per member
+            (of one class: the model-file layer's members may differ in their settings,
+            :func:`~._keywords.member_values`).
         recorded: the integrator options the members' results record (``stats["options"]``;
-            default: the method object's own).
+            default: the method object's own), for every member or one per member.
         batch_size, threads: as in :func:`sweep`.
         on_member: called with a member's index when it is done (from any thread).
         describe: member index -> words naming it in an error (its varied values).
@@ -86,19 +83,15 @@ def run_members(
             structures.
     """
     threads = threads or os.cpu_count() or 1
-    if isinstance(analysis, Analysis):
-        values = [analysis] * len(members)
-        records: list[dict | None] = [recorded] * len(members)
-    else:  # the keyword spelling, member by member (its keywords may differ)
-        values, records = [], []
-        for i in range(len(members)):
-            try:
-                value, record = from_keywords(analysis, t, kwargs_of(i))
-            except ModelError as err:
-                raise _input_error(err, offset + i, describe(i)) from None
-            values.append(value)
-            records.append(record)
-    first_value = values[0] if values else analysis
+    one = isinstance(analysis, Analysis)
+    values = [analysis] * len(members) if one else list(analysis)
+    if isinstance(recorded, (list, tuple)):
+        records = list(recorded)
+    else:
+        records = [recorded] * len(members)
+    if not values:
+        return []
+    first_value = values[0]
     t0 = float(np.atleast_1d(np.asarray(t, dtype=float))[0])
 
     def setup_of(i: int):

@@ -1,18 +1,16 @@
-"""The set-up every analysis shares, done once per run: the constraint set, a consistent start
-and the mobility analysis (which rows are redundant), before anything is integrated.
+"""The start every analysis shares, made once per set-up: the constraint set, a consistent
+start and the mobility analysis (which rows are redundant), before anything is integrated.
 
-``prepare_dynamic`` serves forward and mixed dynamics (positions and velocities made
-consistent), ``prepare_kinematic`` kinematic and inverse dynamics (positions assembled, the
-drivers checked against the degrees of freedom). Both return a :class:`Prepared` record, from
-which an analysis takes the constraint rows its solver needs
-(:meth:`Prepared.constraints`).
+:func:`dynamic_start` serves forward and mixed dynamics (positions and velocities made
+consistent), :func:`kinematic_start` kinematic, inverse and static analyses (positions
+assembled). Both return a :class:`Prepared` record, from which an analysis takes the
+constraint rows its solver needs (:meth:`Prepared.constraints`).
 
-The analysis values make theirs in :func:`~mixdyn.prepare` (:mod:`._setup`), which carries
-it in its :class:`~._setup.Setup`. A :class:`Prepared` made here beforehand is also taken by
-the analysis functions' deprecated ``prepared=`` keyword (the model-file runner,
-:mod:`mixdyn.runs`, checks a run on the start the run then starts from):
-:func:`use_prepared` refuses one made for another call (model, drivers, start time, rough
-start, held coordinates, linear solver).
+Each analysis value makes its start in :func:`~mixdyn.prepare` (:mod:`._setup`), which
+carries it in its :class:`~._setup.Setup` (``setup.start``). A start made beforehand,
+``prepare(model, analysis, start=...)``, takes the place of a new one where the analysis
+would make the same (:func:`matching`): the model-file runner (:mod:`mixdyn.runs`) checks a
+run on the start the run then starts from, and runs with the same start share one.
 """
 
 from __future__ import annotations
@@ -47,8 +45,9 @@ class Prepared:
         report: the degrees-of-freedom report at ``(q, t0)``.
         keep: the constraint rows kept (independent joint rows, then the drivers).
         linear_solver: the solver asked for (:class:`~mixdyn.linalg.LinearSolver`).
-        inputs: what the start was made from (the kind of set-up, the rough positions and
-            velocities, the held coordinates...), compared by :func:`use_prepared`.
+        inputs: what the start was made from (the kind of start, the start time, the rough
+            positions and velocities, the held coordinates, the linear solver), compared by
+            :func:`matching`.
     """
 
     model: Model
@@ -72,14 +71,27 @@ class Prepared:
         return c.with_linear_solver(self.linear_solver)
 
 
-def prepare_dynamic(
-    model: Model, t0: float, *, drivers=None, q0=None, qd0=None, hold=(), linear_solver="auto"
+def dynamic_start(
+    model: Model,
+    t0: float,
+    given=None,
+    *,
+    drivers=None,
+    q0=None,
+    qd0=None,
+    hold=(),
+    linear_solver="auto",
 ) -> Prepared:
-    """Forward and mixed dynamics: positions and velocities made consistent
-    (:func:`~mixdyn.analysis._start.consistent_state`), then the mobility analysis there."""
+    """The start of forward and mixed dynamics: positions and velocities made consistent
+    (:func:`~mixdyn.analysis._start.consistent_state`), then the mobility analysis there;
+    ``given`` (a start made beforehand, :func:`~mixdyn.prepare`'s ``start``) in its place
+    where it was made from the same model, drivers, start time and settings
+    (:func:`matching`)."""
     drivers = tuple(model.drivers if drivers is None else drivers)
+    inputs = _dynamic_inputs(t0, q0, qd0, hold, linear_solver)
+    if given is not None:
+        return matching(given, model, drivers, inputs)
     c_full = Constraints(model.joints, drivers, model.nq, linear_solver=linear_solver)
-    inputs = _dynamic_inputs(q0, qd0, hold)
     q, qd = consistent_state(model, c_full, t0, q0, qd0, hold)
     report, keep = analyse(model, np.asarray(q), t0, drivers)
     require_held_meshes(model, q, t0, drivers)
@@ -87,24 +99,30 @@ def prepare_dynamic(
     return Prepared(model, drivers, t0, q, qd, report, keep, solver, inputs)
 
 
-def prepare_kinematic(
+def kinematic_start(
     model: Model,
     t0: float,
+    given=None,
     *,
     drivers=None,
     q0=None,
     hold=(),
     assemble_first: bool = True,
     linear_solver="auto",
-    balanced: bool = True,
+    balanced: bool = False,
 ) -> Prepared:
-    """Kinematic and inverse dynamics: the rough pose assembled (unless
-    ``assemble_first=False``), the mobility analysis there, and the drivers checked to fix
-    every degree of freedom (:class:`~mixdyn.errors.DegreesOfFreedomError` otherwise; not with
-    ``balanced=False``, for a caller that reports the balance itself: the analysis checks it
-    again when handed the set-up)."""
+    """The start of kinematic, inverse and static analyses: the rough pose assembled (unless
+    ``assemble_first=False``), then the mobility analysis there, with ``balanced`` the
+    drivers checked to fix every degree of freedom
+    (:class:`~mixdyn.errors.DegreesOfFreedomError` otherwise); ``given`` in its place as in
+    :func:`dynamic_start`."""
     drivers = tuple(model.drivers if drivers is None else drivers)
-    inputs = _kinematic_inputs(q0, hold, assemble_first)
+    inputs = _kinematic_inputs(t0, q0, hold, assemble_first, linear_solver)
+    if given is not None:
+        given = matching(given, model, drivers, inputs)
+        if balanced:
+            require_balanced(given.report)
+        return given
     q = model.q0 if q0 is None else jnp.asarray(q0, dtype=jnp.float64)
     if assemble_first:
         q = jnp.asarray(assemble(model, q, hold=hold, linear_solver=linear_solver).q)
@@ -116,78 +134,34 @@ def prepare_kinematic(
     return Prepared(model, drivers, t0, q, None, report, keep, solver, inputs)
 
 
-def use_prepared(
-    prepared,
-    model: Model,
-    t0: float,
-    *,
-    what: str,
-    dynamic: bool,
-    drivers=None,
-    q0=None,
-    qd0=None,
-    hold=(),
-    assemble_first: bool = True,
-    linear_solver="auto",
-) -> Prepared:
-    """A set-up handed to an analysis, checked to be the one the analysis would make itself.
-
-    Args:
-        prepared: the :class:`Prepared` handed over.
-        model: the analysis' model.
-        t0: its start time [time].
-        what: the analysis' name, for the messages.
-        dynamic: whether the analysis makes a dynamic start (positions and velocities:
-            forward, mixed) or a kinematic one (kinematic, inverse).
-        drivers: the drivers of the run (default: the model's).
-        q0, qd0, hold, assemble_first, linear_solver: the analysis' arguments.
-
-    Returns:
-        ``prepared``; a kinematic set-up with its drivers checked against the degrees of
-        freedom (:func:`~mixdyn.analysis._structure.require_balanced`).
+def matching(start, model: Model, drivers: tuple, inputs: tuple) -> Prepared:
+    """``start``, made beforehand, where it is the start its analysis would make: of the
+    same model and drivers, from the same inputs (:attr:`Prepared.inputs`: the kind of start,
+    the start time, the rough start, the held coordinates, the linear solver).
 
     Raises:
-        ModelError: ``prepared`` is no :class:`Prepared`, or was made for another model,
-            other drivers, another start time, another rough start or held coordinates
-            (or, for a kinematic set-up, ``assemble_first``) or another linear solver.
+        ModelError: ``start`` is no :class:`Prepared`, or was made otherwise.
     """
-    if not isinstance(prepared, Prepared):
+    if not isinstance(start, Prepared):
         raise ModelError(
-            f"prepared must be the set-up of a run (mixdyn.analysis._prepare.Prepared), got "
-            f"{type(prepared).__name__}",
-            "prepared",
+            "start must be the start of a set-up (setup.start, made by mixdyn.prepare), got "
+            f"{type(start).__name__}",
+            "start",
         )
-    drivers = tuple(model.drivers if drivers is None else drivers)
-    wrong = []
-    if not _same_model(prepared.model, model):
-        wrong.append("another model")
-    if not _same_drivers(prepared.drivers, drivers):
-        names = ", ".join(d.name for d in prepared.drivers) or "none"
-        wrong.append(f"other drivers ({names})")
-    if prepared.t0 != float(t0):
-        wrong.append(f"another start time (t = {prepared.t0:g}, not {float(t0):g})")
-    inputs = (
-        _dynamic_inputs(q0, qd0, hold) if dynamic else _kinematic_inputs(q0, hold, assemble_first)
+    same = (
+        start.inputs == inputs
+        and _same_model(start.model, model)
+        and _same_drivers(start.drivers, drivers)
     )
-    if prepared.inputs[:1] != inputs[:1]:
-        kind = {("dynamic",): "a dynamic run's", ("kinematic",): "a kinematic run's"}
-        wrong.append(f"{kind.get(prepared.inputs[:1], 'an unrecorded')} start")
-    elif prepared.inputs != inputs:
-        wrong.append("another rough start (q0, qd0, hold or assemble_first)")
-    if prepared.linear_solver != as_linear_solver(linear_solver):
-        asked = as_linear_solver(linear_solver).name
-        wrong.append(f"the linear solver {prepared.linear_solver.name!r}, not {asked!r}")
-    if wrong:
+    if not same:
         raise ModelError(
-            f"the prepared set-up does not match this {what} analysis: it was made for "
-            + "; ".join(wrong)
-            + ". Leave prepared out (the analysis prepares its own start), or prepare it from "
-            "the same arguments",
-            "prepared",
+            "the start was made for another model, other drivers, another start time or "
+            "other start settings (q0, qd0, hold, assemble_first, linear_solver) than this "
+            "analysis': leave start out (the analysis makes its own), or give the start of "
+            "a set-up of the same model and start settings",
+            "start",
         )
-    if not dynamic:
-        require_balanced(prepared.report)  # as prepare_kinematic checks it
-    return prepared
+    return start
 
 
 def _same_model(a: Model, b: Model) -> bool:
@@ -230,18 +204,20 @@ def _key(x):
     return (a.shape, a.tobytes())
 
 
-def _dynamic_inputs(q0, qd0, hold) -> tuple:
+def _dynamic_inputs(t0, q0, qd0, hold, linear_solver) -> tuple:
     """What a dynamic start is made from (see :attr:`Prepared.inputs`)."""
     if isinstance(qd0, Mapping):
         qd = ("conditions", tuple(sorted((str(k), _key(v)) for k, v in qd0.items())))
     else:
         qd = _key(qd0)
-    return ("dynamic", _key(q0), qd, tuple(hold))
+    solver = as_linear_solver(linear_solver)
+    return ("dynamic", float(t0), _key(q0), qd, tuple(hold), solver)
 
 
-def _kinematic_inputs(q0, hold, assemble_first) -> tuple:
+def _kinematic_inputs(t0, q0, hold, assemble_first, linear_solver) -> tuple:
     """What a kinematic start is made from (see :attr:`Prepared.inputs`)."""
-    return ("kinematic", _key(q0), tuple(hold), bool(assemble_first))
+    solver = as_linear_solver(linear_solver)
+    return ("kinematic", float(t0), _key(q0), tuple(hold), bool(assemble_first), solver)
 
 
-__all__ = ["Prepared", "prepare_dynamic", "prepare_kinematic", "use_prepared"]
+__all__ = ["Prepared", "dynamic_start", "kinematic_start", "matching"]

@@ -78,9 +78,17 @@ class Analysis(eqx.Module):
         integrator's option), or ``""``."""
         return ""
 
+    def _initial(self, model: Model, t0: float, given=None):
+        """The start this analysis makes of ``model`` at ``t0`` [time]: its consistent start
+        and the mobility analysis there (:class:`~._prepare.Prepared`; the drivers not
+        checked against the degrees of freedom); ``given``, a start made beforehand, in its
+        place where it is the same (:func:`~._prepare.matching`)."""
+        raise NotImplementedError
+
     def _prepare(self, model: Model, t0: float, given=None) -> Setup:
         """The set-up of this analysis of ``model`` from the start time ``t0`` [time]
-        (``given``: a start made beforehand, checked to be this analysis' own)."""
+        (``given``: a start made beforehand, in place of the analysis' own where it is the
+        same: :meth:`_initial`)."""
         raise NotImplementedError
 
     def _run(self, setup: Setup, t, progress=None):
@@ -130,7 +138,7 @@ class Setup:
     recorded: dict | None = None
 
 
-def prepare(model: Model, analysis: Analysis, *, t0: float = 0.0) -> Setup:
+def prepare(model: Model, analysis: Analysis, *, t0: float = 0.0, start=None) -> Setup:
     """Prepare ``analysis`` of ``model`` from the start time ``t0``: every check and every
     computation done once before the time loop.
 
@@ -140,14 +148,22 @@ def prepare(model: Model, analysis: Analysis, *, t0: float = 0.0) -> Setup:
             ``Mixed(...)``...).
         t0: the start time [time]: the consistent start is made there, and a run of the
             set-up has output times that start there.
+        start: the start of an earlier set-up (``setup.start``: the consistent positions
+            and velocities and the mobility analysis there), taken instead of making it again
+            where ``analysis`` makes the same start: the same model and drivers, ``t0``, and
+            start settings (``q0``, ``qd0``, ``hold``, ``assemble_first``,
+            ``linear_solver``), e.g. a forward analysis with another integration method.
+            Default None: the analysis makes its own. A static or quasi-static analysis
+            makes its own in any case.
 
     Returns:
         A :class:`Setup`, for :func:`run` (as often as wanted, over any time grid from
         ``t0``).
 
     Raises:
-        ModelError: ``analysis`` is not an analysis value, or an input error of the analysis
-            (its subclasses: a degree-of-freedom imbalance, an unsolvable mixed problem...).
+        ModelError: ``analysis`` is not an analysis value, a ``start`` made otherwise, or an
+            input error of the analysis (its subclasses: a degree-of-freedom imbalance, an
+            unsolvable mixed problem...).
         NumericalError: the start cannot be made (an assembly that does not close).
     """
     if not isinstance(analysis, Analysis):
@@ -159,7 +175,7 @@ def prepare(model: Model, analysis: Analysis, *, t0: float = 0.0) -> Setup:
         )
     if not isinstance(model, Model):
         raise ModelError(f"model must be a mixdyn.Model, got {type(model).__name__}", "model")
-    return analysis._prepare(model, _time(t0))
+    return analysis._prepare(model, _time(t0), start)
 
 
 def run(setup: Setup, t, *, progress=None):
@@ -196,12 +212,13 @@ def keyword_setup(
     """The set-up of an analysis function's call (``md.forward(model, t, ...)``): its
     analysis value prepared from ``t0``, recording ``recorded`` (the integrator options
     given by keywords); ``prepared``: a start made beforehand (the deprecated ``prepared=``
-    keyword), checked to be the analysis' own."""
+    keyword: :func:`prepare`'s ``start``)."""
     if prepared is not None:
         warnings.warn(
             "prepared= is deprecated: prepare the analysis once, setup = "
             f"mixdyn.prepare(model, mixdyn.analyses.{type(analysis).__name__}(...), t0=t[0]), "
-            "and run it with mixdyn.run(setup, t)",
+            "and run it with mixdyn.run(setup, t); a start made beforehand is "
+            "mixdyn.prepare(..., start=...)",
             DeprecationWarning,
             stacklevel=3,
         )
@@ -329,7 +346,7 @@ def switch(option: str):
 
 def start_of(analysis: Analysis, *fields: str) -> dict[str, Any]:
     """The start settings of ``analysis`` as the keywords of the start's functions
-    (:mod:`._prepare`)."""
+    (:func:`~._prepare.dynamic_start`, :func:`~._prepare.kinematic_start`)."""
     return {f: getattr(analysis, f) for f in fields}
 
 

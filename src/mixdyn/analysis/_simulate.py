@@ -377,7 +377,7 @@ class Integrated(_setup.Analysis):
         return f"did you mean {spelled.format(close[0])}? " if close else ""
 
     def _start(self) -> dict:
-        """The start settings, as the keywords of :func:`~._prepare.prepare_dynamic`."""
+        """The start settings, as the keywords of :func:`~._prepare.dynamic_start`."""
         return _setup.start_of(self, "q0", "qd0", "hold", "linear_solver")
 
     def _start_forces(self) -> tuple[str, ...]:

@@ -1,16 +1,14 @@
 from __future__ import annotations
 
-import dataclasses
 from typing import ClassVar
 
 from ..linalg import LinearSolver
 from ..model import Model
-from ._prepare import Prepared, prepare_dynamic, use_prepared
+from ._prepare import Prepared, dynamic_start
 from ._problem import Problem
 from ._setup import Setup, keyword_setup
 from ._simulate import (
     ENERGY_TOL,
-    Case,
     Integrated,
     output_times,
     refuse_reaction_dependent_in,
@@ -49,13 +47,13 @@ class Forward(Integrated):
 
     name: ClassVar[str] = "forward"
 
+    def _initial(self, model: Model, t0: float, given: Prepared | None = None) -> Prepared:
+        return dynamic_start(model, t0, given, **self._start())
+
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
         refuse_reaction_dependent_in(model, self.method)
         require_masses(model)
-        if given is None:
-            prep = prepare_dynamic(model, t0, **self._start())
-        else:
-            prep = use_prepared(given, model, t0, what="forward", dynamic=True, **self._start())
+        prep = self._initial(model, t0, given)
         # The partitioning integrator needs independent rows; the others solve redundant
         # constraints in the least-squares sense (robust where the redundancy moves).
         problem = Problem(model, prep.constraints(self.method.independent_rows))
@@ -121,12 +119,11 @@ def forward(
             (not checked). A run that breaks it, e.g. by jumping to another branch at a
             singular position, raises :class:`~mixdyn.errors.EnergyBalanceError` rather
             than returning a wrong motion.
-        prepared: the run's set-up (consistent start and mobility analysis), made beforehand
-            by :func:`~mixdyn.analysis._prepare.prepare_dynamic` from the same model, start
-            time ``t[0]``, ``q0``, ``qd0``, ``hold`` and ``linear_solver`` (the model-file
-            runner checks a run on it, then runs from it, so that the run is assembled and
-            analysed once). Default None: the run prepares its own. A set-up made for another
-            call is refused (:class:`~mixdyn.errors.ModelError`).
+        prepared: deprecated (a DeprecationWarning names the new spelling): the start of an
+            earlier set-up (``setup.start``) made from the same model, start time ``t[0]``,
+            ``q0``, ``qd0``, ``hold`` and ``linear_solver``, as
+            ``mixdyn.prepare(model, mixdyn.analyses.Forward(...), t0=t[0], start=...)``
+            takes it; a start made otherwise is refused (:class:`~mixdyn.errors.ModelError`).
         **options: integrator options with a method's name (``solver="dopri8"``,
             ``alpha``, ``beta``, ``rho_inf``, ``max_steps``...: the fields of its class).
 
@@ -156,16 +153,6 @@ def forward(
     )
     setup = keyword_setup(model, analysis, float(ts[0]), recorded, prepared)
     return analysis._run(setup, ts, progress)
-
-
-def forward_case(model: Model, t, **kwargs) -> Case:
-    """The set-up of a forward run from :func:`forward`'s keywords but ``progress``, not yet
-    integrated (for the model-file runner's programs prepared ahead; ``prepared=`` taken as
-    :func:`forward` takes it, without the warning)."""
-    ts = output_times(t)
-    analysis, recorded = Forward._from_keywords(ts, kwargs)
-    setup = analysis._prepare(model, float(ts[0]), kwargs.get("prepared"))
-    return analysis._case(dataclasses.replace(setup, recorded=recorded), ts)
 
 
 __all__ = ["Forward", "forward"]

@@ -15,7 +15,7 @@ import numpy as np
 from ..linalg import LinearSolver
 from ..model import Model
 from . import _setup
-from ._prepare import Prepared, prepare_kinematic, use_prepared
+from ._prepare import Prepared
 from ._problem import Problem
 from ._setup import Setup, keyword_setup
 from ._simulate import _post, output_times, post_kinds, require_masses
@@ -45,10 +45,7 @@ class Inverse(_Driven):
 
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
         require_masses(model)
-        if given is None:
-            prep = prepare_kinematic(model, t0, **self._start())
-        else:
-            prep = use_prepared(given, model, t0, what="inverse", dynamic=False, **self._start())
+        prep = self._initial(model, t0, given, balanced=True)
         # the kinematic run's rows: assembled and analysed once
         return Setup(self, model, t0, prep, Problem(model, prep.constraints()))
 
@@ -101,10 +98,8 @@ def inverse(
         linear_solver: a :class:`~mixdyn.LinearSolver`, or its name: ``"dense"``, ``"sparse"`` or
             ``"auto"`` (sparse for large mechanisms of small bandwidth, see :mod:`mixdyn.linalg`):
             the path of the kinematic analysis and of the multipliers' solve.
-        prepared: the run's set-up, as in :func:`~mixdyn.kinematic` (made by
-            :func:`~mixdyn.analysis._prepare.prepare_kinematic` from the same model, start
-            time, ``q0``, ``hold``, ``assemble_first`` and ``linear_solver``; another is
-            refused). Default None: the run prepares its own.
+        prepared: deprecated, as in :func:`~mixdyn.kinematic`:
+            ``mixdyn.prepare(model, mixdyn.analyses.Inverse(...), t0=t[0], start=...)``.
         **kinematic_options: passed to :func:`~mixdyn.kinematic` (``tol``, ``max_iter``...).
 
     Returns:

@@ -24,7 +24,7 @@ from ..runtime._programs import cached_jit
 from . import _setup
 from ._assembly import length_scale
 from ._newton import newton_positions
-from ._prepare import Prepared, prepare_kinematic, use_prepared
+from ._prepare import Prepared, kinematic_start
 from ._setup import Setup, keyword_setup
 from .result import Result
 
@@ -132,8 +132,20 @@ class _Driven(_setup.Analysis):
     linear_solver: LinearSolver = eqx.field(default=AutoSolver(), converter=_setup.linear_solver)
 
     def _start(self) -> dict:
-        """The start settings, as the keywords of :func:`~._prepare.prepare_kinematic`."""
+        """The start settings, as the keywords of :func:`~._prepare.kinematic_start`."""
         return _setup.start_of(self, "q0", "hold", "assemble_first", "linear_solver")
+
+    def _drivers(self, model: Model) -> tuple:
+        """The drivers of the run: the model's."""
+        return model.drivers
+
+    def _initial(self, model: Model, t0: float, given: Prepared | None = None, balanced=False):
+        """As :meth:`~._setup.Analysis._initial`; with ``balanced`` the drivers checked to fix
+        every degree of freedom."""
+        drivers = self._drivers(model)
+        return kinematic_start(
+            model, t0, given, drivers=drivers, balanced=balanced, **self._start()
+        )
 
     def _kinematics(self, setup: Setup, ts) -> Result:
         """The kinematic run of ``setup`` over the output times ``ts`` (N,) [time]."""
@@ -168,20 +180,15 @@ class Kinematic(_Driven):
     _: dataclasses.KW_ONLY
     drivers: tuple[Driver, ...] | None = eqx.field(default=None, converter=_drivers)
 
+    def _drivers(self, model: Model) -> tuple:
+        """The drivers of the run: :attr:`drivers` bound to the model's bodies, or the
+        model's."""
+        if self.drivers is None:
+            return model.drivers
+        return tuple(d.bind(_resolver(model)) for d in self.drivers)
+
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
-        drivers = (
-            model.drivers
-            if self.drivers is None
-            else tuple(d.bind(_resolver(model)) for d in self.drivers)
-        )
-        if given is None:
-            prep = prepare_kinematic(model, t0, drivers=drivers, **self._start())
-        else:
-            prep = use_prepared(
-                given, model, t0, what="kinematic", dynamic=False, drivers=drivers,
-                **self._start(),
-            )  # fmt: skip
-        return Setup(self, model, t0, prep)
+        return Setup(self, model, t0, self._initial(model, t0, given, balanced=True))
 
     def _run(self, setup: Setup, t, progress=None) -> Result:
         _setup.no_progress(self, progress)
@@ -222,12 +229,11 @@ def kinematic(
             pivot ratio compared with ``singular_tol`` is the square root of that factorization's)
             or ``"auto"`` (sparse for large mechanisms of small bandwidth, see
             :mod:`mixdyn.linalg`). The assembly takes the same path.
-        prepared: the run's set-up (assembled start and mobility analysis), made beforehand
-            by :func:`~mixdyn.analysis._prepare.prepare_kinematic` from the same model,
-            drivers, start time ``t[0]``, ``q0``, ``hold``, ``assemble_first`` and
-            ``linear_solver`` (the model-file runner checks a run on it, then runs from it).
-            Default None: the run prepares its own. A set-up made for another call is refused
-            (:class:`~mixdyn.errors.ModelError`).
+        prepared: deprecated (a DeprecationWarning names the new spelling): the start of an
+            earlier set-up (``setup.start``) made from the same model, drivers, start time
+            ``t[0]``, ``q0``, ``hold``, ``assemble_first`` and ``linear_solver``, as
+            ``mixdyn.prepare(model, mixdyn.analyses.Kinematic(...), t0=t[0], start=...)``
+            takes it; a start made otherwise is refused (:class:`~mixdyn.errors.ModelError`).
 
     Returns:
         A :class:`Result` with the body coordinates, velocities and accelerations and, in
@@ -255,7 +261,7 @@ def run_kinematic(
     prep: Prepared, ts, *, tol: float | None = None, max_iter: int = 25, singular_tol=1e-7
 ) -> Result:
     """:func:`kinematic` from its prepared start (:func:`~mixdyn.analysis._prepare.
-    prepare_kinematic`): the jitted scan over the output times ``ts`` (N,), then the checks."""
+    kinematic_start`): the jitted scan over the output times ``ts`` (N,), then the checks."""
     model = prep.model
     c = prep.constraints()
     tol = 1e-12 * length_scale(model) if tol is None else tol

@@ -34,12 +34,11 @@ from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
 from ..model._element import Resolver
 from ..runtime._programs import cached_jit
 from . import _setup
-from ._prepare import Prepared, prepare_dynamic, use_prepared
+from ._prepare import Prepared, dynamic_start
 from ._problem import Problem
 from ._setup import Setup, keyword_setup
 from ._simulate import (
     ENERGY_TOL,
-    Case,
     Integrated,
     output_times,
     refuse_reaction_dependent_in,
@@ -280,6 +279,14 @@ class Mixed(Integrated):
         # structural, not a matter of the masses
         return bool(setup.problem.collocated) or self.solver == "partition"
 
+    def _initial(self, model: Model, t0: float, given: Prepared | None = None) -> Prepared:
+        """The start with the model's drivers and the prescribed motions bound to its
+        bodies (:func:`bind_prescribed`)."""
+        prescribed = bind_prescribed(model, self.prescribed)
+        return dynamic_start(
+            model, t0, given, drivers=(*model.drivers, *prescribed), **self._start()
+        )
+
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
         """Everything a mixed run does before integrating: checks, consistent start,
         problem (the start and its mobility analysis checked on ``given`` where given)."""
@@ -310,11 +317,9 @@ class Mixed(Integrated):
                     "actuator) can be unknown",
                     name,
                 )
-        args = dict(drivers=(*model.drivers, *prescribed), **self._start())
-        if given is None:
-            prep = prepare_dynamic(model, t0, **args)
-        else:
-            prep = use_prepared(given, model, t0, what="mixed", dynamic=True, **args)
+        prep = dynamic_start(
+            model, t0, given, drivers=(*model.drivers, *prescribed), **self._start()
+        )
         q, qd, report = prep.q, prep.qd, prep.report
         bad = [n for n in report.redundant_drivers if n in {d.name for d in prescribed}]
         if bad:
@@ -468,14 +473,14 @@ def mixed(
             solver stays on the dense path: ``"auto"`` takes it silently, ``"sparse"`` raises a
             :class:`ModelError`. The consistent start (assembly, velocities) takes the path asked
             for in any case; the solvability checks of the start state are dense.
-        prepared: the run's set-up (consistent start and mobility analysis), made beforehand
-            by :func:`~mixdyn.analysis._prepare.prepare_dynamic` with the model's drivers
-            followed by the prescribed motions bound to the bodies
-            (:func:`bind_prescribed`), from the same start time, ``q0``, ``qd0``, ``hold`` and
-            ``linear_solver`` (the model-file runner checks a run on it, then runs from it).
-            Default None: the run prepares its own. A set-up made for another call (other
-            prescribed motions included) is refused (:class:`~mixdyn.errors.ModelError`);
-            the solvability checks are run on it in any case.
+        prepared: deprecated (a DeprecationWarning names the new spelling): the start of an
+            earlier set-up (``setup.start``) with the model's drivers followed by the
+            prescribed motions bound to the bodies (:func:`bind_prescribed`), from the same
+            start time, ``q0``, ``qd0``, ``hold`` and ``linear_solver``, as
+            ``mixdyn.prepare(model, mixdyn.analyses.Mixed(...), t0=t[0], start=...)`` takes
+            it; a start made otherwise (other prescribed motions included) is refused
+            (:class:`~mixdyn.errors.ModelError`); the solvability checks are run on it in
+            any case.
 
     Returns:
         A :class:`Result` with the motion, a column per unknown force (named after it, in force
@@ -509,16 +514,6 @@ def mixed(
     )
     setup = keyword_setup(model, analysis, float(ts[0]), recorded, prepared)
     return analysis._run(setup, ts, progress)
-
-
-def mixed_case(model: Model, t, **kwargs) -> Case:
-    """The set-up of a mixed run from :func:`mixed`'s keywords but ``progress``, not yet
-    integrated (for the model-file runner's programs prepared ahead; ``prepared=`` taken as
-    :func:`mixed` takes it, without the warning)."""
-    ts = output_times(t)
-    analysis, recorded = Mixed._from_keywords(ts, kwargs)
-    setup = analysis._prepare(model, float(ts[0]), kwargs.get("prepared"))
-    return analysis._case(dataclasses.replace(setup, recorded=recorded), ts)
 
 
 __all__ = ["Mixed", "bind_prescribed", "check_mixed", "mixed", "prescribe"]

@@ -48,7 +48,7 @@ from ..linalg import DenseSolver, LinearSolver
 from ..model import Model
 from . import _setup
 from ._assembly import length_scale
-from ._prepare import prepare_kinematic
+from ._prepare import kinematic_start
 from ._reactions import (
     contact_columns,
     driver_efforts,
@@ -132,12 +132,12 @@ class _Equilibria(_setup.Analysis):
     tol: float = eqx.field(default=1e-10, converter=_positive("tol"))
     max_iter: int = eqx.field(default=100, converter=_setup.checked("max_iter"))
 
-    def _equilibrium_start(self, model: Model, t0: float):
+    def _initial(self, model: Model, t0: float, given=None):
         """The assembled start of an equilibrium at ``t0`` (dense path; the drivers'
         balance not required: free degrees of freedom settle)."""
         check_supported(model, "statics (its equilibrium leaves out the joint reactions)")
-        return prepare_kinematic(
-            model, t0, q0=self.q0, hold=self.hold, balanced=False, linear_solver=DenseSolver()
+        return kinematic_start(
+            model, t0, given, q0=self.q0, hold=self.hold, linear_solver=DenseSolver()
         )
 
 
@@ -157,7 +157,7 @@ class Static(_Equilibria):
     name: ClassVar[str] = "statics"
 
     def _prepare(self, model: Model, t0: float, given=None) -> Setup:
-        return Setup(self, model, t0, self._equilibrium_start(model, t0))
+        return Setup(self, model, t0, self._initial(model, t0))
 
     def _run(self, setup: Setup, t, progress=None) -> Statics:
         _setup.no_progress(self, progress)
@@ -353,7 +353,7 @@ class QuasiStatic(_Equilibria):
     name: ClassVar[str] = "quasi-static"
 
     def _prepare(self, model: Model, t0: float, given=None) -> Setup:
-        return Setup(self, model, t0, self._equilibrium_start(model, t0))
+        return Setup(self, model, t0, self._initial(model, t0))
 
     def _run(self, setup: Setup, t, progress=None) -> Result:
         _setup.no_progress(self, progress)

@@ -27,6 +27,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 
 import equinox as eqx
@@ -37,18 +38,14 @@ import numpy as np
 from .. import paths
 from ..errors import MixdynError, ModelError
 from ..model import Model
+from . import _members
 from ._cluster import _on_cluster
-from ._keywords import study_analysis
+from ._keywords import member_values, study_analysis
 from ._members import model_swapper as model_swapper
-from ._members import run_members
 from ._schedule import ACCELERATOR_BATCH as ACCELERATOR_BATCH
 from ._schedule import for_batch as for_batch
 from ._setup import Analysis
 from .result import Result
-
-#: The checked accessor of a parameter path, for the model-file layer's modules that read it
-#: here (the public one: :func:`mixdyn.paths.getter`).
-_leaf_getter = paths.getter
 
 
 def grid(**axes: Sequence[float]) -> dict[str, np.ndarray]:
@@ -398,7 +395,7 @@ def sweep(
         models is None and value.integrated
         and shares_start(model, vary or {}, value._start_forces())
     )  # fmt: skip
-    outcomes = run_members(
+    outcomes = _members.run_members(
         members,
         t,
         value,
@@ -414,6 +411,42 @@ def sweep(
     errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
     seconds["total"] = time.perf_counter() - started
     return Sweep(results, errors, params, seconds)
+
+
+def run_members(
+    members: Sequence[Model],
+    t,
+    analysis: Analysis | str,
+    kwargs_of: Callable[[int], dict] | None = None,
+    **options,
+):
+    """Deprecated: :func:`sweep` with ``models=`` and the analysis value runs members
+    (``md.sweep(models=[...], t=t, analysis=md.analyses.Forward(...))``, a DeprecationWarning
+    says so). Each member's ``(Result, None)`` or ``(None, its numerical error)``, in order.
+
+    Args:
+        members: the member models, of one structure.
+        t: (N,) output times [time].
+        analysis: the analysis value; or an analysis' name (``"forward"``, ``"mixed"``,
+            ``"kinematic"``, ``"inverse"``, ``"statics"``) with ``kwargs_of(i)`` member
+            ``i``'s keywords.
+        kwargs_of: member index -> the analysis' keywords for it (with a name only).
+        **options: ``batch_size``, ``threads``, ``on_member``, ``describe``, ``offset``,
+            ``same_start``, ``seconds``, as the sweep takes them.
+    """
+    warnings.warn(
+        "mixdyn.analysis.sweep.run_members is deprecated: run the members with "
+        "mixdyn.sweep(models=[...], t=t, analysis=mixdyn.analyses.Forward(...))",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    if not isinstance(analysis, Analysis):
+        kwargs = [kwargs_of(i) for i in range(len(members))]
+        describe = options.get("describe", lambda i: "")
+        analysis, options["recorded"] = member_values(
+            analysis, t, kwargs, describe, options.get("offset", 0)
+        )
+    return _members.run_members(members, t, analysis, **options)
 
 
 def _describe(params, i) -> str:

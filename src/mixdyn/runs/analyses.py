@@ -14,11 +14,9 @@ from __future__ import annotations
 import pathlib
 import shutil
 from collections.abc import Callable
-from typing import ClassVar
 
 import numpy as np
 
-from .. import analysis as an
 from ..io import schema as s
 from ..io.expressions import ExpressionError
 from ..io.expressions import parse as parse_expression
@@ -40,11 +38,9 @@ def _prescribed_ref(runner, ref: str, path) -> None:
 
 
 class AnalysisKind(RunKind):
-    """A run of one analysis (:attr:`analysis`), called on the run's model and output times
-    with the keywords its set-up makes (:meth:`keywords`)."""
-
-    #: The analysis, ``analysis(model, t, **keywords) -> Result``.
-    analysis: ClassVar[Callable]
+    """A run of one analysis, its value made from the keywords of the run's settings
+    (:meth:`keywords`, :func:`.setup.analysis_of`), prepared and run on the run's model and
+    output times."""
 
     # ----------------------------------------------------------------- planning and checks
     def plan(self, runner, index: int, r) -> Plan:
@@ -171,13 +167,13 @@ class AnalysisKind(RunKind):
         closed with its held coordinates only)."""
         return True
 
-    def keywords(self, r, args: dict, prepared, options: dict, dt, drivers) -> dict:
-        """The keywords of the run's :attr:`analysis`.
+    def keywords(self, r, args: dict, options: dict, dt, drivers) -> dict:
+        """The keywords of the run's analysis (those of its function, ``mixdyn.forward``...),
+        read as its analysis value (:func:`.setup.analysis_of`).
 
         Args:
             r: the run's description.
             args: the start's arguments (:func:`.setup.start_args`).
-            prepared: the set-up the checks made, or None.
             options: the run's ``options`` (but ``linear_solver``).
             dt: the run's fixed step [time], or None.
             drivers: its prescribed motions, as drivers.
@@ -185,15 +181,8 @@ class AnalysisKind(RunKind):
         raise NotImplementedError
 
     def execute(self, runner, plan: Plan, results: dict, progress: Callable | None):
-        try:
-            _, model, kwargs = setup.call(runner, plan, results)
-            if progress is not None and self.integrated:
-                kwargs["progress"] = progress
-            return self.analysis(model, plan.times, **kwargs)
-        except TypeError as e:
-            if "unexpected keyword argument" in str(e):
-                runner.fail((*plan.path, "options"), f"unknown option ({e})", "remove the option")
-            raise
+        run = setup.analysis_of(runner, plan, results)
+        return run.run(plan.times, progress if self.integrated else None)
 
     def progress(self, plan: Plan, console) -> Callable | None:
         return console.times(plan) if self.integrated else None
@@ -263,15 +252,14 @@ class Kinematic(AnalysisKind):
     """A kinematic run: the drivers fix the motion (:func:`mixdyn.kinematic`)."""
 
     name = "kinematic"
-    analysis = staticmethod(an.kinematic)
     fully_driven = True
     motion_only = True
 
-    def keywords(self, r, args, prepared, options, dt, drivers) -> dict:
+    def keywords(self, r, args, options, dt, drivers) -> dict:
         kw = {"max_iter": r.max_iter}
         if r.tol is not None:
             kw["tol"] = r.tol
-        return dict(prepared=prepared, **args, **kw)
+        return dict(**args, **kw)
 
 
 @register
@@ -280,10 +268,9 @@ class Statics(AnalysisKind):
     (:func:`mixdyn.quasi_static`)."""
 
     name = "statics"
-    analysis = staticmethod(an.quasi_static)
     element_columns = False
 
-    def keywords(self, r, args, prepared, options, dt, drivers) -> dict:
+    def keywords(self, r, args, options, dt, drivers) -> dict:
         return dict(**args, tol=r.tol, max_iter=r.max_iter)
 
 
@@ -293,7 +280,6 @@ class Inverse(AnalysisKind):
     drivers fix (:func:`mixdyn.inverse`)."""
 
     name = "inverse"
-    analysis = staticmethod(an.inverse)
     dynamic = True
     fully_driven = True
     differentiable_efforts = True
@@ -301,9 +287,9 @@ class Inverse(AnalysisKind):
     def assembles_first(self, options: dict) -> bool:
         return bool(options.get("assemble_first", True))
 
-    def keywords(self, r, args, prepared, options, dt, drivers) -> dict:
+    def keywords(self, r, args, options, dt, drivers) -> dict:
         options.pop("assemble_first", None)
-        return dict(prepared=prepared, **args, **options)
+        return dict(**args, **options)
 
 
 class _Integrated(AnalysisKind):
@@ -312,15 +298,8 @@ class _Integrated(AnalysisKind):
     dynamic = True
     integrated = True
 
-    def keywords(self, r, args, prepared, options, dt, drivers) -> dict:
-        return dict(
-            method=r.method, rtol=r.rtol, atol=r.atol, dt=dt, **args, prepared=prepared, **options
-        )
-
-    def case(self, model, t, **keywords):
-        """The integrator's case of the run (what :func:`mixdyn.analysis._simulate.ahead`
-        prepares the programs of)."""
-        raise NotImplementedError
+    def keywords(self, r, args, options, dt, drivers) -> dict:
+        return dict(method=r.method, rtol=r.rtol, atol=r.atol, dt=dt, **args, **options)
 
 
 @register
@@ -328,12 +307,6 @@ class Forward(_Integrated):
     """A forward-dynamics run: the motion under the forces (:func:`mixdyn.forward`)."""
 
     name = "forward"
-    analysis = staticmethod(an.forward)
-
-    def case(self, model, t, **keywords):
-        from ..analysis.forward import forward_case
-
-        return forward_case(model, t, **keywords)
 
 
 @register
@@ -342,25 +315,19 @@ class Mixed(_Integrated):
     (:func:`mixdyn.mixed`)."""
 
     name = "mixed"
-    analysis = staticmethod(an.mixed)
     unknown_forces = True
 
     def check_own(self, runner, r, path) -> None:
         checks.check_mixed(runner, r, path)
 
-    def keywords(self, r, args, prepared, options, dt, drivers) -> dict:
+    def keywords(self, r, args, options, dt, drivers) -> dict:
         return dict(
             prescribed=drivers,
             unknown=list(r.unknown),
             solver=r.solver,
             independent=None if r.independent is None else list(r.independent),
-            **super().keywords(r, args, prepared, options, dt, drivers),
+            **super().keywords(r, args, options, dt, drivers),
         )
-
-    def case(self, model, t, **keywords):
-        from ..analysis.mixed import mixed_case
-
-        return mixed_case(model, t, **keywords)
 
     def described(self, r) -> str:
         return f", unknown {', '.join(r.unknown)}, solver {r.solver}"

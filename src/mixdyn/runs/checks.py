@@ -34,10 +34,10 @@ import numpy as np
 from .. import analysis as an
 from .. import model as m
 from ..analysis._options import CHOICES, step_count, suggestions, value_problem
-from ..analysis._prepare import prepare_dynamic
+from ..analysis._setup import prepare
 from ..analysis._simulate import ENERGY_TOL
 from ..analysis.methods import FIXED_STEP, OPTIONS
-from ..analysis.mixed import bind_prescribed
+from ..analysis.mixed import Mixed, bind_prescribed
 from ..errors import AssemblyError, ModelError, NumericalError
 from ..io import schema as s
 from ..io._errors import FileError
@@ -317,15 +317,35 @@ def check_settings(runner, plan: Plan) -> None:
 
 
 def output_units(runner) -> dict[str, str]:
-    """The file's ``output_units`` checked: known kinds, units of their dimension."""
-    from ..units import DIMENSIONS
+    """The file's ``output_units`` checked: a preset's name (``SI``, ``mm-N-s``:
+    :data:`mixdyn.units.OUTPUT_PRESETS`) or kinds and their units, a ``preset`` among them
+    expanded first; known kinds, units of their dimension."""
+    from .._hints import did_you_mean
+    from ..units import DIMENSIONS, OUTPUT_PRESETS
 
+    given = runner.spec.output_units
+    if isinstance(given, str):
+        given = {"preset": given}
     out = {}
-    for kind, unit in runner.spec.output_units.items():
+    if "preset" in given:
+        name = given["preset"]
+        path = (
+            ("output_units",)
+            if isinstance(runner.spec.output_units, str)
+            else ("output_units", "preset")
+        )
+        if name not in OUTPUT_PRESETS:
+            runner.fail(
+                path,
+                f"no preset of output units {name!r}",
+                did_you_mean(name, OUTPUT_PRESETS, "presets"),
+            )
+        out.update(OUTPUT_PRESETS[name])
+    for kind, unit in given.items():
+        if kind == "preset":
+            continue
         path = ("output_units", kind)
         if kind not in DIMENSIONS:
-            from .._hints import did_you_mean
-
             runner.fail(
                 path, f"no kind of quantity {kind!r}", did_you_mean(kind, DIMENSIONS, "kinds")
             )
@@ -561,15 +581,11 @@ def _standin_report(runner, plan: Plan):
         prescribed = prescribed_motions(runner, plan, model, q)
     except ModelError as e:
         runner.model_error(plan, e)
+    value = Mixed(
+        prescribed=prescribed, unknown=r.unknown, q0=q, hold=hold, linear_solver=r.linear_solver
+    )
     try:
-        prep = prepare_dynamic(
-            model,
-            float(plan.times[0]),
-            drivers=(*model.drivers, *prescribed),
-            q0=q,
-            hold=hold,
-            linear_solver=r.linear_solver,
-        )
+        prep = value._initial(model, float(plan.times[0]))
     except FileError:
         raise
     except (ModelError, NumericalError):
@@ -697,22 +713,22 @@ def check_solvable(runner, plan: Plan) -> None:
     done.add(plan.name)
 
 
-def _solvable_at(plan: Plan, model, prescribed, q0, qd0, hold, linear_solver, prepared=None):
-    """:func:`mixdyn.check_mixed` of a mixed run's unknown forces and solver."""
+def _solvable_at(plan: Plan, model, prescribed, q0, qd0, hold, linear_solver, start=None):
+    """The checks of :func:`mixdyn.check_mixed` of a mixed run's unknown forces and solver:
+    its set-up (:func:`mixdyn.prepare`), from ``start`` (a start made beforehand) where
+    given."""
     r = plan.spec
-    an.check_mixed(
-        model,
-        prescribed,
-        tuple(r.unknown),
-        t0=float(plan.times[0]),
+    value = Mixed(
+        prescribed=prescribed,
+        unknown=tuple(r.unknown),
         solver=r.solver,
         independent=r.independent,
         q0=q0,
         qd0=qd0,
         hold=hold,
         linear_solver=linear_solver,
-        prepared=prepared,
     )
+    prepare(model, value, t0=float(plan.times[0]), start=start)
 
 
 def _passes(check: Callable, hold) -> bool:

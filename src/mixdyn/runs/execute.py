@@ -76,7 +76,7 @@ def ahead(runner, plan: Plan) -> None:
     integrator's and its post-processing's: :func:`mixdyn.analysis._simulate.ahead`), in a
     second thread while the runs before it compute: a file's first run compiles them, and
     two programs compile at once. A run replaying another run's motion is set up with the
-    stand-ins its checks made (:func:`.setup.call`), which have the replayed motion's form.
+    stand-ins its checks made (:func:`.setup.analysis_of`), which have the replayed motion's form.
     Nothing when the programs are read from the cache anyway
     (:func:`mixdyn.runtime._programs.reading_ahead`), with the cache off, or for other runs; a
     failure here is left for the run to meet."""
@@ -93,8 +93,9 @@ def ahead(runner, plan: Plan) -> None:
 
     def prepare():
         try:
-            _, model, kwargs = setup.call(runner, plan, {}, stand_ins=True)
-            _simulate.ahead(kind.case(model, plan.times, **kwargs))
+            run = setup.analysis_of(runner, plan, {}, stand_ins=True)
+            t0 = float(plan.times[0])
+            _simulate.ahead(run.analysis._case(run.setup(t0), plan.times))
         except Exception:  # the run itself meets it, and names it
             pass
 

@@ -141,7 +141,7 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
         ]
     try:
         # the repeated run's analysis as a value (its keywords read once)
-        value, _ = from_keywords(analysis, plan.times, kwargs)
+        value, recorded = from_keywords(analysis, plan.times, kwargs)
         opt = optimize(
             model,
             plan.times,
@@ -168,7 +168,7 @@ def execute(runner, plan: OptimizePlan) -> FileOptimum:
         for p, v in zip(params, values, strict=True):
             get, _ = paths.getter(m, p)
             m = eqx.tree_at(get, m, jnp.asarray(float(v)))
-        return KINDS[analysis].analysis(m, plan.times, **kwargs)
+        return setup.RunAnalysis(analysis, m, value, recorded).run(plan.times)
 
     return FileOptimum(plan, opt, at(opt.values), at(opt.start))
 

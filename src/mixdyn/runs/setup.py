@@ -1,23 +1,30 @@
-"""A run's set-up: its model, its start and the call of its analysis.
+"""A run's set-up: its model, its start and its analysis.
 
-:func:`prepare` makes a run's set-up as its analysis would (the consistent start of a dynamic
-run or the assembled one of a kinematic, inverse or statics run, and the mobility analysis
-there: :mod:`mixdyn.analysis._prepare`), once per run and once for runs with the same start
-(:class:`Setups`). The checks (:func:`.checks.mobility`) make it, and the run is handed it
-(:func:`call`: ``prepared=``), so that the check and the run share one assembly and one rank
-analysis.
+:func:`analysis_of` reads a run as what it computes (:class:`RunAnalysis`): its analysis value
+(:mod:`mixdyn.analyses`, made from the run's settings), its model and the start it starts
+from; :meth:`RunAnalysis.run` prepares and runs it (:func:`mixdyn.prepare`,
+:func:`mixdyn.run`). :func:`prepare` makes a run's start as its analysis makes it (the
+consistent start of a dynamic run or the assembled one of a kinematic, inverse or statics
+run, and the mobility analysis there), once per run and once for runs with the same start
+(:class:`Setups`). The checks (:func:`.checks.mobility`) make it, and the run is prepared
+from it (``mixdyn.prepare(..., start=...)``), so that the check and the run share one
+assembly and one rank analysis.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
 from .. import analysis as an
 from .. import model as m
-from ..analysis._prepare import Prepared, prepare_dynamic, prepare_kinematic
+from ..analysis._keywords import from_keywords
+from ..analysis._prepare import Prepared
+from ..analysis._setup import Analysis, Setup
+from ..analysis._setup import prepare as prepare_analysis
+from ..analysis._setup import run as run_setup
 from ..analysis.mixed import bind_prescribed
 from ..errors import ModelError, NumericalError
 from ..io import schema as s
@@ -25,14 +32,47 @@ from .kinds import kind_of
 from .plan import Plan
 
 
+@dataclasses.dataclass(frozen=True)
+class RunAnalysis:
+    """What a run computes: its analysis value on its model, from its start.
+
+    Attributes:
+        kind: the run kind's name (``"forward"``...).
+        model: the run's model (its drivers selected; a mixed run's prescribed motions are
+            the analysis').
+        analysis: the analysis value made from the run's settings.
+        recorded: the integrator options its result records (``stats["options"]``: the
+            run's settings), or None (the method object's own).
+        start: the start the checks made (:func:`prepare`), or None (the analysis makes its
+            own).
+    """
+
+    kind: str
+    model: m.Model
+    analysis: Analysis
+    recorded: dict | None = None
+    start: Prepared | None = None
+
+    def setup(self, t0: float) -> Setup:
+        """The run's set-up from the start time ``t0`` [time] (:func:`mixdyn.prepare`)."""
+        setup = prepare_analysis(self.model, self.analysis, t0=t0, start=self.start)
+        if self.recorded is None:
+            return setup
+        return dataclasses.replace(setup, recorded=self.recorded)
+
+    def run(self, times, progress: Callable | None = None):
+        """The run over the output times ``times`` (N,) [time] (:func:`mixdyn.run`)."""
+        return run_setup(self.setup(float(times[0])), times, progress=progress)
+
+
 @dataclasses.dataclass
 class Setups:
     """What a runner keeps of its runs' set-ups.
 
     Attributes:
-        prepared: run name -> ``(start arguments, Prepared)``: the set-up the checks made,
+        prepared: run name -> ``(start arguments, Prepared)``: the start the checks made,
             which the run starts from.
-        made: the set-ups by what they are made from (runs with the same start share one), or
+        made: the starts by what they are made from (runs with the same start share one), or
             the error met making one (not made again by the checks that follow).
         checked: mixed runs' set-ups for :func:`.checks.check_solvable`: run name ->
             ``(model, q0, qd0, prescribed motions, Prepared)``.
@@ -152,10 +192,10 @@ def dummy_driver(k, p: s.PrescribedSpec) -> m.Driver:
 
 
 def prepare(runner, plan: Plan) -> Prepared:
-    """The run's set-up, made as its analysis would make it: the consistent start (a dynamic
-    run) or the assembled one (kinematic, inverse, statics), and the mobility analysis there
-    (:mod:`mixdyn.analysis._prepare`). Kept for :func:`call`, which hands it to the analysis;
-    made once per run (and once for runs with the same set-up).
+    """The run's start, made as its analysis makes it (the analysis value's own start: the
+    consistent start of a dynamic run or the assembled one of a kinematic, inverse or
+    statics run, and the mobility analysis there). Kept for :func:`analysis_of`, whose run
+    is prepared from it; made once per run (and once for runs with the same start).
 
     Args:
         runner: the file's runner.
@@ -163,7 +203,7 @@ def prepare(runner, plan: Plan) -> Prepared:
             only once the other run has run).
 
     Returns:
-        The :class:`~mixdyn.analysis._prepare.Prepared` set-up (its drivers are not checked
+        The :class:`~mixdyn.analysis._prepare.Prepared` start (its drivers are not checked
         against the degrees of freedom here: :func:`.checks.mobility` reports that).
 
     Raises:
@@ -185,10 +225,10 @@ def prepare(runner, plan: Plan) -> Prepared:
     model = run_model(runner, plan, () if mixed else laws)
     args = start_args(runner, plan, model)
     t0 = float(plan.times[0])
-    kinematic = not kind_of(plan).integrated
+    value, _ = from_keywords(kind_of(plan).name, plan.times, _keywords(runner, plan, args, laws))
     drivers = (*model.drivers, *(bind_prescribed(model, laws) if mixed else ()))
     key = (
-        "kinematic" if kinematic else "dynamic",
+        type(value)._initial,  # the analyses that make their start alike share it
         drivers_key(drivers),
         t0,
         tuple(sorted((k, _arg_key(v)) for k, v in args.items())),
@@ -196,10 +236,7 @@ def prepare(runner, plan: Plan) -> Prepared:
     made = setups.made
     if key not in made:
         try:
-            if kinematic:
-                made[key] = prepare_kinematic(model, t0, drivers=drivers, balanced=False, **args)
-            else:
-                made[key] = prepare_dynamic(model, t0, drivers=drivers, **args)
+            made[key] = value._initial(model, t0)
         except (ModelError, NumericalError) as e:
             made[key] = e  # not made again by the checks that follow
     if isinstance(made[key], Exception):
@@ -232,17 +269,38 @@ def start_args(runner, plan: Plan, model: m.Model) -> dict:
 def call(
     runner, plan: Plan, results: dict, *, checked: bool = True, stand_ins: bool = False
 ) -> tuple[str, m.Model, dict]:
-    """What a run computes: ``(kind, model, keywords)``, its analysis called as
-    ``KINDS[kind].analysis(model, plan.times, **keywords)``.
+    """What a run computes as ``(kind, model, keywords)``: the keyword spelling of its
+    analysis (:func:`mixdyn.analysis._keywords.from_keywords` reads it as the value).
 
     Args:
         runner: the file's runner.
         plan: the run.
         results: the results of the runs it replays (``from_run``).
-        checked: start from the set-up the checks made (:func:`.checks.mobility`), if any.
+        checked: on the model of the start the checks made (:func:`.checks.mobility`), if
+            any.
         stand_ins: a replayed motion by the stand-in its checks made (held at its start
             value, in the replayed law's form: :func:`.checks.held`) instead of ``results``.
     """
+    kind, model, keywords, _ = _call(runner, plan, results, checked, stand_ins)
+    return kind, model, keywords
+
+
+def analysis_of(
+    runner, plan: Plan, results: dict, *, checked: bool = True, stand_ins: bool = False
+) -> RunAnalysis:
+    """What a run computes (:class:`RunAnalysis`), from the start the checks made where
+    ``checked`` (:func:`prepare`); arguments as :func:`call`.
+
+    Raises:
+        ModelError: a setting the analysis refuses.
+    """
+    kind, model, keywords, start = _call(runner, plan, results, checked, stand_ins)
+    value, recorded = from_keywords(kind, plan.times, keywords)
+    return RunAnalysis(kind, model, value, recorded, start)
+
+
+def _call(runner, plan: Plan, results: dict, checked: bool, stand_ins: bool):
+    """``(kind, model, keywords, start)`` of a run (:func:`call`)."""
     r = plan.spec
     drivers = []
     for k, p in enumerate(r.prescribed):
@@ -266,20 +324,26 @@ def call(
         else:
             drivers.append(prescribed_driver(runner, p, (*plan.path, "prescribed", k)))
     mixed = isinstance(r, s.MixedRunSpec)
-    # The set-up the check made (mobility), if any: the run starts from it, not assembled
+    # The start the check made (mobility), if any: the run starts from it, not assembled
     # and analysed again.
     no_setup = (None, None)
     args, prep = runner.setups.prepared.get(plan.name, no_setup) if checked else no_setup
     model = prep.model if prep is not None else run_model(runner, plan, () if mixed else drivers)
+    if args is None:
+        args = start_args(runner, plan, model)
+    return kind_of(plan).name, model, _keywords(runner, plan, args, drivers), prep
+
+
+def _keywords(runner, plan: Plan, args: dict, drivers: Sequence[m.Driver]) -> dict:
+    """The keywords of a run's analysis (:meth:`.analyses.AnalysisKind.keywords`): its start
+    arguments ``args``, options, step and prescribed motions ``drivers``."""
+    r = plan.spec
     opts = dict(getattr(r, "options", {}) or {})
     opts.pop("linear_solver", None)
     dt = None
     if getattr(r, "dt", None) is not None:
         dt = runner.b.scalar(r.dt, "time", (*plan.path, "dt"))
-    if args is None:
-        args = start_args(runner, plan, model)
-    kind = kind_of(plan)
-    return kind.name, model, kind.keywords(r, args, prep, opts, dt, drivers)
+    return kind_of(plan).keywords(r, args, opts, dt, drivers)
 
 
 def drivers_key(drivers) -> tuple:
@@ -313,7 +377,9 @@ def velocity_kind(coord: str) -> str:
 
 
 __all__ = [
+    "RunAnalysis",
     "Setups",
+    "analysis_of",
     "call",
     "drivers_key",
     "dummy_driver",
