@@ -97,10 +97,12 @@ def load_seconds(page: pathlib.Path, runs: int = 5) -> float:
 def main() -> None:
     import mixdyn as md
     import mixdyn.io as mio
+    import mixdyn.runs
     from mixdyn.viz import Scene, html
 
     root = pathlib.Path(__file__).resolve().parent.parent
-    res = mio.execute(mio.read(root / "examples" / "antonya.yaml"), ["forward"])["forward"]
+    spec = mio.read(root / "examples" / "antonya.yaml")
+    res = mixdyn.runs.execute(spec, ["forward"])["forward"]
     with tempfile.TemporaryDirectory() as d:
         ours = html(res, pathlib.Path(d) / "mixdyn.html", trace=["coupler.C"])
         scene = Scene(res.model, np.asarray(res.q))

@@ -36,7 +36,13 @@ if _configure_cache() is not None and (_tag := _command.job_tag(_sys.argv)) is n
 
     _prefetch(_tag)  # `mixdyn run FILE`: its programs read while the rest imports
 
-from . import analyses, errors, paths  # noqa: E402
+from . import (  # noqa: E402
+    _moved,
+    analyses,
+    errors,
+    paths,
+)
+from ._version import __version__  # noqa: E402
 from .analysis import (  # noqa: E402
     Analysis,
     Assembly,
@@ -91,8 +97,6 @@ from .model import *  # noqa: E402, F403
 from .model import __all__ as _model_all  # noqa: E402
 from .units import SI, UnitSystem  # noqa: E402
 
-__version__ = "0.1.0"
-
 
 def _model_html(model) -> str:
     """A notebook's view of a model, drawn by :func:`mixdyn.viz.show.model_html` (the plots
@@ -111,6 +115,18 @@ def _result_html(result) -> str:
 
 Model._repr_html_ = _model_html  # noqa: F405  (Model comes from .model's *)
 Result._repr_html_ = _result_html
+
+
+def _from_runs(name: str):
+    """:mod:`mixdyn.runs`' ``name``, for its old spelling ``mixdyn.io.name`` (registered
+    here, above both, so that the file formats do not import the runs of a file)."""
+    from . import runs
+
+    return getattr(runs, name)
+
+
+for _name in ("Plan", "Runner", "execute"):
+    _moved.register("mixdyn.io", _name, f"mixdyn.runs.{_name}", lambda n=_name: _from_runs(n))
 
 
 def __getattr__(name):

@@ -7,18 +7,20 @@ quantities may carry units (``"500 N*mm"``) and laws of time are safe expression
 (``"10*sin(pi*t/2)"``). Every fault is a :class:`FileError` naming the file, line and element.
 
 This package holds the file formats (the model file, the written results). Running a file's
-runs is :mod:`mixdyn.runs`; its :class:`Runner`, :class:`Plan` and :func:`execute` are also
-reached here (looked up in :mod:`mixdyn.runs` when first used).
+runs is :mod:`mixdyn.runs` (``mixdyn.io.Runner``, ``Plan`` and ``execute`` are deprecated
+spellings of its names: a DeprecationWarning names them).
 
 Example::
 
     import mixdyn.io as mio
+    import mixdyn.runs
     spec = mio.read("examples/antonya.yaml")
     model = mio.build(spec)
-    results = mio.execute(spec)          # every run, by name
+    results = mixdyn.runs.execute(spec)  # every run, by name
     mio.write_result(results["forward"], "out/forward")
 """
 
+from .._moved import old_name
 from ._errors import FileError
 from .dump import describe, dump, dumps
 from .expressions import FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
@@ -27,16 +29,10 @@ from .quantities import DimensionError, QuantityError, convert
 from .results import read_result, write_result
 from .schema import ModelFile, json_schema
 
-#: Names of :mod:`mixdyn.runs` reached from here.
-_RUNS = ("Plan", "Runner", "execute")
-
 
 def __getattr__(name: str):
-    if name in _RUNS:
-        from .. import runs
-
-        return getattr(runs, name)
-    raise AttributeError(f"module 'mixdyn.io' has no attribute {name!r}")
+    # Runner, Plan and execute moved up to mixdyn.runs, which mixdyn's top level registers.
+    return old_name(__name__, name)
 
 
 __all__ = [
@@ -47,15 +43,12 @@ __all__ = [
     "ExpressionLaw",
     "FileError",
     "ModelFile",
-    "Plan",
     "QuantityError",
-    "Runner",
     "build",
     "convert",
     "describe",
     "dump",
     "dumps",
-    "execute",
     "json_schema",
     "load",
     "read",

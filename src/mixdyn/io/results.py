@@ -73,7 +73,7 @@ def write_result(
     Returns:
         The files written.
     """
-    from .. import __version__
+    from .._version import __version__
 
     folder = pathlib.Path(folder)
     cols, units = in_units(result, *point_columns(result, points), output_units)
@@ -137,7 +137,7 @@ def write_failure(
     Returns:
         The files written.
     """
-    from .. import __version__
+    from .._version import __version__
 
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
@@ -278,7 +278,7 @@ def write_sweep(
     Returns:
         The files written.
     """
-    from .. import __version__
+    from .._version import __version__
 
     folder = pathlib.Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
