@@ -271,7 +271,7 @@ def _unit(text: str):
 
 @functools.lru_cache(maxsize=CACHE_SIZE)
 def _parse_unit(text: str):
-    text = text.replace("\u00b2", "**2").replace("\u00b3", "**3").replace("^", "**")
+    text = plain(text).replace("^", "**")
     if len(text) > MAX_LENGTH or not _UNIT.match(text):
         raise QuantityError(
             f"{text!r} is not a unit", "write units like 'mm', 'N*mm', 'kg*mm**2', 'rad/s'"
@@ -344,13 +344,20 @@ def factor(unit_text: str, kind: Kind | None, units: UnitSystem) -> float:
 
 @functools.lru_cache(maxsize=CACHE_SIZE)
 def _factor(unit_text: str, kind: Kind | None, units: UnitSystem) -> float:
-    exps = exponents(unit_text)
+    try:
+        exps = exponents(unit_text)
+    except QuantityError as e:
+        close = close_units(unit_text, kind)
+        if not close:
+            raise
+        raise QuantityError(e.problem, f"did you mean {_either(close)}?") from None
     if kind is not None and exps != dimension(kind):
         name = kind_name(kind)
+        close = close_units(unit_text, kind)
         raise DimensionError(
             f"{unit_text!r} is a unit of {kind_of(exps).replace('_', ' ')}, expected "
             f"{_article(name)} ({model_unit(kind, units) or 'dimensionless'})",
-            f"give the value in a unit of {name}",
+            f"did you mean {_either(close)}?" if close else f"give the value in a unit of {name}",
         )
     target = unit_for(exps, units)
     q = registry().Quantity(1.0, _unit(unit_text))
@@ -358,8 +365,125 @@ def _factor(unit_text: str, kind: Kind | None, units: UnitSystem) -> float:
     return float(value)
 
 
+#: Common units of each kind, the spellings :func:`close_units` suggests.
+COMMON_UNITS: dict[str, tuple[str, ...]] = {
+    "length": ("m", "mm", "cm", "km", "um", "in", "ft"),
+    "mass": ("kg", "g", "mg", "t", "lb"),
+    "time": ("s", "ms", "min", "h"),
+    "angle": ("rad", "deg", "rev"),
+    "velocity": ("m/s", "mm/s", "km/h"),
+    "acceleration": ("m/s**2", "mm/s**2"),
+    "angular_velocity": ("rad/s", "rpm", "deg/s", "rev/s", "Hz"),
+    "angular_acceleration": ("rad/s**2", "deg/s**2"),
+    "force": ("N", "kN", "mN", "lbf"),
+    "torque": ("N*m", "N*mm", "N*cm", "kN*m", "mN*m", "lbf*ft", "lbf*in"),
+    "inertia": ("kg*m**2", "kg*mm**2", "kg*cm**2", "g*cm**2", "g*mm**2"),
+    "energy": ("J", "kJ", "mJ"),
+    "power": ("W", "kW"),
+    "stiffness": ("N/m", "N/mm", "kN/m"),
+    "damping": ("N*s/m", "N*s/mm"),
+    "rotational_stiffness": ("N*m/rad", "N*mm/rad", "N*m/deg"),
+    "rotational_damping": ("N*m*s/rad", "N*mm*s/rad"),
+}
+
+
+def _squashed(text: str) -> str:
+    """A unit's spelling without separators and powers' marks (``kg*m**2`` -> ``kgm2``)."""
+    return re.sub(r"[\s*·.^]", "", text.replace("**", "")).replace("²", "2").replace("³", "3")
+
+
+def close_units(text: str, kind: Kind | None = None) -> list[str]:
+    """Common units (:data:`COMMON_UNITS`) spelled like ``text`` but for separators, powers'
+    marks or case (``Nm`` -> ``N*m``, ``kg m2`` -> ``kg*m**2``, ``RPM`` -> ``rpm``), of the
+    dimension of ``kind`` where given, best first; then near misses of one letter."""
+    import difflib
+
+    want = None if kind is None else dimension(kind)
+    names = [
+        u
+        for k, units in COMMON_UNITS.items()
+        if want is None or DIMENSIONS[k] == want
+        for u in units
+        if u != text
+    ]
+    names = list(dict.fromkeys(names))
+    key = _squashed(text)
+    same = [u for u in names if _squashed(u) == key]
+    if not same:
+        same = [u for u in names if _squashed(u).lower() == key.lower()]
+    if same or want is None:
+        return same
+    squashed = {_squashed(u): u for u in names}
+    near = difflib.get_close_matches(key, list(squashed), n=2, cutoff=0.75)
+    return [squashed[k] for k in near]
+
+
+def _either(units: list[str]) -> str:
+    return " or ".join(f"'{u}'" for u in units)
+
+
 def _article(name: str) -> str:
     return ("an " if name[0] in "aeiou" else "a ") + name
+
+
+# --------------------------------------------------------------------------- labels
+_SUPERSCRIPTS = str.maketrans(
+    "0123456789-", "\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b"
+)
+_PLAIN_DIGITS = {
+    v: k
+    for k, v in zip(
+        "0123456789-",
+        "\u2070\u00b9\u00b2\u00b3\u2074\u2075\u2076\u2077\u2078\u2079\u207b",
+        strict=True,
+    )
+}
+_MICRO = {"um": "\u00b5m", "us": "\u00b5s"}
+
+
+def engineering(unit: str) -> str:
+    """A unit as an engineer writes it, for tables, figures and files: products with a
+    middle dot, powers as superscripts, micro as µ (``mN*mm`` -> ``mN·mm``,
+    ``mm/s**2`` -> ``mm/s²``, ``kg*mm**2`` -> ``kg·mm²``, ``um`` -> ``µm``). mixdyn reads
+    these spellings back (:func:`plain`); ``""`` stays ``""``."""
+    text = re.sub(
+        r"\s*\*\*\s*([-+]?\d+)", lambda m: m[1].lstrip("+").translate(_SUPERSCRIPTS), unit
+    )
+    text = re.sub(r"\s*\*\s*", "\u00b7", text)
+    return re.sub(r"[A-Za-z_]+", lambda m: _MICRO.get(m[0], m[0]), text)
+
+
+def plain(unit: str) -> str:
+    """The pint spelling of a unit written by :func:`engineering` (``N·m`` -> ``N*m``,
+    ``mm/s²`` -> ``mm/s**2``); other spellings as they are."""
+    text = re.sub(
+        "[\u2070\u00b9\u00b2\u00b3\u2074-\u2079\u207b]+",
+        lambda m: "**" + "".join(_PLAIN_DIGITS[c] for c in m[0]),
+        unit,
+    )
+    return text.replace("\u00b7", "*").replace("\u22c5", "*")
+
+
+#: ``output_units`` presets: every kind of quantity of the results in one named system
+#: (``output_units: SI``; ``{preset: mm-N-s, angle: deg}`` changes some of them).
+OUTPUT_PRESETS: dict[str, dict[str, str]] = {
+    "SI": {
+        "length": "m", "mass": "kg", "time": "s", "angle": "rad", "velocity": "m/s",
+        "acceleration": "m/s**2", "angular_velocity": "rad/s",
+        "angular_acceleration": "rad/s**2", "force": "N", "torque": "N*m",
+        "inertia": "kg*m**2", "energy": "J", "power": "W", "stiffness": "N/m",
+        "damping": "N*s/m", "rotational_stiffness": "N*m/rad",
+        "rotational_damping": "N*m*s/rad",
+    },
+    "mm-N-s": {
+        "length": "mm", "mass": "kg", "time": "s", "angle": "rad", "velocity": "mm/s",
+        "acceleration": "mm/s**2", "angular_velocity": "rad/s",
+        "angular_acceleration": "rad/s**2", "force": "N", "torque": "N*mm",
+        "inertia": "kg*mm**2", "energy": "mJ", "power": "mW", "stiffness": "N/mm",
+        "damping": "N*s/mm", "rotational_stiffness": "N*mm/rad",
+        "rotational_damping": "N*mm*s/rad",
+    },
+}  # fmt: skip
 
 
 SI = UnitSystem("m", "kg", "s")

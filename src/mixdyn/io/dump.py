@@ -18,6 +18,7 @@ from ..errors import ModelError
 from ..model._declare import TIME, Variable
 from . import schema as s
 from .expressions import ExpressionFunction, ExpressionLaw
+from .readings import parameter_units
 
 
 class _Dumper(yaml.SafeDumper):
@@ -270,7 +271,7 @@ def describe(model: m.Model, runs=()) -> s.ModelFile:
     drivers = [d.driver(x) for x in model.drivers]
     forces = [d.force(f) for f in model.forces]
     u = model.units
-    return s.ModelFile(
+    out = s.ModelFile(
         name=model.name,
         units=s.UnitsSpec(length=u.length, mass=u.mass, time=u.time),
         gravity=tuple(_v(model.gravity)),
@@ -282,6 +283,13 @@ def describe(model: m.Model, runs=()) -> s.ModelFile:
         forces=forces,
         runs=list(runs),
     )
+    # The parameters are numbers in model units: those that laws need with a dimension
+    # (``c`` of ``-c*rod.omega``) are written with the model's unit of it.
+    needed = parameter_units(out) if out.parameters else {}
+    if not needed:
+        return out
+    params = {k: f"{v!r} {needed[k]}" if k in needed else v for k, v in out.parameters.items()}
+    return out.model_copy(update={"parameters": params})
 
 
 __all__ = ["describe", "dump", "dumps", "to_data"]

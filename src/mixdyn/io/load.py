@@ -47,6 +47,7 @@ from .quantities import (
     has_unit_tail,
     looks_like_quantity,
 )
+from .readings import Readings
 
 _SECTIONS = {
     "bodies": "body",
@@ -302,6 +303,8 @@ class Builder:
         self.body_names = [b.name for b in spec.bodies]
         self.body_index = {n: i for i, n in enumerate(self.body_names)}
         self._body_tuple = tuple(self.body_names)
+        #: The unit checks and the record of every number read (``mixdyn check --explain``).
+        self.readings = Readings(self)
 
     # ----------------------------------------------------------------- errors
     def fail(self, path, problem: str, hint: str = "") -> NoReturn:
@@ -350,12 +353,14 @@ class Builder:
     def scalar(self, value, kind, path, *, scale: float = 1.0) -> float:
         """A scalar in model units (see :func:`mixdyn.io.quantities.convert`)."""
         try:
-            return convert(value, kind, self.units, self.parameters, scale)
+            x = convert(value, kind, self.units, self.parameters, scale)
         except ExpressionError as e:
             self.fail(path, e.message, e.hint)
         except QuantityError as e:
             shown = repr(value)
             self.fail(path, e.problem if shown in e.problem else f"{shown}: {e.problem}", e.hint)
+        self.readings.scalar(value, kind, path, x, scale)
+        return x
 
     def factor(self, unit: str, kind, path) -> float:
         try:
@@ -461,6 +466,7 @@ class Builder:
         path = tuple(path)
         if variable != TIME:
             spec = self._renamed(spec, variable, path)
+        self.readings.law(spec, kind, path, variable.kind)
         if isinstance(spec, int | float):
             return m.Constant(float(spec))
         if isinstance(spec, str):
@@ -574,6 +580,7 @@ class Builder:
 
     def expression(self, text, unit, kind, path, state: bool):
         scale = 1.0 if unit is None else self.factor(unit, kind, (*path[:-1], "unit"))
+        self.readings.expression(text, unit, kind, path)
         try:
             # A law of t (no body state) parses the same without the bodies: that parse is
             # cached and is the one ExpressionLaw repeats.
