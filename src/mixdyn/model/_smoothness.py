@@ -44,6 +44,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
+from ..runtime._programs import cached_jit
 from ._laws import PiecewisePolynomial
 from ._validate import _traced
 
@@ -70,11 +71,11 @@ class Jump:
 
 def _samples(law, x: np.ndarray) -> np.ndarray:
     """``(4, len(x))``: the law and its first three derivatives at ``x`` (one compiled
-    program per law and grid size)."""
+    program per law's structure and grid size, kept between processes)."""
     return np.asarray(_derivatives(law, jnp.asarray(x, dtype=jnp.float64)), dtype=float).T
 
 
-@eqx.filter_jit
+@cached_jit(optimize=False)  # runs once per law
 def _derivatives(law, x):
     def derivs(s):
         def d1(u):
