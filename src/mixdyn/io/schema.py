@@ -247,9 +247,9 @@ class _DeclaredSpec(Spec):
             values[field] = value
         try:
             with warnings.catch_warnings():
-                # What the class only warns of in Python (a deprecated default) a file has
-                # to give.
-                warnings.simplefilter("error", DeprecationWarning)
+                # What the class only warns of in Python (a deprecated default, a warning
+                # that starts with the element's name) a file has to give.
+                warnings.filterwarnings("error", f"{re.escape(self.name)}: ", DeprecationWarning)
                 return kind.cls(self.name, **values)
         except ModelError as e:
             b.fail(b.fault_path(p, e), _without_element(e, self.name))
