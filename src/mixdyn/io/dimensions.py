@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import itertools
 from collections.abc import Mapping
 from fractions import Fraction
 
@@ -132,7 +133,8 @@ def leaves(source: str, parameters) -> Leaves:
 class _Infer:
     """Dimensions of the nodes of one parsed (and already accepted) expression."""
 
-    def __init__(self, source: str, dims: Mapping[str, Dim], variable: Dim, values):
+    def __init__(self, source: str, dims: Mapping[str, Dim], variable: Dim, values, numbers):
+        self.numbers = numbers
         self.text = source.strip()
         self.shift = len(source) - len(source.lstrip())
         self.dims = dims
@@ -172,14 +174,14 @@ class _Infer:
 
     def of(self, node) -> Dim | None:
         if isinstance(node, ast.Constant):
-            return FREE
+            return self.numbers
         if isinstance(node, ast.Name):
             if node.id == "t":
                 return self.variable
             if node.id in self.dims:
                 return self.dims[node.id]
             if node.id in CONSTANTS:
-                return FREE
+                return self.numbers
             return FREE
         if isinstance(node, ast.Attribute):
             return dim(STATE_DIMS[node.attr])
@@ -268,6 +270,7 @@ def infer(
     *,
     variable: Dim = dim(DIMENSIONS["time"]),
     values: Mapping[str, float] | None = None,
+    numbers: Dim | None = FREE,
 ) -> Dim | None:
     """The dimension of an accepted expression (:func:`mixdyn.io.expressions.parse`), or
     :data:`FREE` where it is made of numbers only.
@@ -277,12 +280,14 @@ def infer(
         dims: the dimension of every parameter it may use.
         variable: the dimension of ``t`` (time; an angle for a cam's law).
         values: the parameters' values, for constant exponents.
+        numbers: the dimension of the numbers written in it (:data:`FREE`; :data:`PLAIN`
+            to find the plainest reading of a law, :func:`check`).
 
     Raises:
         MismatchError: two dimensions that must be equal are not, with the column.
     """
     tree = ast.parse(source.strip(), mode="eval")
-    return _Infer(source, dims, variable, dict(values or {})).of(tree.body)
+    return _Infer(source, dims, variable, dict(values or {}), numbers).of(tree.body)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -308,12 +313,13 @@ class Parameter:
 class Fault:
     """Why a law does not fit its field: ``problem`` and ``hint`` (the line to write), and
     ``parameter``, the parameter at fault (None: none found), with ``dim``, the dimension
-    that would make the law fit."""
+    that would make the law fit, and ``dims``, those of all the parameters at fault."""
 
     problem: str
     hint: str
     parameter: str | None = None
     dim: Dim | None = None
+    dims: Mapping[str, Dim] | None = None
 
 
 #: Dimensions tried for a parameter written without a unit, to find the one a law needs.
@@ -330,6 +336,7 @@ def check(
     variable: Dim = dim(DIMENSIONS["time"]),
     values: Mapping[str, float] | None = None,
     strict: bool = False,
+    law: bool = True,
 ) -> Fault | None:
     """Whether the expression ``source`` comes out as ``target``; None where it does.
 
@@ -349,6 +356,8 @@ def check(
         values: the parameters' values (model units).
         strict: check every expression, and refuse one made of numbers only where ``target``
             has a dimension (the file's ``strict_units``).
+        law: ``source`` is a law (else a constant expression in a field, whose unit is
+            written after it).
     """
     used = leaves(source, parameters)
     stated = used.states or any(parameters[n].dim not in (None, PLAIN) for n in used.parameters)
@@ -363,23 +372,21 @@ def check(
         mismatch = None
         if got is FREE:
             if strict and target != PLAIN:
+                unit = unit_of(target, units)
                 return Fault(
                     f"the numbers of {source!r} carry no unit (strict_units), {needed} is needed",
-                    f"give the law's unit: {{expr: {source}, unit: {unit_of(target, units)}}}, "
-                    "or use parameters with units",
+                    f"give the law's unit: {{expr: {source}, unit: {unit}}}, or use parameters "
+                    "with units"
+                    if law
+                    else f"write it with its unit: `{source} {unit}`",
                 )
             return None
         if got == target:
             return None
     bare = [n for n in used.parameters if parameters[n].dim is None]
-    for name in bare:
-        for cand in _CANDIDATES:
-            try:
-                d = infer(source, {**dims, name: cand}, variable=variable, values=values)
-            except MismatchError:
-                continue
-            if d is FREE or d == target:
-                return _blame(parameters[name], cand, source, got, mismatch, needed, units)
+    fix = _units_that_fit(source, target, dims, bare, variable, values)
+    if fix:
+        return _blame([parameters[n] for n in fix], fix, source, got, mismatch, needed, units)
     for name in used.parameters:
         p = parameters[name]
         for spelling in close_units(p.unit) if p.unit else ():
@@ -408,19 +415,48 @@ def check(
     )
 
 
-def _blame(p: Parameter, d: Dim, source, got, mismatch, needed, units) -> Fault:
-    line = f" (line {p.line})" if p.line else ""
+#: Most parameters without units given units together to find a law's fix.
+MAX_FIXED_TOGETHER = 2
+
+
+def _units_that_fit(source, target, dims, bare, variable, values) -> dict[str, Dim]:
+    """Dimensions of the fewest of the parameters ``bare`` that make ``source`` come out as
+    ``target`` (empty: none found), the plainest reading first: with the numbers written in
+    it dimensionless (the ``1`` of ``1 - w/n0``), then as any dimension."""
+    for numbers in (PLAIN, FREE):
+        for k in range(1, min(MAX_FIXED_TOGETHER, len(bare)) + 1):
+            for names in itertools.combinations(bare, k):
+                for cands in itertools.product(_CANDIDATES, repeat=k):
+                    trial = {**dims, **dict(zip(names, cands, strict=True))}
+                    try:
+                        d = infer(source, trial, variable=variable, values=values, numbers=numbers)
+                    except MismatchError:
+                        continue
+                    if d == target or (d is FREE and numbers is FREE):
+                        return dict(zip(names, cands, strict=True))
+    return {}
+
+
+def _blame(ps: list[Parameter], fix: dict, source, got, mismatch, needed, units) -> Fault:
     if mismatch is not None:
         outcome = f"its units do not fit ({mismatch.problem})"
     else:
         outcome = f"it comes out as {describe(got)}, not {needed}"
-    unit = unit_of(d, units)
+    named = " and ".join(
+        f"parameter {p.name!r}" + (f" (line {p.line})" if p.line else "") for p in ps
+    )
+    verb = "is" if len(ps) == 1 else "are"
+    fixes = ", ".join(
+        f"`{p.name}: {_shown(p.written)} {unit_of(fix[p.name], units)}` ({describe(fix[p.name])})"
+        for p in ps
+    )
     return Fault(
-        f"expression {source!r}: parameter {p.name!r}{line} is written without a unit, so it "
-        f"is a plain number here and {outcome}",
-        f"write the unit you mean, e.g. `{p.name}: {_shown(p.written)} {unit}` ({describe(d)})",
-        p.name,
-        d,
+        f"expression {source!r}: {named} {verb} written without a unit, so a plain number "
+        f"here and {outcome}",
+        f"write the unit you mean, e.g. {fixes}",
+        ps[0].name,
+        fix[ps[0].name],
+        fix,
     )
 
 

@@ -162,11 +162,13 @@ class Readings:
             variable=self.variable,
             values=self.b.parameters,
             strict=self.strict,
+            law=time,
         )
         if fault is None:
             return
         if self.needed is not None and fault.parameter is not None and fault.dim is not None:
-            self.needed.setdefault(fault.parameter, fault.dim)
+            for name, dim in (fault.dims or {fault.parameter: fault.dim}).items():
+                self.needed.setdefault(name, dim)
             return
         self.b.fail(path, fault.problem, fault.hint)
 
@@ -181,7 +183,7 @@ class Readings:
         if isinstance(spec, int | float):
             self.scalar(spec, kind, path, float(spec))
         elif isinstance(spec, str):
-            self._unit_tail(spec, path)
+            self._unit_tail(spec, kind, path)
 
     def expression(self, text: str, unit: str | None, kind: Kind, path) -> None:
         """Check a law's expression (``unit``: the unit given with it) and record it; one
@@ -197,8 +199,10 @@ class Readings:
         self._expression(text, kind, path, time=True, unit_scale=unit)
         self.records[path] = Reading(path, text, kind, None, unit)
 
-    def _unit_tail(self, text: str, path) -> None:
-        """Refuse a law of time or state followed by a unit (``10*sin(t) N``)."""
+    def _unit_tail(self, text: str, kind: Kind, path) -> None:
+        """Refuse a law of time or state followed by a unit (``10*sin(t) N``), with the
+        spelling that gives it that unit, or without the unit where the law has it already
+        (its parameters have units)."""
         if _parses(text):
             return
         words = text.split()
@@ -213,11 +217,23 @@ class Readings:
             uses = d.leaves(head, self.b.parameters)
             if not (uses.states or re.search(r"\bt\b", head)):
                 return  # a constant followed by a unit: a quantity
+            fits = d.leaves(head, self.parameters).parameters and not d.check(
+                head,
+                d.dim(_exps(kind)),
+                self.parameters,
+                self.b.units,
+                needed="",
+                variable=self.variable,
+                values=self.b.parameters,
+            )
+            stated = any(self.parameters[n].dim not in (None, d.PLAIN) for n in uses.parameters)
             self.b.fail(
                 path,
                 f"the law {text!r} ends in a unit ({tail}); an expression's unit is given "
                 "beside it",
-                f"write {{expr: {head}, unit: {tail}}}",
+                f"write {head} (its parameters' units make it {_needed(kind, None)} already)"
+                if fits and stated
+                else f"write {{expr: {head}, unit: {tail}}}",
             )
 
 
