@@ -591,6 +591,15 @@ class Packed(eqx.Module):
         """Values (nnz,) of ``Phi_q`` on the pattern ``c.coo()``."""
         return _jacobian_eval(self.key.static, self.groups, q, t, self.c.active)
 
+    def jacobian(self, q, t) -> BandedJacobian:
+        """``Phi_q(q, t)`` as the set's banded operator (:meth:`Constraints.jacobian`)."""
+        return BandedJacobian(self.c, self.jacobian_values(q, t))
+
+    def phi_t(self, q, t) -> jax.Array:
+        """Partial time derivative ``Phi_t`` (m,), the rows kept."""
+        t = jnp.asarray(t, dtype=jnp.float64)
+        return _local_eval(self.key.static, self.groups, _phi_t, q, t, None, self.c.active)
+
 
 def _localize(e):
     """A copy of element ``e`` reading its bodies from a local vector ``[q_b0, q_b1, ...]``

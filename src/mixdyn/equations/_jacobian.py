@@ -23,7 +23,8 @@ the pivot ratio (near 0: the matrix lost rank; comparable between the two paths)
 With ``guard=True`` a factorization whose pivot ratio falls below
 :data:`~mixdyn.linalg._dense.SINGULAR_RATIO` (a singular position) is solved instead by the
 damped SVD solve, on either path (:func:`~mixdyn.linalg._dense.guarded`): from the SVD of the
-dense ``Phi_q W^(1/2)`` for the symmetric ``S``, of ``S`` itself for a mixed problem's.
+dense ``Phi_q W^(1/2)`` for the symmetric ``S``, of ``S`` itself for a mixed problem's; on the
+sparse path above :data:`DENSE_GUARD_MAX_ENTRIES` by a damped solve on the banded factors.
 """
 
 from __future__ import annotations
@@ -36,12 +37,27 @@ import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
 
-from ..linalg._dense import Factor, factor_ranked, gram_factor, guarded, lu_factor_checked
+from ..linalg._dense import (
+    SINGULAR_DAMPING,
+    SINGULAR_RATIO,
+    Factor,
+    factor_ranked,
+    gram_factor,
+    guarded,
+    lu_factor_checked,
+)
 
 #: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
 #: the steps of iterated regularization (see :meth:`BandedJacobian.schur`).
 REGULARIZATION = 1e-8
 REFINE_REDUNDANT = 4
+
+#: The largest ``Phi_q`` (m x n entries) whose guard on the sparse path takes the damped SVD
+#: solve of the dense matrix (32 MB of float64); a larger one's guard is the damped solve on
+#: the banded factors (:meth:`BandedJacobian._banded_guard`). The dense branch is compiled
+#: whether or not it is taken, and XLA's compile time grows with the matrix it forms: the
+#: guard of a 4,000-link chain's start (m x n = 8000 x 12000) took 259 s to compile.
+DENSE_GUARD_MAX_ENTRIES = 4_000_000
 
 
 class JacobianOperator(eqx.Module):
@@ -347,6 +363,8 @@ class BandedJacobian(JacobianOperator):
                 return y
 
             f = Factor(solve, ratio)
+        if guard and c.m and c.m * c.nq > DENSE_GUARD_MAX_ENTRIES:
+            return self._banded_guard(f, W, shift)
         if guard and c.m:
 
             def F():  # formed only where the guard takes the damped solve
@@ -354,6 +372,32 @@ class BandedJacobian(JacobianOperator):
 
             return guarded(f, F, self.rank, c.batched, gram=True)
         return f
+
+    def _banded_guard(self, f: Factor, W, shift=None) -> Factor:
+        """``f`` with, below :data:`~mixdyn.linalg._dense.SINGULAR_RATIO`, a damped solve on
+        the banded factors instead of the dense SVD (``Phi_q`` over
+        :data:`DENSE_GUARD_MAX_ENTRIES`): ``y = (S + mu I)^-1 S (S + mu I)^-1 b`` with
+        ``mu = SINGULAR_DAMPING * max diag S``, which inverts an eigenvalue ``s`` of ``S`` as
+        ``s / (s + mu)^2``: ``1/s`` for ``s >> mu``, smoothly to zero below, as the SVD
+        solve's ``s / (s^2 + mu^2)`` does (both at most ``1 / (2 mu)``)."""
+        c, v = self.c, self.values
+        st = c.schur_structure()
+        rows, cols = c.coo()
+        extra = 0.0 if shift is None else shift
+        diag = jax.ops.segment_sum(v**2 * W[cols], jnp.asarray(rows), num_segments=c.m)
+        mu = SINGULAR_DAMPING * (jnp.max(diag, initial=0.0) + extra)
+        fac, _ = st.factor(v, W, mu + extra, rank=self.rank)
+
+        def damped(b):
+            if b.ndim == 2:
+                return jax.vmap(damped, in_axes=1, out_axes=1)(b)
+            y = st.solve_factored(fac, b)
+            return st.solve_factored(fac, self.mv(W * self.rmv(y)) + extra * y)
+
+        def solve(b):
+            return jax.lax.cond(~(f.ratio >= SINGULAR_RATIO), damped, f.solve, b)
+
+        return Factor(solve, f.ratio)
 
     def solver(self, refine=0):
         """The minimum-norm solution through the Schur complement (:meth:`min_norm` with
