@@ -38,6 +38,7 @@ from mixdyn.analysis._problem import Problem
 from mixdyn.analysis._reactions import joint_reactions
 from mixdyn.equations import Constraints
 from mixdyn.model._element import Resolver
+from mixdyn.runs import execute
 
 TOL = 1e-12
 
@@ -535,7 +536,7 @@ def test_model_file_run_takes_the_linear_solver():
         "kind: kinematic\n", "kind: kinematic\n    linear_solver: sparse\n"
     ).replace("time: {span: [0, 2*pi], step: 0.05}", "time: {span: [0, 0.2], n: 3}")
     spec = mio.reads(text)
-    res = mio.execute(spec, ["kinematics"])["kinematics"]
+    res = execute(spec, ["kinematics"])["kinematics"]
     assert res.stats["linear_solver"] == "sparse"
     # the default normal form does not change: 'auto' is the default
     assert "linear_solver" not in mio.dumps(mio.read(EXAMPLES / "four_bar.yaml"))

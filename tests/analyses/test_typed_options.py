@@ -16,7 +16,7 @@ import mixdyn as md
 import mixdyn.io as mio
 from fixtures import new_traces, pendulum, slider_crank, traced_now
 from mixdyn.analysis.methods import FIXED_STEP, OPTIONS
-from mixdyn.runs import checks
+from mixdyn.runs import Runner, checks
 from mixdyn.runtime import _programs
 
 TS = np.linspace(0.0, 0.2, 5)
@@ -323,7 +323,7 @@ def test_a_model_file_run_makes_the_same_object(kind, lines, expected, monkeypat
 
     monkeypatch.setattr(importlib.import_module(f"mixdyn.analysis.{kind}"), "simulate", simulate)
     spec = mio.reads(FILE + run)
-    runner = mio.Runner(spec)
+    runner = Runner(spec)
     with pytest.raises(_CapturedError):
         runner.execute()
     assert seen["options"] == expected

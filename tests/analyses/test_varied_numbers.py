@@ -10,6 +10,7 @@ import mixdyn as md
 import mixdyn.io as mio
 from fixtures import EXAMPLES
 from mixdyn.errors import ModelError
+from mixdyn.runs import Runner
 
 T = np.linspace(0.0, 1.0, 11)
 
@@ -161,7 +162,7 @@ def test_optimization_bounds_a_model_refuses_are_refused_before_searching(
     import scipy.optimize
 
     spec = mio.read(EXAMPLES / "slider_crank_spring.yaml")
-    model, t = mio.build(spec), mio.Runner(spec).plans["revolution"].times
+    model, t = mio.build(spec), Runner(spec).plans["revolution"].times
     monkeypatch.setattr(scipy.optimize, "minimize", _no_search)
     with pytest.raises(ModelError) as truth:
         built()
@@ -226,3 +227,48 @@ def test_a_number_replaced_by_path_is_the_model_built_with_it():
         )
     with pytest.raises(ModelError, match=r"the value: mesh.radius_i = 0 is refused: .* > 0"):
         md.paths.replace(_gears(), "mesh.radius_i", 0.0)
+
+
+def _rocker(amplitude=0.2):
+    """A cam turned from 0.8 rad at 3 rad/s swinging a pivoted arm by ``a sin(theta)``."""
+    return md.Model(
+        bodies=[
+            md.Body("cam", 1.0, 1e-3, q0=(0, 0, 0.8)),
+            md.Body("arm", 0.2, 2e-3, q0=(0.12, 0.07, 0.0), points={"roller": (-0.1, 0.0)}),
+        ],
+        ground={"O": (0.0, 0.0), "P": (0.12, 0.07)},
+        joints=[
+            md.Revolute("O", "ground.O", "cam"),
+            md.Revolute("P", "ground.P", "arm"),
+            md.CamFollower(
+                "pair",
+                "cam",
+                "arm",
+                law=md.Harmonic(amplitude, 1.0),
+                motion="oscillating",
+                pivot="ground.P",
+                point="arm.roller",
+                follower_type="roller",
+                roller=0.01,
+            ),
+        ],
+        drivers=[md.CoordinateDriver("motor", "cam", "phi", law=md.Ramp(0.8, 3.0))],
+        units=md.SI,
+    )
+
+
+def test_a_swept_cam_law_keeps_the_follower_where_it_starts():
+    """An oscillating follower's angle is its start plus the law's change from the cam's
+    start angle, ``a (sin(theta) - sin(0.8))`` (the closed form), for each swept amplitude,
+    as a model built with it gives."""
+    amplitudes = [0.1, 0.2, 0.3]
+    sweep = md.sweep(
+        _rocker(), T, vary={"pair.law.amplitude": amplitudes}, analysis=md.analyses.Kinematic()
+    )
+    for i, a in enumerate(amplitudes):
+        theta = 0.8 + 3.0 * T
+        np.testing.assert_allclose(
+            sweep[i]["arm.phi"], a * (np.sin(theta) - np.sin(0.8)), rtol=0, atol=1e-12
+        )
+        single = md.kinematic(_rocker(a), T)
+        np.testing.assert_allclose(sweep[i]["arm.phi"], single["arm.phi"], rtol=0, atol=1e-12)

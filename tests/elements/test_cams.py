@@ -12,6 +12,7 @@ import pytest
 import mixdyn as md
 from fixtures import EXAMPLES, evaluate, fd_gamma, fd_jacobian
 from mixdyn.equations import Constraints
+from mixdyn.runs import execute
 
 H, BASE, M, K, F0 = 0.02, 0.05, 0.5, 200.0, 5.0
 
@@ -164,7 +165,7 @@ def test_the_cam_example_file_and_its_separation_speed(tmp_path):
 
     path = EXAMPLES / "cam_follower.yaml"
     text = path.read_text()
-    res = mio.execute(mio.read(path))["inverse"]
+    res = execute(mio.read(path))["inverse"]
     th = res["cam.phi"]
     np.testing.assert_allclose(res["follower.y"], 50 + 10 * (1 - np.cos(th)), atol=1e-10)
     w_sep = math.sqrt(2 * (15 + 40) / (0.3 * 0.02)) * 30 / math.pi  # rpm
@@ -246,7 +247,7 @@ def test_the_rocker_example_file():
     spec = mio.read(path)
     # two and a half turns: the law, given over one turn, is read within each turn
     longer = path.read_text().replace("span: [0, 0.5], n: 181", "span: [0, 1.25], n: 451")
-    res = mio.execute(mio.reads(longer))["inverse"]
+    res = execute(mio.reads(longer))["inverse"]
     th = np.mod(res["cam.phi"], 2 * np.pi)
     b = math.radians(15)
     rise = th / np.pi - np.sin(2 * th) / (2 * np.pi)

@@ -10,6 +10,7 @@ from typer.testing import CliRunner
 import mixdyn.io as mio
 from fixtures import EXAMPLES
 from mixdyn.cli import app
+from mixdyn.runs import Runner
 
 
 def _short(name: str) -> str:
@@ -22,7 +23,7 @@ def _short(name: str) -> str:
 
 @pytest.mark.parametrize("name", ["slider_crank.yaml", "antonya.yaml"])
 def test_the_promised_columns_are_the_results_columns(name):
-    runner = mio.Runner(mio.reads(_short(name)))
+    runner = Runner(mio.reads(_short(name)))
     results = runner.execute()
     assert {r.kind for r in results.values()} >= (
         {"kinematic", "inverse"} if "slider" in name else {"forward", "mixed"}
@@ -61,7 +62,7 @@ def test_a_column_the_run_will_not_have_is_refused(tmp_path, run, column, words)
 def test_a_kinematic_run_has_the_motion_only(tmp_path):
     text = _short("slider_crank.yaml")
     assert "kind: kinematic" in text
-    runner = mio.Runner(mio.reads(text))
+    runner = Runner(mio.reads(text))
     kin = next(p for p in runner.plans.values() if p.spec.kind == "kinematic")
     with pytest.raises(mio.FileError, match="a kinematic run has the motion only"):
         runner.check_column("O.Fx", kin.spec, kin.path)

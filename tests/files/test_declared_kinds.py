@@ -13,6 +13,7 @@ import pytest
 import mixdyn.io as mio
 from mixdyn.io._errors import FileError
 from mixdyn.model._declare import number_kind
+from mixdyn.runs import Runner
 
 MODEL = """\
 mixdyn: 1
@@ -57,7 +58,7 @@ def _file(vary: dict[str, str]) -> str:
 
 
 def test_a_varied_element_number_is_converted_by_its_declared_kind():
-    runner = mio.Runner(mio.reads(_file({k: v for k, (v, _) in VARIED.items()})))
+    runner = Runner(mio.reads(_file({k: v for k, (v, _) in VARIED.items()})))
     values = runner.plans["sweep"].values
     for name, (_, expected) in VARIED.items():
         assert values[name][0] == pytest.approx(expected, rel=1e-12), name
@@ -93,5 +94,5 @@ def test_the_kinds_are_the_declarations():
 def test_a_unit_of_another_kind_is_refused_at_its_line(name, value, words):
     text = _file({name: value})
     with pytest.raises(FileError, match=words) as err:
-        mio.Runner(mio.reads(text))
+        Runner(mio.reads(text))
     assert err.value.line == text.count("\n")  # the varied number's line, the last

@@ -12,6 +12,7 @@ import pytest
 import mixdyn as md
 import mixdyn.io as mio
 from fixtures import EXAMPLES, four_bar, paper_mechanism, slider_crank
+from mixdyn.runs import Runner
 
 FILES = sorted(EXAMPLES.glob("*.yaml"))
 
@@ -228,11 +229,11 @@ def test_energy_tol_null_turns_the_energy_check_off():
     """``options: {energy_tol: null}`` (docs/model-files.md) is accepted and turns the energy
     check off: the same run that a tolerance below its measured balance error refuses
     (a named numerical failure) then ends with that balance error recorded."""
-    off = mio.Runner(mio.reads(_pendulum_run("{energy_tol: null}"), "pendulum.yaml")).execute()
+    off = Runner(mio.reads(_pendulum_run("{energy_tol: null}"), "pendulum.yaml")).execute()
     balance = off["loose"].stats["energy_balance_error"]
     assert balance > 0
     tight = mio.reads(_pendulum_run(f"{{energy_tol: {balance / 10:.3e}}}"), "pendulum.yaml")
     with pytest.raises(md.NumericalError, match="energy"):
-        mio.Runner(tight).execute()
+        Runner(tight).execute()
     with pytest.raises(mio.FileError, match=r"options\.first_step"):  # not for other options
-        mio.Runner(mio.reads(_pendulum_run("{first_step: null}"), "p.yaml"))
+        Runner(mio.reads(_pendulum_run("{first_step: null}"), "p.yaml"))

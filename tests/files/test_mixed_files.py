@@ -9,6 +9,7 @@ import pytest
 import mixdyn as md
 import mixdyn.io as mio
 from fixtures import DATA
+from mixdyn.runs import Runner
 
 ENGINE = DATA / "engine_mixed.yaml"
 CART = DATA / "cart_pendulum.yaml"
@@ -24,13 +25,13 @@ def _line(text: str, needle: str) -> int:
 
 @pytest.fixture(scope="module")
 def engine():
-    runner = mio.Runner(mio.read(ENGINE))
+    runner = Runner(mio.read(ENGINE))
     return runner, runner.execute()
 
 
 @pytest.fixture(scope="module")
 def cart():
-    runner = mio.Runner(mio.read(CART))
+    runner = Runner(mio.read(CART))
     return runner, runner.execute()
 
 
@@ -55,7 +56,7 @@ def test_law_engine_load_torque_is_the_inverse_dynamics_motor_torque(engine):
 def test_the_check_tests_the_prescribed_coordinate():
     """The engine lists the piston before the rod: the check that did not bind the prescribed
     motion tested piston.phi (fixed by the cylinder) and refused crank.phi as redundant."""
-    runner = mio.Runner(mio.read(ENGINE))
+    runner = Runner(mio.read(ENGINE))
     rep = runner.mobility(runner.plans["constant_speed"])
     assert (rep.dof, rep.n_drivers, rep.redundant_drivers) == (1, 1, ())
 
@@ -71,7 +72,7 @@ def test_the_check_refuses_a_coordinate_the_joints_fix():
     text = text.replace(
         "{coordinate: crank.phi, law: pi/2 + omega*t}", "{coordinate: piston.x, law: 0}"
     )
-    runner = mio.Runner(mio.reads(text, "engine.yaml"))
+    runner = Runner(mio.reads(text, "engine.yaml"))
     assert [b.name for b in runner.model.bodies] == ["crank", "rod", "piston"]
     with pytest.raises(mio.FileError, match=r"redundant: prescribed piston\.x"):
         runner.mobility(runner.plans["constant_speed"])
@@ -82,7 +83,7 @@ def test_law_and_samples_pendulum_torque_in_closed_form():
     """A rod pendulum whose angle is prescribed, by a law (constant speed) and by samples (a
     cubic spline through samples of a quadratic, which it reproduces): the torque is
     M = J_O phi'' + m g (L/2) sin(phi) with J_O = m L^2 / 3."""
-    runner = mio.Runner(mio.read(PENDULUM))
+    runner = Runner(mio.read(PENDULUM))
     res = runner.execute()
     m, g, L = 1.0, 9.81, 1.0
     J_O = m * L**2 / 3
@@ -135,7 +136,7 @@ def test_samples_cart_pendulum_recovers_the_force(cart):
     rtol: 1.0e-11
     atol: 1.0e-12
 """
-    runner = mio.Runner(mio.reads(CART.read_text() + run, "cart.yaml"))
+    runner = Runner(mio.reads(CART.read_text() + run, "cart.yaml"))
     mx = runner.execute(["samples"])["samples"]
     np.testing.assert_allclose(mx["F"], 2 * np.sin(np.pi * mx.t), atol=1e-6)
     np.testing.assert_allclose(mx.q, fw.q, atol=1e-7)
@@ -159,7 +160,7 @@ def test_a_run_that_holds_what_it_prescribes_is_refused():
         "    rtol: 1.0e-10\n", "    rtol: 1.0e-10\n    hold: [crank.phi]\n"
     )
     with pytest.raises(mio.FileError) as e:
-        mio.Runner(mio.reads(text, "engine.yaml"))
+        Runner(mio.reads(text, "engine.yaml"))
     assert e.value.line == _line(text, "    hold: [crank.phi]")
     assert "crank.phi is held, but the run prescribes it" in str(e.value)
 
@@ -168,7 +169,7 @@ def test_a_conflicting_inherited_hold_is_an_input_error_naming_assembly_hold():
     """assembly.hold on rod.phi holds the rod's speed at 0 while the crank turns: the error
     points at assembly.hold, not at the run."""
     text = ENGINE.read_text().replace("hold: [crank.phi]", "hold: [crank.phi, rod.phi]")
-    runner = mio.Runner(mio.reads(text, "engine.yaml"))
+    runner = Runner(mio.reads(text, "engine.yaml"))
     assert runner.hold(runner.plans["constant_speed"]) == ("rod.phi",)
     with pytest.raises(mio.FileError) as e:
         runner.mobility(runner.plans["constant_speed"])
@@ -185,7 +186,7 @@ def test_a_conflicting_hold_of_the_run_is_an_input_error_naming_the_run():
     text = ENGINE.read_text().replace(
         "law: pi/2 + omega*t}", "law: pi/2 + 0.3 + omega*t}\n    hold: [piston.y]"
     )
-    runner = mio.Runner(mio.reads(text, "engine.yaml"))
+    runner = Runner(mio.reads(text, "engine.yaml"))
     with pytest.raises(mio.FileError) as e:
         runner.check_solvable(runner.plans["constant_speed"])
     msg = str(e.value)

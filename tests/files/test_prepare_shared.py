@@ -20,6 +20,7 @@ import mixdyn.io as mio
 from fixtures import DATA, ROOT, antonya_mixed
 from mixdyn.analyses import Forward, Kinematic, Mixed
 from mixdyn.errors import DegreesOfFreedomError, ModelError
+from mixdyn.runs import Runner, execute
 
 ANTONYA = ROOT / "examples" / "antonya.yaml"
 SLIDER_CRANK = ROOT / "examples" / "slider_crank.yaml"
@@ -54,7 +55,7 @@ def counts(monkeypatch):
     return n
 
 
-def _check_then_run(runner: mio.Runner, counts) -> tuple[dict, dict, dict]:
+def _check_then_run(runner: Runner, counts) -> tuple[dict, dict, dict]:
     """``mixdyn run``'s order: every run checked, then executed; the calls per step."""
     checks, runs, results = {}, {}, {}
     for plan in runner.order():
@@ -88,7 +89,7 @@ def test_antonya_each_run_is_assembled_and_analysed_once(counts):
     and 5."""
     # the example's own time grid: its programs are those of the file's other tests (the
     # runs take milliseconds; tracing and compiling them is the cost)
-    runner = mio.Runner(mio.reads(ANTONYA.read_text(), ANTONYA.name))
+    runner = Runner(mio.reads(ANTONYA.read_text(), ANTONYA.name))
     checks, runs, res = _check_then_run(runner, counts)
     assert checks["forward"] == {"assemble": 1, "analyse": 1}
     assert runs["forward"] == {"assemble": 0, "analyse": 0}
@@ -109,7 +110,7 @@ def test_mixed_runs_by_law_share_the_checks_set_up(counts):
     """Mixed runs whose motion is a law are checked (counts, solvability) on the set-up they
     run from: one assembly and one analysis each, none in the run (before: 7 assemblies and
     6 analyses for the two runs)."""
-    runner = mio.Runner(mio.read(PENDULUM))
+    runner = Runner(mio.read(PENDULUM))
     checks, runs, res = _check_then_run(runner, counts)
     for name in ("constant_speed", "samples"):
         assert checks[name] == {"assemble": 1, "analyse": 1}
@@ -134,7 +135,7 @@ def test_kinematic_and_inverse_runs_share_one_set_up(counts):
     """A kinematic and an inverse run from the same start share one assembly and one
     analysis, check and runs together (before: 3 and 3)."""
     spec = _short(SLIDER_CRANK, "time: {span: [0, pi], n: 181}", "time: {span: [0, 1], n: 11}")
-    runner = mio.Runner(spec)
+    runner = Runner(spec)
     checks, runs, res = _check_then_run(runner, counts)
     assert checks == {
         "kinematics": {"assemble": 1, "analyse": 1},
@@ -150,9 +151,9 @@ def test_kinematic_and_inverse_runs_share_one_set_up(counts):
 
 
 def test_execute_without_the_check_prepares_each_run_itself(counts):
-    """``mixdyn.io.execute`` (no check first): each run makes its own set-up, once."""
+    """``mixdyn.runs.execute`` (no check first): each run makes its own set-up, once."""
     spec = _short(SLIDER_CRANK, "time: {span: [0, pi], n: 181}", "time: {span: [0, 1], n: 3}")
-    mio.execute(spec, ["kinematics"])
+    execute(spec, ["kinematics"])
     assert dict(counts) == {"assemble": 1, "analyse": 1}
 
 

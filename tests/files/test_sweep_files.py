@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 import mixdyn.io as mio
 from fixtures import EXAMPLES
 from mixdyn.cli import app
+from mixdyn.runs import Runner, execute
 
 EXAMPLE = EXAMPLES / "antonya_sweep.yaml"
 MODEL = EXAMPLE.read_text().split("\nruns:")[0]
@@ -53,17 +54,17 @@ def _file(tmp_path, text: str, name: str = "sweep.yaml") -> pathlib.Path:
     return path
 
 
-def _single(f0: float, m5: float) -> mio.Runner:
+def _single(f0: float, m5: float) -> Runner:
     """The nominal run of the file with ``F0`` and ``m5`` written in: the member's truth."""
     text = MODEL.replace("  F0: 10 ", f"  F0: {float(f0)!r} ")
     text = text.replace("  m5: 0.00786", f"  m5: {float(m5)!r}")
-    return mio.execute(mio.reads(text + BASE))["forward"]
+    return execute(mio.reads(text + BASE))["forward"]
 
 
 @pytest.fixture(scope="module")
 def swept():
     spec = mio.reads(MODEL + BASE + SWEEP)
-    return mio.execute(spec, ["sweep"])["sweep"]
+    return execute(spec, ["sweep"])["sweep"]
 
 
 def test_members_equal_the_single_runs_of_the_edited_file(swept):
@@ -97,8 +98,8 @@ def test_a_body_number_varies_like_the_parameter_it_is_built_from():
     """``slider.mass`` varied directly gives the members that ``m5`` gives."""
     by_body = SWEEP.replace("m5: {values:", "slider.mass: {values:").replace("by: m5", "by: F0")
     by_body = by_body.replace("x: F0, y: turn, by: F0", "x: slider.mass, y: turn, by: F0")
-    a = mio.execute(mio.reads(MODEL + BASE + by_body), ["sweep"])["sweep"]
-    b = mio.execute(mio.reads(MODEL + BASE + SWEEP), ["sweep"])["sweep"]
+    a = execute(mio.reads(MODEL + BASE + by_body), ["sweep"])["sweep"]
+    b = execute(mio.reads(MODEL + BASE + SWEEP), ["sweep"])["sweep"]
     for i in range(4):
         np.testing.assert_array_equal(a.sweep[i].q, b.sweep[i].q)
 
@@ -115,7 +116,7 @@ def test_latin_hypercube_members_lie_in_their_strata():
       F0: {span: [5, 15]}
       slider.mass: {span: ["4 g", "12 g"]}
 """
-    runner = mio.Runner(mio.reads(MODEL + BASE + lhs))
+    runner = Runner(mio.reads(MODEL + BASE + lhs))
     values = runner.plans["sweep"].values
     f0, m = values["F0"], values["slider.mass"]
     assert sorted(np.floor((f0 - 5) / 10 * 5).astype(int)) == [0, 1, 2, 3, 4]
@@ -246,7 +247,7 @@ def test_output_units_apply_to_the_summaries_and_the_long_table(swept):
     """``output_units: {angle: deg, force: N}`` in the file (model: mm, kg, s, so forces in
     mN): the summaries and the long table in degrees and newtons, the varied values as given."""
     spec = mio.reads("output_units: {angle: deg, force: N}\n" + MODEL + BASE + SWEEP)
-    conv = mio.execute(spec, ["sweep"])["sweep"]
+    conv = execute(spec, ["sweep"])["sweep"]
     turn, d_rms = swept.summaries["turn"], swept.summaries["d_rms"]
     np.testing.assert_allclose(conv.summaries["turn"], np.degrees(turn), rtol=1e-12)
     np.testing.assert_allclose(conv.summaries["d_rms"], d_rms / 1000, rtol=1e-12)

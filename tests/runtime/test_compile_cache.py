@@ -23,6 +23,7 @@ import pytest
 
 import mixdyn as md
 from fixtures import ROOT, TESTS, new_traces, paper_mechanism, pendulum, traced_now
+from mixdyn.runs import Runner
 from mixdyn.runtime import _private, _programs, _xla
 
 TS = np.linspace(0.0, 0.2, 11)
@@ -221,7 +222,7 @@ def test_a_files_next_run_is_prepared_while_the_first_computes(cache):
 
     for fn in (_simulate._integrator("projection"), _simulate._post_arrays, _values):
         fn.programs.clear()  # as in a new process (the folder is new: nothing on disk)
-    runner = mio.Runner(mio.read(ROOT / "examples" / "antonya.yaml"))
+    runner = Runner(mio.read(ROOT / "examples" / "antonya.yaml"))
     plans = runner.order()
     for plan in plans:  # the checks mixdyn run makes first
         runner.mobility(plan)
