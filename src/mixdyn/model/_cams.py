@@ -165,7 +165,7 @@ class CamFollower(Joint):
         converter=float,
         kw_only=True,
     )
-    psi0: object = eqx.field(default=0.0, converter=_f64, kw_only=True)
+    a0: object = eqx.field(default=(0.0, 0.0), converter=_f64, kw_only=True)  # (theta, psi)
     draw0: tuple = eqx.field(static=True, default=(), kw_only=True)  # for profile()
     sp: object = eqx.field(default=None, kw_only=True)
     bi: int = eqx.field(static=True, default=_UNBOUND, kw_only=True)
@@ -272,7 +272,7 @@ class CamFollower(Joint):
             draw0 = (*(pivot - center), *(pt - pivot), phi_i - phi_c, s0)
             extra = {
                 "sp": sp,
-                "psi0": _f64(phi_j - phi_c - self.sense * s0),
+                "a0": _f64((phi_i - phi_c, phi_j - phi_c)),
                 "draw0": tuple(float(v) for v in draw0),
             }
         smoothness.check(
@@ -291,6 +291,12 @@ class CamFollower(Joint):
 
     def reaction_point(self):
         return self.bj, self.sj
+
+    @property
+    def psi0(self):
+        """An oscillating follower's angle relative to the frame at the law's zero [rad]:
+        its angle at the rough start less ``sense`` times the law there."""
+        return self.a0[1] - self.sense * self.law(self.a0[0])
 
     def theta(self, q):
         """The cam angle relative to the frame [rad]."""
