@@ -201,10 +201,12 @@ def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]
     written: list[pathlib.Path] = []
     painter = outputs.painter
     by_name = {p.name: p for p in plans}
+    running = []  # the run started last
     try:
         with RunProgress(plans, mode) as progress:
 
             def start(plan):
+                running[:] = [plan]
                 clear_outputs(runner, plan, outputs.folder(plan))
                 progress.start(plan)
 
@@ -222,8 +224,8 @@ def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]
                     on_start=start,
                     on_done=done,
                 )
-            except NumericalError as e:
-                plan = by_name.get(getattr(e, "run", None))
+            except NumericalError as e:  # in the run, or in writing it (a NaN refused)
+                plan = by_name.get(getattr(e, "run", None)) or (running or [None])[0]
                 if plan is not None:
                     written.extend(write_failed(runner, plan, e, outputs))
                 raise
