@@ -201,7 +201,17 @@ def show(
 
 # --------------------------------------------------------------------------- check
 @app.command()
-def check(file: FileArg):
+def check(
+    file: FileArg,
+    explain: Annotated[
+        bool,
+        typer.Option(
+            "--explain",
+            help="Also print every number as understood: where it is, as written, in the "
+            "model's units and in SI.",
+        ),
+    ] = False,
+):
     """Check a model file: form, names, units, expressions, degrees of freedom, and that
     every run is well posed (options, steps, outputs, laws). Prints the degrees of freedom,
     redundant equations, the driver/DOF balance of each run and warnings; changes nothing.
@@ -232,7 +242,7 @@ def check(file: FileArg):
                 else ""
             )
         )
-        warnings = file_warnings(spec, model, report)
+        warnings = [*runner.b.readings.warnings, *file_warnings(spec, model, report)]
         for plan in runner.order():
             runner.check_masses(plan)
             rep = runner.mobility(plan)
@@ -240,6 +250,11 @@ def check(file: FileArg):
             _say(kind_of(plan).describe(plan, rep, model))
         for w in warnings:
             _say(f"[yellow]warning[/yellow]: {_esc(w)}")
+        if explain:
+            from .io.explain import lines
+
+            for line in lines(runner.b):
+                _say(_esc(line))
         _say("[green]ok[/green]")
 
 
@@ -312,6 +327,7 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
 
         painter = Painter()
     with _guard(file):
+        from .runs.console import clean
         from .runs.outputs import Outputs, check_run_outputs, draws, write_runs
 
         try:
@@ -325,6 +341,8 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
             spec = read(file)
             require_size(spec, file)
             runner = Runner(spec)
+            for w in runner.b.readings.warnings:
+                sys.stderr.write(f"{clean(file)}: warning: {clean(w)}\n")
             if not spec.runs:
                 raise FileError(
                     "the file has no runs", "runs", file=str(file), hint="add a runs: section"

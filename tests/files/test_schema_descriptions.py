@@ -44,7 +44,7 @@ PROPERTIES = {
     "MixedRunSpec": "animation atol drivers dt hold independent initial kind linear_solver method "
     "name options outputs plots prescribed rtol solver time unknown velocities",
     "ModelFile": "assembly bodies description drivers forces gravity ground joints mixdyn name "
-    "output_units parameters runs units",  # output_units: issue 14
+    "output_units parameters runs strict_units units",  # output_units: issue 14; strict: 31
     "PiecewiseArgs": "breaks coeffs",
     "PiecewiseSpec": "piecewise",
     "PlotSpec": "columns file reference title x ylabel",  # x: issue 14
@@ -83,8 +83,9 @@ PROPERTIES = {
 # declared elements' specs left out (the same value with the spring-dampers written by hand);
 # and when the joints, drivers and forces but the cam moved to declarations (the value of
 # the schema before the move, with the same specs left out); and when the cam moved too (the
-# value of the schema with the cam's hand-written spec, the cam's spec left out as well).
-STRIPPED_SHA256 = "be64c7d9adab5580cc22a22a39ea91806c7c5665e9a3bd85ac49c6b3343df181"
+# value of the schema with the cam's hand-written spec, the cam's spec left out as well); and
+# with the file's strict_units setting; and with output_units also a preset's name (issue 32).
+STRIPPED_SHA256 = "c0f7d0289668d45825798b92f914e1cd11e123465465dab520f88d63e10ae312"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

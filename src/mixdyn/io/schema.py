@@ -1062,6 +1062,10 @@ class ModelFile(Spec):
     units: UnitsSpec = UnitsSpec()
     """The model's unit system, e.g. ``{length: mm, mass: kg, time: s}``: every number without a
     unit is in these (angles in rad). Default m, kg, s."""
+    strict_units: bool = False
+    """Refuse every number other than 0 written without a unit where a unit is needed (a
+    length, a mass, a law of force, an angle...), and check the units of every law and
+    expression. Default false: such a number is in the model's units (angles in rad)."""
     gravity: Vec2 = (0.0, 0.0)
     """Gravitational acceleration ``[gx, gy]`` [length/time**2], e.g. ``[0, -9.81 m/s^2]``.
     Default ``[0, 0]``."""
