@@ -19,6 +19,7 @@ import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+from fixtures import EXAMPLES
 from mixdyn.cli import app
 
 OK = """\
@@ -98,3 +99,26 @@ def test_a_folder_named_like_an_output_is_left_alone(tmp_path):
     res = _run(tmp_path, FAILS)
     assert res.exit_code == 1, res.output
     assert (folder / "results.parquet" / "keep.txt").read_text() == "mine"
+
+
+def test_a_kinematic_run_that_leaves_the_workspace_writes_the_solved_times(tmp_path):
+    """The slider of the example's slider-crank driven beyond the reach of crank + rod: the
+    output times before the failure were solved (the slider where its law puts it), the one
+    that failed is not written."""
+    text = (EXAMPLES / "slider_crank.yaml").read_text()
+    text = text.replace(
+        "{type: coordinate, name: motor, coordinate: crank.phi, law: omega*t}",
+        "{type: coordinate, name: motor, coordinate: slider.x, law: 0.35 + 0.2*t}",
+    ).replace("    kind: kinematic\n", "    kind: kinematic\n    initial: {crank.phi: 1.0}\n")
+    path = tmp_path / "reach.yaml"
+    path.write_text(text)
+    args = ["run", str(path), "--run", "kinematics", "--out", str(tmp_path / "out")]
+    res = CliRunner().invoke(app, [*args, "--no-figures"])
+    assert res.exit_code == 1, res.output
+    folder = tmp_path / "out" / "kinematics"
+    meta = _meta(folder)
+    assert meta["status"] == "failed" and meta["failure"]["error"] == "ConvergenceError"
+    assert meta["failure"]["time_unit"] == "s"
+    part = pd.read_csv(folder / "results.csv")
+    assert len(part) > 0 and part["t"].iloc[-1] < meta["failure"]["time"]
+    np.testing.assert_allclose(part["slider.x"], 0.35 + 0.2 * part["t"], rtol=0, atol=1e-9)

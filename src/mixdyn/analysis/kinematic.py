@@ -17,7 +17,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints
-from ..errors import ConvergenceError, ModelError, SingularityError
+from ..errors import ConvergenceError, ModelError, NumericalError, SingularityError
 from ..linalg import AutoSolver, LinearSolver, dependent_rows
 from ..model import Driver, Model
 from ..runtime._programs import cached_jit
@@ -26,7 +26,7 @@ from ._assembly import length_scale
 from ._newton import newton_positions
 from ._prepare import Prepared, kinematic_start
 from ._setup import Setup, keyword_setup
-from .result import Result
+from .result import Partial, Result
 
 
 def output_times(t, minimum: int = 2) -> np.ndarray:
@@ -269,7 +269,11 @@ def run_kinematic(
         c, prep.q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)
     )
     q_all = np.asarray(q_all)
-    check_run(c, ts, q_all, it, res, ratio, tol, max_iter, singular_tol)
+    try:
+        check_run(c, ts, q_all, it, res, ratio, tol, max_iter, singular_tol)
+    except NumericalError as e:  # the output times before it were solved
+        e.partial = Partial.before(model, ts, q_all, qd, e.time, strict=True)
+        raise
     return Result(
         kind="kinematic",
         model=model,

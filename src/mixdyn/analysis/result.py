@@ -229,11 +229,15 @@ class Partial:
     qd: np.ndarray
 
     @classmethod
-    def before(cls, model: Model, ts, q, qd, t_fail: float | None) -> Partial:
+    def before(cls, model: Model, ts, q, qd, t_fail: float | None, strict=False) -> Partial:
         """The rows of ``ts`` (N,), ``q``, ``qd`` (N, nq) at times up to ``t_fail`` (all
-        where None) whose states are finite."""
+        where None; with ``strict`` before it: the failure was at an output time) whose
+        states are finite."""
         ts, q, qd = np.asarray(ts, float), np.asarray(q, float), np.asarray(qd, float)
-        keep = ts <= t_fail if t_fail is not None else np.ones(len(ts), bool)
+        if t_fail is None:
+            keep = np.ones(len(ts), bool)
+        else:
+            keep = ts < t_fail if strict else ts <= t_fail
         keep &= np.all(np.isfinite(q), axis=1) & np.all(np.isfinite(qd), axis=1)
         k = int(np.argmin(keep)) if not keep.all() else len(ts)  # the first row not kept
         return cls(model, ts[:k], q[:k], qd[:k])

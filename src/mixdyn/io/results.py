@@ -126,13 +126,14 @@ def write_failure(
     settings: dict | None = None,
     extra: dict | None = None,
     output_units: dict | None = None,
+    model=None,
 ) -> list[pathlib.Path]:
     """Write what a failed run computed: ``folder/results.csv`` with the states up to the
     failure (the error's ``partial``, :class:`mixdyn.analysis.result.Partial`: ``t`` and
     the bodies' coordinates and velocities; no file where it has none) and
     ``folder/meta.json`` with ``status: failed`` and ``failure``: the time (in the model's
     time unit, named as ``time_unit``), the error's class, its message and the elements
-    involved.
+    involved. ``model``: the run's model where the error carries no states.
 
     Returns:
         The files written.
@@ -153,7 +154,7 @@ def write_failure(
         csv = folder / RESULTS_CSV
         _write_csv(csv, names, table)
         written.append(csv)
-    model = getattr(partial, "model", None)
+    model = getattr(partial, "model", None) or model
     meta = {
         "mixdyn_version": __version__,
         "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),

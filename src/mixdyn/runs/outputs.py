@@ -176,6 +176,7 @@ def write_failed(runner, plan, error, outputs: Outputs) -> list[pathlib.Path]:
         settings=run_settings(plan.spec),
         extra=extra,
         output_units=runner.output_units,
+        model=runner.model,
     )
 
 
