@@ -36,7 +36,8 @@ import numpy as np
 
 from .errors import ModelError
 from .model import Body, Model
-from .model._body import check_inertial
+from .model._body import INERTIAL_AT_LEAST, check_inertial
+from .model._declare import Quantity, declared_fields
 
 #: Fields that hold geometry bound from body points: a number there would disagree with the
 #: bodies' points; vary the points by building the models instead (``models=``).
@@ -283,6 +284,26 @@ def check(
         raise ModelError(f"{label(first)}: {shown} is refused: {err}", where(named[0]))
 
 
+def lower_limit(model: Model, path: str) -> float:
+    """The least value the number at ``path`` may take, from its owner's declaration (an
+    element's declared quantity: ``above`` or ``at_least``; a body's mass and inertia:
+    :data:`~mixdyn.model._body.INERTIAL_AT_LEAST`); ``-inf`` where none is declared (a
+    declared ``above`` is itself refused: a search bounded by it stays above it).
+    """
+    getter(model, path)
+    head, _, rest = path.partition(".")
+    obj = _locate(model, head)(model)
+    if "." in rest:
+        return -np.inf
+    if isinstance(obj, Body):
+        return INERTIAL_AT_LEAST if rest in ("mass", "inertia") else -np.inf
+    for name, decl, _ in declared_fields(type(obj)):
+        if name == rest and isinstance(decl, Quantity) and not decl.law:
+            ends = [v for v in (decl.above, decl.at_least) if v is not None]
+            return float(max(ends)) if ends else -np.inf
+    return -np.inf
+
+
 #: Words naming the ends of bounds ``(low, high)``, by index.
 BOUND_ENDS = ("the low bound", "the high bound")
 
@@ -322,6 +343,7 @@ __all__ = [
     "get",
     "getter",
     "group",
+    "lower_limit",
     "replace",
     "shape",
 ]

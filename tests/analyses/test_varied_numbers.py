@@ -272,3 +272,26 @@ def test_a_swept_cam_law_keeps_the_follower_where_it_starts():
         )
         single = md.kinematic(_rocker(a), T)
         np.testing.assert_allclose(sweep[i]["arm.phi"], single["arm.phi"], rtol=0, atol=1e-12)
+
+
+def test_a_fit_without_bounds_searches_within_the_range_a_model_accepts(monkeypatch):
+    """A fitted mass without bounds is searched above the least mass a body accepts (its
+    constructor takes that value and refuses the next float below it); a damping, which
+    has no least value, stays unbounded."""
+    import scipy.optimize
+
+    seen = {}
+
+    def capture(fun, x0, **kwargs):
+        seen.update(kwargs)
+        raise RuntimeError("captured")
+
+    monkeypatch.setattr(scipy.optimize, "least_squares", capture)
+    model = mio.build(mio.read(EXAMPLES / "identify_slider_crank.yaml"))
+    with pytest.raises(RuntimeError, match="captured"):
+        md.fit(model, T, {"slider.x": np.full(len(T), 0.3)}, ["rod.mass", "damper.damping"])
+    (low_mass, low_damping), high = seen["bounds"]
+    md.Body("b", low_mass)
+    with pytest.raises(ModelError):
+        md.Body("b", np.nextafter(low_mass, -np.inf))
+    assert low_damping == -np.inf and np.all(np.asarray(high) == np.inf)

@@ -154,7 +154,9 @@ def fit(
         noise: the standard deviation of each measured column [model units] (one number for
             all), the weights of the residuals and the scale of the deviations.
         start: (P,) the first guess (default: the model's numbers).
-        bounds: path -> ``(low, high)``: the fit stays within (default: unbounded).
+        bounds: path -> ``(low, high)``: the fit stays within (default: above the least
+            value the number may take, :func:`mixdyn.paths.lower_limit`, e.g. a mass >= 0;
+            else unbounded).
         analysis: the analysis value (:mod:`mixdyn.analyses`): ``Forward(...)`` (default:
             ``Forward()``) or ``Mixed(...)``, e.g.
             ``analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10))``.
@@ -213,6 +215,9 @@ def fit(
         paths.check_bounds(model, path, (lo[k], hi[k]))  # values a model may take
     if start is not None and len(x0) == len(params):  # a start a model may take
         paths.check(model, {p: x0[k : k + 1] for k, p in enumerate(params)}, lambda i: "the start")
+    for k, p in enumerate(params):  # a number without bounds searched within its range
+        if p not in (bounds or {}):
+            lo[k] = paths.lower_limit(model, p)
 
     def residuals(theta):
         out = f(theta)

@@ -25,13 +25,20 @@ def _points(points, owner: str) -> dict[str, jax.Array]:
     return out
 
 
+#: The least mass and inertia of a body (0: a body for kinematics only).
+INERTIAL_AT_LEAST = 0.0
+
+
 def check_inertial(label: str, value, body: str) -> None:
     """Raise a :class:`ModelError` unless a body's ``mass`` or ``inertia`` (``label``) is
-    finite and ``>= 0`` (an array: every entry, e.g. a sweep's candidates)."""
+    finite and ``>=`` :data:`INERTIAL_AT_LEAST` (an array: every entry, e.g. a sweep's
+    candidates)."""
     a = np.asarray(value, dtype=float)
-    if not (np.all(np.isfinite(a)) and np.all(a >= 0)):
+    if not (np.all(np.isfinite(a)) and np.all(a >= INERTIAL_AT_LEAST)):
         shown = f"{float(a.ravel()[0]):g}" if a.size == 1 else str(a.tolist())
-        raise ModelError(f"{label} must be a finite number >= 0, got {shown}", body)
+        raise ModelError(
+            f"{label} must be a finite number >= {INERTIAL_AT_LEAST:g}, got {shown}", body
+        )
 
 
 class Ground(eqx.Module):
