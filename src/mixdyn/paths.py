@@ -27,6 +27,7 @@ instead (build the models with the change: ``md.sweep(models=[...])``).
 from __future__ import annotations
 
 import dataclasses
+import warnings
 from collections.abc import Callable, Mapping
 
 import equinox as eqx
@@ -248,7 +249,9 @@ def check(
 
         def refused(rows, obj=obj, fields_values=fields_values) -> ModelError | None:
             try:
-                _remake(obj, _changes(fields_values, rows))
+                with warnings.catch_warnings():  # the owner's warnings were given when made
+                    warnings.simplefilter("ignore", DeprecationWarning)
+                    _remake(obj, _changes(fields_values, rows))
             except ModelError as refusal:
                 return refusal
             return None
