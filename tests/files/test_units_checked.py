@@ -340,3 +340,17 @@ def test_a_law_ending_in_a_unit_whose_parameters_have_units_is_told_to_drop_it()
     with pytest.raises(mio.FileError) as info:
         mio.build(mio.reads(motor(T0="1.5 N*m", law="T0*(1 - crank.omega/n0) N*m"), "m"))
     assert "write T0*(1 - crank.omega/n0) (its parameters' units" in info.value.hint
+
+
+def test_strict_units_refuses_a_constant_expression_without_its_unit():
+    """``pi/6`` for an angle is a number without a unit too; ``pi/6 rad`` is not, and the
+    law ``50`` for a torque is refused where ``50 N*m`` is read as 5e7 kg*mm**2/s**2."""
+    strict = "strict_units: true\n"
+    with pytest.raises(mio.FileError, match="strict_units"):
+        mio.build(mio.reads(motor(T0="1.5 N*m", phi="pi/6", strict=strict), "m.yaml"))
+    model = mio.build(mio.reads(motor(T0="1.5 N*m", phi="pi/6 rad", strict=strict), "m"))
+    assert model.bodies[0].q0[2] == pytest.approx(math.pi / 6, rel=1e-15)
+    with pytest.raises(mio.FileError, match="strict_units"):
+        mio.build(mio.reads(motor(T0="1.5 N*m", law="50", strict=strict), "m.yaml"))
+    model = mio.build(mio.reads(motor(T0="1.5 N*m", law="50 N*m", strict=strict), "m"))
+    assert float(model.forces[0].law(0.0)) == pytest.approx(5e7, rel=1e-12)

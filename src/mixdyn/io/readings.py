@@ -23,10 +23,11 @@ import dataclasses
 import math
 import re
 
+from ..errors import ModelError
 from ..units import DIMENSIONS, SI, Kind, UnitSystem, factor, unit_for
 from . import dimensions as d
 from ._yaml import line_of
-from .quantities import _NUMBER, _UNIT, QuantityError, _split, exponents
+from .quantities import _NUMBER, _UNIT, QuantityError, _split, convert, exponents
 
 
 @dataclasses.dataclass(frozen=True)
@@ -124,9 +125,13 @@ class Readings:
         path = tuple(path)
         unit = self._unit_of(value)
         bare = unit is None and scale == 1.0
+        strict = kind is not None and bare and self.strict and _has_unit(kind) and result != 0.0
         if kind is not None and bare and isinstance(value, str) and not _NUMBER.match(value):
+            used = d.leaves(value, self.parameters).parameters
+            if strict and all(self.parameters[n].dim is None for n in used):
+                self._refuse_bare(value, kind, path)  # numbers and plain parameters only
             self._expression(value, kind, path, time=False)
-        elif kind is not None and bare and result != 0.0 and self.strict and _has_unit(kind):
+        elif strict:
             self._refuse_bare(value, kind, path)
         if kind == "angle" and bare and abs(result) > 2 * math.pi and _is_number(value):
             shown = _shown(value)
@@ -184,6 +189,11 @@ class Readings:
             self.scalar(spec, kind, path, float(spec))
         elif isinstance(spec, str):
             self._unit_tail(spec, kind, path)
+            try:  # a constant: a number, a quantity ("50 N") or a constant expression
+                value = convert(spec, kind, self.b.units, self.b.parameters)
+            except ModelError:
+                return  # a law of time, or a fault the builder reports
+            self.scalar(spec, kind, path, value)
 
     def expression(self, text: str, unit: str | None, kind: Kind, path) -> None:
         """Check a law's expression (``unit``: the unit given with it) and record it; one
