@@ -130,7 +130,7 @@ def test_a_denormal_output_step_is_refused_at_its_line(tmp_path, step):
     path = _write(tmp_path, text)
     line = _check(path)
     assert line.startswith(f"{path}:{_line(text, 'step:')}:"), line
-    assert "more than 1,000,000" in line and "use a step of at least 1e-06" in line
+    assert "too many (at most 1,000,000)" in line and "use a step of at least 1e-06" in line
 
 
 def test_a_step_below_the_resolution_of_the_times_is_refused(tmp_path):

@@ -94,7 +94,7 @@ def times(runner, t: s.TimeSpec, path) -> np.ndarray:
         runner.fail(
             (*path, "step"),
             f"a step of {step:.3g} gives {count:.3g} output times over the span "
-            f"[{t0:g}, {t1:g}], more than {MAX_OUTPUT_TIMES:,}",
+            f"[{t0:g}, {t1:g}], too many (at most {MAX_OUTPUT_TIMES:,})",
             f"use a step of at least {(t1 - t0) / (MAX_OUTPUT_TIMES - 1):.3g}",
         )
     times = t0 + step * np.arange(int(np.floor(count)) + 1)
