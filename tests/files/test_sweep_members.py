@@ -3,7 +3,8 @@
 masses and inertias, each member's model holds the numbers of the model built from the file
 with the member's values written in (leaf for leaf), and its results equal that file's single
 run; where a varied number reaches anything else, each member is built from its file and its
-results equal the single run all the same."""
+results equal the single run all the same; members sharing a start run in vectorized chunks
+with the same results."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import pytest
 
 import mixdyn.io as mio
 from fixtures import EXAMPLES
-from mixdyn.runs import Runner, setup
+from mixdyn.runs import Runner, execute, setup, sweep_members
+from mixdyn.runs import sweep as file_sweep
 from mixdyn.runs.sweep_members import quick_members
 
 MODEL = (EXAMPLES / "antonya_sweep.yaml").read_text().split("\nruns:")[0]
@@ -92,7 +94,7 @@ def test_members_equal_the_single_runs_of_the_edited_file(vary, members, quick):
         )
     runner, plan, model = _members(text)
     assert (quick_members(runner, plan, model) is not None) is quick
-    swept = mio.execute(mio.reads(text), ["sweep"])["sweep"]
+    swept = execute(mio.reads(text), ["sweep"])["sweep"]
     assert not swept.sweep.errors and len(swept.sweep) == len(members)
     for i, values in enumerate(members):
         if quick:
@@ -100,9 +102,27 @@ def test_members_equal_the_single_runs_of_the_edited_file(vary, members, quick):
         else:
             y0 = float(plan.values["y0"][i])
             single_text = MODEL.replace("    q0: [0, 25, 0]", f"    q0: [{y0!r}, 25, 0]") + BASE
-        single = mio.execute(mio.reads(single_text))["forward"]
+        single = execute(mio.reads(single_text))["forward"]
         for c in COLUMNS:
             scale = float(np.max(np.abs(single[c])))
             assert float(np.max(np.abs(swept.sweep[i][c] - single[c]))) <= 1e-12 * scale, (i, c)
     ends = {round(float(r["crank.phi"][-1]), 9) for r in swept.sweep.results}
     assert len(ends) == (len(members) if quick else 1)  # the numbers did change the motion
+
+
+@pytest.mark.slow
+def test_members_in_chunks_equal_the_single_runs(monkeypatch):
+    """Members sharing a start run in vectorized chunks (two members here; the last chunk
+    filled up with a copy of its first member), each reported done once."""
+    monkeypatch.setattr(sweep_members, "CHUNK", 2)
+    text = _sweep("      T: {values: [400, 500, 650]}\n")
+    runner, plan, _ = _members(text)
+    assert sweep_members.chunk_size(None, plan.members) == 2
+    done = []
+    swept = file_sweep.execute(runner, plan, done.append)
+    assert sorted(done) == [0, 1, 2] and not swept.sweep.errors
+    for i, t in enumerate((400.0, 500.0, 650.0)):
+        single = execute(mio.reads(_edited(MODEL, {"  T: 500": t}) + BASE))["forward"]
+        for c in COLUMNS:
+            scale = float(np.max(np.abs(single[c])))
+            assert float(np.max(np.abs(swept.sweep[i][c] - single[c]))) <= 1e-12 * scale, (i, c)

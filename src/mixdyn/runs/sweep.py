@@ -7,7 +7,7 @@ member (``summaries:``) and its figures. Member ``i`` is the swept run of the fi
 ``i``'s numbers: the model built again from the file with its parameters (so every quantity
 written with a parameter follows it: laws, masses, points, start values), the numbers of
 bodies and elements replaced, set up exactly as the single run would be; the members run as
-one :func:`mixdyn.analysis.sweep.run_members` (one compiled program for all).
+one :func:`mixdyn.analysis._members.run_members` (one compiled program for all).
 
 Example (``examples/antonya_sweep.yaml``)::
 
@@ -41,7 +41,9 @@ from collections.abc import Callable
 import numpy as np
 
 from .. import paths
-from ..analysis.sweep import Sweep, grid, latin_hypercube, run_members
+from ..analysis._keywords import from_keywords, member_values
+from ..analysis._members import run_members
+from ..analysis.sweep import Sweep, grid, latin_hypercube, shares_start
 from ..errors import MixdynError, ModelError
 from ..io import schema as s
 from ..io._errors import FileError
@@ -51,6 +53,7 @@ from .console import esc
 from .kinds import RunKind, register
 from .plan import Plan, number_kind, study_base, times
 from .runner import Runner
+from .sweep_members import chunk_size, in_chunks, quick_members
 
 #: Most members a sweep may have.
 MAX_MEMBERS = 1_000_000
@@ -389,10 +392,9 @@ def _member_runner(runner: Runner, plan: SweepPlan, i: int) -> Runner:
     return Runner.member(spec, model, plan.base.name)
 
 
-def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | None = None):
-    """Run every member of a sweep; ``progress(i)`` as member ``i`` is done."""
-    r: s.SweepRunSpec = plan.spec
-    started = time.perf_counter()
+def _members_from_file(runner: Runner, plan: SweepPlan) -> tuple[str, list, list]:
+    """``(analysis, models, keywords)``: every member's model and its run's keywords,
+    built from its file."""
     models, kwargs, analysis = [], [], None
     for i in range(plan.members):
         try:
@@ -408,20 +410,62 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
             )
         models.append(model)
         kwargs.append(kw)
+    return analysis, models, kwargs
+
+
+def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | None = None):
+    """Run every member of a sweep; ``progress(i)`` as member ``i`` is done.
+
+    The members' models are made from the swept run's model where the varied numbers reach
+    only forces and bodies' masses and inertias (:func:`.sweep_members.quick_members`), and
+    then share its start (:func:`mixdyn.analysis.sweep.shares_start`); else each is built
+    from its file."""
+    r: s.SweepRunSpec = plan.spec
+    started = time.perf_counter()
+    analysis, model, kw = setup.call(runner, plan.base, {}, checked=False)
+    quick = quick_members(runner, plan, model)
+    same_start = False
+    if quick is None:
+        analysis, models, kwargs = _members_from_file(runner, plan)
+    else:
+        models, kwargs = quick.models, [kw] * plan.members
+        value = from_keywords(analysis, plan.times, kw)[0]
+        same_start = value.integrated and shares_start(
+            model, dict.fromkeys(quick.reached), value._start_forces()
+        )
     built = time.perf_counter()
     try:
+
+        def describe(i: int) -> str:
+            return f" ({plan.describe(i)})"
+
         if plan.member_times is not None:
-            outcomes = _at_own_times(plan, models, analysis, kwargs, progress)
+            outcomes = _at_own_times(plan, models, analysis, kwargs, describe, progress)
         else:
-            outcomes = run_members(
-                models,
-                plan.times,
-                analysis,
-                lambda i: kwargs[i],
-                batch_size=r.batch_size,
-                on_member=progress,
-                describe=lambda i: f" ({plan.describe(i)})",
-            )
+            values, recorded = member_values(analysis, plan.times, kwargs, describe)
+
+            def run(idx: list[int], first: int = 0, batch_size=r.batch_size) -> list:
+                def done(k: int) -> None:  # a chunk's filling (copies of idx[0]) not shown
+                    if progress is not None and (k == 0 or idx[k] != idx[0]):
+                        progress(idx[k])
+
+                return run_members(
+                    [models[i] for i in idx],
+                    plan.times,
+                    [values[i] for i in idx],
+                    recorded=[recorded[i] for i in idx],
+                    batch_size=batch_size,
+                    on_member=done,
+                    describe=lambda k: describe(idx[k]),
+                    offset=first,
+                    same_start=same_start,
+                )
+
+            size = chunk_size(r.batch_size, plan.members) if same_start else None
+            if size is not None:
+                outcomes = in_chunks(lambda idx, first: run(idx, first, size), plan.members, size)
+            else:
+                outcomes = run(list(range(plan.members)))
     except ModelError as e:
         notes = " ".join(getattr(e, "__notes__", []))
         runner.fail((*plan.path, "vary"), f"{_message(e)} {notes}".strip(), "narrow the values")
@@ -435,19 +479,21 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
 
 
-def _at_own_times(plan: SweepPlan, models, analysis: str, kwargs, progress) -> list:
+def _at_own_times(plan: SweepPlan, models, analysis: str, kwargs, describe, progress) -> list:
     """The members run one by one, each over its own output times
     (:attr:`SweepPlan.member_times`; members with as many times share a compiled program)."""
     outcomes = []
     for i, model in enumerate(models):
+        t = plan.times_of(i)
+        values, recorded = member_values(analysis, t, [kwargs[i]], lambda _, i=i: describe(i), i)
         outcomes += run_members(
             [model],
-            plan.times_of(i),
-            analysis,
-            lambda _, i=i: kwargs[i],
+            t,
+            values,
+            recorded=recorded,
             batch_size=plan.spec.batch_size,
             on_member=None if progress is None else lambda _, i=i: progress(i),
-            describe=lambda _, i=i: f" ({plan.describe(i)})",
+            describe=lambda _, i=i: describe(i),
             offset=i,
         )
     return outcomes
@@ -481,14 +527,14 @@ def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
         except KeyError as e:
             runner.fail((*plan.path, "summaries"), str(e.args[0]), "fix the column name")
         units = in_units(ok, cols, units, runner.output_units)[1]
-    out = {}
+    out = {x.name: np.full(len(results), np.nan) for x in r.summaries}
+    columns = list(dict.fromkeys(x.column for x in r.summaries))
+    for i, res in enumerate(results):
+        if res is not None and columns:
+            cols = _columns(res, columns, runner.output_units)  # once a member
+            for x in r.summaries:
+                out[x.name][i] = float(_REDUCE[x.reduce](np.asarray(cols[x.column])))
     for x in r.summaries:
-        vals = np.full(len(results), np.nan)
-        for i, res in enumerate(results):
-            if res is not None:
-                y = np.asarray(_columns(res, [x.column], runner.output_units)[x.column])
-                vals[i] = float(_REDUCE[x.reduce](y))
-        out[x.name] = vals
         units[x.name] = units.get(x.column, "")
     return out, units
 

@@ -178,4 +178,32 @@ def _position(model: Model, where) -> int:
     return next(k for k, leaf in enumerate(marked) if leaf is marker)
 
 
-__all__ = ["Members", "quick_members"]
+#: Members integrated at a time by one vectorized program where a file's sweep shares one
+#: start and gives no ``batch_size`` (on a CPU: the single run's program member by member
+#: otherwise): one program, of this shape, for any number of members, compiled once.
+CHUNK = 64
+
+
+def in_chunks(run, count: int, size: int) -> list:
+    """The outcomes of ``count`` members run ``size`` at a time: ``run(indices, first)`` runs
+    the members ``indices`` (``first`` the chunk's first member) and returns their outcomes;
+    the last chunk is filled up with copies of its first member (one program shape for any
+    count), whose outcomes are dropped."""
+    out = []
+    for first in range(0, count, size):
+        idx = list(range(first, min(first + size, count)))
+        out += run(idx + [idx[0]] * (size - len(idx)), first)[: len(idx)]
+    return out
+
+
+def chunk_size(batch_size: int | None, members: int) -> int | None:
+    """The members a sweep whose members share one start runs at a time: :data:`CHUNK` on a
+    CPU, where the file gives no ``batch_size`` and there are at least :data:`CHUNK` members;
+    None otherwise (the file's ``batch_size``, or the single run's program member by
+    member)."""
+    if batch_size is None and members >= CHUNK and jax.default_backend() == "cpu":
+        return CHUNK
+    return None
+
+
+__all__ = ["CHUNK", "Members", "chunk_size", "in_chunks", "quick_members"]
