@@ -129,12 +129,28 @@ for _name in ("Plan", "Runner", "execute"):
     _moved.register("mixdyn.io", _name, f"mixdyn.runs.{_name}", lambda n=_name: _from_runs(n))
 
 
+#: Names of the file layer reached from the top, by their module (loaded on first use, and
+#: left out of ``__all__`` so that ``import *`` does not load it): :func:`mixdyn.load` and
+#: :func:`mixdyn.run_file` (a model file from Python), :func:`mixdyn.read_table` (written
+#: results).
+_FILE_NAMES = {
+    "load": "runs.files",
+    "run_file": "runs.files",
+    "LoadedFile": "runs.files",
+    "read_table": "io.results",
+}
+
+
 def __getattr__(name):
     # The file layer (pydantic, pint) and the plots (matplotlib) load on first use.
-    if name in ("io", "viz"):
+    if name in ("io", "runs", "viz"):
         import importlib
 
         return importlib.import_module(f".{name}", __name__)
+    if name in _FILE_NAMES:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_FILE_NAMES[name]}", __name__), name)
     from . import model
 
     if name in model._REPLACED:  # deprecated registries: mixdyn.model warns

@@ -25,3 +25,16 @@ def did_you_mean(name: str, known: Iterable[str], what: str = "columns") -> str:
     if len(known) > LISTED:
         return f"the {what} are {head}, ... ({len(known)} in all)"
     return f"the {what} are {head}"
+
+
+def count(n: int, noun: str, plural: str | None = None) -> str:
+    """``n`` with its noun in the number it takes: ``count(1, "driver")`` -> ``"1 driver"``,
+    ``count(3, "body", "bodies")`` -> ``"3 bodies"`` (``plural`` default: ``noun + "s"``)."""
+    return f"{n:,} {noun if n == 1 else (plural or noun + 's')}"
+
+
+def listed(names: Iterable[str], noun: str, plural: str | None = None) -> str:
+    """A noun and the names it introduces, in the number they take: ``listed(["motor"],
+    "driver")`` -> ``"driver motor"``, two names -> ``"drivers a, b"``."""
+    names = [str(n) for n in names]
+    return f"{noun if len(names) == 1 else (plural or noun + 's')} {', '.join(names)}"

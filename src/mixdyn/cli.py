@@ -28,6 +28,7 @@ from typing import Annotated
 
 import typer
 
+from ._hints import count
 from .runtime._private import exit_now, roomy, use_roomy_frames
 
 app = typer.Typer(
@@ -231,7 +232,9 @@ def check(
         asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
         report = an.degrees_of_freedom(model, asm.q)
         _say(f"[bold]{_esc(file)}[/bold]: {_esc(model.summary())}")
-        _say(f"assembled start: residual {asm.residual:.2e} in {asm.iterations} iteration(s)")
+        _say(
+            f"assembled start: residual {asm.residual:.2e} in {count(asm.iterations, 'iteration')}"
+        )
         _say(f"degrees of freedom: {report.dof}")
         _say(f"redundant joint equations: {', '.join(report.redundant) or 'none'}")
         _say(
@@ -276,7 +279,7 @@ def run(
         typer.Option(
             "--netcdf",
             help="Also write each sweep as sweep.nc: a labelled array on (member, t) with the "
-            "varied numbers as coordinates (needs xarray: pip install mixdyn[xarray]).",
+            "varied numbers as coordinates (needs xarray: pip install 'mixdyn\\[xarray]').",
         ),
     ] = False,
     figures: Annotated[
@@ -298,9 +301,9 @@ def run(
     ] = None,
 ):
     """Run the file's runs (or those named by --run) and write, per run, OUT/NAME/results.csv
-    (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name),
-    OUT/NAME/meta.json (units of every column, solver, tolerances, counters, version) and the
-    figures and animation the run asks for."""
+    (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name, each
+    header "name \\[unit]"), OUT/NAME/meta.json (units of every column, solver, tolerances,
+    counters, version) and the figures and animation the run asks for."""
     from .runtime import _command, _programs
 
     # The programs this job used last time are read from the cache beside the checks below
@@ -366,10 +369,28 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
         outputs = Outputs(
             out, file, parquet=parquet, netcdf=netcdf, figures=figures, painter=painter
         )
-        written = write_runs(runner, plans, outputs, mode)
-        _say(f"wrote {len(written)} file(s) under {_esc(out)}")
+        from .runtime._programs import on_first_compile
+
+        if progress is None and mode == "off":  # no line per run: what takes long is said
+            on_first_compile(lambda: _compiling(file))
+        try:
+            written = write_runs(runner, plans, outputs, mode)
+        finally:
+            on_first_compile(None)
+        _say(f"wrote {count(len(written), 'file')} under {_esc(out)}")
         if outputs.failed:  # a sweep with failed members: the others are written
             _fail(EXIT_NUMERICAL, outputs.failed[0])
+
+
+def _compiling(file) -> None:
+    """The one line ``mixdyn run`` writes off a terminal as it first compiles."""
+    from .runs.console import clean
+
+    sys.stderr.write(
+        f"{clean(file)}: compiling the model's programs (the first time for this model, "
+        "up to a minute; later runs read them from the cache)\n"
+    )
+    sys.stderr.flush()
 
 
 # --------------------------------------------------------------------------- plot
@@ -403,10 +424,11 @@ def plot(
         from .io.results import column_in_unit
         from .io.tables import require_numbers
         from .runs.outputs import check_output
+        from .units import engineering
         from .viz import PLOT_SUFFIXES, plot_columns
 
         try:
-            table, meta = read_result(results)
+            table, _ = read_result(results)
         except FileNotFoundError as e:
             raise FileError(
                 str(e), file=str(results), hint="give a folder written by `mixdyn run`"
@@ -434,9 +456,10 @@ def plot(
                 hint=f"use {', '.join(PLOT_SUFFIXES)}",
             )
         check_output(output, "--output")
-        units = dict(meta.get("units") or {})
+        units = dict(table.attrs.get("units") or {})
         for k, spec in enumerate(unit or ()):
             table, units = column_in_unit(table, units, spec, results, k)
+        units = {c: engineering(u) for c, u in units.items()}
         plot_columns(table, columns, output, units=units, title=title, x=x)
         _say(f"wrote {_esc(output)}")
 
@@ -587,6 +610,21 @@ def _write_text(path: pathlib.Path, text: str) -> None:
     check_output(path, "--output")
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(text, encoding="utf-8")
+
+
+def _one_line_summaries() -> None:
+    """Each command's summary in ``mixdyn --help``: its docstring's first paragraph as one
+    line, wrapped by the formatter (typer's rich mode keeps the docstring's line breaks
+    there, breaking lines mid-sentence)."""
+    import inspect
+
+    for info in app.registered_commands:
+        if info.short_help is None and info.callback is not None and info.callback.__doc__:
+            first = inspect.cleandoc(info.callback.__doc__).split("\n\n")[0]
+            info.short_help = " ".join(first.split())
+
+
+_one_line_summaries()
 
 
 def main() -> None:

@@ -486,4 +486,16 @@ OUTPUT_PRESETS: dict[str, dict[str, str]] = {
 }  # fmt: skip
 
 
+def preset(name: str) -> dict[str, str]:
+    """The units of the ``output_units`` preset ``name`` (:data:`OUTPUT_PRESETS`): kind of
+    quantity -> unit. Raises :class:`~mixdyn.errors.ModelError` for an unknown name."""
+    if name not in OUTPUT_PRESETS:
+        from ._hints import did_you_mean
+
+        raise ModelError(
+            f"no preset of output units {name!r}; {did_you_mean(name, OUTPUT_PRESETS, 'presets')}"
+        )
+    return dict(OUTPUT_PRESETS[name])
+
+
 SI = UnitSystem("m", "kg", "s")

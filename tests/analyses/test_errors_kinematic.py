@@ -104,7 +104,7 @@ def test_too_few_drivers():
     model = paper_mechanism(
         drivers=[md.CoordinateDriver("motor", "crank", "phi", law=md.Ramp(0, 1))]
     )
-    with pytest.raises(md.DegreesOfFreedomError, match=r"2 degree\(s\) of freedom but 1") as err:
+    with pytest.raises(md.DegreesOfFreedomError, match=r"2 degrees of freedom but 1 driver") as err:
         md.kinematic(model, T)
     assert "add 1" in str(err.value)
     with pytest.raises(md.DegreesOfFreedomError, match="0 driver"):

@@ -158,7 +158,7 @@ def test_point_velocities_and_accelerations_match_differences():
     res = md.kinematic(four_bar(A4, B4, C4, D4, omega=1.0), t)
     df = res.table(points=["coupler.P", "rocker.B"])
     assert df.attrs["units"]["coupler.P.vx"] == "m/s"
-    assert df.attrs["units"]["coupler.P.ay"] == "m/s**2"
+    assert df.attrs["units"]["coupler.P.ay"] == "m/s²"
     for ref in ("coupler.P", "rocker.B"):
         for axis in "xy":
             p = df[f"{ref}.{axis}"].to_numpy().reshape(-1, 5)

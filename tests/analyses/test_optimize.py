@@ -77,7 +77,7 @@ def test_the_command_line_writes_the_optimum(setup, tmp_path):
     np.testing.assert_allclose(table["optimum"], truth, rtol=1e-7)
     meta = json.loads((out / "spring" / "meta.json").read_text())
     assert abs(meta["optimize"]["objective_optimum"] / rms - 1) <= 1e-8
-    run = pd.read_csv(out / "spring" / "results.csv")  # the inverse run at the optimum
+    run = md.read_table(out / "spring")  # the inverse run at the optimum
     assert abs(np.sqrt(np.mean(run["motor"] ** 2)) / rms - 1) <= 1e-8
     assert (out / "spring" / "optimize.png").stat().st_size > 10_000
 

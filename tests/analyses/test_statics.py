@@ -110,7 +110,6 @@ def test_the_quasi_static_torque_is_the_energys_slope():
 
 
 def test_the_example_file_rests_where_its_turning_torque_vanishes(tmp_path):
-    import pandas as pd
     from typer.testing import CliRunner
 
     from mixdyn.cli import app
@@ -119,8 +118,8 @@ def test_the_example_file_rests_where_its_turning_torque_vanishes(tmp_path):
     out = tmp_path / "out"
     res = CliRunner().invoke(app, ["run", str(path), "--out", str(out)])
     assert res.exit_code == 0, res.output
-    rest = pd.read_csv(out / "rest" / "results.csv")
-    turning = pd.read_csv(out / "turning" / "results.csv")
+    rest = md.read_table(out / "rest")
+    turning = md.read_table(out / "turning")
     phi, torque = turning["crank.phi"].to_numpy(), turning["motor"].to_numpy()
     k = int(np.argmax((torque[:-1] < 0) & (torque[1:] >= 0)))  # the stable zero (rising)
     zero = phi[k] - torque[k] * (phi[k + 1] - phi[k]) / (torque[k + 1] - torque[k])

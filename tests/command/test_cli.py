@@ -19,6 +19,7 @@ import mixdyn as md
 import mixdyn.io as mio
 from fixtures import EXAMPLES, antonya_mixed
 from mixdyn.cli import app, configure_cache
+from mixdyn.units import engineering
 
 
 @pytest.fixture(scope="module")
@@ -73,7 +74,7 @@ def _compare(out: pathlib.Path, name: str):
     api = _api(name, model)
     assert sorted(p.name for p in out.iterdir()) == sorted(api)
     for run, result in api.items():
-        table = pd.read_csv(out / run / "results.csv")
+        table = md.read_table(out / run / "results.csv")
         cols = result.columns()
         assert list(table.columns) == list(cols)
         for col, values in cols.items():
@@ -81,7 +82,12 @@ def _compare(out: pathlib.Path, name: str):
                 table[col].to_numpy(), values, rtol=1e-12, atol=1e-12, err_msg=f"{run}: {col}"
             )
         meta = json.loads((out / run / "meta.json").read_text())
-        assert meta["units"] == {c: result.units()[c] for c in cols}
+        labels = {c: engineering(result.units()[c]) for c in cols}
+        assert meta["units"] == labels and table.attrs["units"] == {
+            c: u for c, u in labels.items() if u
+        }
+        head = (out / run / "results.csv").read_text().partition("\n")[0]
+        assert head.startswith("t [s],") or head.startswith("t [ms],")
         assert meta["kind"] == result.kind and meta["run"] == run
         assert meta["mixdyn_version"] == md.__version__
     return api

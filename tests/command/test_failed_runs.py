@@ -15,10 +15,10 @@ import json
 import re
 
 import numpy as np
-import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+import mixdyn as md
 from fixtures import EXAMPLES
 from mixdyn.cli import app
 
@@ -56,7 +56,7 @@ def test_a_failed_run_replaces_the_earlier_answer_by_its_partial_one(tmp_path):
     assert res.exit_code == 0, res.output
     folder = tmp_path / "out" / "swing"
     assert _meta(folder)["status"] == "ok"
-    full = pd.read_csv(folder / "results.csv")
+    full = md.read_table(folder)
     assert len(full) == 21
     (folder / "notes.txt").write_text("mine")  # not the run's: kept
 
@@ -72,7 +72,7 @@ def test_a_failed_run_replaces_the_earlier_answer_by_its_partial_one(tmp_path):
     assert failure["time_unit"] == "s"
 
     # no stale table: the rows end at the last output time before the failure
-    part = pd.read_csv(folder / "results.csv")
+    part = md.read_table(folder)
     assert meta["rows"] == len(part) and meta["columns"] == list(part.columns)
     assert part["t"].iloc[-1] <= failure["time"] < part["t"].iloc[-1] + 0.05 + 1e-12
     # the same steps up to the failure: the succeeding run's rows
@@ -86,7 +86,7 @@ def test_a_failed_run_replaces_the_earlier_answer_by_its_partial_one(tmp_path):
     res = _run(tmp_path, OK)
     assert res.exit_code == 0, res.output
     assert _meta(folder)["status"] == "ok" and "failure" not in _meta(folder)
-    assert len(pd.read_csv(folder / "results.csv")) == 21
+    assert len(md.read_table(folder)) == 21
 
 
 def test_a_folder_named_like_an_output_is_left_alone(tmp_path):
@@ -119,6 +119,6 @@ def test_a_kinematic_run_that_leaves_the_workspace_writes_the_solved_times(tmp_p
     meta = _meta(folder)
     assert meta["status"] == "failed" and meta["failure"]["error"] == "ConvergenceError"
     assert meta["failure"]["time_unit"] == "s"
-    part = pd.read_csv(folder / "results.csv")
+    part = md.read_table(folder)
     assert len(part) > 0 and part["t"].iloc[-1] < meta["failure"]["time"]
     np.testing.assert_allclose(part["slider.x"], 0.35 + 0.2 * part["t"], rtol=0, atol=1e-9)

@@ -73,7 +73,7 @@ def test_noise_free_velocities_give_the_damper_back(tmp_path):
     meta = json.loads((out / "identify" / "meta.json").read_text())
     assert meta["fit"]["chi2_reduced"] < 1e-8
     # results.csv: the run at the estimate, which reproduces the data
-    run = pd.read_csv(out / "identify" / "results.csv")
+    run = mio.read_table(out / "identify")
     data = pd.read_csv(tmp_path / "rec.csv")
     np.testing.assert_allclose(run["slider.vx"], data["v"], rtol=0, atol=1e-6)
     assert (out / "identify" / "fit.png").stat().st_size > 10_000

@@ -150,7 +150,7 @@ CASES = [
     (
         "dof-too-few",
         sub("drivers:\n  - {type: coordinate, name: motor, coordinate: crank.phi, law: w*t}\n", ""),
-        "1 degree(s) of freedom but the kinematic run has 0 driver(s)",
+        "1 degree of freedom but the kinematic run has 0 drivers",
         30,
     ),
     (
@@ -159,7 +159,7 @@ CASES = [
             "law: w*t}\n",
             "law: w*t}\n  - {type: coordinate, name: m2, coordinate: slider.x, law: 0.3}\n",
         ),
-        "prescribe a motion the joints or other drivers already fix",
+        "driver m2 prescribes a motion the joints or other drivers already fix",
         33,
     ),
     ("empty-span", sub("span: [0, 1]", "span: [1, 0]"), "empty", 34),
@@ -191,7 +191,7 @@ CASES = [
     (
         "mixed-count",
         sub("unknown: [tq]", "unknown: [tq, gas]", MIXED),
-        "2 unknown force(s) but 1 prescribed",
+        "2 unknown forces but 1 prescribed motion",
         None,
     ),
     (

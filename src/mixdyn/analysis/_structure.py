@@ -9,6 +9,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
 
+from .._hints import count, listed
 from ..equations import Constraints
 from ..equations._constraints import Packed
 from ..errors import DegreesOfFreedomError, ModelError, RedundantConstraintError
@@ -403,12 +404,17 @@ def degrees_of_freedom(model: Model, q=None, t: float = 0.0, drivers=None) -> Do
     return analyse(model, q, t, drivers)[0]
 
 
+#: "degree of freedom" in its two numbers, for :func:`mixdyn._hints.count`.
+_DOF = ("degree of freedom", "degrees of freedom")
+
+
 def require_balanced(report: DofReport, what: str = "kinematic analysis") -> None:
     """Raise a clear error unless the drivers fix every degree of freedom once."""
     if report.n_drivers > report.dof:
         raise DegreesOfFreedomError(
-            f"{what}: the mechanism has {report.dof} degree(s) of freedom but "
-            f"{report.n_drivers} driver(s); remove {report.n_drivers - report.dof} driver(s)"
+            f"{what}: the mechanism has {count(report.dof, *_DOF)} but "
+            f"{count(report.n_drivers, 'driver')}; remove "
+            f"{count(report.n_drivers - report.dof, 'driver')}"
             + (
                 f" (redundant: {', '.join(report.redundant_drivers)})"
                 if report.redundant_drivers
@@ -417,12 +423,14 @@ def require_balanced(report: DofReport, what: str = "kinematic analysis") -> Non
         )
     if report.redundant_drivers:
         raise RedundantConstraintError(
-            f"{what}: driver(s) {', '.join(report.redundant_drivers)} prescribe a motion that "
-            "the joints or other drivers already fix; remove them or drive another coordinate"
+            f"{what}: {listed(report.redundant_drivers, 'driver')} prescribe"
+            f"{'s' if len(report.redundant_drivers) == 1 else ''} a motion that the joints or "
+            "other drivers already fix; remove them or drive another coordinate"
         )
     if report.n_drivers != report.dof:
         more = "remove" if report.n_drivers > report.dof else "add"
         raise DegreesOfFreedomError(
-            f"{what}: the mechanism has {report.dof} degree(s) of freedom but "
-            f"{report.n_drivers} driver(s); {more} {abs(report.n_drivers - report.dof)} driver(s)"
+            f"{what}: the mechanism has {count(report.dof, *_DOF)} but "
+            f"{count(report.n_drivers, 'driver')}; {more} "
+            f"{count(abs(report.n_drivers - report.dof), 'driver')}"
         )

@@ -27,6 +27,7 @@ import numpy as np
 import scipy.linalg as sl
 
 from .._arrays import as_f64
+from .._hints import count, listed
 from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
@@ -146,8 +147,8 @@ def _check_solvable(model, c, q, qd, t, mk, unknown, prescribed):
     for a, name in enumerate(unknown):
         if np.abs(W[:, a]).max() <= 1e-9 * scale:
             raise SolvabilityError(
-                f"the unknown force cannot affect the prescribed motion(s) "
-                f"{', '.join(pnames)} (it acts only on motions the joints or the prescribed "
+                f"the unknown force cannot affect the {listed(pnames, 'prescribed motion')} "
+                f"(it acts only on motions the joints or the prescribed "
                 f"motions already fix).{suggestion}",
                 name,
             )
@@ -297,7 +298,8 @@ class Mixed(Integrated):
         prescribed = bind_prescribed(model, self.prescribed)
         if len(unknown) != len(prescribed):
             raise SolvabilityError(
-                f"{len(unknown)} unknown force(s) but {len(prescribed)} prescribed motion(s); "
+                f"{count(len(unknown), 'unknown force')} but "
+                f"{count(len(prescribed), 'prescribed motion')}; "
                 "a mixed problem needs one prescribed motion per unknown force",
                 ", ".join(unknown) or "unknown",
             )

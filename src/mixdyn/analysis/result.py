@@ -58,12 +58,17 @@ def require_finite(result: Result) -> None:
 
 def in_units(result: Result, columns: dict, units: dict, output_units: dict | None):
     """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
-    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``) converted into that unit; the others
+    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``, or a preset's name: ``"SI"``,
+    ``"mm-N-s"``, :data:`mixdyn.units.OUTPUT_PRESETS`) converted into that unit; the others
     as they are (the model's units). ``columns`` and ``units`` as from
     :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
     if not output_units:
         return columns, units
+    from ..units import preset
     from ..units import size_in as factor
+
+    if isinstance(output_units, str):
+        output_units = preset(output_units)
 
     cols, out = dict(columns), dict(units)
     for name in columns:
@@ -103,6 +108,9 @@ class Result:
         extra: further columns by name, each (N,): multipliers, reactions, efforts, energies.
         kinds: kind of quantity of each extra column (a key of ``mixdyn.units.DIMENSIONS``).
         stats: solver counters and settings (iterations, steps, largest violation...).
+        output_units: kind of quantity -> unit its columns are shown in by :meth:`table`,
+            :meth:`plot` and written results (a model file's ``output_units``, given by
+            :func:`mixdyn.run_file`); empty: the model's units.
     """
 
     kind: str
@@ -114,6 +122,7 @@ class Result:
     extra: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     kinds: dict[str, str] = dataclasses.field(default_factory=dict)
     stats: dict[str, Any] = dataclasses.field(default_factory=dict)
+    output_units: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         require_finite(self)
@@ -164,24 +173,58 @@ class Result:
         raise KeyError(f"no column {name!r}; {did_you_mean(name, cols)}")
 
     def table(self, points=(), output_units: dict | None = None):
-        """A pandas DataFrame indexed by ``t``; ``points`` adds point trajectories.
+        """A pandas DataFrame of every column, ``t`` first (a column, as in ``results.csv``);
+        ``points`` adds point trajectories.
 
         Args:
             points: point references (``"crank.B"``) whose global position, velocity and
                 acceleration are added as columns ``crank.B.x``, ``.vx``, ``.ax`` (and y).
             output_units: kind of quantity -> unit, e.g. ``{"angle": "deg", "torque":
-                "N*m", "time": "ms"}``: the columns of those kinds converted (default: the
-                model's units). The kinds are the keys of ``mixdyn.units.DIMENSIONS``.
+                "N*m", "time": "ms"}``, or a preset's name (``"SI"``, ``"mm-N-s"``): the
+                columns of those kinds converted (default: the
+                result's :attr:`output_units`, else the model's units). The kinds are the keys
+                of ``mixdyn.units.DIMENSIONS``.
 
-        The units of the columns are in ``df.attrs["units"]``.
+        The units of the columns (engineering labels: ``N·m``, ``mm/s²``) are in
+        ``df.attrs["units"]``.
         """
         import pandas as pd
 
-        cols, units = in_units(self, *point_columns(self, points), output_units)
-        df = pd.DataFrame(cols).set_index("t")
-        df.attrs["units"] = units
+        from ..units import engineering
+
+        shown = self.output_units if output_units is None else output_units
+        cols, units = in_units(self, *point_columns(self, points), shown)
+        df = pd.DataFrame(cols)
+        df.attrs["units"] = {c: engineering(units[c]) for c in cols if c in units}
         df.attrs["kind"] = self.kind
         return df
+
+    def plot(self, columns, *, x: str = "t", points=(), output_units: dict | None = None, **kw):
+        """A matplotlib Figure of ``columns`` against ``x`` (default ``t``), a panel per unit,
+        in the units of :meth:`table` (:func:`mixdyn.viz.plot_columns`, whose keywords
+        ``title``, ``ylabel``, ``reference``, ``size`` and ``path`` it passes on: with
+        ``path`` the figure is also written there).
+
+        Args:
+            columns: column names, e.g. ``["motor"]``, or one name.
+            x: the column on the x axis, e.g. ``"crank.phi"``.
+            points: point references whose columns (``coupler.P.x``...) may be plotted.
+            output_units: as for :meth:`table`.
+        """
+        from ..viz.plots import plot_columns
+
+        columns = [columns] if isinstance(columns, str) else list(columns)
+        table = self.table(points, output_units)
+        for name in [*columns, x]:
+            if name not in table.columns:
+                self[name]  # raises KeyError naming the column, with close matches
+        path = kw.pop("path", None)
+        fig = plot_columns(table, columns, x=x, **kw)
+        if path is not None:
+            from ..viz.plots import save_figure
+
+            save_figure(fig, path, kw.get("dpi", 120))
+        return fig
 
     def point(self, ref) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Global position, velocity and acceleration of a point, each (N, 2) [model units]."""

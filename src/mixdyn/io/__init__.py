@@ -26,7 +26,7 @@ from .dump import describe, dump, dumps
 from .expressions import FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
 from .load import build, load, read, reads, source_of
 from .quantities import DimensionError, QuantityError, convert
-from .results import read_result, write_result
+from .results import read_result, read_table, write_result
 from .schema import ModelFile, json_schema
 
 
@@ -53,6 +53,7 @@ __all__ = [
     "load",
     "read",
     "read_result",
+    "read_table",
     "reads",
     "source_of",
     "write_result",

@@ -2,8 +2,13 @@
 
 ``results.csv`` has a column ``t`` and every column of the :class:`mixdyn.Result` (body
 coordinates ``{body}.x`` ..., reactions ``{joint}.Fx`` ..., driver efforts and unknown forces by
-name, energies), in the model's units, at full precision. ``meta.json`` holds the unit of every
-column, the run's settings (solver, tolerances), the solver's counters and the mixdyn version.
+name, energies), in the file's ``output_units`` (else the model's units), at full precision.
+Each header names its column and unit, ``name [unit]`` (``t [s]``, ``crank.phi [deg]``,
+``motor [N·m]``; a column without unit by its name alone); :func:`read_table` reads them back
+as names and units. ``results.parquet`` carries the units in its schema metadata
+(:data:`PARQUET_KEY`). ``meta.json`` holds the unit of every column, the run's settings
+(solver, tolerances), the solver's counters and the mixdyn version. Units are engineering
+labels (:func:`mixdyn.units.engineering`), which :mod:`mixdyn.units` reads back.
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import json
 import math
 import os
 import pathlib
+import re
 from typing import Any
 
 import numpy as np
@@ -21,6 +27,7 @@ import numpy as np
 from ..analysis import Result
 from ..analysis.result import in_units, point_columns
 from ..errors import NumericalError
+from ..units import engineering
 
 RESULTS_CSV = "results.csv"
 RESULTS_PARQUET = "results.parquet"
@@ -66,7 +73,7 @@ def write_result(
         settings: the run's settings (analysis kind, solver, tolerances...) for ``meta.json``.
         extra: further entries of ``meta.json``.
         output_units: kind -> unit for the written columns (:func:`in_units`; default: the
-            model's units).
+            result's ``output_units``, else the model's units).
         points: point references (``"coupler.P"``) whose position, velocity and acceleration
             are written too (columns ``coupler.P.x``, ``.vx``, ``.ax`` and y).
 
@@ -76,14 +83,17 @@ def write_result(
     from .._version import __version__
 
     folder = pathlib.Path(folder)
+    if output_units is None:
+        output_units = result.output_units
     cols, units = in_units(result, *point_columns(result, points), output_units)
+    units = {c: engineering(u) for c, u in units.items()}
     names = list(cols)
     table = np.column_stack([np.asarray(cols[n]) for n in names]) if names else np.zeros((0, 0))
     _refuse_non_finite(table, names)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     csv = folder / RESULTS_CSV
-    _write_csv(csv, names, table)
+    _write_csv(csv, headers(names, units), table)
     written.append(csv)
     if parquet:
         pq = folder / RESULTS_PARQUET
@@ -148,11 +158,12 @@ def write_failure(
     rows = 0
     if partial is not None and len(partial.t):
         cols, units = in_units(partial, partial.columns(), partial.units(), output_units)
+        units = {c: engineering(u) for c, u in units.items()}
         names = list(cols)
         table = np.column_stack([np.asarray(cols[n]) for n in names])
         rows = len(table)
         csv = folder / RESULTS_CSV
-        _write_csv(csv, names, table)
+        _write_csv(csv, headers(names, units), table)
         written.append(csv)
     model = getattr(partial, "model", None) or model
     meta = {
@@ -224,6 +235,29 @@ def parquet_units(path) -> dict:
     except (OSError, ValueError):  # not Parquet (pyarrow's ArrowInvalid): no units
         return {}
     return json.loads(meta[PARQUET_KEY]).get("units", {}) if PARQUET_KEY in meta else {}
+
+
+def headers(names, units: dict) -> list[str]:
+    """The CSV headers of columns ``names``: ``name [unit]``, or the name alone where the
+    column has no unit (a count, a ratio)."""
+    return [f"{n} [{units[n]}]" if units.get(n) else n for n in names]
+
+
+_HEADER = re.compile(r"^(?P<name>.*\S)\s+\[(?P<unit>[^\[\]]*)\]$")
+
+
+def split_headers(columns) -> tuple[list[str], dict[str, str]]:
+    """Column names and units of CSV headers written by :func:`headers` (``motor [N·m]`` ->
+    ``motor``, ``N·m``); a header without ``[unit]`` is a name without unit (a table of plain
+    names reads as it is)."""
+    names, units = [], {}
+    for text in columns:
+        m = _HEADER.match(str(text))
+        name = m["name"] if m else str(text)
+        names.append(name)
+        if m and m["unit"].strip():
+            units[name] = m["unit"].strip()
+    return names, units
 
 
 def _write_csv(path: pathlib.Path, names: list[str], table: np.ndarray) -> None:
@@ -337,8 +371,10 @@ def read_result(path):
         path: the run's folder, or its ``results.csv`` / ``results.parquet``.
 
     Returns:
-        ``(table, meta)``: a pandas DataFrame with a column ``t`` and the ``meta.json`` dict
-        (empty if absent). The units are also in ``table.attrs["units"]``.
+        ``(table, meta)``: a pandas DataFrame with a column ``t`` and the columns by name
+        (a CSV's ``name [unit]`` headers split), and the ``meta.json`` dict (empty if
+        absent). The units of the columns are in ``table.attrs["units"]``: the CSV headers',
+        else ``meta.json``'s, else the Parquet file's.
 
     Raises:
         FileNotFoundError: no results there.
@@ -358,13 +394,37 @@ def read_result(path):
     if not p.exists():
         raise FileNotFoundError(f"no results at {path} (expected {RESULTS_CSV} or a run folder)")
     df = read_parquet(p) if p.suffix == ".parquet" else read_csv(p)
+    names, units = split_headers(df.columns)
+    df.columns = names
     meta_path = folder / META_JSON
     meta = _read_meta(meta_path) if meta_path.exists() else {}
-    units = meta.get("units", {})
-    if not units and p.suffix == ".parquet":
-        units = parquet_units(p)
-    df.attrs["units"] = units
+    if p.suffix == ".parquet":
+        units = meta.get("units") or parquet_units(p)
+    else:
+        units = {**meta.get("units", {}), **units}
+    df.attrs["units"] = {c: units[c] for c in names if units.get(c)}
     return df, meta
+
+
+def read_table(path):
+    """The table of results written by ``mixdyn run`` (or :func:`mixdyn.run_file`): a
+    pandas DataFrame with a column ``t`` and every column by name, the units of the columns
+    in ``df.attrs["units"]`` (from the CSV's ``name [unit]`` headers, or the Parquet file's
+    metadata).
+
+    Args:
+        path: a run's folder, or its ``results.csv`` / ``results.parquet``.
+
+    Example::
+
+        df = mixdyn.read_table("out/forward")
+        df[["t", "crank.phi"]]; df.attrs["units"]["crank.phi"]  # 'deg'
+
+    Raises:
+        FileNotFoundError: no results there.
+        FileError: as :func:`read_result`.
+    """
+    return read_result(path)[0]
 
 
 def _read_meta(path: pathlib.Path) -> dict:
@@ -474,11 +534,14 @@ __all__ = [
     "TABLE_CSV",
     "TABLE_PARQUET",
     "column_in_unit",
+    "headers",
     "in_units",
     "jsonable",
     "point_columns",
     "read_motion",
     "read_result",
+    "read_table",
+    "split_headers",
     "write_failure",
     "write_result",
     "write_sweep",

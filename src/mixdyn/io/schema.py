@@ -1069,9 +1069,10 @@ class ModelFile(Spec):
     gravity: Vec2 = (0.0, 0.0)
     """Gravitational acceleration ``[gx, gy]`` [length/time**2], e.g. ``[0, -9.81 m/s^2]``.
     Default ``[0, 0]``."""
-    output_units: dict[str, str] = Field(default_factory=dict)
-    """Units of the written results and figures by kind of quantity, e.g. ``{angle: deg,
-    angular_velocity: rpm, torque: N*m}`` (default: the model's units, named plainly)."""
+    output_units: dict[str, str] | str = Field(default_factory=dict)
+    """Units of the results by kind of quantity, e.g. ``{angle: deg, torque: N*m}``; or a
+    preset for every kind: ``SI`` (m, N, N*m, J, W) or ``mm-N-s`` (mm, N, N*mm, mJ, mW),
+    changed as ``{preset: SI, angle: deg}``. Default: the model's units."""
     parameters: dict[str, Scalar] = Field(default_factory=dict)
     """Named constants usable in expressions and quantities, e.g. ``{L: 120 mm, F0: 10 N}``."""
     ground: GroundSpec = GroundSpec()

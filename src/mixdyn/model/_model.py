@@ -215,10 +215,13 @@ class Model(eqx.Module):
 
     def summary(self) -> str:
         """A short human-readable description."""
+        from .._hints import count
+
         return (
-            f"{self.name}: {self.nb} bodies ({self.nq} coordinates), {len(self.joints)} joints "
-            f"({self.n_joint_equations} equations), {len(self.drivers)} drivers, "
-            f"{len(self.forces)} forces; units {self.units.describe()}"
+            f"{self.name}: {count(self.nb, 'body', 'bodies')} ({count(self.nq, 'coordinate')}), "
+            f"{count(len(self.joints), 'joint')} ({count(self.n_joint_equations, 'equation')}), "
+            f"{count(len(self.drivers), 'driver')}, {count(len(self.forces), 'force')}; "
+            f"units {self.units.describe()}"
         )
 
     # ----------------------------------------------------------------- display

@@ -12,7 +12,9 @@ and does its jobs through one module each:
 * :mod:`.setup`: a run's model, start and analysis keywords, made once and shared by its check
   and its run;
 * :mod:`.execute`: the runs in the order of their dependencies;
-* :mod:`.outputs` and :mod:`.console`: what ``mixdyn run`` writes and shows.
+* :mod:`.outputs` and :mod:`.console`: what ``mixdyn run`` writes and shows;
+* :mod:`.files`: a file from Python, :func:`load` and :func:`run_file` (``mixdyn.load``,
+  ``mixdyn.run_file``).
 
 Example::
 
@@ -23,8 +25,19 @@ Example::
 """
 
 from . import analyses, identify, optimize, sweep  # noqa: F401  (they register their kinds)
+from .files import LoadedFile, load, run_file
 from .kinds import KINDS, RunKind, kind_of
 from .plan import Plan
 from .runner import Runner, execute
 
-__all__ = ["KINDS", "Plan", "RunKind", "Runner", "execute", "kind_of"]
+__all__ = [
+    "KINDS",
+    "LoadedFile",
+    "Plan",
+    "RunKind",
+    "Runner",
+    "execute",
+    "kind_of",
+    "load",
+    "run_file",
+]

@@ -17,6 +17,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .._hints import count
 from ..io import schema as s
 from ..io.expressions import ExpressionError
 from ..io.expressions import parse as parse_expression
@@ -35,6 +36,10 @@ def _prescribed_ref(runner, ref: str, path) -> None:
             runner.fail(path, f"{ref!r}: a point coordinate is x or y", "write body.point.x")
         return
     runner.b.coordinate(ref, path)
+
+
+#: "degree of freedom" in its two numbers.
+_DOF = ("degree of freedom", "degrees of freedom")
 
 
 class AnalysisKind(RunKind):
@@ -232,11 +237,12 @@ class AnalysisKind(RunKind):
     def describe(self, plan: Plan, report, model) -> str:
         r = plan.spec
         n = report.n_drivers
-        state = "balanced" if n == report.dof else f"{report.dof - n} free degree(s) of freedom"
+        free = report.dof - n
+        state = "balanced" if n == report.dof else f"{free} free {_DOF[free != 1]}"
         return (
-            f"run [bold]{esc(r.name)}[/bold] ({r.kind}): {len(plan.times)} output times "
+            f"run [bold]{esc(r.name)}[/bold] ({r.kind}): {count(len(plan.times), 'output time')} "
             f"{plan.times[0]:g}..{plan.times[-1]:g} {model.units.time}, "
-            f"{n} prescribed motion(s) for {report.dof} DOF ({state}){self.described(r)}"
+            f"{count(n, 'prescribed motion')} for {report.dof} DOF ({state}){self.described(r)}"
         )
 
     def described(self, r) -> str:
@@ -339,6 +345,7 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
     columns, references, the scene; the HTML page is written here)."""
     from ..io.quantities import factor
     from ..io.results import in_units
+    from ..units import engineering
     from ..viz import html, movie_data, result_columns
 
     for k, p in enumerate(runner.plots(plan)):
@@ -347,6 +354,7 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
         except KeyError as e:
             runner.fail((*plan.path, "plots", k, "columns"), str(e.args[0]), "fix the column name")
         shown, units = in_units(result, cols, units, runner.output_units)
+        units = {c: engineering(u) for c, u in units.items()}
         reference = None
         if p.reference is not None:
             y = _reference(runner, p.reference, result.t)

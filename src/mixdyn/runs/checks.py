@@ -33,6 +33,7 @@ import numpy as np
 
 from .. import analysis as an
 from .. import model as m
+from .._hints import count, listed
 from ..analysis._options import CHOICES, step_count, suggestions, value_problem
 from ..analysis._setup import prepare
 from ..analysis._simulate import ENERGY_TOL
@@ -316,6 +317,10 @@ def check_settings(runner, plan: Plan) -> None:
     check_laws(runner, plan)
 
 
+#: "degree of freedom" in its two numbers, for :func:`mixdyn._hints.count`.
+_DOF = ("degree of freedom", "degrees of freedom")
+
+
 def output_units(runner) -> dict[str, str]:
     """The file's ``output_units`` checked: a preset's name (``SI``, ``mm-N-s``:
     :data:`mixdyn.units.OUTPUT_PRESETS`) or kinds and their units, a ``preset`` among them
@@ -375,7 +380,8 @@ def check_mixed(runner, r: s.MixedRunSpec, path) -> None:
     if len(r.unknown) != len(r.prescribed):
         runner.fail(
             path,
-            f"{len(r.unknown)} unknown force(s) but {len(r.prescribed)} prescribed motion(s)",
+            f"{count(len(r.unknown), 'unknown force')} but "
+            f"{count(len(r.prescribed), 'prescribed motion')}",
             "a mixed run needs one prescribed motion per unknown force",
         )
     for k, ref in enumerate(r.independent or ()):
@@ -519,23 +525,24 @@ def mobility(runner, plan: Plan):
         if report.redundant_drivers:
             runner.fail(
                 plan.path,
-                f"driver(s) {', '.join(report.redundant_drivers)} prescribe a motion the "
-                "joints or other drivers already fix",
+                f"{listed(report.redundant_drivers, 'driver')} prescribe"
+                f"{'s' if len(report.redundant_drivers) == 1 else ''} a motion the joints or "
+                "other drivers already fix",
                 "remove them or drive another coordinate",
             )
         if n != report.dof:
             more = "remove" if n > report.dof else "add"
             runner.fail(
                 plan.path,
-                f"the mechanism has {report.dof} degree(s) of freedom but the {r.kind} run "
-                f"has {n} driver(s)",
-                f"{more} {abs(n - report.dof)} driver(s) (drivers: or prescribed:)",
+                f"the mechanism has {count(report.dof, *_DOF)} but the {r.kind} run "
+                f"has {count(n, 'driver')}",
+                f"{more} {count(abs(n - report.dof), 'driver')} (drivers: or prescribed:)",
             )
     elif n > report.dof or report.redundant_drivers:
         runner.fail(
             plan.path,
-            f"the mechanism has {report.dof} degree(s) of freedom but the run prescribes "
-            f"{n} motion(s)"
+            f"the mechanism has {count(report.dof, *_DOF)} but the run prescribes "
+            f"{count(n, 'motion')}"
             + (
                 f" (redundant: {', '.join(report.redundant_drivers)})"
                 if report.redundant_drivers
@@ -700,9 +707,10 @@ def check_solvable(runner, plan: Plan) -> None:
                 cause = cause[len(element) + 2 :]
             runner.fail(
                 path,
-                f"run {plan.name!r}: the held coordinate(s) {', '.join(hold)} (from "
-                f"{source}) conflict with its prescribed motion(s) "
-                f"{', '.join(d.name for d in prescribed)} at t = {plan.times[0]:g}: {cause}",
+                f"run {plan.name!r}: the held {listed(hold, 'coordinate')} (from "
+                f"{source}) conflict{'s' if len(hold) == 1 else ''} with its "
+                f"{listed((d.name for d in prescribed), 'prescribed motion')} at "
+                f"t = {plan.times[0]:g}: {cause}",
                 "remove them from the run's hold"
                 if r.hold is not None
                 else "give the run its own hold: (hold: [] holds nothing)",

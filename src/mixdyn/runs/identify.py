@@ -108,6 +108,7 @@ def _read_data(runner, r: s.IdentifyRunSpec, path):
         if e.problem == "no such file":
             runner.fail((*path, "data"), f"no data file {str(file)!r}", "give a CSV file's path")
         runner.fail((*path, "data"), f"data file {str(file)!r}: {e.problem}", e.hint)
+    table = _in_model_units(runner, table, file, path)
     if "t" not in table.columns:
         runner.fail((*path, "data"), f"{str(file)!r} has no column 't'", "add the times as 't'")
     t = pd.to_numeric(table["t"], errors="coerce").to_numpy(dtype=float)
@@ -118,6 +119,27 @@ def _read_data(runner, r: s.IdentifyRunSpec, path):
             "",
         )
     return file, table, t
+
+
+def _in_model_units(runner, table, file, path):
+    """The recording with ``name [unit]`` headers (as ``results.csv`` writes them) split, each
+    column with a unit converted into the model's unit of its dimension; columns without
+    a unit are in the model's units."""
+    import pandas as pd
+
+    from ..io.results import split_headers
+    from ..units import QuantityError, factor
+
+    names, units = split_headers(table.columns)
+    table = table.set_axis(names, axis=1)
+    for name, unit in units.items():
+        try:
+            scale = factor(unit, None, runner.model.units)
+        except QuantityError as e:
+            runner.fail((*path, "data"), f"{str(file)!r}, column {name!r}: {e.problem}", e.hint)
+        if scale != 1.0:
+            table[name] = pd.to_numeric(table[name], errors="coerce") * scale
+    return table
 
 
 def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:

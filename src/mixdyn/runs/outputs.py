@@ -186,9 +186,12 @@ def draws(runner, plans, figures: bool) -> bool:
 
 
 # --------------------------------------------------------------------------- writing
-def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]:
+def write_runs(
+    runner, plans, outputs: Outputs, mode: str, results: dict | None = None
+) -> list[pathlib.Path]:
     """Execute the plans, writing each run's outputs as it ends. ``mode``: ``"off"``,
-    ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time).
+    ``"runs"`` (a line per run) or ``"steps"`` (a bar following the simulated time);
+    ``results``: a dict given receives each run's result by name.
 
     The figures and animations are drawn by ``outputs.painter`` (None: no figures), a worker
     process that draws while the next runs compute (matplotlib is imported there while the
@@ -213,6 +216,8 @@ def write_runs(runner, plans, outputs: Outputs, mode: str) -> list[pathlib.Path]
 
             def done(plan, result, seconds):
                 progress.done(plan)
+                if results is not None:
+                    results[plan.name] = result
                 kind = kind_of(plan)
                 written.extend(kind.write(runner, plan, result, seconds, outputs))
                 progress.say(kind.done(plan, result, seconds, outputs.folder(plan)))

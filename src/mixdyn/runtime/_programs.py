@@ -305,6 +305,27 @@ stats = {
     "executables": 0,
     "ahead": 0,
 }
+#: What to do before this process first compiles a program from scratch (traced and
+#: compiled, not read from the cache): ``mixdyn run`` off a terminal says so in one line
+#: (:func:`on_first_compile`). Emptied when called.
+_first_compile: list[Callable[[], None]] = []
+
+
+def on_first_compile(fn: Callable[[], None] | None) -> None:
+    """Call ``fn()`` once, before this process first compiles a program from scratch (a
+    program the cache does not hold, or any first program with the cache off); None: nothing."""
+    _first_compile[:] = [] if fn is None else [fn]
+
+
+def _compiling() -> None:
+    """A program is compiled from scratch: the :func:`on_first_compile` notice, once."""
+    with _lock:
+        todo = _first_compile[:]
+        _first_compile.clear()
+    for fn in todo:
+        fn()
+
+
 #: How many times the Python body of each :func:`cached_jit` function ran, i.e. was traced
 #: (by ``filter_jit`` or by export), by ``module.qualname``.
 traces: collections.Counter = collections.Counter()
@@ -367,6 +388,8 @@ class _CachedJit:
         folder = _state["folder"]
         called = None if folder is None else self._key(args, kwargs)
         if called is None:
+            if folder is None and _first_compile:
+                _compiling()
             return self.jit(*args, **kwargs)
         leaves, treedef, dynamic, mkey = called
         try:
@@ -450,6 +473,7 @@ class _CachedJit:
             pass
         except Exception:  # a damaged entry: export it again
             pass
+        _compiling()
         blob = self._export(args, kwargs, leaves, treedef)
         _files.write_pickle(path, blob)
         if blob is None:
@@ -663,6 +687,7 @@ __all__ = [
     "cached_jit",
     "configure_from_env",
     "job",
+    "on_first_compile",
     "prefetch",
     "reading_ahead",
     "register_key",

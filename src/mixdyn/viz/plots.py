@@ -21,7 +21,8 @@ _POINT_SUFFIXES = {
 
 
 def result_columns(result, names) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """Columns ``names`` of a :class:`mixdyn.Result` with their units, ``t`` included.
+    """Columns ``names`` of a :class:`mixdyn.Result` with their units (engineering labels:
+    ``N·m``, ``mm/s²``), ``t`` included.
 
     Besides the result's own columns, a point's global coordinates may be asked for as
     ``"body.point.x"`` (also ``.y``, ``.vx``, ``.vy``, ``.ax``, ``.ay``).
@@ -51,13 +52,15 @@ def result_columns(result, names) -> tuple[dict[str, np.ndarray], dict[str, str]
                 out_units[name] = result.model.units.label(kind)
                 continue
         result[name]  # raises KeyError naming the column, with close matches
-    return out, out_units
+    from ..units import engineering  # here: the figure worker loads this file without mixdyn
+
+    return out, {k: engineering(u) for k, u in out_units.items()}
 
 
 def plot_columns(
     table,
     columns,
-    path,
+    path=None,
     *,
     units: dict[str, str] | None = None,
     title: str | None = None,
@@ -66,16 +69,20 @@ def plot_columns(
     x: str = "t",
     size: tuple[float, float] | None = None,
     dpi: int = 120,
-) -> pathlib.Path:
-    """Plot ``columns`` of ``table`` against its column ``x`` and write the figure to ``path``:
-    one panel per unit (an angle, a speed and an acceleration are not drawn on one axis, where
-    two of them would come out flat), the panels sharing the x axis.
+):
+    """Plot ``columns`` of ``table`` against its column ``x``: one panel per unit (an angle, a
+    speed and an acceleration are not drawn on one axis, where two of them would come out
+    flat), the panels sharing the x axis; written to ``path`` where given.
 
     Args:
-        table: a mapping (or pandas DataFrame) with the column ``x`` and the columns to plot.
+        table: a mapping (or pandas DataFrame, e.g. :meth:`mixdyn.Result.table` or
+            :func:`mixdyn.read_table`) with the column ``x`` (a DataFrame indexed by ``x``
+            also serves) and the columns to plot.
         columns: names of the columns to plot.
-        path: the output file; ``.png``, ``.svg`` or ``.pdf``.
-        units: unit of each column, for the axis labels.
+        path: the output file (``.png``, ``.svg`` or ``.pdf``), or None: the figure is
+            returned, not written.
+        units: unit of each column, for the axis labels, as written there (default:
+            ``table.attrs["units"]``, engineering labels such as ``N·m``, ``mm/s²``).
         title: the figure's title.
         ylabel: the y axis label (default: the columns' name and unit).
         reference: optional ``(t, y, label)`` drawn dashed beside the columns (against ``t``:
@@ -86,16 +93,23 @@ def plot_columns(
         dpi: resolution of a PNG.
 
     Returns:
-        The path written.
+        The path written, or without ``path`` the matplotlib ``Figure``.
+
+    Raises:
+        KeyError: a column (or ``x``) the table does not have.
+        ValueError: a path that is not ``.png``, ``.svg`` or ``.pdf``.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    path = pathlib.Path(path)
-    if path.suffix.lower() not in PLOT_SUFFIXES:
-        raise ValueError(f"cannot write a plot to {path.name!r}; use {', '.join(PLOT_SUFFIXES)}")
+    if path is not None:
+        path = pathlib.Path(path)
+        if path.suffix.lower() not in PLOT_SUFFIXES:
+            raise ValueError(
+                f"cannot write a plot to {path.name!r}; use {', '.join(PLOT_SUFFIXES)}"
+            )
     units = dict(units or getattr(table, "attrs", {}).get("units", {}) or {})
-    xs = np.asarray(table[x], dtype=float)
+    xs = np.asarray(_column(table, x), dtype=float)
     groups: dict[str, list[str]] = {}
     for name in columns:
         groups.setdefault(units.get(name, ""), []).append(name)
@@ -105,7 +119,7 @@ def plot_columns(
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     for ax, (unit, names) in zip(axes, groups.items(), strict=True):
         for name in names:
-            y = np.asarray(table[name], dtype=float)
+            y = np.asarray(_column(table, name), dtype=float)
             ax.plot(xs, y, lw=1.8, label=f"{name} [{unit}]" if unit else name)
         if reference is not None and ax is axes[0]:
             rt, ry, rlabel = reference
@@ -125,9 +139,31 @@ def plot_columns(
         fig.suptitle(title)
     elif title:
         axes[0].set_title(title)
+    if path is None:
+        return fig
+    return save_figure(fig, path, dpi)
+
+
+def save_figure(fig, path, dpi: int = 120) -> pathlib.Path:
+    """Write a matplotlib Figure to ``path`` (its folder created) at ``dpi``; the path."""
+    path = pathlib.Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
     return path
 
 
-__all__ = ["PLOT_SUFFIXES", "plot_columns", "result_columns"]
+def _column(table, name: str) -> np.ndarray:
+    """Column ``name`` of ``table``, or its index where the index is named so (a DataFrame
+    indexed by ``t``); a KeyError naming the column and the ones there are."""
+    try:
+        return table[name]
+    except KeyError:
+        index = getattr(table, "index", None)
+        if index is not None and index.name == name:
+            return np.asarray(index)
+        names = [str(n) for n in getattr(table, "columns", table)]
+        listed = ", ".join(names[:8]) + (f" ... ({len(names)} in all)" if len(names) > 8 else "")
+        raise KeyError(f"no column {name!r}; the table has {listed}") from None
+
+
+__all__ = ["PLOT_SUFFIXES", "plot_columns", "result_columns", "save_figure"]

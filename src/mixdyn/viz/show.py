@@ -7,6 +7,7 @@ import pathlib
 
 import numpy as np
 
+from .._hints import count
 from ._draw import COLORS
 from .animate import Scene
 
@@ -86,7 +87,11 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
     for name, p in _joint_points(model, q):
         ax.plot([p[0]], [p[1]], "o", mfc="white", mec="k", ms=6, zorder=5)
         ax.annotate(name, p, xytext=(5, -10), textcoords="offset points", fontsize=8, zorder=7)
-    ax.set_title(title or f"{model.name}: {len(model.bodies)} bodies, {len(model.joints)} joints")
+    ax.set_title(
+        title
+        or f"{model.name}: {count(len(model.bodies), 'body', 'bodies')}, "
+        f"{count(len(model.joints), 'joint')}"
+    )
     ax.legend(loc="upper right", fontsize="x-small")
     path.parent.mkdir(parents=True, exist_ok=True)
     with matplotlib.rc_context({"svg.fonttype": "none"}):  # names as text in an SVG
