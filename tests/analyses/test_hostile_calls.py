@@ -107,3 +107,10 @@ def test_a_noise_below_the_resolution_of_the_data_is_refused_before_fitting(mode
     big[2] = 1e308
     with pytest.raises(ModelError, match=r"value 1e\+308 in row 2"):
         md.fit(model, ts, {"bob.phi": big}, ["bob.mass"], noise=1e-3)
+
+
+def test_a_step_limit_beyond_the_loops_integers_is_an_input_error():
+    with pytest.raises(ModelError, match="from 1 to 2,147,483,647") as e:
+        md.Projection(max_steps=1e300)
+    assert e.value.element == "max_steps"
+    assert md.Projection(max_steps=2**31 - 1).max_steps == 2**31 - 1

@@ -140,3 +140,13 @@ def test_a_step_below_the_resolution_of_the_times_is_refused(tmp_path):
     )
     line = _check(_write(tmp_path, text))
     assert "successive output times are equal" in line, line
+
+
+def test_a_step_limit_of_1e300_is_refused_at_its_line(tmp_path):
+    text = MODEL.replace(
+        "time: {span: [0, 1], n: 11}",
+        "time: {span: [0, 1], n: 11}\n    options: {max_steps: 1e300}",
+    )
+    line = _check(_write(tmp_path, text))
+    assert line.startswith(f"{tmp_path / 'm.yaml'}:{_line(text, 'max_steps')}:"), line
+    assert "give a whole number from 1 to 2,147,483,647" in line, line

@@ -30,6 +30,10 @@ def _whole(v: float) -> bool:
     return math.isfinite(v) and v >= 1 and float(v).is_integer()
 
 
+#: The largest step limit (2**31 - 1 steps, beyond any run's time): the limit is an integer
+#: argument of the compiled loop, which a number such as 1e300 overflows.
+MAX_STEPS = 2**31 - 1
+
 #: Range of each numeric option: ``(test, what the value must be)``.
 RANGES = {
     "rtol": (_positive, "a finite number > 0 (e.g. 1e-8)"),
@@ -42,7 +46,10 @@ RANGES = {
     "alpha": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
     "beta": (lambda v: math.isfinite(v) and v >= 0, "a finite number >= 0 [1/time]"),
     "rho_inf": (lambda v: 0 <= v <= 1, "a number in [0, 1] (1: no numerical damping)"),
-    "max_steps": (_whole, "a whole number >= 1"),
+    "max_steps": (
+        lambda v: _whole(v) and v <= MAX_STEPS,
+        f"a whole number from 1 to {MAX_STEPS:,}",
+    ),
     "max_newton": (lambda v: _whole(v) and v <= 1000, "a whole number from 1 to 1000"),
     "max_iter": (lambda v: _whole(v) and v <= 1000, "a whole number from 1 to 1000"),
 }
