@@ -383,14 +383,15 @@ def _run(file, runs, out, parquet, figures, progress, netcdf=False):
 
 
 def _compiling(file) -> None:
-    """The one line ``mixdyn run`` writes off a terminal as it first compiles."""
+    """The one line ``mixdyn run`` writes off a terminal as it first compiles (on stdout,
+    beside the files written: stderr holds a failure's one line alone)."""
     from .runs.console import clean
 
-    sys.stderr.write(
+    sys.stdout.write(
         f"{clean(file)}: compiling the model's programs (the first time for this model, "
         "up to a minute; later runs read them from the cache)\n"
     )
-    sys.stderr.flush()
+    sys.stdout.flush()
 
 
 # --------------------------------------------------------------------------- plot
