@@ -9,7 +9,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from .._hints import did_you_mean
+from .._hints import count, did_you_mean
 from ..model import Model
 from ..model._element import Resolver
 from ..model._geometry import point
@@ -48,7 +48,7 @@ def require_finite(result: Result) -> None:
     t = float(result.t[row]) if np.isfinite(result.t[row]) else None
     raise NonFiniteError(
         f"the {result.kind} analysis produced a non-finite value in column {name!r} "
-        f"({n_bad} column(s) affected): a force or law that is not finite here (sqrt or log "
+        f"({count(n_bad, 'column')} affected): a force or law that is not finite here (sqrt or log "
         "of a negative number, an overflow), a singular configuration or a diverging motion; "
         "check the element's law and values",
         t,

@@ -28,6 +28,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from .. import model as m
+from .._hints import count
 from ..analysis._options import suggestions
 from ..errors import ModelError
 from ..model._body import GROUND_NAME
@@ -219,7 +220,7 @@ def _pydantic_error(e: ValidationError, data, lines, file) -> FileError:
         hint = "use one of the allowed values"
     elif typ == "too_short" or typ == "too_long":
         hint = "check the number of items"
-    more = f" (and {len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
+    more = f" (and {count(len(errors) - 1, 'more problem')})" if len(errors) > 1 else ""
     return FileError(
         msg + more,
         element_name(data, path),

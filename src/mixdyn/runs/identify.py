@@ -33,6 +33,7 @@ import pathlib
 import numpy as np
 
 from .. import paths
+from .._hints import count
 from ..analysis import Result
 from ..analysis.fit import _RATES, Fit, check_noise
 from ..errors import ModelError
@@ -310,8 +311,8 @@ class IdentifyKind(RunKind):
     def done(self, plan: IdentifyPlan, result: FileFit, seconds: float, folder) -> str:
         f = result.fit
         return (
-            f"{plan.name}: identify, {len(f.params)} number(s), chi-square "
-            f"{f.chi2:.3g}, {f.evaluations} runs, {seconds:.2f} s -> {folder}"
+            f"{plan.name}: identify, {count(len(f.params), 'number')}, chi-square "
+            f"{f.chi2:.3g}, {count(f.evaluations, 'run')}, {seconds:.2f} s -> {folder}"
         )
 
 

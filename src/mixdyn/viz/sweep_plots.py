@@ -93,7 +93,14 @@ def plot_against(
     ax.set_ylabel(_label(names[1], units.get(names[1], "")))
     failed = int((~ok).sum())
     if title or failed:
-        ax.set_title((title or "") + (f" ({failed} failed member(s) not drawn)" if failed else ""))
+        ax.set_title(
+            (title or "")
+            + (
+                f" ({failed} failed {'member' if failed == 1 else 'members'} not drawn)"
+                if failed
+                else ""
+            )
+        )
     ax.grid(True, alpha=0.35)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=dpi)
