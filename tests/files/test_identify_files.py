@@ -149,3 +149,31 @@ def test_bad_data_is_refused_at_the_data_line(tmp_path):
     data = pd.DataFrame({"t": [0.0, 0.5, 1.0], "v": [0.0, 0.1, 0.2]})
     res = CliRunner().invoke(app, ["check", str(_write(tmp_path, mixed, data))])
     assert res.exit_code == 2 and "is an identify run" in res.output, res.output
+
+
+def test_a_recording_with_units_in_its_headers_is_read_in_them(tmp_path):
+    """A recording with ``name [unit]`` headers (as results.csv writes them): times in ms and
+    speeds in mm/s give the same measurements as the same data in the model's units (m, s);
+    a unit of another kind than the measured column's is refused at the measurement's line."""
+    from mixdyn.io import FileError
+    from mixdyn.runs import Runner
+
+    t = np.linspace(0.0, 1.0, 41)
+    v = 0.3 * np.sin(2 * np.pi * t)  # m/s
+    plans = []
+    for header, scale in (("t,v", 1.0), ("t [ms],v [mm/s]", 1e3)):
+        rows = "".join(f"{a * scale:.17g},{b * scale:.17g}\n" for a, b in zip(t, v, strict=True))
+        (tmp_path / "rec.csv").write_text(f"{header}\n{rows}")
+        path = tmp_path / "fit.yaml"
+        path.write_text(MODEL + IDENTIFY)
+        plans.append(Runner(mio.read(path)).plans["identify"])
+    plain, with_units = plans
+    np.testing.assert_allclose(with_units.times, plain.times, rtol=1e-15, atol=1e-15)
+    np.testing.assert_allclose(
+        with_units.measured["slider.vx"], plain.measured["slider.vx"], rtol=1e-15, atol=1e-18
+    )
+    rows = "".join(f"{a},{b}\n" for a, b in zip(t, v, strict=True))
+    (tmp_path / "rec.csv").write_text("t,v [deg]\n" + rows)
+    with pytest.raises(FileError, match="angle") as err:
+        Runner(mio.read(tmp_path / "fit.yaml"))
+    assert "run 'identify', measured[0].data" in err.value.one_line()

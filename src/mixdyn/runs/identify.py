@@ -109,7 +109,7 @@ def _read_data(runner, r: s.IdentifyRunSpec, path):
         if e.problem == "no such file":
             runner.fail((*path, "data"), f"no data file {str(file)!r}", "give a CSV file's path")
         runner.fail((*path, "data"), f"data file {str(file)!r}: {e.problem}", e.hint)
-    table = _in_model_units(runner, table, file, path)
+    table = _header_units(runner, table, file, path)
     if "t" not in table.columns:
         runner.fail((*path, "data"), f"{str(file)!r} has no column 't'", "add the times as 't'")
     t = pd.to_numeric(table["t"], errors="coerce").to_numpy(dtype=float)
@@ -122,24 +122,21 @@ def _read_data(runner, r: s.IdentifyRunSpec, path):
     return file, table, t
 
 
-def _in_model_units(runner, table, file, path):
-    """The recording with ``name [unit]`` headers (as ``results.csv`` writes them) split, each
-    column with a unit converted into the model's unit of its dimension; columns without
-    a unit are in the model's units."""
+def _header_units(runner, table, file, path):
+    """The recording with ``name [unit]`` headers (as ``results.csv`` writes them) split into
+    names, the units in ``table.attrs["units"]``, its times converted into the model's time
+    unit (a unit of time, checked); the measured columns are converted where their kind is
+    known (:func:`_measured_values`). Columns without a unit are in the model's units."""
     import pandas as pd
 
     from ..io.results import split_headers
-    from ..units import QuantityError, factor
 
     names, units = split_headers(table.columns)
     table = table.set_axis(names, axis=1)
-    for name, unit in units.items():
-        try:
-            scale = factor(unit, None, runner.model.units)
-        except QuantityError as e:
-            runner.fail((*path, "data"), f"{str(file)!r}, column {name!r}: {e.problem}", e.hint)
-        if scale != 1.0:
-            table[name] = pd.to_numeric(table[name], errors="coerce") * scale
+    if units.get("t"):
+        scale = runner.b.factor(units["t"], "time", (*path, "data"))
+        table["t"] = pd.to_numeric(table["t"], errors="coerce") * scale
+    table.attrs["units"] = units
     return table
 
 
@@ -147,6 +144,8 @@ def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
     """Check an identification run against the file, its model and its data."""
     path = ("runs", index)
     base = study_base(runner, index, r, ("forward", "mixed"), "fit")
+    import pandas as pd
+
     file, table, t = _read_data(runner, r, path)
     measured, noise = {}, {}
     for k, m in enumerate(r.measured):
@@ -167,9 +166,10 @@ def plan(runner, index: int, r: s.IdentifyRunSpec) -> IdentifyPlan:
                 f"{str(file)!r} has no column {m.data!r}",
                 f"its columns: {', '.join(map(str, table.columns))}",
             )
-        import pandas as pd
-
         v = pd.to_numeric(table[m.data], errors="coerce").to_numpy(dtype=float)
+        unit = table.attrs["units"].get(m.data)
+        if unit:  # a header's unit: of the measured column's kind, converted
+            v = v * runner.b.factor(unit, _KINDS[suffix], (*mp, "data"))
         if not np.all(np.isfinite(v)):
             row = int(np.argmax(~np.isfinite(v)))
             runner.fail(
