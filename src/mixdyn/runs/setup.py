@@ -279,7 +279,7 @@ def call(
         checked: on the model of the start the checks made (:func:`.checks.mobility`), if
             any.
         stand_ins: a replayed motion by the stand-in its checks made (held at its start
-            value, in the replayed law's form: :func:`.checks.held`) instead of ``results``.
+            value, in the replayed law's form: :func:`.checks.start.held`) instead of ``results``.
     """
     kind, model, keywords, _ = _call(runner, plan, results, checked, stand_ins)
     return kind, model, keywords
