@@ -133,8 +133,11 @@ def test_the_command_line_writes_the_tables_and_figures(tmp_path):
     members = pd.read_csv(folder / "members.csv")
     assert list(members["member"]) == [0, 1, 2, 3]
     assert list(members.columns[:3]) == ["member", "F0", "m5"]
-    table = pd.read_csv(folder / "table.csv")
+    table = mio.read_table(folder / "table.csv")
     assert len(table) == 4 * 21  # a row per member and output time
+    head = (folder / "table.csv").read_text().partition("\n")[0].split(",")
+    assert "slider.x [mm]" in head and "member" in head  # a name with its unit; a count without
+    assert table.attrs["units"]["slider.x"] == "mm" and "member" not in table.attrs["units"]
     # the long table's rows are the members' columns
     single = _single(12.5, 0.01)
     rows = table[table["member"] == 3]
@@ -155,7 +158,7 @@ def test_netcdf_holds_the_sweep_as_a_labelled_array(tmp_path):
     )
     assert res.exit_code == 0, res.output
     ds = xr.load_dataset(out / "sweep" / "sweep.nc", engine="scipy")
-    table = pd.read_csv(out / "sweep" / "table.csv")
+    table = mio.read_table(out / "sweep")
     assert ds["slider.x"].dims == ("member", "t") and ds.sizes == {"member": 4, "t": 21}
     np.testing.assert_array_equal(ds["F0"].values, [8, 8, 12.5, 12.5])
     assert list(ds["status"].values) == ["ok"] * 4
@@ -187,7 +190,7 @@ def test_a_failed_member_is_named_and_the_others_written(tmp_path):
     assert list(members["status"] == "ok") == [True, False, True]
     assert "step" in members["error"][1] and np.isfinite(members["t_error"][1])
     assert np.isnan(members["x_end"][1]) and np.isfinite(members["x_end"][[0, 2]]).all()
-    table = pd.read_csv(out / "sweep" / "table.csv")
+    table = mio.read_table(out / "sweep")
     assert sorted(set(table["member"])) == [0, 2]
 
 

@@ -66,7 +66,7 @@ def test_each_member_runs_to_its_own_end(tmp_path):
     res, out = _run(tmp_path, MODEL + BASE + SWEEP, "--netcdf")
     assert res.exit_code == 0, res.output
     ds = xr.load_dataset(out / "sweep" / "sweep.nc", engine="scipy")
-    table = pd.read_csv(out / "sweep" / "table.csv")
+    table = mio.read_table(out / "sweep")
     members = pd.read_csv(out / "sweep" / "members.csv")
     assert list(members["status"]) == ["ok"] * 3
     for i, t_end in enumerate([0.5, 1.0, 1.5]):

@@ -305,7 +305,8 @@ def write_sweep(
 ) -> list[pathlib.Path]:
     """Write a sweep run's result (:class:`mixdyn.runs.sweep.FileSweep`) to ``folder``:
     ``members.csv`` (a row per member: index, varied values, status, error, summaries),
-    ``table.csv`` (and ``table.parquet``: a row per member and output time), with
+    ``table.csv`` (and ``table.parquet``: a row per member and output time; headers
+    ``name [unit]`` as in ``results.csv``), with
     ``netcdf`` ``sweep.nc`` (the table's columns as a labelled array on (member, t), the
     varied numbers and the status as coordinates, units in attributes; NetCDF 3 through
     SciPy) and ``meta.json`` (units, settings, counts, timings).
@@ -321,11 +322,13 @@ def write_sweep(
     model = next((r.model for r in sweep.sweep.results if r is not None), None)
     written.append(write_frame(sweep.members(), folder / MEMBERS_CSV))
     table = sweep.table()
-    written.append(write_frame(table, folder / TABLE_CSV))
+    units = {c: engineering(u) for c, u in sweep.units.items()}
+    named = dict(zip(table.columns, headers(list(table.columns), units), strict=True))
+    written.append(write_frame(table.rename(columns=named), folder / TABLE_CSV))
     if parquet:
         path = folder / TABLE_PARQUET
         system = None if model is None else _unit_system(model.units)
-        _write_parquet(table, path, dict(sweep.units), system)
+        _write_parquet(table, path, units, system)
         written.append(path)
     if netcdf:
         path = folder / SWEEP_NC
@@ -349,7 +352,7 @@ def write_sweep(
             "time": model.units.time,
             "angle": "rad",
         },
-        "units": dict(sweep.units),
+        "units": units,
         "rows": len(table),
         "seconds": sweep.seconds,
         "settings": jsonable(settings or {}),
@@ -368,7 +371,8 @@ def read_result(path):
     """Read results written by :func:`write_result`.
 
     Args:
-        path: the run's folder, or its ``results.csv`` / ``results.parquet``.
+        path: the run's folder (a sweep's: its long table), or its ``results.csv`` /
+            ``results.parquet`` (a sweep's ``table.csv`` / ``table.parquet``).
 
     Returns:
         ``(table, meta)``: a pandas DataFrame with a column ``t`` and the columns by name
@@ -386,9 +390,16 @@ def read_result(path):
     p = pathlib.Path(path)
     if p.is_dir():
         folder = p
-        p = folder / RESULTS_CSV
-        if not p.exists() and (folder / RESULTS_PARQUET).exists():
-            p = folder / RESULTS_PARQUET
+        p = next(
+            (
+                folder / n
+                for n in (RESULTS_PARQUET, TABLE_CSV, TABLE_PARQUET)
+                if (folder / n).exists()
+            ),
+            folder / RESULTS_CSV,
+        )
+        if (folder / RESULTS_CSV).exists():
+            p = folder / RESULTS_CSV
     else:
         folder = p.parent
     if not p.exists():
@@ -413,7 +424,8 @@ def read_table(path):
     metadata).
 
     Args:
-        path: a run's folder, or its ``results.csv`` / ``results.parquet``.
+        path: a run's folder, or its ``results.csv`` / ``results.parquet``; a sweep's
+            folder or its ``table.csv`` / ``table.parquet`` (a row per member and time).
 
     Example::
 
