@@ -164,9 +164,10 @@ def result_html(result) -> str:
     import tempfile
     from html import escape
 
+    from ..units import engineering
     from .plots import plot_columns, result_columns
 
-    units = result.units()
+    units = {c: engineering(u) for c, u in result.units().items()}
     rows = "".join(
         f"<tr><td>{escape(k)}</td><td>{escape(units.get(k, ''))}</td>"
         f"<td>{float(np.min(v)):.6g}</td><td>{float(np.max(v)):.6g}</td></tr>"
