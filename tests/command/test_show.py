@@ -55,7 +55,7 @@ def test_a_result_in_a_notebook_plots_its_headline_columns():
     inv = md.inverse(slider_crank(), np.linspace(0.0, 1.0, 9))
     assert headline_columns(inv) == ["motor"]
     html = inv._repr_html_()
-    assert "<svg" in html and "motor" in html and "<td>motor</td><td>N*m</td>" in html
+    assert "<svg" in html and "motor" in html and "<td>motor</td><td>N·m</td>" in html
     kin = md.kinematic(slider_crank(), np.linspace(0.0, 1.0, 5))
     assert headline_columns(kin) == ["crank.phi", "rod.phi", "slider.phi"]
     assert "<svg" in kin._repr_html_()
