@@ -7,9 +7,12 @@ CPU default: the single run's program from a thread per core) and in one vectori
 (``batch_size`` = 1, 8, M). Prints milliseconds per member and the ratio to the single runs.
 
 With ``--cluster``: the same sweep on a local Dask cluster of 1 and of 2 worker processes
-(one thread each), and the speed-up of 2 workers over 1.
+(one thread each), and the speed-up of 2 workers over 1; beside it, on the same clusters, the
+machine's own: the same number of tasks of a pure NumPy loop (:func:`spin`, no mixdyn), whose
+speed-up of 2 workers over 1 is what the processor and the other work on it allow.
+``--cluster-only`` leaves out the in-process rows.
 
-Run: ``python benchmarks/sweep.py [M] [--repeat 3] [--cluster]``.
+Run: ``python benchmarks/sweep.py [M] [--repeat 3] [--cluster] [--cluster-only]``.
 """
 
 from __future__ import annotations
@@ -42,12 +45,25 @@ def best(fn, repeat: int) -> float:
     return min(times)
 
 
+def spin(steps: int = 100_000) -> float:
+    """A pure NumPy CPU loop (small matrix products, no threads), the peer of a sweep's
+    chunk on a cluster; returns a number so that nothing is left out."""
+    rng = np.random.default_rng(0)
+    a, b = rng.standard_normal((24, 24)), rng.standard_normal((24, 24)) / 5
+    for _ in range(steps):
+        a = a @ b
+        a /= np.abs(a).max()
+    return float(a.sum())
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("members", nargs="?", type=int, default=64)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--cluster", action="store_true")
+    ap.add_argument("--cluster-only", action="store_true")
     a = ap.parse_args()
+    a.cluster = a.cluster or a.cluster_only
     m, ts = model(), np.linspace(0.0, 2.0, 201)
     vary = {
         "slider.mass": np.linspace(0.005, 0.02, a.members),
@@ -58,13 +74,14 @@ def main() -> None:
     run = md.analyses.Forward(method=md.Projection(rtol=1e-8))
     single = best(lambda: [md.forward(x, ts, **opts) for x in members], a.repeat)
     rows = [("single runs (peer)", single)]
-    rows.append(
-        (
-            "sweep, member by member",
-            best(lambda: md.sweep(m, ts, vary=vary, analysis=run), a.repeat),
+    if not a.cluster_only:
+        rows.append(
+            (
+                "sweep, member by member",
+                best(lambda: md.sweep(m, ts, vary=vary, analysis=run), a.repeat),
+            )
         )
-    )
-    for bs in sorted({1, 8, a.members}):
+    for bs in [] if a.cluster_only else sorted({1, 8, a.members}):
         rows.append(
             (
                 f"sweep, one program, batch_size {bs}",
@@ -76,7 +93,8 @@ def main() -> None:
     if a.cluster:
         from distributed import Client, LocalCluster
 
-        per = {}
+        per, pure = {}, {}
+        tasks = 8  # the sweep's chunks on 2 workers (four a worker thread)
         for n in (1, 2):
             with (
                 LocalCluster(
@@ -87,6 +105,10 @@ def main() -> None:
                 per[n] = best(
                     lambda c=c: md.sweep(m, ts, vary=vary, client=c, analysis=run), a.repeat
                 )
+                pure[n] = best(
+                    lambda c=c: c.gather([c.submit(spin, pure=False) for _ in range(tasks)]),
+                    a.repeat,
+                )
                 rows.append((f"Dask local cluster, {n} worker(s)", per[n]))
     print(f"{a.members} members, {os.cpu_count()} cores, best of {a.repeat}")
     print("| way | ms per member | ratio to single runs |")
@@ -94,7 +116,11 @@ def main() -> None:
     for name, s in rows:
         print(f"| {name} | {1e3 * s / a.members:.1f} | {s / single:.2f} |")
     if a.cluster:
-        print(f"2 Dask workers over 1: {per[1] / per[2]:.2f}x")
+        print(
+            f"2 Dask workers over 1: the sweep {per[1] / per[2]:.2f}x; {tasks} tasks of a pure "
+            f"NumPy loop on the same clusters {pure[1] / pure[2]:.2f}x "
+            f"({pure[1]:.2f} s / {pure[2]:.2f} s); load {os.getloadavg()[0]:.1f}"
+        )
 
 
 if __name__ == "__main__":

@@ -183,8 +183,9 @@ def test_members_varying_only_masses_and_forces_share_one_set_up(paper, monkeypa
 @pytest.mark.timeout(600)
 def test_a_dask_cluster_sweep_equals_the_in_process_one(paper):
     """Two worker processes of a local Dask cluster: every member equals the in-process
-    sweep's; a failed member's error crosses the process boundary whole (class, time); an
-    input error names its member."""
+    sweep's, its chunk's members sharing one start (a force varies) as there; a failed
+    member's error crosses the process boundary whole (class, time); an input error names
+    its member."""
     distributed = pytest.importorskip("distributed")
     vary = {"T2.law.value": [500.0, 50_000.0, 520.0, 480.0]}
     local = md.sweep(paper, TS, vary=vary, max_steps=400, **OPTS)
@@ -201,7 +202,7 @@ def test_a_dask_cluster_sweep_equals_the_in_process_one(paper):
             vary=vary,
             max_steps=400,
             client=client,
-            chunk_size=1,
+            chunk_size=2,
             on_member=seen.append,
             **OPTS,
         )

@@ -15,10 +15,15 @@ from ._setup import Analysis
 CONNECT_TIMEOUT = 5.0
 
 
-def _run_chunk(members: list[Model], t, analysis: Analysis, recorded, first: int):
+def _run_chunk(
+    members: list[Model], t, analysis: Analysis, recorded, first: int, same_start: bool = False
+):
     """On a worker: set up and run ``members`` (the sweep's members ``first``...) member by
-    member in one thread; an input error names its member."""
-    return run_members(members, t, analysis, recorded=recorded, threads=1, offset=first)
+    member in one thread, with one start where ``same_start`` (:func:`.run_members`); an
+    input error names its member."""
+    return run_members(
+        members, t, analysis, recorded=recorded, threads=1, offset=first, same_start=same_start
+    )
 
 
 @contextlib.contextmanager
@@ -60,21 +65,33 @@ def connected(client):
         own.close()
 
 
-def _on_cluster(client, members, t, analysis, recorded, chunk_size, on_member=None):
+def _on_cluster(
+    client, members, t, analysis, recorded, chunk_size, on_member=None, same_start=False
+):
     """The members run on a Dask ``client``'s workers (a client or a scheduler's address:
     :func:`connected`), ``chunk_size`` at a time (default: four chunks per worker thread),
-    gathered in order; ``on_member(i)`` for each member of a chunk as the chunk comes back."""
+    gathered in order; ``on_member(i)`` for each member of a chunk as the chunk comes back;
+    ``same_start``: the members of a chunk share its first member's start."""
     with connected(client) as c:
-        return _on_client(c, members, t, analysis, recorded, chunk_size, on_member)
+        return _on_client(c, members, t, analysis, recorded, chunk_size, on_member, same_start)
 
 
-def _on_client(client, members, t, analysis, recorded, chunk_size, on_member=None):
+def _on_client(client, members, t, analysis, recorded, chunk_size, on_member, same_start):
     if chunk_size is None:
         slots = sum(client.nthreads().values()) or 1
         chunk_size = max(1, -(-len(members) // (4 * slots)))
     starts = range(0, len(members), chunk_size)
     futures = [
-        client.submit(_run_chunk, members[s : s + chunk_size], t, analysis, recorded, s, pure=False)
+        client.submit(
+            _run_chunk,
+            members[s : s + chunk_size],
+            t,
+            analysis,
+            recorded,
+            s,
+            same_start,
+            pure=False,
+        )
         for s in starts
     ]
     if on_member is not None:

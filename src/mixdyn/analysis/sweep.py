@@ -336,7 +336,8 @@ def sweep(
             paper's model; ``benchmarks/sweep.py``), but compiled per number of members.
         threads: threads of the member-by-member path (default: one per core).
         client: a Dask ``distributed.Client``: the members run on its workers (each sets up
-            and runs its chunk member by member; a local cluster,
+            and runs its chunk member by member, its members sharing one start where the
+            in-process sweep's do; a local cluster,
             ``Client(LocalCluster(n_workers=2, threads_per_worker=1))``), or a scheduler's
             address (``"tcp://host:8786"``: connected within 5 s, else a ModelError).
             Results come back in order; a member's input error is raised with its index.
@@ -383,18 +384,20 @@ def sweep(
             {p: (v[i].item() if np.ndim(v[i]) == 0 else v[i].tolist()) for p, v in _rows(vary)}
             for i in range(len(members))
         ]
-    if client is not None:
-        if not value.integrated:
-            raise ModelError(f"a {value.name} sweep runs in this process: no client", "client")
-        outcomes = _on_cluster(client, members, t, value, recorded, chunk_size, on_member)
-        results = [r for r, _ in outcomes]
-        errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
-        return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
-    seconds: dict[str, float] = {}
     same_start = (
         models is None and value.integrated
         and shares_start(model, vary or {}, value._start_forces())
     )  # fmt: skip
+    if client is not None:
+        if not value.integrated:
+            raise ModelError(f"a {value.name} sweep runs in this process: no client", "client")
+        outcomes = _on_cluster(
+            client, members, t, value, recorded, chunk_size, on_member, same_start
+        )
+        results = [r for r, _ in outcomes]
+        errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
+        return Sweep(results, errors, params, {"cluster": time.perf_counter() - started})
+    seconds: dict[str, float] = {}
     outcomes = _members.run_members(
         members,
         t,
