@@ -99,6 +99,7 @@ def test_the_table_is_in_the_files_units_with_t_a_column(crank):
     assert (units["motor"], units["motor.power"], units["energy.kinetic"]) == ("N·m", "W", "J")
     assert units["crank.ax"] == "m/s²" and units["crank.alpha"] == "rad/s²"
     df[["t", "motor"]]  # no KeyError: t is a column
+    np.testing.assert_array_equal(df.index, t)  # and the index: a column's plot is against t
     # the other preset: energy in mJ, torque in N*mm, lengths in mm
     mm = r.table(output_units="mm-N-s")
     truth = _truth(t)
@@ -117,6 +118,7 @@ def test_the_written_files_say_their_units_and_read_back(crank):
     back = md.read_table(out / "turn")
     api = r.table()
     assert list(back.columns) == list(api.columns)
+    np.testing.assert_array_equal(back.index, api.index)
     np.testing.assert_allclose(back.to_numpy(), api.to_numpy(), rtol=1e-15, atol=0)
     assert back.attrs["units"] == {c: u for c, u in api.attrs["units"].items() if u}
     if parquet:

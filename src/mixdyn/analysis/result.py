@@ -173,7 +173,8 @@ class Result:
         raise KeyError(f"no column {name!r}; {did_you_mean(name, cols)}")
 
     def table(self, points=(), output_units: dict | None = None):
-        """A pandas DataFrame of every column, ``t`` first (a column, as in ``results.csv``);
+        """A pandas DataFrame of every column, ``t`` first (a column, as in ``results.csv``,
+        and the times also its unnamed index: ``df["motor"].plot()`` draws against time);
         ``points`` adds point trajectories.
 
         Args:
@@ -194,7 +195,7 @@ class Result:
 
         shown = self.output_units if output_units is None else output_units
         cols, units = in_units(self, *point_columns(self, points), shown)
-        df = pd.DataFrame(cols)
+        df = pd.DataFrame(cols, index=pd.Index(np.asarray(cols["t"])))
         df.attrs["units"] = {c: engineering(units[c]) for c in cols if c in units}
         df.attrs["kind"] = self.kind
         return df

@@ -375,8 +375,9 @@ def read_result(path):
             ``results.parquet`` (a sweep's ``table.csv`` / ``table.parquet``).
 
     Returns:
-        ``(table, meta)``: a pandas DataFrame with a column ``t`` and the columns by name
-        (a CSV's ``name [unit]`` headers split), and the ``meta.json`` dict (empty if
+        ``(table, meta)``: a pandas DataFrame with a column ``t`` (also its unnamed index
+        where the times do not repeat) and the columns by name (a CSV's ``name [unit]``
+        headers split), and the ``meta.json`` dict (empty if
         absent). The units of the columns are in ``table.attrs["units"]``: the CSV headers',
         else ``meta.json``'s, else the Parquet file's.
 
@@ -407,6 +408,10 @@ def read_result(path):
     df = read_parquet(p) if p.suffix == ".parquet" else read_csv(p)
     names, units = split_headers(df.columns)
     df.columns = names
+    if "t" in names and df["t"].is_unique:  # the times also the index, as in Result.table()
+        import pandas as pd
+
+        df.index = pd.Index(df["t"].to_numpy())
     meta_path = folder / META_JSON
     meta = _read_meta(meta_path) if meta_path.exists() else {}
     if p.suffix == ".parquet":
