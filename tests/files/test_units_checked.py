@@ -354,3 +354,15 @@ def test_strict_units_refuses_a_constant_expression_without_its_unit():
         mio.build(mio.reads(motor(T0="1.5 N*m", law="50", strict=strict), "m.yaml"))
     model = mio.build(mio.reads(motor(T0="1.5 N*m", law="50 N*m", strict=strict), "m"))
     assert float(model.forces[0].law(0.0)) == pytest.approx(5e7, rel=1e-12)
+
+
+def test_a_parameter_with_a_unit_before_another_unit_is_refused():
+    """``L**2/12 kg*m**2`` with ``L: 300 mm`` in a file in mm would read L as 300 (mm) and
+    convert the result as kg*m**2: 7500 kg*m**2 instead of 7500 kg*mm**2. Refused, naming L;
+    ``m*L**2/12`` with ``m: 1 kg`` gives 7500 kg*mm**2."""
+    text = motor(T0="1.5 N*m").replace("  n0:", "  L: 300 mm\n  m: 1 kg\n  n0:")
+    twice = text.replace("inertia: 7500 kg*mm^2", "inertia: L**2/12 kg*m**2")
+    with pytest.raises(mio.FileError, match=r"'L' \(line 6\) has a unit of its own"):
+        mio.build(mio.reads(twice, "m.yaml"))
+    once = text.replace("inertia: 7500 kg*mm^2", "inertia: m*L**2/12")
+    assert mio.build(mio.reads(once, "m.yaml")).bodies[1].inertia == pytest.approx(7500.0)

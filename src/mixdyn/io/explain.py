@@ -63,10 +63,12 @@ def _explained(reading: Reading, units) -> str:
         unit = reading.unit or f"{kind_unit} (model units)"
         return f"{reading.written} -> an expression whose value is in {unit}"
     value, si, model = si_value(reading, units)
-    bare = reading.unit is None and reading.scale == 1.0
+    bare = reading.unit is None and reading.scale == 1.0 and not reading.from_parameters
     note = " (no unit: model units)" if bare and model not in ("", "rad") else ""
     if bare and model == "rad":
         note = " (no unit: radians)"
+    if reading.from_parameters:
+        note = " (in its parameters' units)"
     model = model or ""
     si_text = f" = {value:.6g} {si}".rstrip() if si != model else ""
     return f"{reading.written} -> {reading.value:.6g} {model}".rstrip() + note + si_text

@@ -42,6 +42,7 @@ class Reading:
         value: the value in the model's units (None: a law that is an expression).
         unit: the unit written with it (None: none written).
         scale: model units per number written without a unit (a law's ``unit:``).
+        from_parameters: an expression whose unit comes from its parameters' (``m*L**2/12``).
     """
 
     path: tuple
@@ -50,6 +51,7 @@ class Reading:
     value: float | None
     unit: str | None
     scale: float = 1.0
+    from_parameters: bool = False
 
 
 class Readings:
@@ -125,9 +127,13 @@ class Readings:
         path = tuple(path)
         unit = self._unit_of(value)
         bare = unit is None and scale == 1.0
+        if unit is not None and isinstance(value, str):
+            self._unit_twice(value, unit, path)
         strict = kind is not None and bare and self.strict and _has_unit(kind) and result != 0.0
+        stated = False
         if kind is not None and bare and isinstance(value, str) and not _NUMBER.match(value):
             used = d.leaves(value, self.parameters).parameters
+            stated = any(self.parameters[n].dim not in (None, d.PLAIN) for n in used)
             if strict and all(self.parameters[n].dim is None for n in used):
                 self._refuse_bare(value, kind, path)  # numbers and plain parameters only
             self._expression(value, kind, path, time=False)
@@ -139,7 +145,29 @@ class Readings:
                 f"{self._place(path)}: the angle {shown} has no unit and is read as {shown} rad "
                 f"({math.degrees(result):.4g} deg); if degrees are meant, write `{shown} deg`"
             )
-        self.records[path] = Reading(path, value, kind, result, unit, scale)
+        self.records[path] = Reading(path, value, kind, result, unit, scale, stated)
+
+    def _unit_twice(self, text: str, unit: str, path) -> None:
+        """Refuse a constant expression followed by a unit that uses a parameter with a unit
+        of its own (``L**2/12 kg*m**2`` with ``L: 1 m``): the parameter is a number in model
+        units there, and the unit after it would convert it again."""
+        head = text.strip()[: -len(unit)].strip()
+        if not head or _NUMBER.match(head):
+            return
+        used = d.leaves(head, self.parameters).parameters
+        own = [n for n in used if self.parameters[n].unit is not None]
+        if own:
+            name = own[0]
+            p = self.parameters[name]
+            line = f" (line {p.line})" if p.line else ""
+            self.b.fail(
+                path,
+                f"{text!r}: parameter {name!r}{line} has a unit of its own ({p.written}), so "
+                f"the unit after the expression ({unit}) would convert it twice",
+                f"write the expression without the unit, its parameters giving it theirs "
+                f"(a parameter for the rest, e.g. `m: 1 kg` and `m*{head}`), or {name} "
+                "without a unit",
+            )
 
     def _place(self, path) -> str:
         """``joint 'A', angle (line 12)``: where a number is, for warnings."""
