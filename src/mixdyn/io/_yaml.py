@@ -369,3 +369,36 @@ def line_of(lines: dict[Path, int], path: Path) -> int | None:
         if not path:
             return None
         path = path[:-1]
+
+
+#: The sections of a model file whose items are named elements, and what one is called.
+_SECTIONS = {
+    "bodies": "body",
+    "joints": "joint",
+    "drivers": "driver",
+    "forces": "force",
+    "runs": "run",
+}
+
+
+def element_name(data, path) -> str | None:
+    """A readable name of the element at ``path``: ``"joint 'A', point_i"``."""
+    if not path:
+        return None
+    head, rest = path[0], list(path[1:])
+    label = str(head)
+    if head in _SECTIONS and rest and isinstance(rest[0], int):
+        i = rest.pop(0)
+        items = data.get(head) if isinstance(data, dict) else None
+        name = None
+        if isinstance(items, list) and i < len(items) and isinstance(items[i], dict):
+            name = items[i].get("name")
+        label = f"{_SECTIONS[head]} {name!r}" if isinstance(name, str) else f"{head}[{i}]"
+    elif head == "parameters" and rest:
+        label = f"parameter {rest.pop(0)!r}"
+    if rest:
+        text = ""
+        for p in rest:
+            text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else str(p))
+        label += f", {text}"
+    return label

@@ -7,6 +7,8 @@ piecewise polynomials, expressions; not Python functions).
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import os
 import re
 
@@ -16,9 +18,13 @@ import yaml
 from .. import model as m
 from ..errors import ModelError
 from ..model._declare import TIME, Variable
+from ..units import unit_for
+from . import dimensions as d
 from . import schema as s
+from ._errors import FileError
 from .expressions import ExpressionFunction, ExpressionLaw
-from .readings import parameter_units
+from .load import Builder
+from .readings import spec_units
 
 
 class _Dumper(yaml.SafeDumper):
@@ -290,6 +296,27 @@ def describe(model: m.Model, runs=()) -> s.ModelFile:
         return out
     params = {k: f"{v!r} {needed[k]}" if k in needed else v for k, v in out.parameters.items()}
     return out.model_copy(update={"parameters": params})
+
+
+def parameter_units(spec) -> dict[str, str]:
+    """The units (model units, pint spelling) that the parameters written without one in
+    ``spec`` need for its laws to fit their fields, by name: what a description written from
+    a model (:func:`mixdyn.io.dump.describe`, whose parameters are numbers in model units)
+    gives its parameters."""
+    found: dict[str, d.Dim] = {}
+    for _ in range(len(spec.parameters) + 1):
+        b = Builder(spec)
+        b.readings.needed = {}
+        for name, dim in found.items():  # the units found so far, as if written
+            p = b.readings.parameters[name]
+            b.readings.parameters[name] = dataclasses.replace(p, dim=dim)
+        with contextlib.suppress(FileError):
+            b.model()
+        new = {k: v for k, v in b.readings.needed.items() if k not in found}
+        if not new:
+            break
+        found.update(new)
+    return {k: unit_for(tuple(int(e) for e in v), spec_units(spec)) for k, v in found.items()}
 
 
 __all__ = ["describe", "dump", "dumps", "to_data"]

@@ -9,7 +9,7 @@ Example of a line::
 from __future__ import annotations
 
 from ..units import DIMENSIONS, SI, kind_of, unit_for
-from ._yaml import line_of
+from ._yaml import element_name, line_of
 from .readings import Reading, si_value
 
 
@@ -17,7 +17,6 @@ def lines(builder) -> list[str]:
     """The lines of the explanation of the numbers ``builder`` (a
     :class:`~mixdyn.io.load.Builder`, after building the model and planning the runs) read:
     the parameters, then every number in the order read."""
-    from .load import element_name
 
     b, r = builder, builder.readings
     units = b.units

@@ -36,7 +36,7 @@ from ..model._declare import TIME, Variable
 from ..units import UnitSystem
 from . import schema as s
 from ._errors import FileError
-from ._yaml import MAX_BYTES, YamlError, line_of, read_yaml
+from ._yaml import MAX_BYTES, YamlError, element_name, line_of, read_yaml
 from .expressions import CONSTANTS, FUNCTIONS, ExpressionError, ExpressionFunction, ExpressionLaw
 from .expressions import parse as parse_expression
 from .quantities import (
@@ -50,13 +50,6 @@ from .quantities import (
 )
 from .readings import Readings
 
-_SECTIONS = {
-    "bodies": "body",
-    "joints": "joint",
-    "drivers": "driver",
-    "forces": "force",
-    "runs": "run",
-}
 _IDENTIFIER = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 _RESERVED = {"t", *CONSTANTS, *FUNCTIONS}
 
@@ -250,29 +243,6 @@ def _allowed_fields(data, path) -> list[str]:
         if n > score:
             best, score = obj, n
     return list(best.model_fields) if best is not None else []
-
-
-def element_name(data, path) -> str | None:
-    """A readable name of the element at ``path``: ``"joint 'A', point_i"``."""
-    if not path:
-        return None
-    head, rest = path[0], list(path[1:])
-    label = str(head)
-    if head in _SECTIONS and rest and isinstance(rest[0], int):
-        i = rest.pop(0)
-        items = data.get(head) if isinstance(data, dict) else None
-        name = None
-        if isinstance(items, list) and i < len(items) and isinstance(items[i], dict):
-            name = items[i].get("name")
-        label = f"{_SECTIONS[head]} {name!r}" if isinstance(name, str) else f"{head}[{i}]"
-    elif head == "parameters" and rest:
-        label = f"parameter {rest.pop(0)!r}"
-    if rest:
-        text = ""
-        for p in rest:
-            text += f"[{p}]" if isinstance(p, int) else (f".{p}" if text else str(p))
-        label += f", {text}"
-    return label
 
 
 # --------------------------------------------------------------------------- building

@@ -18,7 +18,6 @@ What is checked:
 from __future__ import annotations
 
 import ast
-import contextlib
 import dataclasses
 import math
 import re
@@ -26,7 +25,7 @@ import re
 from ..errors import ModelError
 from ..units import DIMENSIONS, SI, Kind, UnitSystem, factor, unit_for
 from . import dimensions as d
-from ._yaml import line_of
+from ._yaml import element_name, line_of
 from .quantities import _NUMBER, _UNIT, QuantityError, _split, convert, exponents
 
 
@@ -72,7 +71,8 @@ class Readings:
         self._parameters: dict[str, d.Parameter] | None = None
         self.variable: d.Dim = d.dim(DIMENSIONS["time"])
         #: Where not None, the parameters whose units would make the laws fit are collected
-        #: here (name -> dimension) instead of being refused (:func:`parameter_units`).
+        #: here (name -> dimension) instead of being refused
+        #: (:func:`mixdyn.io.dump.parameter_units`).
         self.needed: dict[str, d.Dim] | None = None
 
     # ----------------------------------------------------------------- parameters
@@ -171,8 +171,6 @@ class Readings:
 
     def _place(self, path) -> str:
         """``joint 'A', angle (line 12)``: where a number is, for warnings."""
-        from .load import element_name
-
         line = line_of(self.b.lines, path) if self.b.lines else None
         return (element_name(self.b.data, path) or "the file") + (f" (line {line})" if line else "")
 
@@ -275,30 +273,6 @@ class Readings:
             )
 
 
-def parameter_units(spec) -> dict[str, str]:
-    """The units (model units, pint spelling) that the parameters written without one in
-    ``spec`` need for its laws to fit their fields, by name: what a description written from
-    a model (:func:`mixdyn.io.dump.describe`, whose parameters are numbers in model units)
-    gives its parameters."""
-    from ._errors import FileError
-    from .load import Builder
-
-    found: dict[str, d.Dim] = {}
-    for _ in range(len(spec.parameters) + 1):
-        b = Builder(spec)
-        b.readings.needed = {}
-        for name, dim in found.items():  # the units found so far, as if written
-            p = b.readings.parameters[name]
-            b.readings.parameters[name] = dataclasses.replace(p, dim=dim)
-        with contextlib.suppress(FileError):
-            b.model()
-        new = {k: v for k, v in b.readings.needed.items() if k not in found}
-        if not new:
-            break
-        found.update(new)
-    return {k: unit_for(tuple(int(e) for e in v), spec_units(spec)) for k, v in found.items()}
-
-
 def spec_units(spec) -> UnitSystem:
     u = spec.units
     return UnitSystem(u.length, u.mass, u.time)
@@ -364,4 +338,4 @@ def si_value(reading: Reading, units: UnitSystem) -> tuple[float, str, str] | No
     return reading.value * factor(model or "dimensionless", _exps(reading.kind), SI), si, model
 
 
-__all__ = ["Reading", "Readings", "parameter_units", "si_value"]
+__all__ = ["Reading", "Readings", "si_value", "spec_units"]
