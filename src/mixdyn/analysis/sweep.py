@@ -227,9 +227,11 @@ class Sweep:
         """A long-format pandas DataFrame: one row per (member, output time), with the member
         index, its varied values, ``t`` and the result ``columns`` (default: every column),
         in ``output_units`` (kind -> unit, as :meth:`mixdyn.Result.table`; default the
-        model's units); the units in ``df.attrs["units"]``. Failed members have no rows."""
+        model's units); the units in ``df.attrs["units"]`` (engineering labels, as
+        :meth:`mixdyn.Result.table`). Failed members have no rows."""
         import pandas as pd
 
+        from ..units import engineering
         from .result import in_units
 
         frames, units = [], {}
@@ -249,7 +251,7 @@ class Sweep:
             df.insert(0, "member", i)
             frames.append(df)
         out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
-        out.attrs["units"] = units
+        out.attrs["units"] = {c: engineering(u) for c, u in units.items() if c in out.columns}
         return out
 
     def dataset(self, columns: Sequence[str] = (), output_units: dict | None = None):
