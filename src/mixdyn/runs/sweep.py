@@ -7,7 +7,10 @@ member (``summaries:``) and its figures. Member ``i`` is the swept run of the fi
 ``i``'s numbers: the model built again from the file with its parameters (so every quantity
 written with a parameter follows it: laws, masses, points, start values), the numbers of
 bodies and elements replaced, set up exactly as the single run would be; the members run as
-one :func:`mixdyn.analysis._members.run_members` (one compiled program for all).
+one :func:`mixdyn.analysis._members.run_members` (one compiled program for all). Where the
+varied numbers reach only forces and bodies' masses and inertias, only those parts are built
+again per member (:mod:`.sweep_members`: the same numbers), the members share one start and,
+on a CPU, run in vectorized chunks of :data:`.sweep_members.CHUNK`.
 
 Example (``examples/antonya_sweep.yaml``)::
 
