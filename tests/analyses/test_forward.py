@@ -156,6 +156,7 @@ def test_convergence_order(order_reference, method, solver, order, steps):
 
 
 # ------------------------------------------------------- generalized-alpha's Newton iteration
+@pytest.mark.slow  # long: run by CI's slow set
 @pytest.mark.parametrize("tol, bound", [(None, 5e-9), (1e-12, 1e-11)], ids=["default", "1e-12"])
 def test_generalized_alpha_modified_newton_agrees_with_full(tol, bound):
     """Generalized-alpha's default Newton iteration (``newton="auto"``: the acceleration-level

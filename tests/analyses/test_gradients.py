@@ -140,6 +140,7 @@ def test_mixed_run_gradient_against_finite_differences(paper):
         assert abs(g[k] - fd) <= 1e-6 * abs(fd), (k, g[k], fd)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_value_equals_the_forward_run_and_failure_is_nan(paper):
     f, th0 = md.differentiable(paper, TS, PARAMS, rtol=1e-10, atol=1e-10)
     ref = md.forward(paper, TS, rtol=1e-10, atol=1e-10)
@@ -171,6 +172,7 @@ def test_bad_params_are_refused(paper, params, words):
     assert words in str(err.value)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_inverse_reactions_are_differentiable_and_newton_says_how():
     """An inverse run's reactions and efforts as functions of the masses and inertias: the
     values are md.inverse's; the sum of the ground joints' forces on the bodies is

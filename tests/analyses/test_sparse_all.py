@@ -502,6 +502,7 @@ def test_generalized_alpha_mixed_agrees():
     _agree(s.q, d.q, "positions", 1e-9)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_woodbury_accelerations_match_the_dense_solve():
     """Unit check of the rank-p update at random states: a chain of 30 links (sparse path under
     'auto') with two unknown torques acting on other bodies than those whose angles are

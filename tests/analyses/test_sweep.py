@@ -88,6 +88,7 @@ def _count_setups(monkeypatch, analysis: str) -> list:
     return calls
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_mixed_members_equal_single_runs(paper, monkeypatch):
     """The paper's mixed run (F1 unknown, the slider's x prescribed) over the crank's torque:
     each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2). The

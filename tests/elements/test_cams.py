@@ -139,6 +139,7 @@ def test_cam_equations_against_finite_differences():
         np.testing.assert_allclose(gamma, fd_gamma(c, q, qd, 0.0), rtol=1e-6, atol=1e-6)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_separation_speed_of_a_spring_loaded_follower():
     w_sep = math.sqrt(2 * (F0 + K * H) / (M * H))
     law = md.FunctionLaw(harmonic)

@@ -221,6 +221,7 @@ def test_disk_rolls_down_an_incline(theta_deg):
     np.testing.assert_allclose(res["disk.phi"], -(s - s[0]) / 0.1, atol=1e-10)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_disk_rolling_in_a_ring_has_the_pendulum_period():
     R, r, m = 0.5, 0.1, 1.0
     a0 = 0.02  # rad, small
@@ -245,6 +246,7 @@ def test_disk_rolling_in_a_ring_has_the_pendulum_period():
     assert np.all(res["roll.N"] > 0)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_the_gear_train_file_and_its_round_trip():
     """examples/gear_train.yaml: the output turns at R1/R3 of the pinion, the rack at R3 per
     radian of the output, and at rest (t = 0.25, 0.75: zero speed... any time at zero

@@ -46,6 +46,7 @@ def _central(fun, th0, rel=1e-5):
     return fd
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_a_good_runs_derivatives_agree_with_finite_differences(runs):
     f, th0 = runs["reverse"]
     x = jax.jit(_final_x(f))
