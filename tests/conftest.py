@@ -106,6 +106,44 @@ def pytest_xdist_make_scheduler(config, log):
     return whole_module_scheduler(config, log, WHOLE_MODULES)
 
 
+#: Cases of parametrized tests that are long runs, marked slow here (CI runs them after the
+#: README's test command, with ``-m slow``): their test's other cases check the same property
+#: by default, and the command stays within its 6 minutes on a 2-core machine.
+LONG_CASES = frozenset(
+    {
+        "tests/analyses/test_solver_contract.py::test_kkt_solution_and_gradients[mixed-banded]",
+        "tests/analyses/test_solver_contract.py::test_kkt_solution_and_gradients[forward-banded]",
+        "tests/analyses/test_solver_contract.py::test_rank_deficient_minimum_norm[banded]",
+        "tests/validation/test_failed_gradients.py::"
+        "test_a_failed_run_gives_nan_value_and_nan_derivatives[reverse]",
+        "tests/analyses/test_sweep.py::test_forward_members_equal_single_runs[member-by-member]",
+        "tests/analyses/test_forward.py::"
+        "test_generalized_alpha_stiff_spring_falls_back_to_full_newton[contracting-slowly]",
+        "tests/validation/test_friction_hold.py::"
+        "test_a_block_launched_up_an_incline_stops_where_it_should_and_stays[partitioning]",
+        "tests/validation/test_friction_hold.py::"
+        "test_a_block_launched_up_an_incline_stops_where_it_should_and_stays[projection-fixed]",
+        "tests/validation/test_friction_hold.py::"
+        "test_a_braked_flywheel_stops_and_is_held_by_its_pin[partitioning]",
+        "tests/elements/test_friction.py::"
+        "test_a_block_slides_above_the_friction_angle_at_g_sin_minus_mu_cos[0.0]",
+        "tests/analyses/test_sparse_all.py::"
+        "test_sparse_equations_equal_the_dense_ones[andrews_mechanism]",
+        "tests/analyses/test_sparse.py::"
+        "test_jacobian_gamma_and_accelerations_agree[paper_mechanism]",
+        "tests/elements/test_cams.py::test_oscillating_follower[-1.0]",
+    }
+)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config, items):
+    """Mark :data:`LONG_CASES` slow before ``-m`` selects."""
+    for item in items:
+        if item.nodeid in LONG_CASES:
+            item.add_marker(pytest.mark.slow)
+
+
 def pytest_unconfigure(config):
     folder = getattr(config, "_mixdyn_made_xla_cache", None)
     if folder:

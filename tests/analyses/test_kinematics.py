@@ -232,6 +232,7 @@ def test_parallelogram_kinematics_through_vertical_links():
     check_parallelogram(5 * np.pi / 6)  # 30 to 150 deg, through the vertical
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_parallelogram_kinematics_on_the_sparse_path():
     """The redundant equation on the sparse path: the regularized Schur complement."""
     check_parallelogram(5 * np.pi / 6, linear_solver="sparse")

@@ -205,6 +205,7 @@ def _slider_crank_closed_form(r, l, masses, inertias, x_law):
     return jax.vmap(torque)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_non_collocated_slider_prescribed_crank_torque_unknown():
     """Prescribe the slider position, leave the crank torque unknown (not collocated):
     the recovered torque matches the closed-form kinetostatics."""

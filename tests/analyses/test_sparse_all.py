@@ -246,6 +246,7 @@ def test_rank_analysis_fast_path_agrees_with_the_qr(monkeypatch):
 
 
 # ------------------------------------------------------------------ kinematics
+@pytest.mark.slow  # long: run by CI's slow set
 def test_inverse_agrees():
     """Inverse dynamics (and the kinematic analysis under it: assembly with held coordinates,
     Newton's positions, velocities, accelerations) on the paper's mechanism driven by two
@@ -282,6 +283,7 @@ def test_assembly_agrees(name):
     _agree(s.q, d.q, "assembled positions")
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_assembly_with_redundant_equations_falls_back():
     """A redundant joint equation makes ``J J^T`` singular once the damping fades: the sparse
     assembly takes the dense step there and closes the joints all the same; the kinematic
@@ -305,6 +307,7 @@ R, L, TH0 = 0.1, 0.3, 0.5
 X0 = R * np.cos(TH0) + np.sqrt(L**2 - (R * np.sin(TH0)) ** 2)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_dead_point_detected_on_the_sparse_path():
     """As in test_errors_kinematic: the slider driven to its dead point at t = 1 (an output
     time) and back; the sparse path reports the singularity there, naming the driver."""

@@ -38,6 +38,7 @@ def test_given_velocity_is_kept_and_the_others_follow():
     assert np.max(np.abs(J @ res.qd[0])) <= 1e-12 * 3.0
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_the_double_four_bar_crank_speed_of_the_issue_is_kept():
     """The report: ``velocities: {crank0.phi: -1 rad/s}`` on the double four-bar became
     -0.174 rad/s. Now the crank starts at -1 rad/s, and all cranks of the parallelogram at the

@@ -78,6 +78,7 @@ def test_memberwise_sweeps_take_the_value():
         md.sweep(model, t, vary=vary, analysis=Kinematic(), batch_size=2)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_differentiable_takes_the_value():
     """``md.differentiable(..., analysis=Forward(...))``: the same function values as the
     keyword spelling and as the run itself; an inverse value; a kinematic or quasi-static

@@ -103,6 +103,7 @@ def train(drive=None, load=0.0):
     ), R
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_gear_train_speed_and_torque_ratios():
     model, R = train(md.Ramp(0.0, 12.0), load=-0.8)
     res = md.inverse(model, np.linspace(0, 1, 21))
@@ -121,6 +122,7 @@ def test_gear_train_speed_and_torque_ratios():
     assert "m12.Fx" not in res.columns() and res.units()["m12.Ft"] == "N"
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_frictionless_train_keeps_its_energy_and_ratio():
     model, R = train()
     res = md.forward(model, np.linspace(0, 0.5, 26), qd0={"g1.phi": 20.0}, rtol=1e-10, atol=1e-12)
@@ -313,6 +315,7 @@ def test_a_disk_held_on_an_incline_statics():
     np.testing.assert_allclose(res["hold"], m * G * math.sin(th) * r, rtol=1e-12)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_contact_forces_drawn_as_arrows_where_they_act():
     """The tooth force of a mesh at its pitch point, along the line of action (Ft along the
     tangent, Fr pushing the gears apart); a rolling disk's contact force at the contact point,
