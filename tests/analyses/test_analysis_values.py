@@ -46,6 +46,7 @@ def test_forward_by_prepare_and_run_is_md_forward_bit_for_bit():
     assert by_value.stats["options"] == keywords.stats["options"]
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_each_analysis_by_prepare_and_run_is_its_function():
     """Kinematic, inverse, mixed, static and quasi-static: the value prepared and run equals
     the analysis function's result, bit for bit."""

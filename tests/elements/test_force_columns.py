@@ -28,6 +28,7 @@ def test_spring_length_tension_and_power():
     )
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_a_known_point_force_and_its_power_in_the_paper_mechanism():
     """F1 = 10 sin(pi t / 2) on the slider (the paper's forward run): its column is the law,
     its power F1 times the slider's speed along F1's direction."""

@@ -36,6 +36,7 @@ def incline(theta: float, mu: float, m: float = 2.0) -> md.Model:
     )
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_a_block_sticks_below_the_friction_angle():
     theta, mu, m = 0.25, 0.3, 2.0  # atan(0.3) = 0.2915
     r = md.forward(incline(theta, mu, m), TS, rtol=1e-10, atol=1e-12)

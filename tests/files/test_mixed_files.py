@@ -79,6 +79,7 @@ def test_the_check_refuses_a_coordinate_the_joints_fix():
 
 
 # ------------------------------------------------------------------ law, samples: closed forms
+@pytest.mark.slow  # long: run by CI's slow set
 def test_law_and_samples_pendulum_torque_in_closed_form():
     """A rod pendulum whose angle is prescribed, by a law (constant speed) and by samples (a
     cubic spline through samples of a quadratic, which it reproduces): the torque is

@@ -103,6 +103,7 @@ def test_the_same_structure_traces_nothing_again(cache):
     )
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_exported_program_gives_the_traced_numbers(cache):
     """Round trip: a program exported, written, read back (a new wrapper, as in a new
     process) gives the numbers the traced program gives."""

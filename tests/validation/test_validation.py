@@ -221,6 +221,7 @@ def test_double_fourbar_generalized_alpha_vs_exudyn(fourbar_exact):
     assert np.max(err) >= 0.5 * np.max(exudyn), (err, exudyn)
 
 
+@pytest.mark.slow  # long: run by CI's slow set
 def test_double_fourbar_projection_loose(fourbar_exact):
     """Adaptive projection with Dopri8 at rtol = atol = 1e-9 on this output grid: it either
     follows the 1-DOF reduction through the ten singular positions to 1e-7, or is refused with
