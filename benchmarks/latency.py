@@ -1,4 +1,4 @@
-"""Latency of a model-file run and of a second Python process (issue 12).
+"""Latency of a model-file run and of a second Python process.
 
 Times whole processes (wall clock, ``time.perf_counter`` around ``subprocess.run``), each
 scenario ``--repeat`` times, and prints the median, min and max, the target and the ratio
