@@ -120,12 +120,7 @@ def write_result(
         "stats": jsonable(result.stats),
         "status": "ok",
     }
-    meta.update(jsonable(extra or {}))
-    path = folder / META_JSON
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(meta, indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-    written.append(path)
+    written.append(write_meta(folder, meta, extra))
     return written
 
 
@@ -185,13 +180,19 @@ def write_failure(
         "output_units": dict(output_units or {}),
         "settings": jsonable(settings or {}),
     }
+    written.append(write_meta(folder, meta, extra))
+    return written
+
+
+def write_meta(folder: pathlib.Path, meta: dict, extra=None) -> pathlib.Path:
+    """``meta`` with ``extra``'s entries as ``folder/meta.json``, written whole or not at all
+    (through a temporary file replaced at the end); returns its path."""
     meta.update(jsonable(extra or {}))
     path = folder / META_JSON
     tmp = path.with_suffix(".json.tmp")
     tmp.write_text(json.dumps(jsonable(meta), indent=2) + "\n", encoding="utf-8")
     os.replace(tmp, path)
-    written.append(path)
-    return written
+    return path
 
 
 def write_frame(df, path: pathlib.Path) -> pathlib.Path:
@@ -358,12 +359,7 @@ def write_sweep(
         "settings": jsonable(settings or {}),
         "status": "ok",
     }
-    meta.update(jsonable(extra or {}))
-    path = folder / META_JSON
-    tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps(jsonable(meta), indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-    written.append(path)
+    written.append(write_meta(folder, meta, extra))
     return written
 
 
