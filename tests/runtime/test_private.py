@@ -29,6 +29,20 @@ def test_hooks_run_only_on_checked_versions(monkeypatch):
     assert not _private.allowed("jax", first)
 
 
+def test_public_only_names_hooks_one_by_one(monkeypatch):
+    """``$MIXDYN_PUBLIC_ONLY`` given hook names sends those hooks, and only those, to
+    their public paths; an unknown word means every hook, as ``1`` does."""
+    first, _ = _private.KNOWN["jax"]
+    monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "short_locations, exit_now")
+    assert not _private.allowed("jax", first, hook="short_locations")
+    assert _private.allowed("jax", first, hook="chained_floor")
+    assert _private.allowed("jax", first)  # no hook named: the version check alone
+    monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "yes")
+    assert all(_private.public_only(hook) for hook in _private.HOOKS)
+    monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "0")
+    assert not any(_private.public_only(hook) for hook in _private.HOOKS)
+
+
 def test_diffrax_is_given_back_after_a_run():
     """The chained floor is diffrax's only while mixdyn traces one of its own solves."""
     from diffrax import _integrate

@@ -66,10 +66,29 @@ def version(distribution: str) -> tuple[int, ...] | None:
     return tuple(int(x) for x in re.findall(r"\d+", text)[:3])
 
 
-def allowed(distribution: str, installed: tuple[int, ...] | None = None) -> bool:
-    """Whether the private hooks into ``distribution`` run: its version (default: the
-    installed one) is in :data:`KNOWN` and ``$MIXDYN_PUBLIC_ONLY`` is unset."""
-    if os.environ.get(PUBLIC_ONLY_ENV, "").strip() not in ("", "0"):
+#: The hooks by name, as ``$MIXDYN_PUBLIC_ONLY`` may list them.
+HOOKS = ("short_locations", "chained_floor", "roomy", "exit_now", "whole_module_scheduler")
+
+
+def public_only(hook: str | None = None) -> bool:
+    """Whether ``$MIXDYN_PUBLIC_ONLY`` sends ``hook`` (None: every hook) to its public path:
+    ``1`` names every hook; a comma-separated list of names from :data:`HOOKS` names those
+    (to measure what each hook gives); unset, empty or ``0`` names none."""
+    text = os.environ.get(PUBLIC_ONLY_ENV, "").strip()
+    if text in ("", "0"):
+        return False
+    names = {name.strip() for name in text.split(",")}
+    if not names & set(HOOKS):
+        return True
+    return hook is not None and hook in names
+
+
+def allowed(
+    distribution: str, installed: tuple[int, ...] | None = None, hook: str | None = None
+) -> bool:
+    """Whether the private hook ``hook`` into ``distribution`` runs: its version (default:
+    the installed one) is in :data:`KNOWN` and ``$MIXDYN_PUBLIC_ONLY`` does not name it."""
+    if public_only(hook):
         return False
     installed = version(distribution) if installed is None else installed
     first, after = KNOWN[distribution]
@@ -82,7 +101,7 @@ def short_locations():
     in this thread only, not the whole Python traceback (JAX's default: up to 100 frames
     per operation). What a program computes is unchanged; the paper example's programs
     export 25% smaller and compile 5-10% faster. Public fallback: JAX's default."""
-    if not allowed("jax"):
+    if not allowed("jax", hook="short_locations"):
         return contextlib.nullcontext()
     try:
         from jax._src import config
@@ -104,7 +123,7 @@ def chained_floor():
     (:mod:`mixdyn.runtime._clip_floor`): the same bits, ~25% less to trace, compile and
     load for a projection integrator. diffrax's module global is restored when the last
     such context (of any thread) ends. Public fallback: diffrax as it is."""
-    if not allowed("diffrax"):
+    if not allowed("diffrax", hook="chained_floor"):
         yield
         return
     with _floor_lock:
@@ -159,7 +178,7 @@ def _roomy(fn: Callable, *args, **kwargs):
 @functools.cache
 def _roomy_code() -> bool:
     """Give :func:`_roomy` its over-sized operand stack (once); False where not allowed."""
-    if not allowed("python"):
+    if not allowed("python", hook="roomy"):
         return False
     _roomy.__code__ = _roomy.__code__.replace(co_stacksize=SLOTS)
     return True
@@ -196,7 +215,7 @@ def exit_now(code: int) -> None:
     import atexit
 
     run_exit_functions = getattr(atexit, "_run_exitfuncs", None)
-    if not allowed("python") or run_exit_functions is None:
+    if not allowed("python", hook="exit_now") or run_exit_functions is None:
         raise SystemExit(code)
     for thread in threading.enumerate():
         if thread is not threading.current_thread() and not thread.daemon:
@@ -214,7 +233,7 @@ def whole_module_scheduler(config, log, modules: tuple[str, ...]):
     modules named in ``modules`` (file names) each sent whole to one worker (its module
     fixtures, long runs, computed once), through xdist's private ``_split_scope``. Public
     fallback: None (xdist's own scheduler; the same tests, those runs once per worker)."""
-    if not allowed("pytest-xdist"):
+    if not allowed("pytest-xdist", hook="whole_module_scheduler"):
         return None
     try:
         from xdist.scheduler import LoadScopeScheduling
@@ -230,10 +249,12 @@ def whole_module_scheduler(config, log, modules: tuple[str, ...]):
 
 
 __all__ = [
+    "HOOKS",
     "KNOWN",
     "PUBLIC_ONLY_ENV",
     "SLOTS",
     "allowed",
+    "public_only",
     "chained_floor",
     "exit_now",
     "roomy",
