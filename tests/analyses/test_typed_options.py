@@ -137,6 +137,8 @@ BAD = [
     (dict(method="projection", max_steps=2.5), "max_steps must be a whole number"),
     (dict(method="projection", max_steps=True), "max_steps must be a whole number"),
     (dict(method="projection", first_step=0.0), "first_step must be a finite step > 0"),
+    (dict(method="projection", first_step=1e-320), "first_step must be a finite step > 0"),
+    (dict(method="partitioning", first_step=-1e-3), "first_step must be a finite step > 0"),
     (dict(method="baumgarte", dt=-1e-3), "dt must be a finite step > 0"),
     (dict(method="baumgarte", dt=1e-3, alpha=-1.0), "alpha must be a finite number >= 0"),
     (dict(method="projection", solver="rk4"), "solver must be one of tsit5, dopri5, dopri8"),
@@ -181,6 +183,30 @@ def test_step_count_is_checked_at_the_run():
     opts = md.Baumgarte(dt=1e-3, max_steps=100)  # 200 steps over 0.2 s
     with pytest.raises(md.ModelError, match="more than max_steps = 100"):
         md.forward(pendulum(), TS, method=opts)
+
+
+@pytest.mark.parametrize("scale", [0.5, 1.0, 2.0])
+def test_a_first_step_is_checked_against_the_runs_times(scale, monkeypatch):
+    """A first step below the shortest step that advances the run's times in float64,
+    ``1e-13 * max(|t|, 1)`` (the integrator's own collapsed step: below it, the run would
+    end at its start with a step-size failure), or longer than the span is refused before
+    computing, naming first_step; from the floor up, the run gives the motion of the default
+    first step (another grid of steps: the same motion within the tolerances)."""
+    model = pendulum(theta0=0.3)
+    ts = TS + 1e3 * (scale - 1.0)  # 0..0.2 s, or later: the floor grows with |t|
+    floor = 1e-13 * max(float(np.max(np.abs(ts))), 1.0)
+    reference = md.forward(model, ts, rtol=1e-10, atol=1e-12)
+    at_floor = md.forward(model, ts, rtol=1e-10, atol=1e-12, first_step=floor)
+    np.testing.assert_allclose(at_floor.q, reference.q, atol=1e-8)
+    fw = importlib.import_module("mixdyn.analysis.forward")
+    monkeypatch.setattr(fw, "dynamic_start", lambda *a, **k: pytest.fail("computing began"))
+    for bad, match in [(floor * 0.99, "cannot advance time"), (0.21, "at most the run's span")]:
+        for method in (md.Projection(first_step=bad), md.Partitioning(first_step=bad)):
+            with pytest.raises(md.ModelError, match=match) as err:
+                md.forward(model, ts, method=method)
+            assert err.value.element == "first_step"
+        with pytest.raises(md.ModelError, match=match):
+            md.forward(model, ts, first_step=bad)
 
 
 def test_objects_are_immutable_hashable_and_plain():
@@ -299,6 +325,33 @@ FILE_RUNS = [
         md.GeneralizedAlpha(dt=1e-3, rho_inf=0.5),
     ),
 ]
+
+
+@pytest.mark.parametrize(
+    ("value", "problem"),
+    [
+        ("1.0e-320", "not subnormal"),
+        ("1.0e-16", "cannot advance time in float64"),
+        ("0", "finite step > 0"),
+        ("-1.0e-3", "finite step > 0"),
+        (".nan", "finite step > 0"),
+        ("0.5", "at most the run's span 0.1"),
+    ],
+)
+def test_a_model_files_first_step_is_refused_at_its_line(value, problem, monkeypatch):
+    """An absurd ``options.first_step`` in a file is a named input error at its line, found
+    when the file is read, before anything is computed."""
+    run = (
+        "  - name: r\n    kind: forward\n    time: {span: [0, 0.1], n: 3}\n"
+        f"    options: {{first_step: {value}}}\n"
+    )
+    fw = importlib.import_module("mixdyn.analysis.forward")
+    monkeypatch.setattr(fw, "simulate", lambda *a, **k: pytest.fail("computing began"))
+    text = FILE + run
+    with pytest.raises(mio.FileError, match=problem) as err:
+        Runner(mio.reads(text)).execute()
+    assert err.value.line == text.splitlines().index(f"    options: {{first_step: {value}}}") + 1
+    assert "options.first_step" in str(err.value)
 
 
 class _CapturedError(Exception):

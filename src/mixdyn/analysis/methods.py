@@ -33,7 +33,7 @@ import equinox as eqx
 import numpy as np
 
 from ..errors import ModelError
-from ._options import step_count, suggestions, value_problem
+from ._options import first_step_problem, step_count, suggestions, value_problem
 
 
 def _real(v: float) -> float:
@@ -156,6 +156,9 @@ class Projection(_AdaptiveRungeKutta):
         max_steps: step limit [steps]; default 1,000,000.
         first_step: the first step's size [time], or None (default: 1e-4 of the span or the
             first output interval, whichever is shorter); the controller adapts it from there.
+            A normal float64 > 0, and for a run over the times ``t``, from
+            ``1e-13 * max(max|t|, 1)`` (a shorter step cannot advance time in float64: the
+            integrator's collapsed step) to the span; else refused before the run.
     """
 
     method: ClassVar[str] = "projection"
@@ -175,7 +178,8 @@ class Partitioning(_AdaptiveRungeKutta):
         solver: the Runge–Kutta method: ``"tsit5"`` (default), ``"dopri5"`` or ``"dopri8"``.
         max_steps: step limit [steps]; default 1,000,000.
         first_step: the first step's size [time], or None (default: 1e-4 of the span or the
-            first output interval, whichever is shorter).
+            first output interval, whichever is shorter); from ``1e-13 * max(max|t|, 1)``
+            to the span, as :class:`Projection`'s.
     """
 
     method: ClassVar[str] = "partitioning"
@@ -290,11 +294,16 @@ def check(cls: type[IntegratorOptions], given: dict, ts=None, step: bool = True)
 
 
 def check_steps(options: IntegratorOptions, ts) -> None:
-    """Refuse a run at a fixed step ``dt`` that needs more than ``max_steps`` steps over the
-    output times ``ts`` (N,) [time], before anything is computed."""
+    """Refuse, before anything is computed, a run over the output times ``ts`` (N,) [time]
+    whose first step cannot advance time or is longer than the span
+    (:func:`~._options.first_step_problem`), or at a fixed step ``dt`` that needs more than
+    ``max_steps`` steps."""
+    ts = np.asarray(ts, dtype=float)
+    first = getattr(options, "first_step", None)
+    if first is not None and (problem := first_step_problem(float(first), ts)):
+        raise ModelError(f"first_step {problem}, got {float(first)!r}", "first_step")
     if options.dt is None:
         return
-    ts = np.asarray(ts, dtype=float)
     dt = float(options.dt)
     steps = int(step_count(ts, dt))
     limit = int(options.max_steps)

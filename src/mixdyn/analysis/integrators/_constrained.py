@@ -31,6 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ...runtime._private import chained_floor
+from .. import _options
 from ._common import MAX_STEPS, NOT_FINITE, OK, STEP_COLLAPSE, UNCLOSED, report_progress
 
 #: The explicit Runge–Kutta methods of the adaptive integrators: diffrax's class name.
@@ -40,8 +41,9 @@ METHODS = {"tsit5": "Tsit5", "dopri5": "Dopri5", "dopri8": "Dopri8"}
 #: of the loop this replaced): at most 10x longer, at least 5x shorter after a rejection.
 FACTOR_MAX, FACTOR_MIN, SAFETY = 10.0, 0.2, 0.9
 
-#: A step shorter than this fraction of the time (at least 1) is a collapsed step.
-DT_MIN = 1e-13
+#: A step shorter than this fraction of the time (at least 1) is a collapsed step
+#: (:data:`mixdyn.analysis._options.DT_MIN`, which a first step is checked against).
+DT_MIN = _options.DT_MIN
 
 
 class RK4(diffrax.AbstractERK):

@@ -7,7 +7,14 @@ outputs (:mod:`.outputs`) and laws (:mod:`.laws`)."""
 from __future__ import annotations
 
 from ..._hints import count
-from ...analysis._options import CHOICES, step_count, suggestions, value_problem
+from ...analysis._options import (
+    CHOICES,
+    first_step_problem,
+    step_count,
+    step_floor,
+    suggestions,
+    value_problem,
+)
 from ...analysis._simulate import ENERGY_TOL
 from ...analysis.methods import FIXED_STEP, OPTIONS
 from ...io import schema as s
@@ -104,11 +111,13 @@ def _check_value(runner, name: str, value, path) -> None:
 
 
 def check_step(runner, plan: Plan) -> None:
-    """A fixed step where needed, and no more steps than ``max_steps``."""
+    """A first step that advances time and fits the span, a fixed step where needed, and no
+    more steps than ``max_steps``."""
     r = plan.spec
     if isinstance(r, s.KinematicRunSpec | s.InverseRunSpec | s.StaticsRunSpec):
         return
     path = plan.path
+    check_first_step(runner, plan)
     if r.dt is None:
         if r.method in FIXED_STEP:
             span = float(plan.times[-1] - plan.times[0])
@@ -132,6 +141,25 @@ def check_step(runner, plan: Plan) -> None:
             f"max_steps = {int(limit):,}",
             f"use a larger step (dt: {span / fair:.3g} gives {fair:,} steps) or raise "
             "options.max_steps",
+        )
+
+
+def check_first_step(runner, plan: Plan) -> None:
+    """A run's ``options.first_step`` [time] between the shortest step that advances its
+    times in float64 and its span (:func:`~mixdyn.analysis._options.first_step_problem`);
+    a value of the wrong type or not > 0 is refused with the other options."""
+    value = (getattr(plan.spec, "options", None) or {}).get("first_step")
+    if value is None or value_problem("first_step", value) or len(plan.times) < 2:
+        return
+    problem = first_step_problem(float(value), plan.times)
+    if problem:
+        span = float(plan.times[-1] - plan.times[0])
+        runner.fail(
+            (*plan.path, "options", "first_step"),
+            f"first_step is {value!r}: it {problem}",
+            f"give a first step from {step_floor(plan.times):.3g} to {span:g} (e.g. "
+            f"{span * 1e-4:.3g}), or leave it out (the default: 1e-4 of the span or the first "
+            "output interval)",
         )
 
 
@@ -185,6 +213,7 @@ __all__ = [
     "DYNAMIC_OPTIONS",
     "INVERSE_OPTIONS",
     "RUN_SETTINGS",
+    "check_first_step",
     "check_mixed",
     "check_options",
     "check_settings",
