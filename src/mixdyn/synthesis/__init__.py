@@ -4,17 +4,37 @@ in the objective.
 * :mod:`._fourbar` — a four-bar's numbers, its closed-form assembly on a fixed branch with
   implicit derivatives, its coupler curve and transmission angle;
 * :mod:`._dynamics` — the links' inertia from the dimensions and the motor torque;
+* :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
+  angle) and :class:`Objective` (path error, motor torque by weight);
+* :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
+  Levenberg-Marquardt at once, checked, ranked and deduplicated;
 * :mod:`.build` — a synthesized four-bar as a :class:`mixdyn.Model` and a model file.
+
+Example::
+
+    import mixdyn as md
+    from mixdyn.synthesis import Masses, Objective, PathTask
+
+    task = PathTask(points, timing=None)                 # timing-free path generation
+    out = md.synthesize(task, Objective(masses=Masses(density=2.0), torque_weight=1e-4))
+    out.best.error, out.best.torque_rms
+    out.write("best.yaml")                               # mixdyn run best.yaml
 """
 
 from ._dynamics import Masses, link_inertia, motor_torque
 from ._fourbar import NAMES, FourBar, coupler_curve, coupler_point, link_angles, transmission_cosine
+from ._search import Candidate, Synthesis, synthesize
+from ._task import Objective, PathTask
 from .build import four_bar_model, model_file_text
 
 __all__ = [
     "NAMES",
+    "Candidate",
     "FourBar",
     "Masses",
+    "Objective",
+    "PathTask",
+    "Synthesis",
     "coupler_curve",
     "coupler_point",
     "four_bar_model",
@@ -22,5 +42,6 @@ __all__ = [
     "link_inertia",
     "model_file_text",
     "motor_torque",
+    "synthesize",
     "transmission_cosine",
 ]

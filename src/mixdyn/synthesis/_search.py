@@ -1,0 +1,408 @@
+"""The search: thousands of random starts at once, each refined by Levenberg-Marquardt.
+
+A candidate's variables ``u`` are dimensionless: the four-bar's lengths and placement divided by
+the targets' size ``s`` (the pivots from the targets' centre), ``theta0``, the crank's angle at
+the first point ``theta_1`` and, where the timing is free, the increments
+``theta_{i+1} - theta_i``. Its residuals (all divided by ``s``):
+
+* the path: ``C(theta_i) - P_i`` for each target (2N);
+* the loop's closure and transmission angle along the traversed motion (``samples`` input
+  angles from the first point to the last, the points' arc only: a candidate whose loop opens
+  between two points has a circuit defect and pays for it): ``10 relu(|cos mu| - c)`` with
+  ``c = cos(min_transmission)`` (at most 0.999);
+* the bounds: ``10 relu(low - x)``, ``10 relu(x - high)``;
+* the order (timing-free): ``10 relu(-increment)`` and ``10 relu(sum - 2 pi)``;
+* the torque (with a torque weight): ``sqrt(weight) T / s``.
+
+The branch (which side of ``A O4`` the pin ``B`` lies on) is fixed per start, half the starts
+on each, so that no candidate changes branch between points. Every start is solved by
+optimistix' Levenberg-Marquardt (a well-kept library; derivatives through the assembly's
+implicit rule), ``jax.vmap`` over a chunk of starts, chunk after chunk (progress reported
+after each). Infeasible starts cannot leak a NaN: the assembly returns the nearest
+configuration where the loop opens, and the penalty is finite.
+
+The outcomes are checked exactly (closure on a fine grid of the traversed motion, order,
+bounds), ranked by their score, and near-equal ones (the same linkage from two starts) kept
+once.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from collections.abc import Callable
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ModelError
+from ._dynamics import motor_torque
+from ._fourbar import NAMES, FourBar, coupler_point, transmission_cosine
+from ._task import Objective, PathTask
+
+#: The penalties' weight (residuals of infeasibility times this).
+PENALTY = 10.0
+#: The largest |cos mu| a search aims at (a margin inside the loop's closure).
+CLOSURE_MARGIN = 0.999
+#: Input angles of the exact check of closure along the traversed motion.
+CHECK_SAMPLES = 1024
+
+
+@dataclasses.dataclass(frozen=True)
+class _Layout:
+    """How a candidate's variables ``u`` map to a four-bar and its input angles."""
+
+    n: int
+    scale: float
+    centre: np.ndarray
+    timing: np.ndarray | None
+
+    @property
+    def size(self) -> int:
+        return 10 + (0 if self.timing is not None else self.n - 1)
+
+    def fourbar(self, u, branch) -> FourBar:
+        s, c = self.scale, self.centre
+        v = jnp.concatenate([u[:6] * s, jnp.stack([c[0] + s * u[6], c[1] + s * u[7]]), u[8:9]])
+        return FourBar.from_vector(v, branch)
+
+    def angles(self, u) -> jax.Array:
+        """(N,) the input angles at the targets [rad]."""
+        if self.timing is not None:
+            return u[9] + jnp.asarray(self.timing - self.timing[0])
+        return u[9] + jnp.concatenate([jnp.zeros(1), jnp.cumsum(u[10:])])
+
+    def u_of(self, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """Variables of a four-bar's numbers ``v`` (9,) and input angles ``theta`` (N,)."""
+        s, c = self.scale, self.centre
+        u = np.concatenate([v[:6] / s, (v[6:8] - c) / s, v[8:9], theta[:1]])
+        if self.timing is None:
+            u = np.concatenate([u, np.diff(theta)])
+        return u
+
+
+def _residuals(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray):
+    """``r(u, branch)``: the residual vector of a candidate (see the module's documentation)."""
+    s = layout.scale
+    targets = jnp.asarray(task.points)
+    cmax = min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)
+    fractions = jnp.linspace(0.0, 1.0, objective.samples)
+    finite = np.isfinite(box)
+    lo, hi = (
+        jnp.asarray(np.where(finite[:, 0], box[:, 0], 0.0)),
+        jnp.asarray(np.where(finite[:, 1], box[:, 1], 0.0)),
+    )
+    lo_on, hi_on = jnp.asarray(finite[:, 0], float), jnp.asarray(finite[:, 1], float)
+    scale_of = jnp.asarray([s if n != "theta0" else 1.0 for n in NAMES])
+    weight = float(objective.torque_weight)
+
+    def r(u, branch):
+        fb = layout.fourbar(u, branch)
+        theta = layout.angles(u)
+        path = (jax.vmap(lambda t: coupler_point(fb, t))(theta) - targets).ravel() / s
+        grid = theta[0] + (theta[-1] - theta[0]) * fractions
+        cos_mu = jax.vmap(lambda t: transmission_cosine(fb, t))(grid)
+        closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - cmax)
+        v = fb.vector()
+        bounds = PENALTY * jnp.concatenate(
+            [lo_on * jax.nn.relu(lo - v) / scale_of, hi_on * jax.nn.relu(v - hi) / scale_of]
+        )
+        parts = [path, closure, bounds]
+        if layout.timing is None:
+            inc = u[10:]
+            parts.append(PENALTY * jax.nn.relu(-inc))
+            parts.append(PENALTY * jax.nn.relu(jnp.sum(inc) - 2 * jnp.pi)[None])
+        if weight > 0:
+            tau = motor_torque(fb, objective.masses, grid, objective.speed)
+            parts.append(np.sqrt(weight) * _torque_measure(tau, objective.torque)[None] / s)
+        return jnp.concatenate(parts)
+
+    return r
+
+
+def _torque_measure(tau, kind: str):
+    """The RMS of ``tau`` (K,), or its mean 8-norm (``"peak"``)."""
+    if kind == "rms":
+        return jnp.sqrt(jnp.mean(tau**2))
+    big = jnp.max(jnp.abs(tau)) + 1e-300
+    return big * jnp.mean((tau / big) ** 8) ** (1 / 8)
+
+
+@dataclasses.dataclass(frozen=True)
+class Candidate:
+    """One synthesized four-bar.
+
+    Attributes:
+        fourbar: its numbers (NumPy scalars), model units.
+        angles: (N,) its input angles at the targets [rad].
+        error: ``sum_i |C(theta_i) - P_i|^2`` [length**2].
+        score: the objective (error plus the weighted torque term) [length**2].
+        torque_rms, torque_peak: the motor torque over the traversed motion [torque] (NaN
+            without masses).
+        min_transmission: the least transmission angle over the traversed motion [rad].
+    """
+
+    fourbar: FourBar
+    angles: np.ndarray
+    error: float
+    score: float
+    torque_rms: float
+    torque_peak: float
+    min_transmission: float
+
+    def numbers(self) -> dict[str, float]:
+        """The four-bar's numbers by name (:data:`~._fourbar.NAMES`) and its branch."""
+        out = {n: float(getattr(self.fourbar, n)) for n in NAMES}
+        out["branch"] = float(self.fourbar.branch)
+        return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Synthesis:
+    """The outcome of :func:`synthesize`.
+
+    Attributes:
+        task: the path task.
+        objective: the objective.
+        candidates: the distinct feasible four-bars, best score first.
+        starts: random starts solved.
+        feasible: starts that ended feasible (closed loop along the motion, in order, within
+            bounds).
+        seed: the random seed.
+        seconds: wall time [s] (compilation included).
+    """
+
+    task: PathTask
+    objective: Objective
+    candidates: tuple[Candidate, ...]
+    starts: int
+    feasible: int
+    seed: int
+    seconds: float
+
+    @property
+    def best(self) -> Candidate:
+        if not self.candidates:
+            raise ModelError(
+                f"no feasible four-bar among {self.starts} starts: give more starts, wider "
+                "bounds or a smaller min_transmission",
+                "synthesize",
+            )
+        return self.candidates[0]
+
+    def model(self, k: int = 0):
+        """The :class:`mixdyn.Model` of candidate ``k``, its crank at the first target's input
+        angle at t = 0, turning at the objective's speed."""
+        from .build import four_bar_model
+
+        c = self.candidates[k]
+        return four_bar_model(
+            c.fourbar, self.objective.masses, start=float(c.angles[0]), speed=self.objective.speed
+        )
+
+    def model_file(self, k: int = 0) -> str:
+        """YAML text of candidate ``k``'s model file (a kinematic and, with masses, an inverse
+        run over the traversed motion)."""
+        from .build import model_file_text
+
+        c = self.candidates[k]
+        head = (
+            f"A four-bar synthesized by mixdyn (candidate {k + 1} of {len(self.candidates)}, "
+            f"seed {self.seed}):\npath error sum |C - P|^2 = {c.error:.6g} m^2"
+        )
+        if np.isfinite(c.torque_rms):
+            head += f", motor torque RMS {c.torque_rms:.6g} N*m, peak {c.torque_peak:.6g} N*m"
+        return model_file_text(
+            c.fourbar,
+            self.objective.masses,
+            start=float(c.angles[0]),
+            end=float(c.angles[-1]),
+            speed=self.objective.speed,
+            targets=self.task.points,
+            header=head + "\n\n  mixdyn run FILE",
+        )
+
+    def write(self, path, k: int = 0) -> None:
+        """Write :meth:`model_file` of candidate ``k`` to ``path``."""
+        import pathlib
+
+        pathlib.Path(path).write_text(self.model_file(k), encoding="utf-8")
+
+    def table(self):
+        """A pandas DataFrame: a row per candidate, its numbers, error, score and torques."""
+        import pandas as pd
+
+        rows = []
+        for c in self.candidates:
+            row = c.numbers()
+            row.update(
+                error=c.error,
+                score=c.score,
+                torque_rms=c.torque_rms,
+                torque_peak=c.torque_peak,
+                min_transmission_deg=np.rad2deg(c.min_transmission),
+            )
+            rows.append(row)
+        return pd.DataFrame(rows)
+
+
+def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -> np.ndarray:
+    """(count, size) random starts within the bounds (``theta0`` over a turn where unbounded),
+    the input angles spread over up to a turn."""
+    s, c = layout.scale, layout.centre
+    lo, hi = box[:, 0].copy(), box[:, 1].copy()
+    lo[8], hi[8] = (lo[8], hi[8]) if np.isfinite(lo[8]) and np.isfinite(hi[8]) else (-np.pi, np.pi)
+    v = lo + (hi - lo) * rng.random((count, 9))
+    u = np.concatenate(
+        [v[:, :6] / s, (v[:, 6:8] - c) / s, v[:, 8:9], 2 * np.pi * rng.random((count, 1))], axis=1
+    )
+    if layout.timing is None:
+        n = layout.n
+        total = rng.uniform(0.25, 1.0, (count, 1)) * 2 * np.pi
+        inc = rng.dirichlet(np.ones(n), count)[:, : n - 1] * total
+        u = np.concatenate([u, inc], axis=1)
+    return u
+
+
+def synthesize(
+    task: PathTask,
+    objective: Objective | None = None,
+    *,
+    starts: int = 2048,
+    seed: int = 0,
+    chunk: int = 512,
+    max_steps: int = 300,
+    keep: int = 10,
+    progress: Callable[[int, int, float], None] | None = None,
+) -> Synthesis:
+    """Four-bars whose coupler point passes ``task``'s targets, best first.
+
+    Args:
+        task: the path task (targets, timing, bounds, transmission angle).
+        objective: the objective (default: the path error alone).
+        starts: random starts, half on each assembly branch.
+        seed: the random generator's seed (the same seed, the same starts and outcome).
+        chunk: starts solved together (one vectorized program, compiled once).
+        max_steps: Levenberg-Marquardt's steps at most per start.
+        keep: distinct candidates returned at most.
+        progress: called after each chunk with ``(starts done, starts, best score so far)``.
+
+    Returns:
+        A :class:`Synthesis`.
+
+    Raises:
+        ModelError: a bad number of starts, chunk or step count.
+    """
+    import optimistix as optx
+
+    objective = objective or Objective()
+    for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
+        if int(value) < 1:
+            raise ModelError(f"{label} must be at least 1, got {value!r}", label)
+    started = time.perf_counter()
+    box = task.box()
+    layout = _Layout(len(task.points), task.size, task.points.mean(axis=0), task.timing)
+    residuals = _residuals(layout, task, objective, box)
+    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
+
+    def solve_one(u0, branch):
+        sol = optx.least_squares(
+            residuals, solver, u0, args=branch, max_steps=max_steps, throw=False
+        )
+        u = sol.value
+        r = residuals(u, branch)
+        return u, jnp.sum(r**2)
+
+    solve_chunk = jax.jit(jax.vmap(lambda u0, b: solve_one(u0, b)))
+    rng = np.random.default_rng(seed)
+    u0 = _starts(layout, task, box, starts, rng)
+    branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
+    us, scores = [], []
+    best = np.inf
+    for lo in range(0, starts, chunk):
+        hi = min(lo + chunk, starts)
+        pad = chunk - (hi - lo)
+        batch = np.concatenate([u0[lo:hi], np.repeat(u0[lo : lo + 1], pad, axis=0)])
+        bb = np.concatenate([branches[lo:hi], np.repeat(branches[lo : lo + 1], pad)])
+        u, sc = solve_chunk(jnp.asarray(batch), jnp.asarray(bb))
+        us.append(np.asarray(u)[: hi - lo])
+        scores.append(np.asarray(sc)[: hi - lo])
+        best = min(best, float(np.nanmin(scores[-1])))
+        if progress is not None:
+            progress(hi, starts, best * layout.scale**2)
+    u_all, score_all = np.concatenate(us), np.concatenate(scores) * layout.scale**2
+    candidates, feasible = _rank(layout, task, objective, box, u_all, branches, score_all, keep)
+    return Synthesis(
+        task=task,
+        objective=objective,
+        candidates=tuple(candidates),
+        starts=starts,
+        feasible=feasible,
+        seed=seed,
+        seconds=time.perf_counter() - started,
+    )
+
+
+def _figures(layout: _Layout, task: PathTask):
+    """``(u, branch) -> (error, worst |cos mu|)`` of one outcome, exactly: the path error
+    ``sum |C - P|^2`` [length**2] and the largest ``|cos mu|`` over the traversed motion on a
+    fine grid (above 1: the loop opens between two points)."""
+    targets = jnp.asarray(task.points)
+    fractions = jnp.linspace(0.0, 1.0, CHECK_SAMPLES)
+
+    def one(u, branch):
+        fb = layout.fourbar(u, branch)
+        theta = layout.angles(u)
+        c = jax.vmap(lambda t: coupler_point(fb, t))(theta)
+        grid = theta[0] + (theta[-1] - theta[0]) * fractions
+        cos_mu = jax.vmap(lambda t: transmission_cosine(fb, t))(grid)
+        return jnp.sum((c - targets) ** 2), jnp.max(jnp.abs(cos_mu))
+
+    return jax.jit(jax.vmap(one))
+
+
+def _rank(layout, task, objective, box, u_all, branches, scores, keep):
+    """The distinct feasible outcomes, best score first, and the count of feasible ones."""
+    s = layout.scale
+    error, worst = (np.asarray(a) for a in _figures(layout, task)(u_all, branches))
+    v_all = np.asarray(jax.vmap(lambda u: layout.fourbar(u, 1.0).vector())(u_all))
+    theta_all = np.asarray(jax.vmap(layout.angles)(u_all))
+    slack = np.array([1e-6 * s] * 8 + [1e-9])
+    ok = np.isfinite(scores) & np.isfinite(error) & (worst <= np.cos(task.min_transmission))
+    ok &= np.all(v_all >= box[:, 0] - slack, axis=1) & np.all(v_all <= box[:, 1] + slack, axis=1)
+    if layout.timing is None:  # order defect: the points not passed in order within a turn
+        inc = u_all[:, 10:]
+        ok &= np.all(inc >= -1e-9, axis=1) & (np.sum(inc, axis=1) <= 2 * np.pi + 1e-9)
+    scale_of = np.array([s] * 8 + [1.0])
+    kept, keys = [], []
+    for i in np.argsort(np.where(ok, scores, np.inf))[: int(ok.sum())]:
+        v, theta = v_all[i], theta_all[i]
+        key = np.concatenate([v / scale_of, [theta[0]]])
+        key[8:] = np.angle(np.exp(1j * key[8:]))
+        if any(np.max(np.abs(key - k)) < 1e-4 and b == branches[i] for k, b in keys):
+            continue  # the same linkage from another start
+        keys.append((key, branches[i]))
+        fb = FourBar(*(np.float64(x) for x in v), np.float64(branches[i]))
+        rms = peak = float("nan")
+        if objective.masses is not None:
+            grid = np.linspace(theta[0], theta[-1], 256)
+            tau = np.asarray(motor_torque(fb, objective.masses, grid, objective.speed))
+            rms, peak = float(np.sqrt(np.mean(tau**2))), float(np.max(np.abs(tau)))
+        kept.append(
+            Candidate(
+                fourbar=fb,
+                angles=theta,
+                error=float(error[i]),
+                score=float(scores[i]),
+                torque_rms=rms,
+                torque_peak=peak,
+                min_transmission=float(np.arccos(min(float(worst[i]), 1.0))),
+            )
+        )
+        if len(kept) == keep:
+            break
+    return kept, int(ok.sum())
+
+
+__all__ = ["Candidate", "Synthesis", "synthesize"]

@@ -1,0 +1,131 @@
+"""What a synthesis asks for: the path task and the objective, checked when made.
+
+:class:`PathTask` holds the target points, the timing (prescribed input angles, or free), the
+bounds of the four-bar's numbers and the least transmission angle. :class:`Objective` says how
+the path error and the motor torque are weighed. Both are plain, immutable values; the search
+(:mod:`._search`) turns them into one residual function of a candidate's variables.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from ..errors import ModelError
+from ._dynamics import Masses
+from ._fourbar import NAMES
+
+#: The numbers of a four-bar that are lengths (bounded by default), by their index in NAMES.
+LENGTHS = ("r1", "r2", "r3", "r4")
+
+
+@dataclasses.dataclass(frozen=True)
+class PathTask:
+    """Path generation: a four-bar's coupler point through target points, in their order.
+
+    Attributes:
+        points: (N, 2) the target points [length], N >= 2, in the order the coupler point
+            passes them as the crank turns in the positive sense.
+        timing: None (timing-free: the input angles are found too, increasing, within one
+            turn) or (N,) prescribed input angles [rad], increasing; only their differences
+            count (the crank's angle at the first point is found).
+        bounds: ``name -> (low, high)`` for numbers of :data:`~._fourbar.NAMES` (lengths in
+            [length], ``theta0`` in [rad]); by default the link lengths lie within
+            ``[0.05, 5]`` times the targets' size and the pivots within three sizes of the
+            targets' centre.
+        min_transmission: the least transmission angle along the traversed motion [rad]
+            (0: the loop only has to close).
+    """
+
+    points: np.ndarray
+    timing: np.ndarray | None = None
+    bounds: dict = dataclasses.field(default_factory=dict)
+    min_transmission: float = 0.0
+
+    def __post_init__(self):
+        pts = np.asarray(self.points, dtype=float)
+        if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2 or not np.all(np.isfinite(pts)):
+            raise ModelError(
+                f"points must be two or more finite (x, y) pairs, got shape {pts.shape}", "points"
+            )
+        object.__setattr__(self, "points", pts)
+        if self.timing is not None:
+            tim = np.asarray(self.timing, dtype=float)
+            if tim.shape != (len(pts),) or not np.all(np.isfinite(tim)):
+                raise ModelError(f"timing must be {len(pts)} input angles [rad]", "timing")
+            if not np.all(np.diff(tim) > 0) or tim[-1] - tim[0] > 2 * np.pi:
+                raise ModelError("timing must increase, within one turn (2*pi rad)", "timing")
+            object.__setattr__(self, "timing", tim)
+        for name, ends in self.bounds.items():
+            if name not in NAMES:
+                raise ModelError(
+                    f"no number {name!r} of a four-bar; one of {', '.join(NAMES)}", "bounds"
+                )
+            lo, hi = (float(x) for x in ends)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
+                raise ModelError(f"bounds (low, high) with low < high, got {ends!r}", name)
+            if name in LENGTHS and lo <= 0:
+                raise ModelError(f"a length's low bound must be > 0, got {lo!r}", name)
+        if not 0.0 <= self.min_transmission < np.pi / 2:
+            raise ModelError("min_transmission must lie in [0, pi/2) rad", "min_transmission")
+
+    @property
+    def size(self) -> float:
+        """The targets' size: the largest distance from their centre [length] (> 0)."""
+        c = self.points.mean(axis=0)
+        return float(max(np.max(np.linalg.norm(self.points - c, axis=1)), 1e-12))
+
+    def box(self) -> np.ndarray:
+        """(9, 2) the bounds of every number (:data:`NAMES`' order); ``theta0`` unbounded
+        (``-inf, inf``) unless given."""
+        s, c = self.size, self.points.mean(axis=0)
+        out = {n: (0.05 * s, 5.0 * s) for n in LENGTHS}
+        out.update({"rcx": (-5 * s, 5 * s), "rcy": (-5 * s, 5 * s)})
+        out.update({"x0": (c[0] - 3 * s, c[0] + 3 * s), "y0": (c[1] - 3 * s, c[1] + 3 * s)})
+        out["theta0"] = (-np.inf, np.inf)
+        out.update({k: tuple(float(x) for x in v) for k, v in self.bounds.items()})
+        return np.array([out[n] for n in NAMES], dtype=float)
+
+
+@dataclasses.dataclass(frozen=True)
+class Objective:
+    """How a candidate is scored: path error, plus the motor torque by weight.
+
+    The score is ``sum_i |C(theta_i) - P_i|^2 + torque_weight * T^2`` with ``T`` the RMS
+    (``torque="rms"``) or a smooth stand-in for the peak (``"peak"``: the mean 8-norm
+    ``mean(|tau|^8)^(1/8)``, at most the peak and dominated by it) of the motor torque over the
+    traversed input angles, the crank turning at ``speed``.
+
+    Attributes:
+        masses: how the links weigh (None: no dynamics; the torque is not computed).
+        speed: the crank's constant speed [rad / time].
+        torque_weight: [length**2 / torque**2] the weight of ``T^2`` (0: kinematics only).
+        torque: ``"rms"`` or ``"peak"``.
+        samples: input angles over the traversed motion at which the torque and the
+            transmission angle are evaluated.
+    """
+
+    masses: Masses | None = None
+    speed: float = 1.0
+    torque_weight: float = 0.0
+    torque: str = "rms"
+    samples: int = 48
+
+    def __post_init__(self):
+        if self.torque not in ("rms", "peak"):
+            raise ModelError(f"torque must be 'rms' or 'peak', got {self.torque!r}", "torque")
+        if not (np.isfinite(self.torque_weight) and self.torque_weight >= 0):
+            raise ModelError("torque_weight must be a finite number >= 0", "torque_weight")
+        if self.torque_weight > 0 and self.masses is None:
+            raise ModelError(
+                "a torque objective needs the links' masses: give masses=Masses(density=...)",
+                "masses",
+            )
+        if not (np.isfinite(self.speed) and self.speed > 0):
+            raise ModelError("speed must be a finite number > 0 [rad/time]", "speed")
+        if int(self.samples) < 4:
+            raise ModelError("samples must be at least 4", "samples")
+
+
+__all__ = ["Objective", "PathTask"]
