@@ -35,6 +35,7 @@ DIMENSIONS: dict[str, tuple[int, int, int]] = {
     "damping": (0, 1, -1),
     "rotational_stiffness": (2, 1, -2),
     "rotational_damping": (2, 1, -1),
+    "pressure": (-1, 1, -2),
     "dimensionless": (0, 0, 0),
 }
 
@@ -147,6 +148,7 @@ _DERIVED = {
     "damping": "{F}*{T}/{L}",
     "rotational_stiffness": "{F}*{L}/rad",
     "rotational_damping": "{F}*{L}*{T}/rad",
+    "pressure": "{F}/{L}**2",
 }
 
 #: Common spellings accepted without asking pint (fast, and no import at start-up).
@@ -384,6 +386,7 @@ COMMON_UNITS: dict[str, tuple[str, ...]] = {
     "damping": ("N*s/m", "N*s/mm"),
     "rotational_stiffness": ("N*m/rad", "N*mm/rad", "N*m/deg"),
     "rotational_damping": ("N*m*s/rad", "N*mm*s/rad"),
+    "pressure": ("Pa", "kPa", "MPa", "GPa", "N/mm**2"),
 }
 
 
@@ -473,7 +476,7 @@ OUTPUT_PRESETS: dict[str, dict[str, str]] = {
         "angular_acceleration": "rad/s**2", "force": "N", "torque": "N*m",
         "inertia": "kg*m**2", "energy": "J", "power": "W", "stiffness": "N/m",
         "damping": "N*s/m", "rotational_stiffness": "N*m/rad",
-        "rotational_damping": "N*m*s/rad",
+        "rotational_damping": "N*m*s/rad", "pressure": "Pa",
     },
     "mm-N-s": {
         "length": "mm", "mass": "kg", "time": "s", "angle": "rad", "velocity": "mm/s",
@@ -481,7 +484,7 @@ OUTPUT_PRESETS: dict[str, dict[str, str]] = {
         "angular_acceleration": "rad/s**2", "force": "N", "torque": "N*mm",
         "inertia": "kg*mm**2", "energy": "mJ", "power": "mW", "stiffness": "N/mm",
         "damping": "N*s/mm", "rotational_stiffness": "N*mm/rad",
-        "rotational_damping": "N*mm*s/rad",
+        "rotational_damping": "N*mm*s/rad", "pressure": "MPa",
     },
 }  # fmt: skip
 

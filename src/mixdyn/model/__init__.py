@@ -2,6 +2,7 @@
 
 from ._body import Body, Ground
 from ._cams import CamFollower
+from ._compliant import CircleContact, CircleLineContact, JournalBearing
 from ._contacts import BeltDrive, GearPair, RackPinion, RollingDisks, RollingOnLine
 from ._declare import ELEMENTS, element
 from ._drivers import (
@@ -71,6 +72,8 @@ __all__ = [
     "BeltDrive",
     "Body",
     "CamFollower",
+    "CircleContact",
+    "CircleLineContact",
     "Constant",
     "CoordinateDriver",
     "Distance",
@@ -84,6 +87,7 @@ __all__ = [
     "Harmonic",
     "Joint",
     "JointFriction",
+    "JournalBearing",
     "Law",
     "Model",
     "PiecewisePolynomial",

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 
 from .._arrays import as_f64
 from ..errors import ModelError
+from . import _compliant as _c
 from ._declare import direction, element, quantity, reference
 from ._element import Element, Resolver, body_name, moving
 from ._geometry import angle, cross, point, vector
@@ -28,6 +29,10 @@ _UNBOUND = -2
 
 def _f64(x):
     return as_f64(x)
+
+
+def _optional(x):
+    return None if x is None else as_f64(x)
 
 
 class Joint(Element):
@@ -118,10 +123,43 @@ class Revolute(_TwoPoint):
     """Revolute (pin) joint: point ``point_i`` of body i coincides with ``point_j`` of body j.
 
     Equations (2): ``r_j + A_j s_j - r_i - A_i s_i = 0``.
+
+    With a ``clearance`` the joint is a journal (the pin, centre ``point_j``) in a bearing
+    (centre ``point_i``): the model replaces its two equations by the compliant contact of
+    a :class:`~mixdyn.JournalBearing` of the same name, numbers and result columns (the
+    journal's free flight, impacts and continuous contact).
     """
 
+    clearance: jax.Array | None = quantity(
+        "length",
+        'Radial clearance (bearing radius less journal radius), e.g. ``"0.5 mm"``: the joint '
+        "becomes a journal in a bearing (a ``journal_bearing`` contact). Default none (an "
+        "ideal pin).",
+        None,
+        converter=_optional,
+        above=0.0,
+        kw_only=True,
+    )
+    journal_radius: jax.Array | None = quantity(
+        "length",
+        "With a clearance: the journal's (pin's) radius, > 0.",
+        None,
+        converter=_optional,
+        above=0.0,
+        kw_only=True,
+    )
+    young_modulus: jax.Array | None = _c._young_modulus(optional=True)
+    poisson: jax.Array | None = _c._poisson(None)
+    restitution: jax.Array | None = _c._restitution(optional=True)
+    impact_speed: jax.Array | None = _c._impact_speed()
+    contact_model: str | None = _c._contact_model(None)
+    mu: jax.Array | None = _c._mu()
+    v_stick: jax.Array | None = _c._v_stick()
     n_equations: ClassVar[int] = 2
     equation_labels: ClassVar[tuple[str, ...]] = ("x", "y")
+
+    def __check_init__(self):
+        _c.check_clearance(self)
 
     def residual(self, q):
         return self._d(q)

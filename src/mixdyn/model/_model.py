@@ -11,6 +11,7 @@ from .._arrays import as_f64
 from ..errors import ModelError
 from ..units import SI, UnitSystem
 from ._body import GROUND_NAME, Body, Ground
+from ._compliant import clearance_contacts
 from ._drivers import Driver
 from ._element import Resolver
 from ._forces import ForceElement
@@ -83,6 +84,8 @@ class Model(eqx.Module):
             if not isinstance(b, Body):
                 raise ModelError(f"expected a Body, got {type(b).__name__}", name)
         _unique(bodies, "body")
+        joints, bearings = clearance_contacts(joints)
+        forces = (*forces, *bearings)
         elements = [*joints, *drivers, *forces]
         _unique(elements, "element")
         for kind, items, base in (
