@@ -354,8 +354,9 @@ def check(
         needed: what the field needs, in words (``"a torque"``).
         variable: the dimension of ``t``.
         values: the parameters' values (model units).
-        strict: check every expression, and refuse one made of numbers only where ``target``
-            has a dimension (the file's ``strict_units``).
+        strict: check every expression, and refuse one made of numbers and parameters
+            without units only where ``target`` has a dimension (the file's
+            ``strict_units``).
         law: ``source`` is a law (else a constant expression in a field, whose unit is
             written after it).
     """
@@ -370,8 +371,8 @@ def check(
         got, mismatch = None, e
     else:
         mismatch = None
-        if got is FREE:
-            if strict and target != PLAIN:
+        if got is FREE:  # a number in it takes the unit its place needs (m*L**2/12)
+            if strict and target != PLAIN and not stated:
                 unit = unit_of(target, units)
                 return Fault(
                     f"the numbers of {source!r} carry no unit (strict_units), {needed} is needed",

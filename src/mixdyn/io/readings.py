@@ -96,6 +96,37 @@ class Readings:
                 )
         return self._parameters
 
+    def parameter_value(self, name: str, value, path) -> float:
+        """A value a study gives the file parameter ``name`` (a sweep's ``vary``), in model
+        units, read as the parameter itself is: for a parameter with a unit (or written with
+        such parameters), a value with a unit of its dimension is converted to the model's
+        units and a number without a unit is in the model's units of that dimension (refused
+        with ``strict_units``); a value with a unit of another dimension is refused. A
+        parameter without a unit is a plain number, and so are its values: one written with
+        a unit is refused.
+
+        Args:
+            name: the parameter (one of the file's).
+            value: the value as the file writes it (``0.1 m``, ``100``).
+            path: its place in the file, for the errors.
+        """
+        p = self.parameters[name]
+        if p.dim is None:
+            unit = self._unit_of(value)
+            if unit is not None:
+                line = f" (line {p.line})" if p.line else ""
+                self.b.fail(
+                    path,
+                    f"{_shown(value)}: parameter {name!r}{line} is written without a unit, so "
+                    f"it is a plain number, and a value with a unit ({unit}) is not one of it",
+                    f"write the parameter with its unit (e.g. `{name}: {_shown(p.written)} "
+                    f"{unit}`) or the values without one",
+                )
+            return self.b.scalar(value, None, path)
+        if any(e.denominator != 1 for e in p.dim):
+            return self.b.scalar(value, None, path)
+        return self.b.scalar(value, tuple(int(e) for e in p.dim), path)
+
     def _dim_of(self, value) -> d.Dim | None:
         unit = self._unit_of(value)
         if unit is not None:

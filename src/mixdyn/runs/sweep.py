@@ -229,13 +229,13 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
     axes, spans = {}, {}
     for name, v in r.vary.items():
         vpath = (*path, "vary", name)
-        kind = _check_name(runner, name, vpath)
+        read = _reader(runner, name, _check_name(runner, name, vpath))
         if v.values is not None:
-            vals = [runner.b.scalar(x, kind, (*vpath, "values", k)) for k, x in enumerate(v.values)]
+            vals = [read(x, (*vpath, "values", k)) for k, x in enumerate(v.values)]
             axes[name] = np.asarray(vals, dtype=float)
             continue
-        lo = runner.b.scalar(v.span[0], kind, (*vpath, "span", 0))
-        hi = runner.b.scalar(v.span[1], kind, (*vpath, "span", 1))
+        lo = read(v.span[0], (*vpath, "span", 0))
+        hi = read(v.span[1], (*vpath, "span", 1))
         if not hi > lo:
             runner.fail((*vpath, "span"), f"the span [{lo:g}, {hi:g}] is empty", "give [low, high]")
         spans[name] = (lo, hi)
@@ -349,8 +349,18 @@ def _member_times(runner: Runner, path, base: Plan, values: dict[str, np.ndarray
     return tuple(out)
 
 
+def _reader(runner: Runner, name: str, kind) -> Callable[[object, tuple], float]:
+    """What reads the values of a varied name in model units: a file parameter's by the
+    parameter's own units (:meth:`mixdyn.io.readings.Readings.parameter_value`), a body's
+    or element's number by its ``kind`` of quantity."""
+    if "." not in name:
+        return lambda value, path: runner.b.readings.parameter_value(name, value, path)
+    return lambda value, path: runner.b.scalar(value, kind, path)
+
+
 def _check_name(runner: Runner, name: str, path) -> str | None:
-    """The kind of quantity of a varied name (None: model units of any kind), checked."""
+    """The kind of quantity of a varied body's or element's number (None: model units of
+    any kind, and for a file parameter: its values are read by its own units), checked."""
     if "." not in name:
         if name not in runner.b.parameters:
             known = ", ".join(runner.b.parameters) or "(the file has none)"
