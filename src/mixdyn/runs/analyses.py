@@ -120,12 +120,7 @@ class AnalysisKind(RunKind):
                         "remove 'x' or the reference",
                     )
             if plot.reference is not None:
-                try:
-                    parse_expression(plot.reference.expr, b.parameters)
-                except ExpressionError as e:
-                    runner.fail((*pp, "reference", "expr"), e.message, e.hint)
-                if plot.reference.unit is not None:
-                    b.factor(plot.reference.unit, None, (*pp, "reference", "unit"))
+                _check_reference(runner, plot, r, (*pp, "reference"))
         if r.animation is not None:
             for k, ref in enumerate(r.animation.trace):
                 b.point(ref, (*path, "animation", "trace", k))
@@ -389,6 +384,24 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
             painter.done(
                 html(result, path.with_suffix(".html"), fps=a.fps, trace=a.trace, forces=a.forces)
             )
+
+
+def _check_reference(runner, plot: s.PlotSpec, r, path) -> None:
+    """A plot's reference curve, checked as a law of ``t`` of the kind of the plot's first
+    column (it is drawn in that column's panel and unit): its expression's dimension, as a
+    law's (:mod:`mixdyn.io.readings`), and its ``unit``'s; where the kind is not known before
+    the run, the expression's form and the unit alone."""
+    ref = plot.reference
+    kind = checks.column_kind(runner, plot.columns[0], r)
+    if kind is not None:
+        runner.b.law(s.ExpressionSpec(expr=ref.expr, unit=ref.unit), kind, path)
+        return
+    try:
+        parse_expression(ref.expr, runner.b.parameters)
+    except ExpressionError as e:
+        runner.fail((*path, "expr"), e.message, e.hint)
+    if ref.unit is not None:
+        runner.b.factor(ref.unit, None, (*path, "unit"))
 
 
 def _reference(runner, ref, t) -> np.ndarray:

@@ -30,7 +30,7 @@ the run's start) and :mod:`.command` (what ``mixdyn check`` checks of the whole 
 
 from .command import file_warnings, require_size
 from .laws import check_laws, check_replays
-from .outputs import BODY_COLUMNS, check_column, check_outputs, columns, output_units
+from .outputs import BODY_COLUMNS, check_column, check_outputs, column_kind, columns, output_units
 from .settings import (
     DYNAMIC_OPTIONS,
     INVERSE_OPTIONS,
@@ -58,6 +58,7 @@ __all__ = [
     "check_settings",
     "check_solvable",
     "check_step",
+    "column_kind",
     "columns",
     "file_warnings",
     "known_options",

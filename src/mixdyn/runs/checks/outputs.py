@@ -162,6 +162,68 @@ def columns(runner, r) -> tuple[list[str], set[str]]:
     return cols, owners
 
 
+#: The kind of quantity of each per-body column and point column (``body.P.x``).
+_BODY_KINDS = {
+    "x": "length",
+    "y": "length",
+    "phi": "angle",
+    "vx": "velocity",
+    "vy": "velocity",
+    "omega": "angular_velocity",
+    "ax": "acceleration",
+    "ay": "acceleration",
+    "alpha": "angular_acceleration",
+}
+_POINT_KINDS = {k: v for k, v in _BODY_KINDS.items() if k not in ("phi", "omega", "alpha")}
+
+#: The kinds of the energy and work columns of every result.
+_ENERGY_KINDS = {
+    "energy.kinetic": "energy",
+    "energy.potential": "energy",
+    "energy.total": "energy",
+    "work.nonconservative": "energy",
+    "work.constraints": "energy",
+    "constraint.violation": "length",
+}
+
+
+def column_kind(runner, col: str, r) -> str | None:
+    """The kind of quantity of a run's column (a key of :data:`mixdyn.units.DIMENSIONS`),
+    as its result will name it (:meth:`mixdyn.Result.kind_of`), or None where it is not
+    known before the run (a multiplier ``lambda.*``, a prescribed motion's effort).
+
+    Args:
+        runner: the file's runner.
+        col: a column the run has (:func:`check_column`).
+        r: the run's description.
+    """
+    if col == "t":
+        return "time"
+    parts = col.split(".")
+    if parts[0] in runner.b.body_index:
+        if len(parts) == 2:
+            return _BODY_KINDS.get(parts[1])
+        return _POINT_KINDS.get(parts[-1]) if len(parts) == 3 else None
+    if col in _ENERGY_KINDS:
+        return _ENERGY_KINDS[col]
+    model = runner.model
+    name, _, field = col.partition(".")
+    if field == "power":
+        return "power"
+    drivers = {d.name: d for d in model.drivers}
+    if not field and name in drivers:
+        return drivers[name].effort_kind
+    if not field and name in (getattr(r, "unknown", None) or ()):
+        return model.element(name).magnitude_kind
+    joints = {j.name: j for j in model.joints}
+    if name in joints:
+        j = joints[name]
+        return {"Fx": "force", "Fy": "force", "M": "torque", **j.contact_kinds}.get(field)
+    from ...equations import force_output_kinds
+
+    return force_output_kinds(model, exclude=tuple(getattr(r, "unknown", None) or ())).get(col)
+
+
 def check_column(runner, col: str, r, path) -> None:
     """Refuse a column the run's result does not have (a point's ``body.P.x`` checked as a
     point of the body)."""
@@ -191,6 +253,7 @@ __all__ = [
     "BODY_COLUMNS",
     "check_column",
     "check_outputs",
+    "column_kind",
     "columns",
     "output_units",
 ]
