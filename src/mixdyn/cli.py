@@ -1,5 +1,8 @@
-"""The ``mixdyn`` command line: a thin shell over :mod:`mixdyn.io` (the files),
-:mod:`mixdyn.runs` (running a file's runs and writing them) and :mod:`mixdyn.viz`.
+"""The ``mixdyn`` command line: the commands, their arguments and options and their exit
+codes, each command a call into the module that does its job: :mod:`mixdyn.runs.report`
+(``check``), :mod:`mixdyn.runs.job` (``run``), :mod:`mixdyn.runs.pictures` (``show``,
+``plot``, ``animate``) and :mod:`mixdyn.runs.texts` (``schema``, ``dump``); an error ends it
+with one line and the exit code of :mod:`mixdyn.runs.exits`.
 
 Commands: ``check``, ``show``, ``run``, ``plot``, ``animate``, ``schema``, ``dump``; ``--help``
 on each.
@@ -21,15 +24,16 @@ from __future__ import annotations
 import contextlib
 import os
 import pathlib
-import re
 import sys
 import time
 from typing import Annotated
 
 import typer
 
+from ._help import one_line_summaries
 from ._hints import count
 from .runtime._private import exit_now, roomy, use_roomy_frames
+from .runtime._programs import configure_from_env as configure_cache
 
 app = typer.Typer(
     name="mixdyn",
@@ -41,26 +45,7 @@ app = typer.Typer(
     context_settings={"help_option_names": ["-h", "--help"]},
 )
 
-EXIT_OK, EXIT_NUMERICAL, EXIT_INPUT = 0, 1, 2
-
 FileArg = Annotated[pathlib.Path, typer.Argument(help="The model file (YAML).", show_default=False)]
-
-
-# --------------------------------------------------------------------------- plumbing
-def _say(text: str = "") -> None:
-    """Print ``text`` (rich markup) on stdout, its control characters made harmless."""
-    from rich.console import Console
-
-    from .runs.console import clean
-
-    Console(soft_wrap=True, highlight=False).print(clean(text))
-
-
-def _esc(text) -> str:
-    """User text (names, paths) made safe inside rich markup and on the terminal."""
-    from .runs.console import esc
-
-    return esc(text)
 
 
 def _fail(code: int, line: str) -> None:
@@ -74,55 +59,18 @@ def _fail(code: int, line: str) -> None:
 
 @contextlib.contextmanager
 def _guard(file: pathlib.Path | str | None):
-    """Turn mixdyn's errors into one line and an exit code."""
-    from pydantic import ValidationError
-
-    from .errors import AssemblyError, MixdynError, ModelError, NumericalError
-    from .io import FileError
-
-    where = str(file) if file is not None else "mixdyn"
+    """Turn mixdyn's errors into one line and an exit code (:func:`mixdyn.runs.exits.exit_for`)."""
     try:
         yield
     except typer.Exit:
         raise
-    except FileError as e:
-        _fail(EXIT_INPUT, e.one_line())
-    except AssemblyError as e:  # no start closes the joints: the description is at fault
-        _fail(
-            EXIT_INPUT,
-            f"{getattr(e, 'file', where)}: the start cannot be assembled: {e}; check the "
-            "geometry, q0, initial and hold",
-        )
-    except NumericalError as e:
-        run = getattr(e, "run", None)
-        what = f"run {run!r}: " if run else ""
-        _fail(
-            EXIT_NUMERICAL,
-            f"{getattr(e, 'file', where)}: {what}numerical failure ({type(e).__name__}): {e}",
-        )
-    except ModelError as e:
-        _fail(EXIT_INPUT, f"{where}: {e}")
-    except MixdynError as e:
-        _fail(EXIT_NUMERICAL, f"{where}: {type(e).__name__}: {e}")
-    except ValidationError as e:
-        first = e.errors()[0]
-        loc = ".".join(str(p) for p in first["loc"])
-        _fail(EXIT_INPUT, f"{where}: {loc}: {first['msg']}")
-    except KeyboardInterrupt:
-        _fail(130, f"{where}: interrupted")
-    except OSError as e:  # a file that cannot be read or written: the path is the fault
-        name = e.filename if e.filename is not None else where
-        _fail(EXIT_INPUT, f"{name}: {e.strerror or e}; check the path and its permissions")
-    except RecursionError:
-        _fail(EXIT_INPUT, f"{where}: the input is nested too deeply; simplify it")
-    except Exception as e:
-        if os.environ.get("MIXDYN_DEBUG"):
+    except BaseException as e:
+        from .runs.exits import exit_for
+
+        ending = exit_for(e, file)
+        if ending is None:
             raise
-        _fail(
-            EXIT_NUMERICAL,
-            f"{where}: internal error ({type(e).__name__}: {e}); please report it "
-            "(MIXDYN_DEBUG=1 shows the traceback)",
-        )
+        _fail(*ending)
 
 
 def _version(value: bool):
@@ -149,19 +97,6 @@ def _root(
     """
 
 
-def configure_cache() -> str | None:
-    """Turn on mixdyn's persistent caches (see the module's documentation) unless
-    ``MIXDYN_NO_CACHE`` is set (:func:`mixdyn.set_cache`).
-
-    Returns:
-        The cache folder, or None when turned off.
-    """
-    from .runtime._programs import configure_from_env
-
-    return configure_from_env()
-
-
-# --------------------------------------------------------------------------- show
 @app.command()
 def show(
     file: FileArg,
@@ -175,32 +110,12 @@ def show(
     """Draw the model at its assembled start (bodies, joints, ground points and their names),
     without running an analysis."""
     with _guard(file):
-        from . import analysis as an
-        from .io import FileError, read
-        from .runs import Runner
-        from .runs.checks import require_size
-        from .runs.outputs import check_output
-        from .runs.setup import start_q
-        from .viz.show import SHOW_SUFFIXES, draw
+        from .runs.console import esc, say
+        from .runs.pictures import show as draw_start
 
-        target = output or pathlib.Path(file).with_suffix(".png")
-        if target.suffix.lower() not in SHOW_SUFFIXES:
-            raise FileError(
-                f"cannot draw to {target.name!r}",
-                "--output",
-                file=str(file),
-                hint=f"use {', '.join(SHOW_SUFFIXES)}",
-            )
-        check_output(target, "--output")
-        spec = read(file)
-        require_size(spec, file)
-        model = Runner(spec).model
-        asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
-        draw(model, asm.q, target, title=f"{model.name} at its assembled start")
-        _say(f"wrote {_esc(target)}")
+        say(f"wrote {esc(draw_start(file, output))}")
 
 
-# --------------------------------------------------------------------------- check
 @app.command()
 def check(
     file: FileArg,
@@ -219,49 +134,13 @@ def check(
     A model file is UTF-8 text of at most 20 MB with at most 50,000 bodies (checked at
     about 2 s and 50 MB per 1,000 bodies)."""
     with _guard(file):
-        from . import analysis as an
-        from .io import read
-        from .runs import Runner, kind_of
-        from .runs.checks import file_warnings, require_size
-        from .runs.setup import start_q
+        from .runs.console import say
+        from .runs.report import report
 
-        spec = read(file)
-        require_size(spec, file)
-        runner = Runner(spec)
-        model = runner.model
-        asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
-        report = an.degrees_of_freedom(model, asm.q)
-        _say(f"[bold]{_esc(file)}[/bold]: {_esc(model.summary())}")
-        _say(
-            f"assembled start: residual {asm.residual:.2e} in {count(asm.iterations, 'iteration')}"
-        )
-        _say(f"degrees of freedom: {report.dof}")
-        _say(f"redundant joint equations: {', '.join(report.redundant) or 'none'}")
-        _say(
-            f"model drivers: {report.n_drivers}"
-            + (
-                f" (redundant: {', '.join(report.redundant_drivers)})"
-                if report.redundant_drivers
-                else ""
-            )
-        )
-        warnings = [*runner.b.readings.warnings, *file_warnings(spec, model, report)]
-        for plan in runner.order():
-            runner.check_masses(plan)
-            rep = runner.mobility(plan)
-            runner.check_solvable(plan)
-            _say(kind_of(plan).describe(plan, rep, model))
-        for w in warnings:
-            _say(f"[yellow]warning[/yellow]: {_esc(w)}")
-        if explain:
-            from .io.explain import lines
-
-            for line in lines(runner.b):
-                _say(_esc(line))
-        _say("[green]ok[/green]")
+        for line in report(file, explain):
+            say(line)
 
 
-# --------------------------------------------------------------------------- run
 @app.command()
 def run(
     file: FileArg,
@@ -308,93 +187,19 @@ def run(
 
     # The programs this job used last time are read from the cache beside the checks below
     # (from the import of mixdyn on, where it could read the command line: _command.job_tag).
-    with _programs.job(_command.run_tag(file, runs)):
-        _run(file, runs, out, parquet, figures, progress, netcdf)
+    with _programs.job(_command.run_tag(file, runs)), _guard(file):
+        from .runs.console import esc, say
+        from .runs.exits import EXIT_NUMERICAL
+        from .runs.job import run_job
 
-
-def _run(file, runs, out, parquet, figures, progress, netcdf=False):
-    if netcdf:
-        import importlib.util
-
-        if importlib.util.find_spec("xarray") is None:
-            _fail(
-                2,
-                "mixdyn: --netcdf needs xarray, which is not installed; "
-                "pip install 'mixdyn[xarray]' (or leave --netcdf out)",
-            )
-    # The figures' worker starts first: its imports (matplotlib) overlap reading the file and
-    # the checks; it is closed again if the runs draw nothing.
-    painter = None
-    if figures:
-        from .viz.painter import Painter
-
-        painter = Painter()
-    with _guard(file):
-        from .runs.console import clean
-        from .runs.outputs import Outputs, check_run_outputs, draws, write_runs
-
-        try:
-            from .io import FileError, read
-            from .io.tables import parquet_module
-            from .runs import Runner
-            from .runs.checks import require_size
-
-            if parquet:  # refused before anything runs
-                parquet_module(file, "writing", "--parquet")
-            spec = read(file)
-            require_size(spec, file)
-            runner = Runner(spec)
-            for w in runner.b.readings.warnings:
-                sys.stderr.write(f"{clean(file)}: warning: {clean(w)}\n")
-            if not spec.runs:
-                raise FileError(
-                    "the file has no runs", "runs", file=str(file), hint="add a runs: section"
-                )
-            plans = runner.order(runs or None)
-            check_run_outputs(out, plans, figures, runner)
-            if painter is not None and not draws(runner, plans, figures):
-                painter.abort()  # nothing to draw
-                painter = None
-            for plan in plans:  # fail fast on ill-posed runs, before any long computation
-                runner.check_masses(plan)
-                runner.mobility(plan)
-        except BaseException:
-            if painter is not None:
-                painter.abort()  # nothing was drawn yet
-            raise
-        if progress is None:
-            mode = "runs" if sys.stderr.isatty() else "off"
-        else:
-            mode = "steps" if progress else "off"
-        outputs = Outputs(
-            out, file, parquet=parquet, netcdf=netcdf, figures=figures, painter=painter
+        written, failed = run_job(
+            file, runs, out, parquet=parquet, netcdf=netcdf, figures=figures, progress=progress
         )
-        from .runtime._programs import on_first_compile
-
-        if progress is None and mode == "off":  # no line per run: what takes long is said
-            on_first_compile(lambda: _compiling(file))
-        try:
-            written = write_runs(runner, plans, outputs, mode)
-        finally:
-            on_first_compile(None)
-        _say(f"wrote {count(len(written), 'file')} under {_esc(out)}")
-        if outputs.failed:  # a sweep with failed members: the others are written
-            _fail(EXIT_NUMERICAL, outputs.failed[0])
+        say(f"wrote {count(len(written), 'file')} under {esc(out)}")
+        if failed:  # a sweep with failed members: the others are written
+            _fail(EXIT_NUMERICAL, failed[0])
 
 
-def _compiling(file) -> None:
-    """The one line ``mixdyn run`` writes off a terminal as it first compiles (on stdout,
-    beside the files written: stderr holds a failure's one line alone)."""
-    from .runs.console import clean
-
-    sys.stdout.write(
-        f"{clean(file)}: compiling the model's programs (the first time for this model, "
-        "up to a minute; later runs read them from the cache)\n"
-    )
-    sys.stdout.flush()
-
-
-# --------------------------------------------------------------------------- plot
 @app.command()
 def plot(
     results: Annotated[
@@ -420,52 +225,13 @@ def plot(
 ):
     """Plot chosen columns of written results against time (or --x), to PNG, SVG or PDF."""
     with _guard(results):
-        from ._hints import did_you_mean
-        from .io import FileError, read_result
-        from .io.results import column_in_unit
-        from .io.tables import require_numbers
-        from .runs.outputs import check_output
-        from .units import engineering
-        from .viz import PLOT_SUFFIXES, plot_columns
+        from .runs.console import esc, say
+        from .runs.pictures import plot as plot_results
 
-        try:
-            table, _ = read_result(results)
-        except FileNotFoundError as e:
-            raise FileError(
-                str(e), file=str(results), hint="give a folder written by `mixdyn run`"
-            ) from None
-        missing = [c for c in [*columns, x] if c not in table.columns]
-        if missing:
-            raise FileError(
-                f"no column {missing[0]!r}",
-                "--x" if missing[0] == x and x not in columns else "--column",
-                file=str(results),
-                hint=did_you_mean(missing[0], table.columns)
-                + " (the first line of results.csv lists them all)",
-            )
-        require_numbers(table, [x], results, "--x")
-        require_numbers(table, columns, results, "--column")
-        if output is None:
-            folder = results if results.is_dir() else results.parent
-            stem = re.sub(r"[^A-Za-z0-9_.-]+", "_", "_".join(columns))[:80]
-            output = folder / f"{stem}.png"
-        if output.suffix.lower() not in PLOT_SUFFIXES:
-            raise FileError(
-                f"cannot write a plot to {output.name!r}",
-                "--output",
-                file=str(results),
-                hint=f"use {', '.join(PLOT_SUFFIXES)}",
-            )
-        check_output(output, "--output")
-        units = dict(table.attrs.get("units") or {})
-        for k, spec in enumerate(unit or ()):
-            table, units = column_in_unit(table, units, spec, results, k)
-        units = {c: engineering(u) for c, u in units.items()}
-        plot_columns(table, columns, output, units=units, title=title, x=x)
-        _say(f"wrote {_esc(output)}")
+        written = plot_results(results, columns, x, output, title, unit)
+        say(f"wrote {esc(written)}")
 
 
-# --------------------------------------------------------------------------- animate
 @app.command()
 def animate(
     file: FileArg,
@@ -494,66 +260,13 @@ def animate(
     """Animate the mechanism moving in a run: a GIF (MP4 only if ffmpeg exists) and a
     self-contained HTML page."""
     with _guard(file):
-        import numpy as np
+        from .runs.console import say
+        from .runs.pictures import animate as animate_run
 
-        from .io import FileError, read
-        from .io.results import read_motion
-        from .runs import Runner, kind_of
-        from .runs.checks import require_size
-        from .runs.outputs import animation_targets
-        from .viz import animate as write_animation
-
-        spec = read(file)
-        require_size(spec, file)
-        runner = Runner(spec)
-        plan = runner.order([run_name])[-1]
-        refusal = kind_of(plan).animation_refusal(plan)
-        if refusal is not None:
-            raise FileError(refusal[0], "--run", file=str(file), hint=refusal[1])
-        a = plan.spec.animation
-        fps = fps or (a.fps if a else 20)
-        frames = frames or (a.frames if a else 80)
-        trace = list(trace or (a.trace if a else []))
-        for k, ref in enumerate(trace):
-            runner.b.point(ref, ("--trace", k))
-        targets = animation_targets(output, file)
-        model = runner.model
-        if results is not None:
-            t, q = read_motion(results, model, file)
-        else:
-            for p in runner.order([run_name]):
-                runner.check_masses(p)
-                runner.mobility(p)
-            res = runner.execute([run_name])[run_name]
-            res = getattr(res, "result", res)  # a fit or an optimum: the run at it
-            t, q = res.t, res.q
-        forces = a.forces if a else False
-        if forces and (results is not None or kind_of(res).motion_only):
-            _say(
-                "[yellow]note[/]: no force arrows: "
-                + (
-                    "written results carry no model to place them"
-                    if results is not None
-                    else "a kinematic run has no forces"
-                )
-            )
-            forces = False
-        for target in targets:
-            write_animation(
-                res if forces else None,
-                target,
-                model=model,
-                t=np.asarray(t),
-                q=np.asarray(q),
-                fps=fps,
-                frames=frames if target.suffix.lower() != ".html" else None,
-                trace=trace,
-                forces=forces,
-            )
-            _say(f"wrote {_esc(target)}")
+        for line in animate_run(file, run_name, output, results, fps, frames, trace):
+            say(line)
 
 
-# --------------------------------------------------------------------------- schema, dump
 @app.command()
 def schema(
     output: Annotated[
@@ -562,16 +275,15 @@ def schema(
 ):
     """Print (or write) the JSON Schema of model files, for editors and validators."""
     with _guard(output):
-        import json
+        from .runs.console import esc, say
+        from .runs.texts import schema_text, write_text
 
-        from .io import json_schema
-
-        text = json.dumps(json_schema(), indent=2)
+        text = schema_text()
         if output is None:
             typer.echo(text)
         else:
-            _write_text(output, text + "\n")
-            _say(f"wrote {_esc(output)}")
+            write_text(output, text + "\n")
+            say(f"wrote {esc(output)}")
 
 
 @app.command()
@@ -585,47 +297,18 @@ def dump(
     left out), keeping its comments, key order and flow style where its keys remain; loading
     the output gives the same model."""
     with _guard(file):
-        from .io import build, read
-        from .io.dump import dumps_keeping
-        from .runs.checks import require_size
-        from .runs.outputs import check_output
+        from .runs.console import esc, say
+        from .runs.texts import normal_form, write_text
 
-        if output is not None:
-            check_output(output, "--output")
-        spec = read(file)
-        require_size(spec, file)
-        build(spec)
-        text = dumps_keeping(pathlib.Path(file).read_text(encoding="utf-8"), spec)
+        text = normal_form(file, output)
         if output is None:
             typer.echo(text, nl=False)
         else:
-            _write_text(output, text)
-            _say(f"wrote {_esc(output)}")
+            write_text(output, text)
+            say(f"wrote {esc(output)}")
 
 
-def _write_text(path: pathlib.Path, text: str) -> None:
-    """Write ``text`` to ``path`` (its folder created), after
-    :func:`~mixdyn.runs.outputs.check_output`."""
-    from .runs.outputs import check_output
-
-    check_output(path, "--output")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-
-
-def _one_line_summaries() -> None:
-    """Each command's summary in ``mixdyn --help``: its docstring's first paragraph as one
-    line, wrapped by the formatter (typer's rich mode keeps the docstring's line breaks
-    there, breaking lines mid-sentence)."""
-    import inspect
-
-    for info in app.registered_commands:
-        if info.short_help is None and info.callback is not None and info.callback.__doc__:
-            first = inspect.cleandoc(info.callback.__doc__).split("\n\n")[0]
-            info.short_help = " ".join(first.split())
-
-
-_one_line_summaries()
+one_line_summaries(app)  # `mixdyn --help` lists each command on one line
 
 
 def main() -> None:
@@ -644,7 +327,7 @@ def main() -> None:
     except SystemExit as exc:
         code = exc.code
     else:
-        code = EXIT_OK
+        code = 0
     finally:
         if os.environ.get("MIXDYN_TIMING"):
             sys.stderr.write(f"mixdyn: {time.perf_counter() - t0:.2f} s\n")
@@ -658,7 +341,7 @@ def _leave(code) -> None:
     from .runtime import _programs
 
     if code is None:
-        code = EXIT_OK
+        code = 0
     elif not isinstance(code, int):
         sys.stderr.write(f"{code}\n")
         code = 1  # what Python gives for a message

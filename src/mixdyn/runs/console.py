@@ -1,6 +1,6 @@
-"""What ``mixdyn`` shows on the terminal besides its results: text made safe for it, and the
-progress of ``mixdyn run`` (a bar or a line per run, or a plain line every few seconds off a
-terminal)."""
+"""What ``mixdyn`` shows on the terminal besides its results: text made safe for it and
+printed (:func:`say`), and the progress of ``mixdyn run`` (a bar or a line per run, or a plain
+line every few seconds off a terminal, and the notice of its first compile off a terminal)."""
 
 from __future__ import annotations
 
@@ -30,6 +30,23 @@ def esc(text) -> str:
     from rich.markup import escape
 
     return escape(clean(text))
+
+
+def say(text: str = "") -> None:
+    """Print ``text`` (rich markup) on stdout, its control characters made harmless."""
+    from rich.console import Console
+
+    Console(soft_wrap=True, highlight=False).print(clean(text))
+
+
+def compiling(file) -> None:
+    """The one line ``mixdyn run`` writes off a terminal as it first compiles (on stdout,
+    beside the files written: stderr holds a failure's one line alone)."""
+    sys.stdout.write(
+        f"{clean(file)}: compiling the model's programs (the first time for this model, "
+        "up to a minute; later runs read them from the cache)\n"
+    )
+    sys.stdout.flush()
 
 
 def progress_log(plan, every: float = PROGRESS_LOG_EVERY) -> Callable:
@@ -172,4 +189,13 @@ class RunProgress:
         self.console.print(line, highlight=False, soft_wrap=True)
 
 
-__all__ = ["PROGRESS_LOG_EVERY", "RunProgress", "clean", "esc", "members_log", "progress_log"]
+__all__ = [
+    "PROGRESS_LOG_EVERY",
+    "RunProgress",
+    "clean",
+    "compiling",
+    "esc",
+    "members_log",
+    "progress_log",
+    "say",
+]
