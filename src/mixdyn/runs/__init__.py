@@ -13,6 +13,9 @@ and does its jobs through one module each:
   and its run;
 * :mod:`.execute`: the runs in the order of their dependencies;
 * :mod:`.outputs` and :mod:`.console`: what ``mixdyn run`` writes and shows;
+* the jobs of the ``mixdyn`` commands, a module each: :mod:`.report` (``check``),
+  :mod:`.job` (``run``), :mod:`.pictures` (``show``, ``plot``, ``animate``), :mod:`.texts`
+  (``dump``, ``schema``) and :mod:`.exits` (an error's exit code and one line);
 * :mod:`.files`: a file from Python, :func:`load` and :func:`run_file` (``mixdyn.load``,
   ``mixdyn.run_file``).
 
