@@ -20,6 +20,7 @@ from ..equations import Constraints
 from ..errors import ConvergenceError, ModelError, NumericalError, SingularityError
 from ..linalg import AutoSolver, LinearSolver, dependent_rows
 from ..model import Driver, Model
+from ..model._compliant import refuse_contacts
 from ..runtime._programs import cached_jit
 from . import _setup
 from ._assembly import length_scale
@@ -141,7 +142,9 @@ class _Driven(_setup.Analysis):
 
     def _initial(self, model: Model, t0: float, given: Prepared | None = None, balanced=False):
         """As :meth:`~._setup.Analysis._initial`; with ``balanced`` the drivers checked to fix
-        every degree of freedom."""
+        every degree of freedom. A model with compliant contacts (a clearance joint) is
+        refused: its contacts leave free a motion that these analyses prescribe."""
+        refuse_contacts(model, self.name)
         drivers = self._drivers(model)
         return kinematic_start(
             model, t0, given, drivers=drivers, balanced=balanced, **self._start()

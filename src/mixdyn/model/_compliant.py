@@ -507,10 +507,11 @@ def refuse_contacts(model, analysis: str) -> None:
         if isinstance(c, JournalBearing)
         else f"a compliant contact ({type(c).__name__})"
     )
+    article = "an" if analysis[0] in "aeiou" else "a"
     raise ModelError(
-        f"is {what}: a {analysis} analysis prescribes the whole motion, which a contact "
-        "leaves free; run a forward or mixed analysis (prescribe the driven motions, seek "
-        "their efforts)"
+        f"is {what}: {article} {analysis} analysis prescribes the whole motion, while a "
+        "contact's force decides how the bodies move; run a forward or mixed analysis "
+        "(prescribe the driven motions, seek their efforts)"
         + (", or give the joint no clearance" if isinstance(c, JournalBearing) else ""),
         c.name,
     )

@@ -17,6 +17,7 @@ from ...analysis.mixed import Mixed, bind_prescribed
 from ...errors import AssemblyError, ModelError, NumericalError
 from ...io import schema as s
 from ...io._errors import FileError
+from ...model._compliant import refuse_contacts
 from .. import setup
 from ..kinds import kind_of
 from ..plan import Plan
@@ -88,6 +89,10 @@ def mobility(runner, plan: Plan):
         report = _rough_report(runner, plan)
     n = report.n_drivers
     if kind.fully_driven:
+        try:
+            refuse_contacts(runner.model, r.kind)
+        except ModelError as e:
+            runner.model_error(plan, e)
         if report.redundant_drivers:
             runner.fail(
                 plan.path,
