@@ -366,3 +366,34 @@ def test_a_parameter_with_a_unit_before_another_unit_is_refused():
         mio.build(mio.reads(twice, "m.yaml"))
     once = text.replace("inertia: 7500 kg*mm^2", "inertia: m*L**2/12")
     assert mio.build(mio.reads(once, "m.yaml")).bodies[1].inertia == pytest.approx(7500.0)
+
+
+PARAMETER_EXPRESSION = """\
+mixdyn: 1
+name: lengths
+units: {{length: {length}, mass: kg, time: s}}
+parameters:
+  L: 1 m
+  k: 2
+  L2: {L2}
+bodies:
+  - {{name: rod, mass: 1 kg, inertia: 1 kg*m**2, q0: [L2, 0, 0]}}
+"""
+
+
+@pytest.mark.parametrize("length", ["m", "mm"])
+def test_a_parameter_expression_with_a_unit_is_not_converted_twice(length):
+    """``L2: 2*L mm`` with ``L: 1 m`` would read L as a number in model units and convert it
+    again (in a file in m: 2 mm instead of 2 m): refused at L2's line, naming L, with the fix
+    ``L2: 2*L``, which gives 2 m (by hand: 2 in m, 2000 in mm). With a plain parameter the
+    unit after it is the expression's own: ``3*k mm`` with ``k: 2`` is 6 mm."""
+    per_metre = {"m": 1.0, "mm": 1000.0}[length]
+    for written in ("2*L mm", "2*L m", "(2*L) m"):
+        text = PARAMETER_EXPRESSION.format(length=length, L2=written)
+        with pytest.raises(mio.FileError, match=r"parameter 'L' \(line 5\) has a unit") as e:
+            mio.build(mio.reads(text, "p.yaml"))
+        assert e.value.line == 7 and "`L2: " in e.value.hint
+    fixed = mio.build(mio.reads(PARAMETER_EXPRESSION.format(length=length, L2="2*L"), "p"))
+    assert fixed.bodies[0].q0[0] == pytest.approx(2.0 * per_metre, rel=1e-15)
+    plain = mio.build(mio.reads(PARAMETER_EXPRESSION.format(length=length, L2="3*k mm"), "p"))
+    assert plain.bodies[0].q0[0] == pytest.approx(0.006 * per_metre, rel=1e-15)

@@ -276,6 +276,7 @@ class Builder:
         self._body_tuple = tuple(self.body_names)
         #: The unit checks and the record of every number read (``mixdyn check --explain``).
         self.readings = Readings(self)
+        self.readings.check_parameters()
 
     # ----------------------------------------------------------------- errors
     def fail(self, path, problem: str, hint: str = "") -> NoReturn:

@@ -178,10 +178,26 @@ class Readings:
             )
         self.records[path] = Reading(path, value, kind, result, unit, scale, stated)
 
-    def _unit_twice(self, text: str, unit: str, path) -> None:
+    def check_parameters(self) -> None:
+        """Refuse a parameter written as a constant expression followed by a unit that uses
+        a parameter with a unit of its own (``L2: 2*L mm`` with ``L: 1 m``: L is a number in
+        model units there, and ``mm`` would convert it again, 2 m read as 2 mm in a file in
+        m); the fix is the expression alone (``L2: 2*L``, which takes L's unit)."""
+        for name, p in self.parameters.items():
+            if p.unit is not None and isinstance(p.written, str):
+                head = p.written.strip()[: -len(p.unit)].strip()
+                self._unit_twice(
+                    p.written,
+                    p.unit,
+                    ("parameters", name),
+                    f"write `{name}: {head}`: it takes the units of its parameters",
+                )
+
+    def _unit_twice(self, text: str, unit: str, path, hint: str | None = None) -> None:
         """Refuse a constant expression followed by a unit that uses a parameter with a unit
         of its own (``L**2/12 kg*m**2`` with ``L: 1 m``): the parameter is a number in model
-        units there, and the unit after it would convert it again."""
+        units there, and the unit after it would convert it again. ``hint``: the fix (default:
+        a field's)."""
         head = text.strip()[: -len(unit)].strip()
         if not head or _NUMBER.match(head):
             return
@@ -195,7 +211,8 @@ class Readings:
                 path,
                 f"{text!r}: parameter {name!r}{line} has a unit of its own ({p.written}), so "
                 f"the unit after the expression ({unit}) would convert it twice",
-                f"write the expression without the unit, its parameters giving it theirs "
+                hint
+                or f"write the expression without the unit, its parameters giving it theirs "
                 f"(a parameter for the rest, e.g. `m: 1 kg` and `m*{head}`), or {name} "
                 "without a unit",
             )
