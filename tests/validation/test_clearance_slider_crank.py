@@ -1,0 +1,119 @@
+"""Flores' slider-crank with a revolute clearance joint (the parameters in
+``tests/data/flores_clearance_slider_crank.txt``: Flores, Ambrosio, Claro and Lankarani,
+Proc. IMechE K 220 (2006) 21-34): the crank driven at 5000 rpm, its torque sought (a mixed
+run), the pin between the rod and the slider a journal in a bearing.
+
+Truths:
+
+- The journal stays within ``c + delta`` of the bearing's centre, so the slider's position
+  departs from the ideal joint's by at most ``sqrt(1 + tan(beta)**2) (c + delta_max)`` (its
+  own offset along the guide and the rod's turn across it, ``tan(beta) <= r / sqrt(l**2 -
+  r**2)``): as the clearance tends to zero the motion tends to the ideal joint's.
+- The published behaviour: free flight, impacts and continuous contact in one turn, and a
+  driving torque whose spikes exceed the ideal joint's torque.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+
+import numpy as np
+import pytest
+
+import mixdyn as md
+from fixtures.paths import DATA
+
+pytestmark = pytest.mark.slow  # long: run by CI's slow set
+
+
+def reference() -> dict[str, float]:
+    """The numbers of the reference file: ``name value`` lines and the bodies' table."""
+    out = {}
+    for line in (DATA / "flores_clearance_slider_crank.txt").read_text().splitlines():
+        words = line.split("#")[0].split()
+        if len(words) >= 2 and words[0] in ("crank", "rod", "slider"):
+            length = math.nan if words[1] == "-" else float(words[1])
+            out |= {f"{words[0]}.length": length, f"{words[0]}.mass": float(words[2]),
+                    f"{words[0]}.inertia": float(words[3])}  # fmt: skip
+        elif len(words) >= 2:
+            with contextlib.suppress(ValueError):  # words: the law, the stiffness's formula
+                out[words[0]] = float(words[1])
+    return out
+
+
+REF = reference()
+L1, L2 = REF["crank.length"], REF["rod.length"]
+OMEGA = 5000 * 2 * math.pi / 60  # the reference's crank speed [rad/s]
+TS = np.linspace(0.0, 2 * math.pi / OMEGA, 241)  # one turn
+
+
+def slider_crank(clearance: float | None) -> md.Model:
+    contact = (
+        {}
+        if clearance is None
+        else dict(
+            clearance=clearance,
+            journal_radius=REF["journal_radius"],
+            young_modulus=REF["young_modulus"],
+            poisson=REF["poisson"],
+            restitution=REF["restitution"],
+            impact_speed=0.5,
+        )
+    )
+    bodies = [
+        md.Body("crank", REF["crank.mass"], REF["crank.inertia"], q0=(L1 / 2, 0.0, 0.0),
+                points={"O": (-L1 / 2, 0.0), "A": (L1 / 2, 0.0)}),
+        md.Body("rod", REF["rod.mass"], REF["rod.inertia"], q0=(L1 + L2 / 2, 0.0, 0.0),
+                points={"A": (-L2 / 2, 0.0), "B": (L2 / 2, 0.0)}),
+        md.Body("slider", REF["slider.mass"], REF["slider.inertia"], q0=(L1 + L2, 0.0, 0.0)),
+    ]  # fmt: skip
+    joints = [
+        md.Revolute("O", "ground", "crank.O"),
+        md.Revolute("A", "crank.A", "rod.A"),
+        md.Revolute("B", "rod.B", "slider", **contact),
+        md.Translational("slide", "ground", "slider"),
+    ]
+    return md.Model(bodies, joints, forces=[md.Torque("motor", "crank")], gravity=(0.0, -9.81))
+
+
+def run(clearance):
+    drive = md.CoordinateDriver("drive", "crank", "phi", law=md.Polynomial([0.0, OMEGA]))
+    return md.mixed(
+        slider_crank(clearance), TS, prescribed=[drive], unknown=["motor"], rtol=1e-7, atol=1e-9
+    )
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return {c: run(c) for c in (None, 5e-4, 1e-4)}
+
+
+def test_the_reference_numbers_are_read():
+    assert (L1, L2, REF["clearance"], REF["restitution"]) == (0.05, 0.12, 5e-4, 0.9)
+    assert REF["bearing_radius"] - REF["journal_radius"] == pytest.approx(REF["clearance"])
+
+
+def test_as_the_clearance_shrinks_the_motion_tends_to_the_ideal_joints(runs):
+    ideal = runs[None]["slider.x"]
+    tan_beta = L1 / math.sqrt(L2**2 - L1**2)
+    errors = {}
+    for c in (5e-4, 1e-4):
+        r = runs[c]
+        reach = c + max(float(np.max(r["B.penetration"])), 0.0)
+        errors[c] = float(np.max(np.abs(r["slider.x"] - ideal)))
+        assert errors[c] <= math.sqrt(1 + tan_beta**2) * reach * 1.01, c
+    assert errors[1e-4] < 0.4 * errors[5e-4]
+
+
+def test_free_flight_impacts_and_contact_and_the_torques_spikes(runs):
+    """One turn with 0.5 mm: the journal flies (gap), impacts and rides the bearing; the
+    motor torque's peak exceeds the ideal joint's (the impacts' spikes), and the contact
+    force's peak exceeds the steady inertial load of the slider ``m r omega**2``."""
+    r = runs[5e-4]
+    pen, F = r["B.penetration"], r["B.normal"]
+    first = np.argmax(F > 0)
+    assert first > 0 and np.any(pen[first:] < 0) and np.sum(F > 0) > 20
+    ideal = runs[None]["motor"]
+    assert np.max(np.abs(r["motor"])) > 1.5 * np.max(np.abs(ideal))
+    assert np.max(F) > 5 * REF["slider.mass"] * L1 * OMEGA**2
