@@ -319,3 +319,46 @@ def test_the_example_file_reads_converts_and_writes_back():
     with pytest.raises(mio.FileError, match="journal_radius") as err:
         mio.build(mio.reads(text))
     assert "line" in str(err.value) or err.value.line is not None
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_gradients_through_an_impact_equal_finite_differences():
+    """``md.differentiable`` through a bounce: the ball's height after it with respect to the
+    restitution and the reference impact speed, reverse mode against central differences
+    (<= 1e-5 relative)."""
+    import jax
+
+    t_fall = math.sqrt(2 * H0 / G)
+    ts = np.linspace(0.0, 1.6 * t_fall, 9)
+    f, theta0 = md.differentiable(
+        ball(0.9),
+        ts,
+        ["floor.restitution", "floor.impact_speed"],
+        analysis=md.analyses.Forward(method=md.Projection(rtol=1e-11, atol=1e-13)),
+    )
+
+    def height(theta):
+        return f(theta)["q"][-1, 1]
+
+    grad = np.asarray(jax.grad(height)(np.asarray(theta0)))
+    h = 1e-5
+    fd = [(height(theta0 + h * e) - height(theta0 - h * e)) / (2 * h) for e in np.eye(2)]
+    np.testing.assert_allclose(grad, np.asarray(fd), rtol=1e-5)
+    assert grad[0] > 0  # a livelier ball bounces higher
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_the_example_runs(tmp_path):
+    """``mixdyn run examples/clearance_slider_crank.yaml`` ends well (exit 0) with the
+    contact's columns written."""
+    import subprocess
+    import sys
+
+    out = subprocess.run(
+        [sys.executable, "-c", "from mixdyn.cli import main; main()", "run",
+         str(EXAMPLES / "clearance_slider_crank.yaml"), "--out", str(tmp_path)],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert out.returncode == 0, out.stderr
+    header = (tmp_path / "one_turn" / "results.csv").read_text().splitlines()[0]
+    assert "B.normal" in header and "B.penetration" in header and "motor" in header
