@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import math
 
+import jax
 import numpy as np
 import pytest
 
@@ -145,7 +146,7 @@ def test_penetration_and_force_follow_the_shapes(pair):
     q, qd = _state(model)
     d = delta(q)
     assert d > 0  # the random state presses
-    out = f.outputs(q, qd, 0.0)
+    out = jax.jit(lambda q, qd: f.outputs(q, qd, 0.0))(q, qd)  # one program: quicker
     np.testing.assert_allclose(out["penetration"], d, rtol=1e-12, atol=1e-15)
     K = 4 / 3 * 1e9 / (2 * (1 - 0.25**2)) * math.sqrt(radius)
     h = 1e-7
@@ -153,6 +154,33 @@ def test_penetration_and_force_follow_the_shapes(pair):
     F = max(K * d**1.5 * (1 + 0.75 * (1 - 0.8**2) * rate / 2.0), 0.0)
     assert F > 0
     np.testing.assert_allclose(out["normal"], F, rtol=1e-6)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_slider_in_a_guide_touches_at_its_ends():
+    """A slider tilted and shifted in a guide on a turned body: its ends' penetrations beyond
+    either surface written out, and the forces' generalized force minus the gradient of the
+    elastic energy (no damping)."""
+    guide = md.SliderInGuide(
+        "g", ("a", (0.01, 0.0)), ("b", (0.0, 0.0)), 0.001, 0.04, 0.005, axis=(1.0, 0.0),
+        angle=0.1, young_modulus=1e9, restitution=1.0,
+    )  # fmt: skip
+    model = two_bodies(guide)
+    f = model.forces[0]
+    q = np.array([0.0, 0.0, 0.3, 0.02, 0.012, 0.3 + 0.1 + 0.05, 0, 0, 0])[:6]
+    u = np.array([math.cos(0.3), math.sin(0.3)])
+    n = np.array([-u[1], u[0]])
+    w = np.array([math.cos(0.35), math.sin(0.35)])
+    p = _at(q, 0, (0.01, 0.0))
+    ends = [q[3:5] + 0.02 * w, q[3:5] - 0.02 * w]
+    y = [np.dot(e - p, n) for e in ends]
+    expected = np.array([y[0], -y[0], y[1], -y[1]]) - 0.001
+    np.testing.assert_allclose(f.penetration(q), expected, rtol=1e-12, atol=1e-16)
+    assert np.max(expected) > 0  # one end presses
+    Q = np.asarray(f.generalized(q, np.zeros(6), 0.0, model.nq))
+    h = 1e-8
+    grad = [(f.potential(q + h * e) - f.potential(q - h * e)) / (2 * h) for e in np.eye(6)]
+    np.testing.assert_allclose(Q, -np.asarray(grad), rtol=1e-5, atol=1e-9 * np.abs(Q).max())
 
 
 @pytest.mark.slow  # long: run by CI's slow set
@@ -286,6 +314,29 @@ def test_a_revolute_joint_with_clearance_is_a_journal_bearing():
     assert set(DAMPING_FACTORS) == {"hunt_crossley", "lankarani_nikravesh", "flores"}
 
 
+def test_a_translational_joint_with_clearance_is_a_slider_in_a_guide():
+    """The model replaces the slide's two equations by a slider in a guide of its name, axis
+    and numbers; a pin in a slot takes no clearance."""
+    slide = md.Translational(
+        "slide", "ground", "block", axis=(0.0, 1.0), angle=0.2, clearance=5e-4,
+        slider_length=0.05, corner_radius=0.004, young_modulus=2e11, restitution=1.0,
+    )  # fmt: skip
+    model = md.Model([md.Body("block", 1.0, 0.01)], [slide])
+    assert model.joints == ()
+    (guide,) = model.forces
+    assert isinstance(guide, md.SliderInGuide) and guide.name == "slide"
+    assert guide.axis == (0.0, 1.0) and float(guide.angle) == 0.2
+    assert float(guide.effective_radius()) == 0.004
+    with pytest.raises(md.errors.ModelError) as err:
+        md.Translational("s", "ground", "block", clearance=5e-4, young_modulus=2e11,
+                         restitution=1.0)  # fmt: skip
+    assert err.value.field == "slider_length"
+    from mixdyn.model._declare import declared_fields
+
+    assert "clearance" not in [name for name, _, _ in declared_fields(md.PinInSlot)]
+    assert "clearance" in [name for name, _, _ in declared_fields(md.Translational)]
+
+
 def test_kinematic_and_inverse_analyses_refuse_contacts():
     """A fully driven mechanism with a contact is refused by name before any computing."""
     b = md.Body("ball", M, 4e-6, q0=(0.0, 0.02, 0.0))
@@ -326,7 +377,6 @@ def test_gradients_through_an_impact_equal_finite_differences():
     """``md.differentiable`` through a bounce: the ball's height after it with respect to the
     restitution and the reference impact speed, reverse mode against central differences
     (<= 1e-5 relative)."""
-    import jax
 
     t_fall = math.sqrt(2 * H0 / G)
     ts = np.linspace(0.0, 1.6 * t_fall, 9)

@@ -2,7 +2,7 @@
 
 from ._body import Body, Ground
 from ._cams import CamFollower
-from ._compliant import CircleContact, CircleLineContact, JournalBearing
+from ._compliant import CircleContact, CircleLineContact, JournalBearing, SliderInGuide
 from ._contacts import BeltDrive, GearPair, RackPinion, RollingDisks, RollingOnLine
 from ._declare import ELEMENTS, element
 from ._drivers import (
@@ -104,6 +104,7 @@ __all__ = [
     "RollingDisks",
     "RollingOnLine",
     "RotarySpringDamper",
+    "SliderInGuide",
     "Spline",
     "SpringDamper",
     "StateFunction",

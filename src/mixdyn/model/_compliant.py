@@ -47,7 +47,7 @@ from ._contact_law import (
 from ._declare import direction, element, option, quantity, reference
 from ._element import Resolver, body_name, moving
 from ._forces import _UNBOUND, ForceElement, _f64
-from ._geometry import GROUND, point, pose, vector
+from ._geometry import GROUND, angle, point, pose, vector
 
 
 def _optional(x):
@@ -215,12 +215,13 @@ class _Compliant(ForceElement):
 
     # what a shape pair gives
     def penetration(self, q) -> jax.Array:
-        """``delta(q)`` [length]: positive in contact, negative the gap."""
+        """``delta(q)`` [length]: positive in contact, negative the gap; a scalar, or (k,)
+        for a pair that touches at k places (a slider's corners)."""
         raise NotImplementedError
 
     def frame(self, q) -> tuple[jax.Array, jax.Array]:
         """``(P, n)``: the contact point (2,) [length] and the unit normal (2,) along which
-        the contact pushes body j."""
+        the contact pushes body j; (k, 2) each for k places."""
         raise NotImplementedError
 
     def effective_radius(self) -> jax.Array:
@@ -234,42 +235,50 @@ class _Compliant(ForceElement):
         return hertz_stiffness(self.young_modulus, self.poisson, self.effective_radius())
 
     def _sliding(self, q, qd):
-        """The sliding speed of j on i at the contact point, along ``z x n`` [velocity]."""
-        P, n = self.frame(q)
-        t = jnp.stack([-n[1], n[0]])
-        return jnp.dot(_velocity(q, qd, self.bj, P) - _velocity(q, qd, self.bi, P), t)
+        """The sliding speeds of j on i at the contact points, along ``z x n`` (k,)
+        [velocity]."""
+        P, n = (jnp.atleast_2d(x) for x in self.frame(q))
+        t = jnp.stack([-n[:, 1], n[:, 0]], axis=1)
+
+        def one(P, t):
+            return jnp.dot(_velocity(q, qd, self.bj, P) - _velocity(q, qd, self.bi, P), t)
+
+        return jax.vmap(one)(P, t)
+
+    def _delta(self, q):
+        return jnp.atleast_1d(self.penetration(q))
 
     def _state(self, q, qd):
-        """``(delta, grad delta (nq,), F, F_t)`` at the state."""
-        delta, g = jax.value_and_grad(self.penetration)(q)
+        """``(delta (k,), d delta / dq (k, nq), F (k,), F_t (k,) or None)`` at the state."""
+        delta = self._delta(q)
+        J = jax.jacfwd(self._delta)(q)
         speed = 1.0 if self.impact_speed is None else self.impact_speed
-        F = normal_force(
-            delta, jnp.dot(g, qd), self.stiffness, self.restitution, speed, self.contact_model
-        )
+        F = normal_force(delta, J @ qd, self.stiffness, self.restitution, speed, self.contact_model)
         if self.mu is None:
-            return delta, g, F, None
-        return delta, g, F, friction_force(F, self._sliding(q, qd), self.mu, self.v_stick)
+            return delta, J, F, None
+        return delta, J, F, friction_force(F, self._sliding(q, qd), self.mu, self.v_stick)
 
     def passive(self, q, qd, t, nq):
-        _, g, F, Ft = self._state(q, qd)
-        Q = -F * g
+        _, J, F, Ft = self._state(q, qd)
+        Q = -F @ J
         if Ft is not None:
-            Q = Q + Ft * jax.grad(self._sliding, argnums=1)(q, qd)
+            Q = Q + Ft @ jax.jacfwd(self._sliding, argnums=1)(q, qd)
         return Q
 
     def potential(self, q):
-        """The elastic energy ``K delta**2.5 / 2.5`` [energy] (the damping and the friction
-        count as non-conservative work)."""
-        return elastic_energy(self.penetration(q), self.stiffness)
+        """The elastic energy ``K delta**2.5 / 2.5`` [energy], summed over the contact
+        points (the damping and the friction count as non-conservative work)."""
+        return jnp.sum(elastic_energy(self._delta(q), self.stiffness))
 
     def outputs(self, q, qd, t):
         """``normal``: the normal force [force] (>= 0); ``penetration`` [length] (negative:
         the gap); ``friction``: the friction force on body j along ``z x n`` [force], where
-        ``mu`` is given."""
+        ``mu`` is given. For several contact points: the sum of the forces and the deepest
+        penetration."""
         delta, _, F, Ft = self._state(q, qd)
-        out = {"normal": F, "penetration": delta}
+        out = {"normal": jnp.sum(F), "penetration": jnp.max(delta)}
         if Ft is not None:
-            out["friction"] = Ft
+            out["friction"] = jnp.sum(Ft)
         return out
 
     @property
@@ -432,11 +441,92 @@ class JournalBearing(_Compliant):
         return R * (R + self.clearance) / self.clearance
 
 
+@element("slider_in_guide", "forces")
+class SliderInGuide(_Compliant):
+    """A slider (body j) in a guide (body i or the ground) with a gap: a translational joint
+    with clearance (Flores, Ambrosio, Claro and Lankarani, "Translational joints with
+    clearance in rigid multibody systems", J. Comput. Nonlinear Dyn. 3 (2008) 011007). A
+    translational joint with ``clearance`` is this element.
+
+    The guide's surfaces run along ``axis`` through ``point_i`` at ``+-clearance`` from the
+    line that the slider's centre ``point_j`` follows in the ideal joint; the slider's two
+    ends, ``slider_length`` apart along its axis (the guide's axis turned by the relative
+    angle less ``angle``), touch them with rounded corners of radius ``corner_radius``
+    (Hertz's effective radius; the slider's height is taken into the clearance, exact to
+    first order in its tilt). Penetrations (4): each end beyond each surface. Result columns:
+    ``{name}.normal`` (the sum of the corners' forces), ``.penetration`` (the deepest) and,
+    with ``mu``, ``.friction`` (the sum).
+    """
+
+    point_i: str = reference(
+        "A point of the guide's centre line, ``ground.point`` or ``body.point``."
+    )
+    point_j: str = reference("The slider's centre, on another body.")
+    clearance: jax.Array = quantity(
+        "length",
+        'The gap on each side of the centred slider, > 0, e.g. ``"0.5 mm"``.',
+        converter=_f64,
+        above=0.0,
+    )
+    slider_length: jax.Array = quantity(
+        "length", "Distance between the slider's two ends, > 0.", converter=_f64, above=0.0
+    )
+    corner_radius: jax.Array = quantity(
+        "length", "Radius of the slider's rounded corners, > 0.", converter=_f64, above=0.0
+    )
+    axis: str | tuple[float, ...] = direction(
+        "Direction of the guide in body i's frame: ``[x, y]`` or a vector's name. Default "
+        "``[1, 0]``.",
+        (1.0, 0.0),
+        on="point_i",
+    )
+    angle: jax.Array = quantity(
+        "angle",
+        "The relative angle ``phi_j - phi_i`` at which the slider lies along the guide. Default 0.",
+        0.0,
+        converter=_f64,
+    )
+    u: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def bind(self, r: Resolver):
+        bi, si = r.point(self.point_i, self.name)
+        bj, sj = r.point(self.point_j, self.name)
+        if bi == bj:
+            raise ModelError(
+                f"the slider and the guide are both on {body_name(self.point_i)!r}: they must "
+                "be on two different bodies",
+                self.name,
+            )
+        u = r.vector(self.axis, bi, self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u)
+
+    def _ends(self, q):
+        """The slider's two ends (2, 2) [length] and the guide's normal ``n`` (2,)."""
+        u = vector(q, self.bi, self.u)
+        tilt = angle(q, self.bj) - angle(q, self.bi) - self.angle
+        c, sn = jnp.cos(tilt), jnp.sin(tilt)
+        w = jnp.stack([c * u[0] - sn * u[1], sn * u[0] + c * u[1]])
+        centre = point(q, self.bj, self.sj)
+        half = 0.5 * self.slider_length * w
+        return jnp.stack([centre + half, centre - half]), jnp.stack([-u[1], u[0]])
+
+    def penetration(self, q):
+        ends, n = self._ends(q)
+        y = (ends - point(q, self.bi, self.si)) @ n
+        return jnp.stack([y[0], -y[0], y[1], -y[1]]) - self.clearance
+
+    def frame(self, q):
+        ends, n = self._ends(q)
+        P = jnp.stack([ends[0], ends[0], ends[1], ends[1]])
+        return P, jnp.stack([-n, n, -n, n])
+
+    def effective_radius(self):
+        return self.corner_radius
+
+
 # --------------------------------------------------------------------------- the model's use
-#: The revolute joint's fields that describe its clearance, as the journal bearing names them.
-CLEARANCE_FIELDS = (
-    "clearance",
-    "journal_radius",
+#: The contact numbers of a joint with clearance, as its contact element names them.
+LAW_FIELDS = (
     "young_modulus",
     "poisson",
     "restitution",
@@ -446,28 +536,39 @@ CLEARANCE_FIELDS = (
     "v_stick",
 )
 
+#: The joint classes' names that take a ``clearance``: the contact element that replaces
+#: such a joint, and the fields of its geometry besides the clearance.
+CLEARANCE_JOINTS = {
+    "Revolute": ("JournalBearing", ("journal_radius",)),
+    "Translational": ("SliderInGuide", ("slider_length", "corner_radius")),
+}
+
 
 def clearance_contacts(joints) -> tuple[tuple, tuple]:
-    """``(joints, bearings)``: the joints without the revolute joints that have a
-    ``clearance``, and a :class:`JournalBearing` of each one's name, points and contact
-    numbers (called by the model)."""
-    from ._joints import Revolute
-
-    kept, bearings = [], []
+    """``(joints, contacts)``: the joints without those that have a ``clearance``, and the
+    contact element of each one's name, points and numbers (a revolute joint's
+    :class:`JournalBearing`, a translational joint's :class:`SliderInGuide`; called by the
+    model)."""
+    kept, made = [], []
     for j in joints:
-        if isinstance(j, Revolute) and j.clearance is not None:
-            given = {f: getattr(j, f) for f in CLEARANCE_FIELDS if getattr(j, f) is not None}
-            bearings.append(JournalBearing(j.name, j.point_i, j.point_j, **given))
-        else:
+        entry = CLEARANCE_JOINTS.get(type(j).__name__)
+        if entry is None or j.clearance is None:
             kept.append(j)
-    return tuple(kept), tuple(bearings)
+            continue
+        cls, geometry = entry
+        fields = ("clearance", *geometry, *LAW_FIELDS)
+        given = {f: getattr(j, f) for f in fields if getattr(j, f) is not None}
+        if cls == "SliderInGuide":
+            given |= {"axis": j.axis, "angle": j.angle}
+        made.append(globals()[cls](j.name, j.point_i, j.point_j, **given))
+    return tuple(kept), tuple(made)
 
 
-def check_clearance(joint) -> None:
-    """The checks of a revolute joint's clearance fields (its ``__check_init__``): a
-    clearance needs its journal's radius, the material and the restitution; contact numbers
-    need a clearance."""
-    given = [f for f in CLEARANCE_FIELDS[1:] if getattr(joint, f) is not None]
+def check_clearance(joint, geometry: tuple[str, ...]) -> None:
+    """The checks of a joint's clearance fields (its ``__check_init__``): a clearance needs
+    the numbers of its ``geometry`` (a journal's radius), the material and the restitution;
+    contact numbers need a clearance."""
+    given = [f for f in (*geometry, *LAW_FIELDS) if getattr(joint, f) is not None]
     if joint.clearance is None:
         if given:
             raise ModelError(
@@ -477,12 +578,12 @@ def check_clearance(joint) -> None:
                 field=given[0],
             )
         return
-    for f in ("journal_radius", "young_modulus", "restitution"):
+    for f in (*geometry, "young_modulus", "restitution"):
         if getattr(joint, f) is None:
             raise ModelError(
-                f"a revolute joint with clearance is a journal in a bearing: give its {f} "
-                "(journal_radius, young_modulus and restitution; impact_speed where "
-                "restitution < 1)",
+                f"a joint with clearance is a contact: give its {f} ("
+                + ", ".join((*geometry, "young_modulus", "restitution"))
+                + "; impact_speed where restitution < 1)",
                 joint.name,
                 field=f,
             )
@@ -518,10 +619,12 @@ def refuse_contacts(model, analysis: str) -> None:
 
 
 __all__ = [
-    "CLEARANCE_FIELDS",
+    "CLEARANCE_JOINTS",
+    "LAW_FIELDS",
     "CircleContact",
     "CircleLineContact",
     "JournalBearing",
+    "SliderInGuide",
     "check_clearance",
     "clearance_contacts",
     "contacts",

@@ -159,7 +159,7 @@ class Revolute(_TwoPoint):
     equation_labels: ClassVar[tuple[str, ...]] = ("x", "y")
 
     def __check_init__(self):
-        _c.check_clearance(self)
+        _c.check_clearance(self, ("journal_radius",))
 
     def residual(self, q):
         return self._d(q)
@@ -202,6 +202,10 @@ class Translational(_TwoPoint):
 
     Equations (2): ``u_i x (r_Pj - r_Pi) = 0`` (u_i the global unit axis) and
     ``phi_j - phi_i - angle = 0``.
+
+    With a ``clearance`` the slider moves in a guide with a gap on each side: the model
+    replaces the two equations by the contact of a :class:`~mixdyn.SliderInGuide` of the
+    same name, points, axis and numbers.
     """
 
     point_i: str = reference(
@@ -220,9 +224,44 @@ class Translational(_TwoPoint):
         0.0,
         converter=_f64,
     )
+    clearance: jax.Array | None = quantity(
+        "length",
+        'The gap on each side of the centred slider, e.g. ``"0.5 mm"``: the joint becomes a '
+        "slider in a guide (a ``slider_in_guide`` contact). Default none (an ideal slide).",
+        None,
+        converter=_optional,
+        above=0.0,
+        kw_only=True,
+    )
+    slider_length: jax.Array | None = quantity(
+        "length",
+        "With a clearance: the distance between the slider's two ends, > 0.",
+        None,
+        converter=_optional,
+        above=0.0,
+        kw_only=True,
+    )
+    corner_radius: jax.Array | None = quantity(
+        "length",
+        "With a clearance: the radius of the slider's rounded corners, > 0.",
+        None,
+        converter=_optional,
+        above=0.0,
+        kw_only=True,
+    )
+    young_modulus: jax.Array | None = _c._young_modulus(optional=True)
+    poisson: jax.Array | None = _c._poisson(None)
+    restitution: jax.Array | None = _c._restitution(optional=True)
+    impact_speed: jax.Array | None = _c._impact_speed()
+    contact_model: str | None = _c._contact_model(None)
+    mu: jax.Array | None = _c._mu()
+    v_stick: jax.Array | None = _c._v_stick()
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
     n_equations: ClassVar[int] = 2
     equation_labels: ClassVar[tuple[str, ...]] = ("normal", "angle")
+
+    def __check_init__(self):
+        _c.check_clearance(self, ("slider_length", "corner_radius"))
 
     def bind(self, r: Resolver):
         kw = self._bind_points(r)
@@ -262,6 +301,17 @@ class PinInSlot(Translational):
     )
     #: Not a field of a file: the pin turns freely, no relative angle is held.
     angle: jax.Array = eqx.field(default=0.0, converter=_f64)
+    #: Not fields of a file: a pin in a slot has no clearance here.
+    clearance: None = eqx.field(default=None, kw_only=True)
+    slider_length: None = eqx.field(default=None, kw_only=True)
+    corner_radius: None = eqx.field(default=None, kw_only=True)
+    young_modulus: None = eqx.field(default=None, kw_only=True)
+    poisson: None = eqx.field(default=None, kw_only=True)
+    restitution: None = eqx.field(default=None, kw_only=True)
+    impact_speed: None = eqx.field(default=None, kw_only=True)
+    contact_model: None = eqx.field(default=None, kw_only=True)
+    mu: None = eqx.field(default=None, kw_only=True)
+    v_stick: None = eqx.field(default=None, kw_only=True)
     n_equations: ClassVar[int] = 1
     equation_labels: ClassVar[tuple[str, ...]] = ("normal",)
 
