@@ -145,6 +145,15 @@ runs:
   - {name: kin, kind: kinematic, time: {span: [0, 1], n: 5}}
 """
 
+#: A parabolic rise and return of 20 mm (constant accelerations +-80/pi**2 mm/rad**2): its
+#: second derivative jumps by -8*20/pi**2 = -16.2114 at pi/2 and back at 3 pi/2.
+CONSTANT_ACCELERATION = (
+    "'where(theta < pi/2, 40*(theta/pi)**2, where(theta < pi, 20 - 40*((pi - theta)/pi)**2, "
+    "where(theta < 3*pi/2, 20 - 40*((theta - pi)/pi)**2, 40*((2*pi - theta)/pi)**2)))'"
+)
+#: A trapezoidal speed: 16 pi rad/s**2 to t = 0.25, then 4 pi rad/s (a jump of -16 pi).
+TRAPEZOID = "where(t < 0.25, 8*pi*t**2, pi/2 + 4*pi*(t - 0.25))"
+
 
 @pytest.mark.parametrize(
     ("old", "new", "expected"),
@@ -165,8 +174,19 @@ runs:
             "driver 'motor', law: the law 'where(t < 0.5, 2*pi*t, 4*pi*t - pi)' jumps by "
             "+6.28319 (model units) in its slope at t = 0.5",
         ),
+        (
+            "10*(1 - cos(theta))",
+            CONSTANT_ACCELERATION,
+            "jumps by -16.2114 (model units) in its second derivative at theta = 1.5708 rad "
+            "(90 deg)",
+        ),
+        (
+            "law: 2*pi*t}",
+            f"law: '{TRAPEZOID}'}}",
+            "jumps by -50.2655 (model units) in its second derivative at t = 0.25",
+        ),
     ],
-    ids=["cam-step", "cam-sawtooth", "driver-kink"],
+    ids=["cam-step", "cam-sawtooth", "driver-kink", "cam-acceleration", "driver-acceleration"],
 )
 def test_mixdyn_check_refuses_a_law_that_jumps_at_its_line(tmp_path, old, new, expected):
     text = sub(old, new, FILE + RUN)
@@ -175,6 +195,28 @@ def test_mixdyn_check_refuses_a_law_that_jumps_at_its_line(tmp_path, old, new, e
     res = CliRunner().invoke(app, ["check", str(path)])
     assert res.exit_code == 2 and "Traceback" not in res.output, res.output
     assert f"{path}:{line_of(text, new)}:" in res.stderr and expected in res.stderr, res.stderr
+
+
+def test_continuity_c1_accepts_finite_acceleration_jumps():
+    """The constant-acceleration cam and the trapezoidal speed above, declared ``continuity:
+    C1`` (on the cam, the driver, a prescribed motion), are accepted; the prescribed motion
+    without it is refused at its law's line."""
+    cam = sub("10*(1 - cos(theta))", CONSTANT_ACCELERATION + "\n    continuity: C1", FILE + RUN)
+    text = sub("law: 2*pi*t}", f"law: '{TRAPEZOID}', continuity: C1}}", cam)
+    model = mio.build(mio.reads(text))
+    assert model.element("cam_pair").continuity == model.drivers[0].continuity == "C1"
+    from mixdyn.runs import Runner
+
+    Runner(mio.reads(text))  # the run's checks
+    prescribed = (
+        "  - name: kin2\n    kind: kinematic\n    time: {span: [0, 1], n: 5}\n"
+        "    drivers: []\n    prescribed:\n"
+        f"      - {{coordinate: cam.phi, law: '{TRAPEZOID}'CONTINUITY}}\n"
+    )
+    with pytest.raises(mio.FileError, match=r"second derivative at t = 0\.25") as e:
+        Runner(mio.reads(cam + prescribed.replace("CONTINUITY", "")))
+    assert e.value.line == len((cam + prescribed).splitlines())
+    Runner(mio.reads(cam + prescribed.replace("CONTINUITY", ", continuity: C1")))
 
 
 @pytest.mark.parametrize("name", ["cam_follower", "cam_rocker"])

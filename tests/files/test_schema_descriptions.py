@@ -49,7 +49,7 @@ PROPERTIES = {
     "PiecewiseSpec": "piecewise",
     "PlotSpec": "columns file reference title x ylabel",  # x: issue 14
     "PolynomialSpec": "polynomial unit",
-    "PrescribedSpec": "coordinate from_run law name",
+    "PrescribedSpec": "continuity coordinate from_run law name",  # continuity: issue 31
     "RampArgs": "rate start",
     "RampSpec": "ramp",
     "ReferenceSpec": "expr label unit",
@@ -84,8 +84,9 @@ PROPERTIES = {
 # and when the joints, drivers and forces but the cam moved to declarations (the value of
 # the schema before the move, with the same specs left out); and when the cam moved too (the
 # value of the schema with the cam's hand-written spec, the cam's spec left out as well); and
-# with the file's strict_units setting; and with output_units also a preset's name (issue 32).
-STRIPPED_SHA256 = "c0f7d0289668d45825798b92f914e1cd11e123465465dab520f88d63e10ae312"
+# with the file's strict_units setting; and with output_units also a preset's name (issue 32);
+# and with a prescribed motion's continuity (issue 31: the same value without it).
+STRIPPED_SHA256 = "02ada1d848dc6528f15b8e38151895423a2546fa71c04670b7c957ba793c5fdc"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -236,9 +236,11 @@ def _time(t0) -> float:
     return value
 
 
-def check_start(setup: Setup, ts: np.ndarray) -> None:
+def check_start(setup: Setup, ts: np.ndarray, accelerations: bool = True) -> None:
     """Refuse output times ``ts`` (N,) that do not start at the set-up's ``t0``, and drivers
-    whose laws jump in value or slope over them (:meth:`~mixdyn.model.Driver.check_law`)."""
+    whose laws jump in value or slope over them, or, for a run that reports
+    ``accelerations``, in their second derivative (unless a driver's ``continuity`` is
+    ``"C1"``; :meth:`~mixdyn.model.Driver.check_law`)."""
     if float(ts[0]) != setup.t0:
         raise ModelError(
             f"the set-up was made from t0 = {setup.t0:g} but the output times start at "
@@ -248,7 +250,7 @@ def check_start(setup: Setup, ts: np.ndarray) -> None:
         )
     drivers = setup.model.drivers if setup.start is None else setup.start.drivers
     for driver in drivers:
-        driver.check_law(float(ts[0]), float(ts[-1]))
+        driver.check_law(float(ts[0]), float(ts[-1]), accelerations)
 
 
 def no_progress(analysis: Analysis, progress) -> None:

@@ -168,7 +168,7 @@ class Static(_Equilibria):
                 f"{ts.size} times (a quasi-static analysis follows many: QuasiStatic)",
                 "t",
             )
-        _setup.check_start(setup, ts)
+        _setup.check_start(setup, ts, accelerations=False)  # none reported
         return _equilibrium(setup)
 
 
@@ -359,7 +359,7 @@ class QuasiStatic(_Equilibria):
         _setup.no_progress(self, progress)
         model = setup.model
         ts = output_times(t, minimum=1)
-        _setup.check_start(setup, ts)
+        _setup.check_start(setup, ts, accelerations=False)  # none reported
         rows, smallest, iters = [], [], 0
         for k, tk in enumerate(ts):
             if k == 0:

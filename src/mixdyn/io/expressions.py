@@ -578,6 +578,12 @@ class ExpressionLaw(Law):
         so that :mod:`mixdyn.model._smoothness` need not sample it."""
         return _smooth(self.tree)
 
+    def smooth_to(self, order: int) -> bool:
+        """Continuous with its derivatives up to ``order`` by its form (:attr:`smooth`;
+        for ``order`` 2 without ``step``, whose cubic blend's second derivative jumps at its
+        ends)."""
+        return _smooth(self.tree, order)
+
 
 #: The functions that are smooth (every derivative continuous) wherever their arguments are.
 _SMOOTH_FUNCTIONS = frozenset({"sin", "cos", "sinh", "cosh", "tanh", "exp", "atan"})
@@ -600,31 +606,37 @@ def _children(tree) -> tuple:
     return ()
 
 
-def _smooth(tree) -> bool:
-    """An expression tree continuous with its first derivative in ``t`` for every ``t``."""
+#: The order up to which each blend's derivatives are continuous (its value at both ends
+#: constant): ``step`` cubic (C1), ``step5`` quintic (C2).
+_BLENDS = {"step": 1, "step5": 2}
+
+
+def _smooth(tree, order: int = 1) -> bool:
+    """An expression tree continuous with its derivatives in ``t`` up to ``order`` for every
+    ``t``."""
     tag = tree[0]
     if not _has_t(tree):
         return True
     if tag == "t":
         return True
     if tag == "u":
-        return _smooth(tree[2])
+        return _smooth(tree[2], order)
     if tag == "b":
         op, a, b = tree[1], tree[2], tree[3]
         if op in ("+", "-", "*"):
-            return _smooth(a) and _smooth(b)
+            return _smooth(a, order) and _smooth(b, order)
         if op == "/":
-            return _smooth(a) and not _has_t(b)
+            return _smooth(a, order) and not _has_t(b)
         if op == "**":
             whole = b[0] == "c" and float(b[1]) >= 0 and float(b[1]).is_integer()
-            return (_smooth(a) and whole) or (not _has_t(a) and _smooth(b))
+            return (_smooth(a, order) and whole) or (not _has_t(a) and _smooth(b, order))
         return False
     if tag == "f":
         name, args = tree[1], tuple(tree[2])
         if name in _SMOOTH_FUNCTIONS:
-            return all(_smooth(a) for a in args)
-        if name in ("step", "step5"):  # C1 and C2 blends of x between constant ends
-            return _smooth(args[0]) and not any(_has_t(a) for a in args[1:])
+            return all(_smooth(a, order) for a in args)
+        if _BLENDS.get(name, 0) >= order:  # blends of x between constant ends
+            return _smooth(args[0], order) and not any(_has_t(a) for a in args[1:])
     return False
 
 

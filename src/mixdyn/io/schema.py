@@ -656,6 +656,10 @@ class PrescribedSpec(Spec):
     from_run: Name | None = None
     """Name of another run whose computed motion of this coordinate is replayed (that run is
     executed first)."""
+    continuity: Literal["C1", "C2"] = "C2"
+    """How smooth the law must be: ``C2`` (default: continuous with its slope and second
+    derivative, as the accelerations and forces a run reports need) or ``C1`` (its second
+    derivative may jump: constant-acceleration segments, a trapezoidal speed)."""
 
     @model_validator(mode="after")
     def _one_source(self):

@@ -90,6 +90,10 @@ class CamFollower(Joint):
             then an angle [rad]).
         pivot: an oscillating follower's pivot, a point of ``frame``.
         sense: +1 if an oscillating follower's angle grows as it lifts, -1 if it falls.
+        continuity: ``"C2"`` (default: the law continuous with its slope and second
+            derivative over the turn, as the follower's reported accelerations and forces
+            need) or ``"C1"`` (its second derivative may jump: a constant-acceleration
+            profile, whose accelerations and forces then jump, finite).
     """
 
     cam: str = reference("The cam's body.", what="body")
@@ -104,8 +108,8 @@ class CamFollower(Joint):
         ("length", "angle"),
         "Displacement (an oscillating follower: its angle) as a law of the cam angle "
         "``theta`` [rad], given over one turn: an expression of ``theta`` "
-        "(``h/2*(1 - cos(theta))``), a polynomial or spline in ``theta``; continuous with "
-        "its slope over the turn and across ``theta = 2 pi``.",
+        "(``h/2*(1 - cos(theta))``), a polynomial or spline in ``theta``; smooth over the "
+        "turn and across ``theta = 2 pi`` (``continuity``).",
         converter=as_law,
         law=True,
         variable=CAM_ANGLE,
@@ -165,6 +169,9 @@ class CamFollower(Joint):
         converter=float,
         kw_only=True,
     )
+    continuity: str = option(
+        smoothness.CONTINUITY_DOC, "C2", choices=tuple(smoothness.CONTINUITY), kw_only=True
+    )
     a0: object = eqx.field(default=(0.0, 0.0), converter=_f64, kw_only=True)  # (theta, psi)
     draw0: tuple = eqx.field(static=True, default=(), kw_only=True)  # for profile()
     sp: object = eqx.field(default=None, kw_only=True)
@@ -206,6 +213,7 @@ class CamFollower(Joint):
         return "M" if self.motion == "oscillating" else "F"
 
     def __check_init__(self):
+        smoothness.check_continuity(self.continuity, self.name)
         if self.follower_type not in FOLLOWERS:
             raise ModelError(
                 f"follower_type must be one of {', '.join(FOLLOWERS)}, got {self.follower_type!r}",
@@ -283,6 +291,7 @@ class CamFollower(Joint):
             moved="the follower",
             variable="theta",
             periodic=True,
+            order=smoothness.CONTINUITY[self.continuity],
         )
         return dataclasses.replace(self, bi=bi, bj=bj, bc=bc, si=si, sj=sj, u=u, **extra)
 

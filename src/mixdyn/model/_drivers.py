@@ -28,9 +28,17 @@ _COORD = {"x": 0, "y": 1, "phi": 2}
 
 
 class Driver(Element):
-    """Abstract driver: a measure ``g(q)`` and its prescribed law ``f(t)``."""
+    """Abstract driver: a measure ``g(q)`` and its prescribed law ``f(t)``.
+
+    Its law must be continuous with its slope over a run, and with its second derivative
+    where the run reports accelerations (every run but statics), unless ``continuity`` is
+    ``"C1"`` (:meth:`check_law`).
+    """
 
     law: Law = eqx.field(converter=as_law, kw_only=True)
+    continuity: str = option(
+        smoothness.CONTINUITY_DOC, "C2", choices=tuple(smoothness.CONTINUITY), kw_only=True
+    )
     #: ``"length"`` or ``"angle"``: the unit of the measure; the effort is a force or torque.
     measure_kind: ClassVar[str] = "length"
 
@@ -42,16 +50,26 @@ class Driver(Element):
         """``g(q) - f(t)``, shape (1,)."""
         return (self.measure(q) - self.law(t))[None]
 
-    def check_law(self, t0: float, t1: float) -> None:
+    def __check_init__(self):
+        smoothness.check_continuity(self.continuity, self.name)
+
+    def check_law(self, t0: float, t1: float, accelerations: bool = True) -> None:
         """Refuse a law that jumps in value or slope between the times ``t0`` and ``t1``
         [time] (a run's span): the driven quantity would move, or change its speed, in no
-        time. Its second derivative may jump (the accelerations then jump, finite).
+        time; and, for a run that reports ``accelerations``, one whose second derivative
+        jumps (the accelerations and forces would jump in no time), unless the driver's
+        ``continuity`` is ``"C1"``.
 
         Raises:
             ModelError: naming the law, the time and the jump (:mod:`._smoothness`).
         """
         smoothness.check(
-            self.law, float(t0), float(t1), element=self.name, moved="the driven quantity"
+            self.law,
+            float(t0),
+            float(t1),
+            element=self.name,
+            moved="the driven quantity",
+            order=smoothness.CONTINUITY[self.continuity] if accelerations else 1,
         )
 
     @property

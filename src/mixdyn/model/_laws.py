@@ -32,6 +32,12 @@ class Law(eqx.Module):
     #: jumps (:mod:`mixdyn.model._smoothness`) over an interval.
     smooth: ClassVar[bool] = False
 
+    def smooth_to(self, order: int) -> bool:
+        """Whether the law and its derivatives up to ``order`` (1: the slope, 2: the second
+        derivative) are continuous everywhere by its form, so that they need not be sampled
+        for jumps; by default :attr:`smooth`."""
+        return bool(self.smooth)
+
     @abc.abstractmethod
     def __call__(self, t: jax.Array) -> jax.Array:
         """Value at time ``t`` (scalar)."""

@@ -1,29 +1,35 @@
-"""Is a law smooth enough? Jumps in a law's value or slope, found before any computing.
+"""Is a law smooth enough? Jumps in a law's value, slope or second derivative, found before
+any computing.
 
 A law whose value jumps moves a body by a finite distance in no time; one whose slope jumps
 (a kink: piecewise linear segments, ``abs``) gives it an infinite acceleration. Neither can
 be integrated, and the accelerations and forces an analysis reports would miss the jump's
-impulse. :func:`jumps` finds them on an interval (for a cam, over its turn and across the
-wrap-around ``theta = 2 pi -> 0``).
+impulse. One whose second derivative jumps (a constant-acceleration segment, a trapezoidal
+speed) makes the accelerations and forces jump, finite, in no time (an infinite jerk): where
+a run reports accelerations a law must be continuous with its second derivative, unless the
+element accepts such jumps (``continuity: C1``). :func:`jumps` finds them on an interval (for
+a cam, over its turn and across the wrap-around ``theta = 2 pi -> 0``), up to the ``order``
+asked.
 
-The law and its first three derivatives (exact, forward-mode AD) are sampled on a grid of
+The law and its first four derivatives (exact, forward-mode AD) are sampled on a grid of
 ``n`` steps ``h``. Over a step ``[x_i, x_{i+1}]`` of a function ``g`` (the law, ``k = 0``,
-or its slope, ``k = 1``) the trapezoidal rule of its derivative, ``r = |g(x_{i+1}) - g(x_i)
-- h (g'(x_i) + g'(x_{i+1})) / 2|``, is ``h**3/12 |g'''|`` where ``g`` is smooth, at most
-about ``h |jump of g'| / 2`` where ``g'`` jumps (a jump one order up), and the jump itself
-where ``g`` jumps (the sampled derivatives are one-sided, finite). A step whose ``r`` is
-beyond what the derivatives sampled at its ends allow,
+its slope, ``k = 1``, or its second derivative, ``k = 2``) the trapezoidal rule of its
+derivative, ``r = |g(x_{i+1}) - g(x_i) - h (g'(x_i) + g'(x_{i+1})) / 2|``, is small where
+``g`` is smooth, at most about ``h |jump of g'| / 2`` where ``g'`` jumps (a jump one order
+up), and the jump itself where ``g`` jumps (the sampled derivatives are one-sided, finite).
+A step whose ``r`` is beyond what the derivatives sampled at its ends allow,
 
-    r > h**(2-k) (|g''_i| + |g''_{i+1}|) + h**(3-k) (|g'''_i| + |g'''_{i+1}|) / 6 + floor
+    k = 0:  r > h**2 (|g''_i| + |g''_{i+1}|) + h**3 (|g'''_i| + |g'''_{i+1}|) / 6 + floor
+    k = 1:  r > h (|g''_i| + |g''_{i+1}|) + floor
+    k = 2:  r > h**2 (|g''_i| + |g''_{i+1}|) + floor
 
 (``g''`` the law's derivative of order ``k + 2``), is looked at ``n`` times closer, three
 times over (to ``h / n**3``): a jump stays a jump at every scale, a steep smooth stretch
-resolves. What is left is a jump, placed within ``h / n**3``; a jump in value explains a
-kink's share of ``r`` first. Jumps smaller than ``rtol`` times the law's scale (its range;
-for the slope, its largest slope) are left (rounded coefficients of segments that meet).
-
-The second derivative may jump (a constant-acceleration segment): the accelerations and
-forces then jump too, finite, and are reported as they are.
+resolves. What is left is a jump, placed within ``h / n**3``; a jump of a lower order
+explains its share of the residual one order up first (a jump in value before a kink, a
+kink before a jump of the second derivative). Jumps smaller than ``rtol`` times the scale
+of their order (the law's range; its largest slope; its largest second derivative) are left
+(rounded coefficients of segments that meet).
 
 A piecewise polynomial (a spline, a Hermite motion) is read from its pieces instead: at each
 break their values must meet, and their slopes within a step's worth of their curvatures.
@@ -52,15 +58,42 @@ from ._validate import _traced
 _EFFECT = (
     "would move in no time",
     "would change its speed in no time (an infinite acceleration)",
+    "would change its acceleration in no time, and the accelerations and forces the run "
+    "reports would jump with it",
 )
+
+#: A jump of each order, in messages.
+_WHAT = ("value", "slope", "second derivative")
+
+#: The continuity a law of a driver or a cam may be declared to have (its ``continuity``),
+#: by the highest derivative that must be continuous.
+CONTINUITY = {"C1": 1, "C2": 2}
+
+#: The doc of the ``continuity`` of a driver's or a cam's law.
+CONTINUITY_DOC = (
+    "How smooth the law must be: ``C2`` (default: continuous with its slope and second "
+    "derivative, as reported accelerations and forces need) or ``C1`` (the second "
+    "derivative may jump: constant-acceleration segments, a trapezoidal speed)."
+)
+
+
+def check_continuity(value, element: str) -> None:
+    """Refuse a ``continuity`` other than ``"C1"`` or ``"C2"`` (:data:`CONTINUITY`) of
+    ``element``."""
+    if value not in CONTINUITY:
+        raise ModelError(
+            f"continuity must be one of {', '.join(CONTINUITY)}, got {value!r}",
+            element,
+            field="continuity",
+        )
 
 
 @dataclasses.dataclass(frozen=True)
 class Jump:
-    """A jump of a law: ``order`` 0 in its value, 1 in its slope; ``at`` the place (in the
-    law's variable, within ``resolution``), ``size`` its size (after minus before; the law's
-    unit per the variable's unit**order); ``finite`` False where the law or a derivative is
-    not finite there (``size`` nan)."""
+    """A jump of a law: ``order`` 0 in its value, 1 in its slope, 2 in its second
+    derivative; ``at`` the place (in the law's variable, within ``resolution``), ``size`` its
+    size (after minus before; the law's unit per the variable's unit**order); ``finite``
+    False where the law or a derivative is not finite there (``size`` nan)."""
 
     order: int
     at: float
@@ -70,7 +103,7 @@ class Jump:
 
 
 def _samples(law, x: np.ndarray) -> np.ndarray:
-    """``(4, len(x))``: the law and its first three derivatives at ``x`` (one compiled
+    """``(5, len(x))``: the law and its first four derivatives at ``x`` (one compiled
     program per law's structure and grid size, kept between processes)."""
     return np.asarray(_derivatives(law, jnp.asarray(x, dtype=jnp.float64)), dtype=float).T
 
@@ -85,8 +118,12 @@ def _derivatives(law, x):
             (f, fd), (_, fdd) = jax.jvp(d1, (u,), (jnp.ones_like(u),))
             return f, fd, fdd
 
-        (f, fd, fdd), (_, _, fddd) = jax.jvp(d2, (s,), (jnp.ones_like(s),))
-        return jnp.stack([f, fd, fdd, fddd])
+        def d3(u):
+            (f, fd, fdd), (_, _, fddd) = jax.jvp(d2, (u,), (jnp.ones_like(u),))
+            return f, fd, fdd, fddd
+
+        (f, fd, fdd, fddd), (_, _, _, f4) = jax.jvp(d3, (s,), (jnp.ones_like(s),))
+        return jnp.stack([f, fd, fdd, fddd, f4])
 
     return jax.vmap(derivs)(x)
 
@@ -102,18 +139,23 @@ class _Turn(eqx.Module):
         return self.law(self.start + jnp.mod(x - self.start, self.period))
 
 
+#: The power of the step in what each order's residual is allowed (see the module).
+_POWER = (2, 1, 2)
+
+
 def _residuals(x: np.ndarray, d: np.ndarray, floors) -> tuple[np.ndarray, np.ndarray]:
-    """Per step ``(2, n)``: the residual ``r`` of the value and of the slope, and what the
-    derivatives at the step's ends allow."""
+    """Per step ``(len(floors), n)``: the residual ``r`` of the value, the slope (and the
+    second derivative, for three floors), and what the derivatives at the step's ends
+    allow."""
     h = np.diff(x)
     a = np.abs(np.nan_to_num(d, nan=0.0, posinf=0.0, neginf=0.0))
     r, allowed = [], []
-    for k in (0, 1):
+    for k in range(len(floors)):
         g, g1 = d[k], d[k + 1]
         r.append(np.abs(np.diff(g) - h * (g1[:-1] + g1[1:]) / 2))
         c2 = a[k + 2][:-1] + a[k + 2][1:]
         c3 = a[3][:-1] + a[3][1:] if k == 0 else 0.0
-        allowed.append(h ** (2 - k) * c2 + h ** (3 - k) * c3 / 6 + floors[k])
+        allowed.append(h ** _POWER[k] * c2 + h**3 * c3 / 6 + floors[k])
     return np.array(r), np.array(allowed)
 
 
@@ -127,8 +169,10 @@ def jumps(
     zooms: int = 3,
     rtol: float = 1e-6,
     limit: int | None = None,
+    order: int = 1,
 ) -> list[Jump]:
-    """The jumps in value and slope of ``law`` on ``[start, stop]`` (see the module).
+    """The jumps in value and slope (and, ``order`` 2, second derivative) of ``law`` on
+    ``[start, stop]`` (see the module).
 
     Args:
         law: a scalar function of one variable, JAX-traceable (a :class:`~mixdyn.Law`).
@@ -140,19 +184,23 @@ def jumps(
         zooms: closer looks at a step that seems to jump.
         rtol: jumps smaller than this times the law's scale are left.
         limit: stop after this many jumps (default: find them all).
+        order: the highest derivative whose jumps are found: 1 (the slope, default) or 2
+            (the second derivative).
 
     Returns:
-        The jumps found, by place; empty for a law that is continuous with its slope (or
-        when the law cannot be sampled, or its numbers are being traced).
+        The jumps found, by place; empty for a law that is continuous with its derivatives
+        up to ``order`` (or when the law cannot be sampled, or its numbers are being traced).
     """
-    if _traced(law) or (getattr(law, "smooth", False) and not periodic) or not stop > start:
+    if order not in (1, 2):
+        raise ValueError(f"order must be 1 or 2, got {order!r}")
+    if _traced(law) or (_smooth_to(law, order) and not periodic) or not stop > start:
         return []
     if isinstance(law, PiecewisePolynomial):
-        return _piecewise(law, start, stop, periodic, rtol, n)[:limit]
-    key = _key(law, start, stop, periodic, n, zooms, rtol, limit)
+        return _piecewise(law, start, stop, periodic, rtol, n, order)[:limit]
+    key = _key(law, start, stop, periodic, n, zooms, rtol, limit, order)
     if key is not None and key in _FOUND:
         return list(_FOUND[key])
-    found = _jumps(law, start, stop, periodic, n, zooms, rtol, limit)
+    found = _jumps(law, start, stop, periodic, n, zooms, rtol, limit, order)
     if found is None:  # a law that cannot be sampled (here) fails, named, when it is run
         return []
     if key is not None:
@@ -166,11 +214,19 @@ def jumps(
 _FOUND: dict = {}
 
 
-def _piecewise(law, start, stop, periodic, rtol, n) -> list[Jump]:
+def _smooth_to(law, order: int) -> bool:
+    """Whether ``law`` is continuous with its derivatives up to ``order`` by its form
+    (:meth:`~mixdyn.model.Law.smooth_to`; a callable that is no Law: not known)."""
+    smooth_to = getattr(law, "smooth_to", None)
+    return bool(smooth_to(order)) if callable(smooth_to) else False
+
+
+def _piecewise(law, start, stop, periodic, rtol, n, order=1) -> list[Jump]:
     """The jumps of a piecewise polynomial, from its pieces: at each break inside the span
-    its pieces' values and slopes meet (and, ``periodic``, the law's at ``stop`` and at
-    ``start``), within what :func:`jumps` sees (a slope jump less than the curvatures either
-    side times a step of ``n`` over the span is not seen)."""
+    its pieces' values and slopes (and, ``order`` 2, second derivatives) meet (and,
+    ``periodic``, the law's at ``stop`` and at ``start``), within what :func:`jumps` sees (a
+    jump of a derivative less than the next derivative either side times a step of ``n``
+    over the span is not seen)."""
     x = np.asarray(law.breaks, dtype=float)
     c = np.asarray(law.coeffs, dtype=float)
     m = c.shape[1]  # pieces
@@ -188,14 +244,19 @@ def _piecewise(law, start, stop, periodic, rtol, n) -> list[Jump]:
     values = [at(piece(u), u, 0) for u in ends]
     slopes = [at(piece(u), u, 1) for u in ends]
     scale0 = float(np.ptp(values))
-    floors = (rtol * scale0, rtol * (float(np.max(np.abs(slopes))) + scale0 / (stop - start)))
+    scale1 = float(np.max(np.abs(slopes))) + scale0 / (stop - start)
+    floors = [rtol * scale0, rtol * scale1]
+    if order == 2:
+        knots = [*x[:m], x[m - 1]]  # every piece at its start and the last at its end
+        curvatures = [at(piece(u), u, 2) for u in (*ends, *knots)]
+        floors.append(rtol * (float(np.max(np.abs(curvatures))) + scale1 / (stop - start)))
     found = []
     h = (stop - start) / n
     for b, i, j, b_right in pairs:
-        bends = abs(at(i, b, 2)) + abs(at(j, b_right, 2))
-        for k in (0, 1):
+        for k in range(order + 1):
             size = at(j, b_right, k) - at(i, b, k)
-            if abs(size) > floors[k] + k * h * bends or not math.isfinite(size):
+            bends = abs(at(i, b, k + 1)) + abs(at(j, b_right, k + 1))
+            if abs(size) > floors[k] + (k > 0) * h * bends or not math.isfinite(size):
                 found.append(Jump(k, float(b), size, 0.0))
                 break
     return found
@@ -212,7 +273,7 @@ def _key(law, *args):
     return key
 
 
-def _jumps(law, start, stop, periodic, n, zooms, rtol, limit) -> list[Jump] | None:
+def _jumps(law, start, stop, periodic, n, zooms, rtol, limit, order=1) -> list[Jump] | None:
     """:func:`jumps` of a law (None: it cannot be sampled, e.g. while a program is traced)."""
     period = stop - start
     f = _Turn(law, start, period) if periodic else law
@@ -227,7 +288,9 @@ def _jumps(law, start, stop, periodic, n, zooms, rtol, limit) -> list[Jump] | No
         return [Jump(0, float(x[i]), math.nan, 0.0, finite=False)]
     scale0 = float(np.ptp(d[0]))
     scale1 = float(np.max(np.abs(d[1]))) + scale0 / period
-    floors = (rtol * scale0 + 1e-300, rtol * scale1 + 1e-300)
+    floors = [rtol * scale0 + 1e-300, rtol * scale1 + 1e-300]
+    if order == 2:
+        floors.append(rtol * (float(np.max(np.abs(d[2]))) + scale1 / period) + 1e-300)
     r, allowed = _residuals(x, d, floors)
     found = []
     for i in np.flatnonzero(np.any(r > allowed, axis=0)):
@@ -249,14 +312,12 @@ def _closer(f, a: float, b: float, n: int, zooms: int, floors) -> Jump | None:
             return Jump(0, float(x[i]), math.nan, float(b - a), finite=False)
         r, allowed = _residuals(x, d, floors)
         h = x[1] - x[0]
-        value = r[0] > allowed[0] + h * r[1]
-        slope = r[1] > allowed[1]
-        if value.any():
-            i = int(np.argmax(r[0] * value))
-            order = 0
-        elif slope.any():
-            i = int(np.argmax(r[1] * slope))
-            order = 1
+        up = [*(h * r[1:]), 0.0]  # a jump one order up explains this much of a residual
+        for order in range(len(floors)):
+            seen = r[order] > allowed[order] + up[order]
+            if seen.any():
+                i = int(np.argmax(r[order] * seen))
+                break
         else:
             return None
         a, b = x[i], x[i + 1]
@@ -286,16 +347,19 @@ def check(
     variable: str = "t",
     periodic: bool = False,
     field: str = "law",
+    order: int = 1,
 ) -> None:
-    """Refuse a law that jumps in value or slope on ``[start, stop]`` (see :func:`jumps`):
-    a :class:`~mixdyn.errors.ModelError` of ``element`` at ``field`` naming the law, the
-    place (``variable = ...``; an angle [rad] also in degrees) and the jump, and what it
-    does to what the law ``moved`` (``"the follower"``).
+    """Refuse a law that jumps in value or slope (and, ``order`` 2, in its second
+    derivative) on ``[start, stop]`` (see :func:`jumps`): a
+    :class:`~mixdyn.errors.ModelError` of ``element`` at ``field`` naming the law, the place
+    (``variable = ...``; an angle [rad] also in degrees) and the jump, and what it does to
+    what the law ``moved`` (``"the follower"``); a jump of the second derivative also names
+    the element's ``continuity: C1``, which accepts it.
 
     Raises:
         ModelError: the first jump found.
     """
-    found = jumps(law, start, stop, periodic=periodic, limit=1)
+    found = jumps(law, start, stop, periodic=periodic, limit=1, order=order)
     if not found:
         return
     j = found[0]
@@ -311,19 +375,27 @@ def check(
     else:
         problem = (
             f"the law {_shown(law, variable)} jumps by {j.size:+.6g} (model units) in its "
-            f"{'value' if j.order == 0 else 'slope'} at {place}: {moved} {_EFFECT[j.order]}"
+            f"{_WHAT[j.order]} at {place}: {moved} {_EFFECT[j.order]}"
         )
+    what = "its slope" if order == 1 else "its slope and second derivative"
+    ends = "value and slope" if order == 1 else "value, slope and second derivative"
     over = (
-        f"over the turn, {variable} = {start:g} to {stop:.6g} (at the end its value and slope "
-        "at the start)"
+        f"over the turn, {variable} = {start:g} to {stop:.6g} (at the end its {ends} at the start)"
         if periodic
         else f"over the run, {variable} = {start:g} to {stop:g}"
     )
-    raise ModelError(
-        f"{problem}; give a law continuous with its slope {over}; its second derivative may jump",
-        element,
-        field=field,
-    )
+    if j.finite and j.order == 2:
+        fix = (
+            f"give a law continuous with {what} {over} (cycloidal, harmonic, 3-4-5 polynomial "
+            "segments), or accept finite jumps of the acceleration (constant-acceleration "
+            f"segments, a trapezoidal speed) with 'continuity: C1' on {element} "
+            "(continuity='C1' in Python)"
+        )
+    else:
+        fix = f"give a law continuous with {what} {over}"
+        if order == 1:
+            fix += "; its second derivative may jump"
+    raise ModelError(f"{problem}; {fix}", element, field=field)
 
 
 def _shown(law, variable: str) -> str:
@@ -335,4 +407,4 @@ def _shown(law, variable: str) -> str:
     return f"({type(law).__name__})"
 
 
-__all__ = ["Jump", "check", "jumps"]
+__all__ = ["CONTINUITY", "CONTINUITY_DOC", "Jump", "check", "check_continuity", "jumps"]

@@ -175,10 +175,16 @@ def prescribed_driver(runner, p: s.PrescribedSpec, path) -> m.Driver:
     name = p.name or f"prescribed {p.coordinate}"
     if len(parts) == 3:
         law = runner.b.law(p.law, "length", (*path, "law"))
-        return m.PointDriver(name, f"{parts[0]}.{parts[1]}", parts[2], law=law)
+        return m.PointDriver(
+            name, f"{parts[0]}.{parts[1]}", parts[2], law=law, continuity=p.continuity
+        )
     kind = "angle" if parts[1] == "phi" else "length"
     return m.CoordinateDriver(
-        name, parts[0], parts[1], law=runner.b.law(p.law, kind, (*path, "law"))
+        name,
+        parts[0],
+        parts[1],
+        law=runner.b.law(p.law, kind, (*path, "law")),
+        continuity=p.continuity,
     )
 
 

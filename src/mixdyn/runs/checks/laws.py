@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...errors import ModelError
+from ...io import schema as s
 from ...io.expressions import ExpressionLaw, evaluate
 from .. import setup
 from ..plan import Plan
@@ -15,7 +16,8 @@ from ..plan import Plan
 def check_laws(runner, plan: Plan) -> None:
     """Every expression law of the run's drivers, prescribed motions and known forces finite
     at its output times; the drivers' and prescribed motions' laws continuous with their
-    slopes over the run (:meth:`~mixdyn.model.Driver.check_law`)."""
+    slopes over the run, and with their second derivatives but in a statics run or where the
+    element's ``continuity`` is ``C1`` (:meth:`~mixdyn.model.Driver.check_law`)."""
     r = plan.spec
     used = None if r.drivers is None else set(r.drivers)
     unknown = set(getattr(r, "unknown", ()))
@@ -38,9 +40,10 @@ def check_laws(runner, plan: Plan) -> None:
     for path, law in laws:
         if isinstance(law, ExpressionLaw):
             _finite_law(runner, law, plan.times, path)
+    accelerations = not isinstance(r, s.StaticsRunSpec)  # a statics run reports none
     for path, driver in drivers:
         try:
-            driver.check_law(plan.times[0], plan.times[-1])
+            driver.check_law(plan.times[0], plan.times[-1], accelerations)
         except ModelError as e:
             runner.fail(path, e.message, "")
 
