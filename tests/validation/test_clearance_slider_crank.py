@@ -146,3 +146,25 @@ def test_a_gap_in_the_guide_tends_to_the_ideal_slide(runs):
         assert np.max(r["slide.normal"]) > 0  # it touched
         errors[c] = float(np.max(np.abs(r["slider.x"] - ideal)))
     assert errors[1e-4] < 0.5 * errors[5e-4]
+
+
+def test_a_sweep_over_the_clearance_is_its_single_runs(runs):
+    """``md.sweep`` over ``B.clearance`` (compiled once): the member at 0.5 mm is the single
+    run (<= 1e-9 m), and every member's slider stays within its clearance's reach of the
+    ideal joint's (as above)."""
+    drive = md.CoordinateDriver("drive", "crank", "phi", law=md.Polynomial([0.0, OMEGA]))
+    sizes = [5e-4, 2.5e-4, 1e-4]
+    sw = md.sweep(
+        slider_crank(5e-4),
+        TS,
+        vary={"B.clearance": sizes},
+        analysis=md.analyses.Mixed(
+            prescribed=[drive], unknown=["motor"], method=md.Projection(rtol=1e-7, atol=1e-9)
+        ),
+    )
+    np.testing.assert_allclose(sw.results[0]["slider.x"], runs[5e-4]["slider.x"], atol=1e-9)
+    tan_beta = L1 / math.sqrt(L2**2 - L1**2)
+    for c, r in zip(sizes, sw.results, strict=True):
+        reach = c + max(float(np.max(r["B.penetration"])), 0.0)
+        error = np.max(np.abs(r["slider.x"] - runs[None]["slider.x"]))
+        assert error <= math.sqrt(1 + tan_beta**2) * reach * 1.01, c
