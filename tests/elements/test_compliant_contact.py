@@ -240,12 +240,22 @@ def test_a_dropped_ball_rebounds_with_the_models_restitution():
 @pytest.mark.slow  # long: run by CI's slow set
 def test_without_loss_a_bouncing_ball_keeps_its_energy():
     """e = 1: the energy with the contact's elastic energy is kept through the impact
-    (<= 1e-8 relative) and the ball returns to its height."""
+    (<= 1e-8 relative) and the ball returns to its height; the contact's arrow is the normal
+    force at the contact point."""
     apex, r = rebound_apex(ball(1.0))
     E = r["energy.total"]
     assert np.max(np.abs(E - E[0])) < 1e-8 * E[0]
     assert np.max(r["floor.penetration"]) > 0  # through a contact
     np.testing.assert_allclose(apex, H0, rtol=1e-7)
+    # its arrow: the floor's push, straight up, at the middle of the overlap
+    from mixdyn.viz.arrows import force_arrows
+
+    (arrow,) = force_arrows(r, ["floor"])
+    np.testing.assert_allclose(arrow["F"][:, 1], r["floor.normal"], rtol=1e-12)
+    assert np.all(arrow["F"][:, 0] == 0)
+    middle = r["ball.y"] - R + r["floor.penetration"] / 2
+    np.testing.assert_allclose(arrow["at"][:, 1], middle, atol=1e-15)
+    assert [a["name"] for a in force_arrows(r)] == ["floor"]
 
 
 @pytest.mark.slow  # long: run by CI's slow set

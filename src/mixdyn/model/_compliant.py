@@ -281,6 +281,23 @@ class _Compliant(ForceElement):
             out["friction"] = jnp.sum(Ft)
         return out
 
+    def arrow(self, q, qd) -> tuple[np.ndarray, np.ndarray]:
+        """The contact's force on body j as an arrow: ``(at, F)``, the contact point (N, 2)
+        [length] (of the largest force, where the pair touches at several) and the force
+        (N, 2) [force] (normal and friction, summed over the contact points), from the
+        coordinates ``q`` and velocities ``qd`` (N, nq)."""
+
+        def one(q, qd):
+            _, _, F, Ft = self._state(q, qd)
+            P, n = (jnp.atleast_2d(x) for x in self.frame(q))
+            force = F[:, None] * n
+            if Ft is not None:
+                force = force + Ft[:, None] * jnp.stack([-n[:, 1], n[:, 0]], axis=1)
+            return P[jnp.argmax(F)], jnp.sum(force, axis=0)
+
+        at, F = jax.vmap(one)(jnp.asarray(q), jnp.asarray(qd))
+        return np.asarray(at), np.asarray(F)
+
     @property
     def output_kinds(self):
         kinds = {"normal": "force", "penetration": "length"}

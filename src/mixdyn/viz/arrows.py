@@ -1,4 +1,5 @@
-"""Forces drawn as arrows over a motion: joint reactions and point forces (known or unknown).
+"""Forces drawn as arrows over a motion: joint reactions, point forces (known or unknown) and
+contact forces.
 
 An arrow starts at the point the force acts on and is drawn to one scale for every arrow of
 an animation, chosen so that the largest force over the whole motion is a quarter of the
@@ -10,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import PointForce
+from ..model._compliant import contacts
 from ._draw import COLORS
 
 #: The largest arrow of an animation, as a fraction of the scene's largest extent.
@@ -38,7 +40,7 @@ def force_arrows(result, names=True) -> list[dict]:
             joints (their reaction on body j, at the joint; a contact's force at its contact
             point: a gear's tooth force on gear j, a rolling disk's or a pinion's force on the
             wheel, a cam's push on its follower), of point forces and of reaction-dependent
-            forces.
+            forces, and of compliant contacts (their force on body j at the contact point).
 
     Returns:
         Per arrow: ``name``, ``color``, ``at`` (N, 2) [length], ``F`` (N, 2) [force] and
@@ -56,7 +58,12 @@ def force_arrows(result, names=True) -> list[dict]:
     joints = {j.name: j for j in model.joints}
     forces = {f.name: f for f in model.forces if isinstance(f, PointForce)}
     dependent = {f.name: f for f in model.forces if f.needs_reactions}
-    wanted = list(joints) + list(forces) + list(dependent) if names is True else list(names)
+    touching = {f.name: f for f in contacts(model)}
+    wanted = (
+        list(joints) + list(forces) + list(dependent) + list(touching)
+        if names is True
+        else list(names)
+    )
     cols, units = result.columns(), result.units()
     q = np.asarray(result.q)
     out = []
@@ -74,6 +81,18 @@ def force_arrows(result, names=True) -> list[dict]:
                     "at": at,
                     "F": np.asarray(F, dtype=float),
                     "unit": units[f"{name}.{key}"],
+                }
+            )
+            continue
+        if name in touching:  # a compliant contact's force on body j, at its contact point
+            at, F = touching[name].arrow(q, np.asarray(result.qd))
+            out.append(
+                {
+                    "name": name,
+                    "color": COLORS[(k + 3) % len(COLORS)],
+                    "at": at,
+                    "F": F,
+                    "unit": units[f"{name}.normal"],
                 }
             )
             continue
@@ -106,8 +125,9 @@ def force_arrows(result, names=True) -> list[dict]:
             from .._hints import did_you_mean
 
             raise ValueError(
-                f"cannot draw the force {name!r}: it is neither a joint, a point force nor "
-                "a reaction-dependent force; " + did_you_mean(name, [*joints, *forces, *dependent])
+                f"cannot draw the force {name!r}: it is neither a joint, a point force, a "
+                "reaction-dependent force nor a contact; "
+                + did_you_mean(name, [*joints, *forces, *dependent, *touching])
             )
         out.append(
             {

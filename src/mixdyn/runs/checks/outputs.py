@@ -56,11 +56,13 @@ def _check_arrows(runner, plan: Plan, forces, path) -> None:
         return
     from ..._hints import did_you_mean
     from ...model import PointForce
+    from ...model._compliant import contacts
 
     known = [j.name for j in runner.model.joints]
     known += [f.name for f in runner.model.forces if isinstance(f, PointForce)]
     dependent = {f.name: f for f in runner.model.forces if f.needs_reactions}
     known += [name for name, f in dependent.items() if f.no_arrow is None]
+    known += [f.name for f in contacts(runner.model)]
     contacts = {
         j.name: j
         for j in runner.model.joints
