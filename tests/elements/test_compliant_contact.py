@@ -184,6 +184,50 @@ def test_a_slider_in_a_guide_touches_at_its_ends():
 
 
 @pytest.mark.slow  # long: run by CI's slow set
+def test_a_box_touches_a_line_at_its_rounded_corners():
+    """A turned box over a turned line: its corners' penetrations written out (each corner
+    a circle of the corner radius, inset from the box's vertices)."""
+    box = md.BoxLineContact(
+        "box", ("b", (0.01, 0.0)), 0.06, 0.02, 0.004, ("a", (0.0, 0.0)), axis=(1.0, 0.0),
+        young_modulus=1e9, restitution=1.0,
+    )  # fmt: skip
+    model = two_bodies(box)
+    f = model.forces[0]
+    q = np.array([0.0, 0.0, 0.1, 0.0, 0.008, 0.25])
+    n = np.array([-math.sin(0.1), math.cos(0.1)])
+    corners = [(0.026, 0.006), (-0.026, 0.006), (-0.026, -0.006), (0.026, -0.006)]
+    expected = [0.004 - np.dot(_at(q, 1, (0.01 + a, b)) - _at(q, 0, (0, 0)), n)
+                for a, b in corners]  # fmt: skip
+    np.testing.assert_allclose(f.penetration(q), expected, rtol=1e-12, atol=1e-16)
+    assert max(expected) > 0 > min(expected)  # one corner presses, one is clear
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_block_sliding_on_the_floor_stops_where_coulomb_says_and_stays():
+    """A block (a box on its two bottom corners) launched along the floor at v0 with
+    friction mu: the friction is mu m g while it slides, it stops at ``v0**2 / (2 mu g)``
+    (<= 1e-4 relative: the regularization's creep below v_stick is a small share) and stays
+    there."""
+    g, m, W, H, rho, E, mu, v0 = 9.81, 1.0, 0.1, 0.05, 0.002, 1e9, 0.3, 1.0
+    K = float(hertz_stiffness(E, 0.3, rho))
+    settled = (m * g / 2 / K) ** (2 / 3)  # each bottom corner carries m g / 2
+    block = md.Body("block", m, m * (W**2 + H**2) / 12, q0=(0.0, H / 2 - settled, 0.0))
+    floor = md.BoxLineContact(
+        "floor", "block", W, H, rho, "ground", young_modulus=E, restitution=0.3,
+        impact_speed=0.1, contact_model="flores", mu=mu, v_stick=1e-3,
+    )  # fmt: skip
+    model = md.Model([block], forces=[floor], gravity=(0.0, -g))
+    ts = np.linspace(0.0, 0.5, 101)
+    r = md.forward(model, ts, qd0=np.array([v0, 0.0, 0.0]), rtol=1e-8, atol=1e-10)
+    sliding = ts < 0.8 * v0 / (mu * g)
+    np.testing.assert_allclose(r["floor.friction"][sliding][5:], mu * m * g, rtol=1e-3)
+    stop = v0**2 / (2 * mu * g)
+    np.testing.assert_allclose(r["block.x"][-1], stop, rtol=1e-4)
+    after = ts > v0 / (mu * g) + 0.02
+    assert np.ptp(r["block.x"][after]) < 1e-7 * stop
+
+
+@pytest.mark.slow  # long: run by CI's slow set
 def test_without_damping_the_force_derives_from_the_elastic_energy():
     """``restitution: 1``: Q = -dV/dq (central differences of the potential)."""
     contact = md.JournalBearing(

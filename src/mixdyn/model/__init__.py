@@ -2,7 +2,13 @@
 
 from ._body import Body, Ground
 from ._cams import CamFollower
-from ._compliant import CircleContact, CircleLineContact, JournalBearing, SliderInGuide
+from ._compliant import (
+    BoxLineContact,
+    CircleContact,
+    CircleLineContact,
+    JournalBearing,
+    SliderInGuide,
+)
 from ._contacts import BeltDrive, GearPair, RackPinion, RollingDisks, RollingOnLine
 from ._declare import ELEMENTS, element
 from ._drivers import (
@@ -71,6 +77,7 @@ __all__ = [
     "ELEMENTS",
     "BeltDrive",
     "Body",
+    "BoxLineContact",
     "CamFollower",
     "CircleContact",
     "CircleLineContact",

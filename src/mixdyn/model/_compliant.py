@@ -361,6 +361,91 @@ class CircleLineContact(_Compliant):
         return self.radius
 
 
+@element("box_line_contact", "forces")
+class BoxLineContact(_Compliant):
+    """A box (a rectangle with rounded corners, on body j: a block, a slider, a cam's flat
+    stop) touching a straight line of body i or the ground, the edge of a solid half-plane,
+    at its corners: a convex polygon's vertices against a line.
+
+    The box is ``width`` by ``height`` about ``center``, its sides along body j's axes; its
+    four corners are rounded with radius ``corner_radius`` (Hertz's effective radius), each
+    a circle that penetrates the half-plane (see :class:`CircleLineContact`: the solid right
+    of ``axis``). Penetrations (4), one a corner. Result columns: ``{name}.normal`` (the sum
+    of the corners' forces), ``.penetration`` (the deepest) and, with ``mu``, ``.friction``
+    (the sum).
+    """
+
+    center: str = reference("Centre of the box, ``body.point`` (or ``body``).")
+    width: jax.Array = quantity(
+        "length", "The box's size along body j's x axis, > 0.", converter=_f64, above=0.0
+    )
+    height: jax.Array = quantity(
+        "length", "The box's size along body j's y axis, > 0.", converter=_f64, above=0.0
+    )
+    corner_radius: jax.Array = quantity(
+        "length",
+        "Radius of the box's rounded corners, > 0 and at most half its smaller side.",
+        converter=_f64,
+        above=0.0,
+    )
+    line_point: str = reference(
+        "A point of the line, ``ground.point`` or ``body.point`` (another body)."
+    )
+    axis: str | tuple[float, ...] = direction(
+        "Direction of the line in its body's frame; the solid is on its right (``[1, 0]``: "
+        "a floor). Default ``[1, 0]``.",
+        (1.0, 0.0),
+        on="line_point",
+    )
+    u: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def __check_init__(self):
+        if not np.all(
+            2 * np.asarray(self.corner_radius)
+            <= np.minimum(np.asarray(self.width), np.asarray(self.height))
+        ):
+            raise ModelError(
+                "the corners' radius must be at most half the box's smaller side",
+                self.name,
+                field="corner_radius",
+            )
+
+    def bind(self, r: Resolver):
+        bj, sj = r.point(self.center, self.name)
+        bi, si = r.point(self.line_point, self.name)
+        if bi == bj:
+            raise ModelError(
+                f"the box and the line are both on {body_name(self.center)!r}: they must be "
+                "on two different bodies",
+                self.name,
+            )
+        u = r.vector(self.axis, bi, self.name)
+        return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u)
+
+    def _corners(self, q):
+        """The centres of the rounded corners (4, 2) and the line's normal ``n`` (2,)."""
+        a = 0.5 * self.width - self.corner_radius
+        b = 0.5 * self.height - self.corner_radius
+        local = jnp.stack(
+            [jnp.stack([a, b]), jnp.stack([-a, b]), jnp.stack([-a, -b]), jnp.stack([a, -b])]
+        )
+        centres = jax.vmap(lambda s: point(q, self.bj, self.sj + s))(local)
+        u = vector(q, self.bi, self.u)
+        return centres, jnp.stack([-u[1], u[0]])
+
+    def penetration(self, q):
+        centres, n = self._corners(q)
+        return self.corner_radius - (centres - point(q, self.bi, self.si)) @ n
+
+    def frame(self, q):
+        centres, n = self._corners(q)
+        reach = self.corner_radius - 0.5 * self.penetration(q)
+        return centres - reach[:, None] * n, jnp.broadcast_to(n, (4, 2))
+
+    def effective_radius(self):
+        return self.corner_radius
+
+
 @element("circle_contact", "forces")
 class CircleContact(_Compliant):
     """Two circles touching from outside (disks, balls, a pin and a round stop): circle i on
@@ -638,6 +723,7 @@ def refuse_contacts(model, analysis: str) -> None:
 __all__ = [
     "CLEARANCE_JOINTS",
     "LAW_FIELDS",
+    "BoxLineContact",
     "CircleContact",
     "CircleLineContact",
     "JournalBearing",
