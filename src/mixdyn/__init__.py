@@ -132,18 +132,20 @@ for _name in ("Plan", "Runner", "execute"):
 #: Names of the file layer reached from the top, by their module (loaded on first use, and
 #: left out of ``__all__`` so that ``import *`` does not load it): :func:`mixdyn.load` and
 #: :func:`mixdyn.run_file` (a model file from Python), :func:`mixdyn.read_table` (written
-#: results).
+#: results); :func:`mixdyn.synthesize` (linkage synthesis, :mod:`mixdyn.synthesis`), loaded
+#: on first use too.
 _FILE_NAMES = {
     "load": "runs.files",
     "run_file": "runs.files",
     "LoadedFile": "runs.files",
     "read_table": "io.results",
+    "synthesize": "synthesis",
 }
 
 
 def __getattr__(name):
     # The file layer (pydantic, pint) and the plots (matplotlib) load on first use.
-    if name in ("io", "runs", "viz"):
+    if name in ("io", "runs", "synthesis", "viz"):
         import importlib
 
         return importlib.import_module(f".{name}", __name__)
