@@ -186,7 +186,7 @@ def test_a_failed_member_is_named_and_the_others_written(tmp_path):
     res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--run", "sweep"])
     assert res.exit_code == 1, res.output
     assert "1 of 3 members failed" in res.output and "member 1, T = 50000" in res.output
-    members = pd.read_csv(out / "sweep" / "members.csv")
+    members = mio.read_table(out / "sweep" / "members.csv")
     assert list(members["status"] == "ok") == [True, False, True]
     assert "step" in members["error"][1] and np.isfinite(members["t_error"][1])
     assert np.isnan(members["x_end"][1]) and np.isfinite(members["x_end"][[0, 2]]).all()

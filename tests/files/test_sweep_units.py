@@ -57,11 +57,15 @@ def _sweep(values: str, name: str = "L", head: str = "") -> str:
     return head + MODEL + SWEEP.format(name=name, spec=spec)
 
 
-def test_values_with_units_equal_the_single_runs_and_the_closed_form():
+@pytest.fixture(scope="module")
+def swept():
+    return execute(mio.reads(_sweep("[0.1 m, 0.2 m]")), ["sweep"])["sweep"]
+
+
+def test_values_with_units_equal_the_single_runs_and_the_closed_form(swept):
     """``L: {values: [0.1 m, 0.2 m]}`` in a file in mm gives the members of ``[100 mm,
     200 mm]`` and of ``[100, 200]`` (model units of the parameter's dimension), each equal to
     the file run with ``L: 100 mm`` / ``L: 200 mm`` written in and to ``m L**2 / 3``."""
-    swept = execute(mio.reads(_sweep("[0.1 m, 0.2 m]")), ["sweep"])["sweep"]
     assert not swept.sweep.errors
     for values in ("[100 mm, 200 mm]", "[100, 200]", "[10 cm, 20 cm]"):
         plan = Runner(mio.reads(_sweep(values))).plans["sweep"]
@@ -109,3 +113,30 @@ def test_strict_units_refuses_values_without_a_unit():
     with pytest.raises(mio.FileError, match="has no unit") as err:
         Runner(mio.reads(bare))
     assert err.value.line == bare.splitlines().index("      L: {values: [100, 200]}") + 1
+
+
+def test_members_csv_names_its_units_and_reads_back(swept, tmp_path):
+    """``members.csv`` has ``name [unit]`` headers as ``results.csv`` (the varied length in
+    the model's mm, the torque summary in mN·mm = kg·mm²/s², the failure time in s; the
+    member index, status and error without), and ``read_table`` gives back the member table
+    and its units."""
+    from mixdyn.io.results import MEMBERS_CSV, write_sweep
+
+    write_sweep(swept, tmp_path)
+    head = (tmp_path / MEMBERS_CSV).read_text(encoding="utf-8").partition("\n")[0]
+    assert head.split(",") == [
+        "member",
+        "L [mm]",
+        "status",
+        "error",
+        "t_error [s]",
+        "torque [mN·mm]",
+        "x [mm]",
+    ]
+    back = mio.read_table(tmp_path / MEMBERS_CSV)
+    members = swept.members()
+    assert list(back.columns) == list(members.columns)
+    assert back.attrs["units"] == {"L": "mm", "t_error": "s", "torque": "mN·mm", "x": "mm"}
+    for c in ("member", "L", "torque", "x"):
+        np.testing.assert_array_equal(back[c].to_numpy(), members[c].to_numpy())
+    assert list(back["status"]) == ["ok", "ok"]

@@ -5,7 +5,6 @@ sweep's line before any computing (exit 2)."""
 from __future__ import annotations
 
 import numpy as np
-import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
@@ -67,7 +66,7 @@ def test_each_member_runs_to_its_own_end(tmp_path):
     assert res.exit_code == 0, res.output
     ds = xr.load_dataset(out / "sweep" / "sweep.nc", engine="scipy")
     table = mio.read_table(out / "sweep")
-    members = pd.read_csv(out / "sweep" / "members.csv")
+    members = mio.read_table(out / "sweep" / "members.csv")
     assert list(members["status"]) == ["ok"] * 3
     for i, t_end in enumerate([0.5, 1.0, 1.5]):
         text = MODEL.replace("t_end: 1\n", f"t_end: {t_end}\n") + BASE

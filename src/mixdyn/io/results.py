@@ -306,8 +306,8 @@ def write_sweep(
 ) -> list[pathlib.Path]:
     """Write a sweep run's result (:class:`mixdyn.runs.sweep.FileSweep`) to ``folder``:
     ``members.csv`` (a row per member: index, varied values, status, error, summaries),
-    ``table.csv`` (and ``table.parquet``: a row per member and output time; headers
-    ``name [unit]`` as in ``results.csv``), with
+    ``table.csv`` (and ``table.parquet``: a row per member and output time), both with
+    headers ``name [unit]`` as in ``results.csv`` (a column without a unit: its name), with
     ``netcdf`` ``sweep.nc`` (the table's columns as a labelled array on (member, t), the
     varied numbers and the status as coordinates, units in attributes; NetCDF 3 through
     SciPy) and ``meta.json`` (units, settings, counts, timings).
@@ -321,7 +321,10 @@ def write_sweep(
     folder.mkdir(parents=True, exist_ok=True)
     written = []
     model = next((r.model for r in sweep.sweep.results if r is not None), None)
-    written.append(write_frame(sweep.members(), folder / MEMBERS_CSV))
+    members = sweep.members()
+    member_units = {c: engineering(u) for c, u in sweep.member_units().items()}
+    named = dict(zip(members.columns, headers(list(members.columns), member_units), strict=True))
+    written.append(write_frame(members.rename(columns=named), folder / MEMBERS_CSV))
     table = sweep.table()
     units = {c: engineering(u) for c, u in sweep.units.items()}
     named = dict(zip(table.columns, headers(list(table.columns), units), strict=True))
@@ -426,7 +429,8 @@ def read_table(path):
 
     Args:
         path: a run's folder, or its ``results.csv`` / ``results.parquet``; a sweep's
-            folder or its ``table.csv`` / ``table.parquet`` (a row per member and time).
+            folder or its ``table.csv`` / ``table.parquet`` (a row per member and time), or
+            its ``members.csv`` (a row per member; no ``t``).
 
     Example::
 

@@ -72,10 +72,13 @@ class SweepPlan(Plan):
         member_times: each member's output times, where the swept run's ``time`` is written
             with a swept parameter and they differ between members; None: every member
             has the swept run's times (``times``).
+        value_units: varied name -> the model's unit of its values (pint spelling; ``""``
+            for a plain number: a parameter without a unit, a law's number).
     """
 
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict)
     member_times: tuple[np.ndarray, ...] | None = None
+    value_units: dict[str, str] = dataclasses.field(default_factory=dict)
 
     def times_of(self, i: int) -> np.ndarray:
         """Member ``i``'s output times [model time unit]: the swept run's, or its own where
@@ -124,7 +127,7 @@ class FileSweep:
     def members(self):
         """A pandas DataFrame, a row per member: ``member``, the varied values, ``status``
         (``ok`` or the error's class), ``error`` (its message), ``t_error`` (the time it
-        failed at, if known) and the summaries."""
+        failed at, if known) and the summaries; their units in :meth:`member_units`."""
         import pandas as pd
 
         n = self.plan.members
@@ -136,6 +139,17 @@ class FileSweep:
         data["t_error"] = [_error_time(errors.get(i)) for i in range(n)]
         data.update(self.summaries)
         return pd.DataFrame(data)
+
+    def member_units(self) -> dict[str, str]:
+        """The unit of each column of :meth:`members` that has one (pint spelling): the
+        varied values' in model units (:attr:`SweepPlan.value_units`), ``t_error`` in the
+        model's unit of time, the summaries' in the file's ``output_units``."""
+        model = next((r.model for r in self.sweep.results if r is not None), None)
+        units = {k: u for k, u in self.plan.value_units.items() if u}
+        if model is not None:
+            units["t_error"] = model.units.label("time")
+        units.update({x.name: self.units[x.name] for x in self.plan.spec.summaries})
+        return {k: u for k, u in units.items() if u}
 
     def dataset(self):
         """The table's columns as an ``xarray.Dataset`` on (member, t) with the varied numbers
@@ -226,10 +240,12 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
     base = study_base(
         runner, index, r, ("kinematic", "statics", "forward", "inverse", "mixed"), "sweep"
     )
-    axes, spans = {}, {}
+    axes, spans, value_units = {}, {}, {}
     for name, v in r.vary.items():
         vpath = (*path, "vary", name)
-        read = _reader(runner, name, _check_name(runner, name, vpath))
+        kind = _check_name(runner, name, vpath)
+        value_units[name] = _value_unit(runner, name, kind)
+        read = _reader(runner, name, kind)
         if v.values is not None:
             vals = [read(x, (*vpath, "values", k)) for k, x in enumerate(v.values)]
             axes[name] = np.asarray(vals, dtype=float)
@@ -282,7 +298,16 @@ def plan(runner: Runner, index: int, r: s.SweepRunSpec) -> SweepPlan:
         if p.y not in seen:
             known = ", ".join(seen) or "(none: add summaries)"
             runner.fail((*pp, "y"), f"{p.y!r} is not a summary", f"summaries: {known}")
-    return SweepPlan(r, index, base.times, (), base=base, values=values, member_times=member_times)
+    return SweepPlan(
+        r,
+        index,
+        base.times,
+        (),
+        base=base,
+        values=values,
+        member_times=member_times,
+        value_units=value_units,
+    )
 
 
 def _check_numbers(runner: Runner, path, values: dict[str, np.ndarray]) -> None:
@@ -347,6 +372,26 @@ def _member_times(runner: Runner, path, base: Plan, values: dict[str, np.ndarray
     if all(len(t) == len(base.times) and np.array_equal(t, base.times) for t in out):
         return None
     return tuple(out)
+
+
+def _value_unit(runner: Runner, name: str, kind) -> str:
+    """The model's unit of the values of a varied name (pint spelling; ``""``: plain
+    numbers): a file parameter's by its own unit's dimension (an angle's: rad), a body's or
+    element's number by its ``kind``."""
+    from ..units import COMMON_UNITS, DIMENSIONS, kind_of, unit_for
+
+    units = runner.model.units
+    if "." in name:
+        return units.label(kind) if kind is not None else ""
+    p = runner.b.readings.parameters[name]
+    if p.dim is None or any(e.denominator != 1 for e in p.dim):
+        return ""
+    exps = tuple(int(e) for e in p.dim)
+    if not any(exps):
+        angle = p.unit is not None and p.unit.strip() in (*COMMON_UNITS["angle"], "degree")
+        return "rad" if angle else ""  # an angle in rad, a ratio as it is
+    known = kind_of(exps)
+    return units.label(known) if known in DIMENSIONS else unit_for(exps, units)
 
 
 def _reader(runner: Runner, name: str, kind) -> Callable[[object, tuple], float]:
