@@ -190,14 +190,18 @@ def test_a_first_step_is_checked_against_the_runs_times(scale, monkeypatch):
     """A first step below the shortest step that advances the run's times in float64,
     ``1e-13 * max(|t|, 1)`` (the integrator's own collapsed step: below it, the run would
     end at its start with a step-size failure), or longer than the span is refused before
-    computing, naming first_step; from the floor up, the run gives the motion of the default
-    first step (another grid of steps: the same motion within the tolerances)."""
+    computing, naming first_step; from the floor up, the run gives the motion of a first
+    step of 1 ms (another grid of steps: the same motion within the tolerances; the options
+    of SAME_RUNS, one program)."""
     model = pendulum(theta0=0.3)
     ts = TS + 1e3 * (scale - 1.0)  # 0..0.2 s, or later: the floor grows with |t|
     floor = 1e-13 * max(float(np.max(np.abs(ts))), 1.0)
-    reference = md.forward(model, ts, rtol=1e-10, atol=1e-12)
-    at_floor = md.forward(model, ts, rtol=1e-10, atol=1e-12, first_step=floor)
-    np.testing.assert_allclose(at_floor.q, reference.q, atol=1e-8)
+
+    def run(first_step):
+        method = md.Projection(rtol=1e-9, atol=1e-11, solver="dopri5", first_step=first_step)
+        return md.forward(model, ts, method=method)
+
+    np.testing.assert_allclose(run(floor).q, run(1e-3).q, atol=1e-7)
     fw = importlib.import_module("mixdyn.analysis.forward")
     monkeypatch.setattr(fw, "dynamic_start", lambda *a, **k: pytest.fail("computing began"))
     for bad, match in [(floor * 0.99, "cannot advance time"), (0.21, "at most the run's span")]:
