@@ -37,39 +37,69 @@ runs:
   - name: turn
     kind: inverse
     time: {span: [0, 1], n: 3}
+  - name: kin
+    kind: kinematic
+    time: {span: [0, 1], n: 3}
 """
 
 SWEEP = """\
   - name: sweep
     kind: sweep
-    run: turn
+    run: {run}
     vary:
       {name}: {spec}
     summaries:
-      - {{name: torque, column: motor, reduce: first}}
+      - {{name: {summary}}}
       - {{name: x, column: rod.x, reduce: first}}
 """
 
+#: The first summary of a sweep of each run.
+SUMMARY = {
+    "turn": "torque, column: motor, reduce: first",
+    "kin": "a, column: rod.alpha, reduce: first",
+}
 
-def _sweep(values: str, name: str = "L", head: str = "") -> str:
-    """The file with a sweep of ``name`` over ``values`` (a list, or a mapping: a span)."""
+
+def _sweep(values: str, name: str = "L", head: str = "", run: str = "kin") -> str:
+    """The file with a sweep of run ``run`` over ``values`` of ``name`` (a list, or a
+    mapping: a span)."""
     spec = values if values.startswith("{") else f"{{values: {values}}}"
-    return head + MODEL + SWEEP.format(name=name, spec=spec)
+    sweep = SWEEP.format(name=name, spec=spec, run=run, summary=SUMMARY[run])
+    return head + MODEL + sweep
+
+
+def test_values_with_units_are_read_in_model_units():
+    """``[0.1 m, 0.2 m]``, ``[10 cm, 20 cm]``, ``[100 mm, 200 mm]`` and ``[100, 200]`` (model
+    units of the parameter's dimension) are 100 and 200 in a file in mm (by hand)."""
+    for values in ("[0.1 m, 0.2 m]", "[10 cm, 20 cm]", "[100 mm, 200 mm]", "[100, 200]"):
+        plan = Runner(mio.reads(_sweep(values))).plans["sweep"]
+        np.testing.assert_allclose(plan.values["L"], [100.0, 200.0], rtol=1e-15)
+        assert plan.value_units == {"L": "mm"}
 
 
 @pytest.fixture(scope="module")
 def swept():
+    """The kinematic run swept over L: [0.1 m, 0.2 m] (a program compiled in about a
+    second)."""
     return execute(mio.reads(_sweep("[0.1 m, 0.2 m]")), ["sweep"])["sweep"]
 
 
-def test_values_with_units_equal_the_single_runs_and_the_closed_form(swept):
-    """``L: {values: [0.1 m, 0.2 m]}`` in a file in mm gives the members of ``[100 mm,
-    200 mm]`` and of ``[100, 200]`` (model units of the parameter's dimension), each equal to
-    the file run with ``L: 100 mm`` / ``L: 200 mm`` written in and to ``m L**2 / 3``."""
+def test_members_are_the_motion_of_their_length(swept):
+    """The rod's centre starts at L/2 = 50 and 100 mm, its angular acceleration is
+    1 rad/s**2 (phi = t**2/2) whatever L."""
     assert not swept.sweep.errors
-    for values in ("[100 mm, 200 mm]", "[100, 200]", "[10 cm, 20 cm]"):
-        plan = Runner(mio.reads(_sweep(values))).plans["sweep"]
-        np.testing.assert_array_equal(plan.values["L"], swept.plan.values["L"])
+    table = swept.members()
+    np.testing.assert_allclose(table["x"], [50.0, 100.0], rtol=1e-12)
+    np.testing.assert_allclose(table["a"], [1.0, 1.0], rtol=1e-12)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (an inverse run's program compiled, ~5 s)
+def test_values_with_units_equal_the_single_runs_and_the_closed_form():
+    """``L: {values: [0.1 m, 0.2 m]}`` in a file in mm of the inverse run: each member equal
+    to the file run with ``L: 100 mm`` / ``L: 200 mm`` written in and to the closed-form
+    torque ``m L**2 / 3`` (times 1 rad/s**2)."""
+    swept = execute(mio.reads(_sweep("[0.1 m, 0.2 m]", run="turn")), ["sweep"])["sweep"]
+    assert not swept.sweep.errors
     table = swept.members()
     for i, length in enumerate((100.0, 200.0)):
         single = execute(mio.reads(MODEL.replace("L: 300 mm", f"L: {length:g} mm")))["turn"]
@@ -117,9 +147,9 @@ def test_strict_units_refuses_values_without_a_unit():
 
 def test_members_csv_names_its_units_and_reads_back(swept, tmp_path):
     """``members.csv`` has ``name [unit]`` headers as ``results.csv`` (the varied length in
-    the model's mm, the torque summary in mN·mm = kg·mm²/s², the failure time in s; the
-    member index, status and error without), and ``read_table`` gives back the member table
-    and its units."""
+    the model's mm, the summaries in rad/s² and mm, the failure time in s; the member index,
+    status and error without), and ``read_table`` gives back the member table and its
+    units."""
     from mixdyn.io.results import MEMBERS_CSV, write_sweep
 
     write_sweep(swept, tmp_path)
@@ -130,13 +160,13 @@ def test_members_csv_names_its_units_and_reads_back(swept, tmp_path):
         "status",
         "error",
         "t_error [s]",
-        "torque [mN·mm]",
+        "a [rad/s²]",
         "x [mm]",
     ]
     back = mio.read_table(tmp_path / MEMBERS_CSV)
     members = swept.members()
     assert list(back.columns) == list(members.columns)
-    assert back.attrs["units"] == {"L": "mm", "t_error": "s", "torque": "mN·mm", "x": "mm"}
-    for c in ("member", "L", "torque", "x"):
+    assert back.attrs["units"] == {"L": "mm", "t_error": "s", "a": "rad/s²", "x": "mm"}
+    for c in ("member", "L", "a", "x"):
         np.testing.assert_array_equal(back[c].to_numpy(), members[c].to_numpy())
     assert list(back["status"]) == ["ok", "ok"]
