@@ -259,11 +259,21 @@ class _Compliant(ForceElement):
         return delta, J, F, friction_force(F, self._sliding(q, qd), self.mu, self.v_stick)
 
     def passive(self, q, qd, t, nq):
-        _, J, F, Ft = self._state(q, qd)
-        Q = -F @ J
-        if Ft is not None:
-            Q = Q + Ft @ jax.jacfwd(self._sliding, argnums=1)(q, qd)
-        return Q
+        """The contact's generalized force (nq,): evaluated where a penetration is positive,
+        zero without computing it elsewhere (a narrow phase that costs one penetration while
+        the pair is apart)."""
+
+        def touching(q, qd):
+            _, J, F, Ft = self._state(q, qd)
+            Q = -F @ J
+            if Ft is not None:
+                Q = Q + Ft @ jax.jacfwd(self._sliding, argnums=1)(q, qd)
+            return Q
+
+        def apart(q, qd):
+            return jnp.zeros(nq, dtype=jnp.result_type(q, qd))
+
+        return jax.lax.cond(jnp.any(self._delta(q) > 0.0), touching, apart, q, qd)
 
     def potential(self, q):
         """The elastic energy ``K delta**2.5 / 2.5`` [energy], summed over the contact
