@@ -273,12 +273,16 @@ def test_friction_acts_at_the_contact_point_against_the_sliding():
 def test_a_dropped_ball_rebounds_with_the_models_restitution():
     """Lankarani-Nikravesh at e = 0.9: the rebound equals SciPy's integration of the same
     impact (<= 1e-6), and the apex is the rigid impact's ``e**2 h0`` within the model's accuracy
-    (2 % on e)."""
-    apex, _ = rebound_apex(ball(0.9))
+    (2 % on e); the damping's work closes the energy balance and is the bounce's loss."""
+    apex, r = rebound_apex(ball(0.9))
     v1 = scipy_rebound(0.9, "lankarani_nikravesh")
     np.testing.assert_allclose(apex, v1**2 / (2 * G), rtol=1e-6)
     e_eff = math.sqrt(apex / H0)
     assert abs(e_eff - 0.9) / 0.9 < 0.02
+    # the energy balance: the contact's damping work is the loss of the bounce
+    E0 = M * G * (R + H0)
+    np.testing.assert_allclose(r["energy.total"] - r["work.nonconservative"], E0, rtol=1e-8)
+    np.testing.assert_allclose(r["work.nonconservative"][-1], -M * G * (H0 - apex), rtol=1e-6)
 
 
 @pytest.mark.slow  # long: run by CI's slow set
