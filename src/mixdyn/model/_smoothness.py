@@ -11,7 +11,7 @@ element accepts such jumps (``continuity: C1``). :func:`jumps` finds them on an 
 a cam, over its turn and across the wrap-around ``theta = 2 pi -> 0``), up to the ``order``
 asked.
 
-The law and its first four derivatives (exact, forward-mode AD) are sampled on a grid of
+The law and its first three derivatives (exact, forward-mode AD) are sampled on a grid of
 ``n`` steps ``h``. Over a step ``[x_i, x_{i+1}]`` of a function ``g`` (the law, ``k = 0``,
 its slope, ``k = 1``, or its second derivative, ``k = 2``) the trapezoidal rule of its
 derivative, ``r = |g(x_{i+1}) - g(x_i) - h (g'(x_i) + g'(x_{i+1})) / 2|``, is small where
@@ -19,22 +19,21 @@ derivative, ``r = |g(x_{i+1}) - g(x_i) - h (g'(x_i) + g'(x_{i+1})) / 2|``, is sm
 up), and the jump itself where ``g`` jumps (the sampled derivatives are one-sided, finite).
 A step whose ``r`` is beyond what the derivatives sampled at its ends allow,
 
-    k = 0:  r > h**2 (|g''_i| + |g''_{i+1}|) + h**3 (|g'''_i| + |g'''_{i+1}|) / 6 + floor
-    k = 1:  r > h (|g''_i| + |g''_{i+1}|) + floor
-    k = 2:  r > h**2 (|g''_i| + |g''_{i+1}|) + floor
+    k = 0:  r > h**2 (|f''_i| + |f''_{i+1}|) + h**3 (|f'''_i| + |f'''_{i+1}|) / 6 + floor
+    k > 0:  r > h (|f'''_i| + |f'''_{i+1}|) + floor
 
-(``g''`` the law's derivative of order ``k + 2``), is looked at ``n`` times closer, three
-times over (to ``h / n**3``): a jump stays a jump at every scale, a steep smooth stretch
-resolves. What is left is a jump, placed within ``h / n**3``; a jump of a lower order
-explains its share of the residual one order up first (a jump in value before a kink, a
-kink before a jump of the second derivative). Jumps smaller than ``rtol`` times the scale
-of their order (the law's range; its largest slope; its largest second derivative) are left
-(rounded coefficients of segments that meet).
+(``f`` the law), is looked at ``n`` times closer, three times over (to ``h / n**3``): a jump
+stays a jump at every scale, a steep smooth stretch resolves. What is left is a jump, placed
+within ``h / n**3``; a jump of a lower order explains its share of the residual one order up
+first (a jump in value before a kink, a kink before a jump of the second derivative). Jumps
+smaller than ``rtol`` times the scale of their order (the law's range; its largest slope;
+its largest second derivative) are left (rounded coefficients of segments that meet).
 
 A piecewise polynomial (a spline, a Hermite motion) is read from its pieces instead: at each
-break their values must meet, and their slopes within a step's worth of their curvatures.
-A law smooth by its form (``Law.smooth``: a constant, polynomial or harmonic; an expression
-of smooth terms) is not sampled over an interval, only across a turn's wrap-around. What is
+break their values must meet, their slopes within a step's worth of their curvatures (and
+their second derivatives within a step's worth of their third). A law smooth by its form to
+the order asked (``Law.smooth_to``: a constant, polynomial or harmonic; an expression of
+smooth terms) is not sampled over an interval, only across a turn's wrap-around. What is
 found is kept by law and interval, so that models that share a law check it once.
 """
 
@@ -103,7 +102,7 @@ class Jump:
 
 
 def _samples(law, x: np.ndarray) -> np.ndarray:
-    """``(5, len(x))``: the law and its first four derivatives at ``x`` (one compiled
+    """``(4, len(x))``: the law and its first three derivatives at ``x`` (one compiled
     program per law's structure and grid size, kept between processes)."""
     return np.asarray(_derivatives(law, jnp.asarray(x, dtype=jnp.float64)), dtype=float).T
 
@@ -118,12 +117,8 @@ def _derivatives(law, x):
             (f, fd), (_, fdd) = jax.jvp(d1, (u,), (jnp.ones_like(u),))
             return f, fd, fdd
 
-        def d3(u):
-            (f, fd, fdd), (_, _, fddd) = jax.jvp(d2, (u,), (jnp.ones_like(u),))
-            return f, fd, fdd, fddd
-
-        (f, fd, fdd, fddd), (_, _, _, f4) = jax.jvp(d3, (s,), (jnp.ones_like(s),))
-        return jnp.stack([f, fd, fdd, fddd, f4])
+        (f, fd, fdd), (_, _, fddd) = jax.jvp(d2, (s,), (jnp.ones_like(s),))
+        return jnp.stack([f, fd, fdd, fddd])
 
     return jax.vmap(derivs)(x)
 
@@ -139,10 +134,6 @@ class _Turn(eqx.Module):
         return self.law(self.start + jnp.mod(x - self.start, self.period))
 
 
-#: The power of the step in what each order's residual is allowed (see the module).
-_POWER = (2, 1, 2)
-
-
 def _residuals(x: np.ndarray, d: np.ndarray, floors) -> tuple[np.ndarray, np.ndarray]:
     """Per step ``(len(floors), n)``: the residual ``r`` of the value, the slope (and the
     second derivative, for three floors), and what the derivatives at the step's ends
@@ -150,12 +141,14 @@ def _residuals(x: np.ndarray, d: np.ndarray, floors) -> tuple[np.ndarray, np.nda
     h = np.diff(x)
     a = np.abs(np.nan_to_num(d, nan=0.0, posinf=0.0, neginf=0.0))
     r, allowed = [], []
+    c3 = a[3][:-1] + a[3][1:]
     for k in range(len(floors)):
         g, g1 = d[k], d[k + 1]
         r.append(np.abs(np.diff(g) - h * (g1[:-1] + g1[1:]) / 2))
-        c2 = a[k + 2][:-1] + a[k + 2][1:]
-        c3 = a[3][:-1] + a[3][1:] if k == 0 else 0.0
-        allowed.append(h ** _POWER[k] * c2 + h**3 * c3 / 6 + floors[k])
+        if k == 0:
+            allowed.append(h**2 * (a[2][:-1] + a[2][1:]) + h**3 * c3 / 6 + floors[k])
+        else:  # the slope's and the second derivative's: a step times the third derivative
+            allowed.append(h * c3 + floors[k])
     return np.array(r), np.array(allowed)
 
 
