@@ -470,3 +470,21 @@ def test_the_example_runs(tmp_path):
     assert out.returncode == 0, out.stderr
     header = (tmp_path / "one_turn" / "results.csv").read_text().splitlines()[0]
     assert "B.normal" in header and "B.penetration" in header and "motor" in header
+
+
+def test_an_animation_draws_the_contacts_shapes():
+    """The scene of a ball over a floor: the floor's line on the ground and the ball's circle
+    in its outline (its rim a radius from the centre); a journal bearing draws both circles."""
+    from mixdyn.viz.scene import Scene
+
+    b = md.Body("ball", M, 4e-6, q0=(0.0, 0.05, 0.0))
+    floor = md.CircleLineContact("floor", "ball", R, "ground", young_modulus=E_STEEL,
+                                 restitution=1.0)  # fmt: skip
+    scene = Scene(md.Model([b], forces=[floor]), np.array([[0.0, 0.05, 0.0]]))
+    (line,) = scene.guides
+    assert np.allclose(line[:, 1], 0.0) and line[0, 0] < -R < R < line[1, 0]
+    rim = np.linalg.norm(scene.outlines[0][0] - [0.0, 0.05], axis=1)
+    np.testing.assert_allclose(np.sort(rim)[-2], R, rtol=1e-9)  # the largest but the tooth
+    bearing = md.JournalBearing("jb", "ground", "ball", 5e-4, 0.01, young_modulus=E_STEEL,
+                                restitution=1.0)  # fmt: skip
+    assert [c[2] for c in bearing.drawing()["circles"]] == [0.0105, 0.01]

@@ -291,6 +291,12 @@ class _Compliant(ForceElement):
             out["friction"] = jnp.sum(Ft)
         return out
 
+    def drawing(self) -> dict:
+        """What an animation draws of the contact's shapes (as a joint's
+        :meth:`~mixdyn.Joint.drawing`): ``circles`` [(body, body point, radius)], ``guides``
+        [(ground point, direction)] (lines on the ground)."""
+        return {}
+
     def arrow(self, q, qd) -> tuple[np.ndarray, np.ndarray]:
         """The contact's force on body j as an arrow: ``(at, F)``, the contact point (N, 2)
         [length] (of the largest force, where the pair touches at several) and the force
@@ -369,6 +375,12 @@ class CircleLineContact(_Compliant):
 
     def effective_radius(self):
         return self.radius
+
+    def drawing(self):
+        out = {"circles": [(self.bj, self.sj, self.radius)]}
+        if self.bi == GROUND:
+            out["guides"] = [(np.asarray(self.si), np.asarray(self.u))]
+        return out
 
 
 @element("box_line_contact", "forces")
@@ -455,6 +467,19 @@ class BoxLineContact(_Compliant):
     def effective_radius(self):
         return self.corner_radius
 
+    def drawing(self):
+        """The box's rounded corners (their circles make its outline) and, where the line is
+        the ground's, the line."""
+        a = float(self.width) / 2 - float(self.corner_radius)
+        b = float(self.height) / 2 - float(self.corner_radius)
+        s = np.asarray(self.sj, dtype=float)
+        corners = [(self.bj, s + np.array([x, y]), self.corner_radius)
+                   for x, y in ((a, b), (-a, b), (-a, -b), (a, -b))]  # fmt: skip
+        out = {"circles": corners}
+        if self.bi == GROUND:
+            out["guides"] = [(np.asarray(self.si), np.asarray(self.u))]
+        return out
+
 
 @element("circle_contact", "forces")
 class CircleContact(_Compliant):
@@ -495,6 +520,9 @@ class CircleContact(_Compliant):
 
     def effective_radius(self):
         return self.radius_i * self.radius_j / (self.radius_i + self.radius_j)
+
+    def drawing(self):
+        return {"circles": [(self.bi, self.si, self.radius_i), (self.bj, self.sj, self.radius_j)]}
 
 
 @element("journal_bearing", "forces")
@@ -551,6 +579,10 @@ class JournalBearing(_Compliant):
     def effective_radius(self):
         R = self.journal_radius
         return R * (R + self.clearance) / self.clearance
+
+    def drawing(self):
+        R = self.journal_radius
+        return {"circles": [(self.bi, self.si, R + self.clearance), (self.bj, self.sj, R)]}
 
 
 @element("slider_in_guide", "forces")
@@ -634,6 +666,15 @@ class SliderInGuide(_Compliant):
 
     def effective_radius(self):
         return self.corner_radius
+
+    def drawing(self):
+        """The guide's two surfaces, where the guide is the ground."""
+        if self.bi != GROUND:
+            return {}
+        u = np.asarray(self.u, dtype=float)
+        n, p = np.array([-u[1], u[0]]), np.asarray(self.si, dtype=float)
+        c = float(np.max(np.asarray(self.clearance)))
+        return {"guides": [(p + c * n, u), (p - c * n, u)]}
 
 
 # --------------------------------------------------------------------------- the model's use

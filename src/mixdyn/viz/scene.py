@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..model import Model
+from ..model._compliant import contacts
 from ..model._element import Resolver
 
 
@@ -57,7 +58,7 @@ class Scene:
         self.model = model
         self.names = [b.name for b in model.bodies]
         scale = self._scale(model, q)
-        drawings = [j.drawing() for j in model.joints]
+        drawings = [j.drawing() for j in model.joints] + [f.drawing() for f in contacts(model)]
         rims = {b: [] for b in range(len(model.bodies))}  # circles' samples per body
         ring = np.linspace(0.0, 2 * np.pi, 48, endpoint=False)
         for d in drawings:
