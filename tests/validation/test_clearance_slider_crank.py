@@ -114,6 +114,11 @@ def test_free_flight_impacts_and_contact_and_the_torques_spikes(runs):
     pen, F = r["B.penetration"], r["B.normal"]
     first = np.argmax(F > 0)
     assert first > 0 and np.any(pen[first:] < 0) and np.sum(F > 0) > 20
+    # the journal's orbit: its distance from the bearing's centre is the clearance plus
+    # the penetration, and its direction in the rod's frame turns with the load
+    orbit = np.hypot(r["B.ex"], r["B.ey"])
+    np.testing.assert_allclose(orbit, pen + 5e-4, rtol=1e-12, atol=1e-15)
+    assert np.ptp(np.arctan2(r["B.ey"], r["B.ex"])[first:]) > 3.0
     ideal = runs[None]["motor"]
     assert np.max(np.abs(r["motor"])) > 1.5 * np.max(np.abs(ideal))
     assert np.max(F) > 5 * REF["slider.mass"] * L1 * OMEGA**2

@@ -47,7 +47,7 @@ from ._contact_law import (
 from ._declare import direction, element, option, quantity, reference
 from ._element import Resolver, body_name, moving
 from ._forces import _UNBOUND, ForceElement, _f64
-from ._geometry import GROUND, angle, point, pose, vector
+from ._geometry import GROUND, angle, point, pose, rot, vector
 
 
 def _optional(x):
@@ -536,7 +536,8 @@ class JournalBearing(_Compliant):
     Penetration ``delta = |c_j - c_i| - clearance`` (the eccentricity less the clearance);
     the normal on the journal points back to the bearing's centre. Hertz's effective radius
     ``R_j (R_j + c) / c`` (a concave bearing). Result columns: ``{name}.normal``,
-    ``.penetration`` and, with ``mu``, ``.friction``.
+    ``.penetration``, the journal's orbit ``.ex``, ``.ey`` (its centre from the bearing's, in
+    body i's frame) and, with ``mu``, ``.friction``.
     """
 
     point_i: str = reference(
@@ -583,6 +584,17 @@ class JournalBearing(_Compliant):
     def drawing(self):
         R = self.journal_radius
         return {"circles": [(self.bi, self.si, R + self.clearance), (self.bj, self.sj, R)]}
+
+    def outputs(self, q, qd, t):
+        """As every contact's, and the journal's orbit: ``ex``, ``ey``, the journal centre's
+        position relative to the bearing's centre in body i's frame [length] (within the
+        clearance in free flight)."""
+        e = rot(angle(q, self.bi)).T @ self._d(q)
+        return {**super().outputs(q, qd, t), "ex": e[0], "ey": e[1]}
+
+    @property
+    def output_kinds(self):
+        return {**super().output_kinds, "ex": "length", "ey": "length"}
 
 
 @element("slider_in_guide", "forces")
