@@ -92,7 +92,7 @@ from .errors import (  # noqa: E402
     SolvabilityError,
     StepSizeError,
 )
-from .linalg import AutoSolver, BandedSolver, DenseSolver, LinearSolver  # noqa: E402
+from .linalg import AutoSolver, BandedSolver, DenseSolver, LinearSolver, UnrolledSolver  # noqa: E402
 from .model import *  # noqa: E402, F403
 from .model import __all__ as _model_all  # noqa: E402
 from .units import SI, UnitSystem  # noqa: E402
@@ -165,6 +165,7 @@ __all__ = [
     "BandedSolver",
     "DenseSolver",
     "LinearSolver",
+    "UnrolledSolver",
     "SI",
     "Analysis",
     "Assembly",

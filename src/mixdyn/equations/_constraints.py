@@ -21,7 +21,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
+from ..linalg import BandedSolver, DenseSolver, LinearSolver, UnrolledSolver, as_linear_solver
 from ..linalg._dense import solve_ranked
 from ..model import Driver, Joint, Model
 from ._jacobian import (  # noqa: F401  (REGULARIZATION, REFINE_REDUNDANT: re-exported)
@@ -63,8 +63,9 @@ class Constraints(eqx.Module):
         labels: a label per row of the full set (``"A.x"``, ``"crank_angle"``), static.
         nq: number of coordinates.
         linear_solver: the path of this set's solves (a
-            :class:`~mixdyn.linalg.DenseSolver` or :class:`~mixdyn.linalg.BandedSolver`),
-            resolved once from the analysis' choice, static.
+            :class:`~mixdyn.linalg.DenseSolver`, :class:`~mixdyn.linalg.UnrolledSolver` or
+            :class:`~mixdyn.linalg.BandedSolver`), resolved once from the analysis' choice,
+            static.
         batched: whether this set is solved in a sweep's one vectorized program: the guard at
             singular positions then decides once per batch
             (:func:`~mixdyn.linalg._dense.guarded`), static.
@@ -77,7 +78,7 @@ class Constraints(eqx.Module):
     owners: tuple[int, ...] = eqx.field(static=True)
     nq: int = eqx.field(static=True)
     rank: int | None = eqx.field(static=True)
-    linear_solver: DenseSolver | BandedSolver = eqx.field(static=True)
+    linear_solver: DenseSolver | UnrolledSolver | BandedSolver = eqx.field(static=True)
     batched: bool = eqx.field(static=True)
 
     def __init__(
@@ -107,7 +108,9 @@ class Constraints(eqx.Module):
         self.linear_solver = self._resolve_solver(linear_solver)
         self.batched = bool(batched)
 
-    def _resolve_solver(self, choice: str | LinearSolver) -> DenseSolver | BandedSolver:
+    def _resolve_solver(
+        self, choice: str | LinearSolver
+    ) -> DenseSolver | UnrolledSolver | BandedSolver:
         solver = as_linear_solver(choice)
         if isinstance(solver, DenseSolver):
             return solver
@@ -328,7 +331,7 @@ class Constraints(eqx.Module):
         :meth:`jacobian_values`). Every solve with ``Phi_q`` goes through its methods."""
         if self.banded:
             return BandedJacobian(self, self.jacobian_values(q, t))
-        return DenseJacobian(self.phi_q(q, t), self.rank, self.batched)
+        return DenseJacobian(self.phi_q(q, t), self.rank, self.batched, self.linear_solver)
 
     def matvec(self, values, x) -> jax.Array:
         """``Phi_q x`` from the sparse values."""

@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
 
+from ..linalg._choice import DenseSolver, LinearSolver
 from ..linalg._dense import (
     SINGULAR_DAMPING,
     SINGULAR_RATIO,
@@ -44,7 +45,6 @@ from ..linalg._dense import (
     factor_ranked,
     gram_factor,
     guarded,
-    lu_factor_checked,
 )
 
 #: Redundant rows on the sparse path: relative shift of the Schur complement's diagonal, and
@@ -158,11 +158,15 @@ class DenseJacobian(JacobianOperator):
         rank_: the rank when rows are redundant, else None (static).
         batched: whether the guard at singular positions decides once per batch (a sweep's
             one program; :func:`~mixdyn.linalg._dense.guarded`), static.
+        path: the set's resolved linear solver, whose :meth:`~mixdyn.linalg.LinearSolver.factor`
+            factorizes the square matrices (LAPACK's LU, or straight-line code for a few
+            rows: :class:`~mixdyn.linalg.UnrolledSolver`), static.
     """
 
     J: jax.Array
     rank_: int | None = eqx.field(static=True, default=None)
     batched: bool = eqx.field(static=True, default=False)
+    path: LinearSolver = eqx.field(static=True, default=DenseSolver())
 
     @property
     def shape(self):
@@ -184,12 +188,21 @@ class DenseJacobian(JacobianOperator):
     def values_on(self, rows, cols):
         return self.J[rows, cols]
 
+    def _factor(self, A, symmetric: bool = False) -> Factor:
+        """The square ``A`` (m, m) factorized on the set's path (:attr:`path`), or its
+        truncated SVD of the known rank with redundant rows (and for a ``Phi_q`` that is not
+        square)."""
+        if self.rank is None and A.shape[0] == A.shape[1]:
+            return self.path.factor(A, symmetric)
+        return factor_ranked(A, self.rank)
+
     def schur(self, W, shift=None, guard=False):
-        """LU of ``S`` (a truncated SVD of the known rank with redundant rows)."""
+        """LU (Cholesky on the straight-line path) of ``S``; a truncated SVD of the known
+        rank with redundant rows."""
         S = self.schur_matrix(W)
         if shift is not None:
             S = S + shift * jnp.eye(S.shape[0])
-        f = factor_ranked(S, self.rank)
+        f = self._factor(S, symmetric=True)
         if guard and self.rank is None and S.shape[0]:
             F = functools.partial(gram_factor, self.J, W, shift)
             return guarded(f, F, batched=self.batched, gram=True)
@@ -203,7 +216,7 @@ class DenseJacobian(JacobianOperator):
         S = self.J @ WJt
         if shift is not None:
             S = S + shift * jnp.eye(S.shape[0])
-        f = factor_ranked(S, self.rank)
+        f = self._factor(S, symmetric=True)
         if guard and self.rank is None and S.shape[0]:
             F = functools.partial(gram_factor, self.J, W, shift)
             f = guarded(f, F, batched=self.batched, gram=True)
@@ -212,7 +225,7 @@ class DenseJacobian(JacobianOperator):
     def solver(self, refine=0):
         """LU of ``Phi_q`` (square), or its truncated SVD of the known rank (least squares,
         minimum norm) with redundant rows; ``refine`` is ignored (a direct solve)."""
-        return factor_ranked(self.J, self.rank)
+        return self._factor(self.J)
 
     def partition(self, D):
         """As :meth:`JacobianOperator.partition`: the LU of ``Phi_qD`` (m, m); the ratio is
@@ -220,7 +233,7 @@ class DenseJacobian(JacobianOperator):
         scaling and would trigger needless new partitions; under ``jit`` the SVD is dropped
         where the ratio is not used)."""
         JD = self.J[:, D]
-        f = lu_factor_checked(JD)
+        f = self.path.factor(JD)
         s = jnp.linalg.svd(JD, compute_uv=False)
         ratio = s[-1] / s[0] if s.shape[0] else jnp.ones(())
         n = self.shape[1]
@@ -238,22 +251,23 @@ class DenseJacobian(JacobianOperator):
         m = C.shape[0]
         G = C.T if B is None else jnp.concatenate([C[: m - B.shape[1]].T, -B], axis=1)
         sym = B is None
-        f, WG = _kkt_factor(C, G, W, self.rank, self.batched, sym)
+        f, WG = _kkt_factor(C, G, W, self.rank, self.batched, sym, self.path)
 
         def solve(r1, r2):
             x, mu = jax.lax.stop_gradient(_kkt_apply(f, WG, C, W, r1, r2))
-            return _kkt_implicit(C, G, W, r1, r2, x, mu, self.rank, self.batched, sym)
+            return _kkt_implicit(C, G, W, r1, r2, x, mu, self.rank, self.batched, sym, self.path)
 
         return solve, f.ratio
 
 
-def _kkt_factor(C, G, W, rank, batched, sym):
+def _kkt_factor(C, G, W, rank, batched, sym, path):
     """The factor of ``S = C W G`` (guarded at singular positions) and ``W G``: C (m, n),
     G (n, m), W (n,). With ``sym`` (static) ``G = C^T`` and the damped solve takes the SVD of
-    ``C W^(1/2)``, else (a mixed problem's unknown forces) that of ``S``."""
+    ``C W^(1/2)``, else (a mixed problem's unknown forces) that of ``S``. ``path``: the set's
+    linear solver (:meth:`~mixdyn.linalg.LinearSolver.factor`)."""
     WG = W[:, None] * G
     S = C @ WG
-    f = factor_ranked(S, rank)
+    f = path.factor(S, sym) if rank is None else factor_ranked(S, rank)
     if rank is None and C.shape[0]:
         if sym:
             f = guarded(f, lambda: gram_factor(C, W), batched=batched, gram=True)
@@ -268,8 +282,8 @@ def _kkt_apply(f, WG, C, W, r1, r2):
     return W * r1 - WG @ mu, mu
 
 
-@functools.partial(jax.custom_jvp, nondiff_argnums=(7, 8, 9))
-def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched, sym):
+@functools.partial(jax.custom_jvp, nondiff_argnums=(7, 8, 9, 10))
+def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched, sym, path):
     """``(x, mu)``, the solution of ``W^-1 x + G mu = r1``, ``C x = r2`` (solved with the
     factor made once, its own derivative stopped), differentiated implicitly: the tangent
     is one more solve, not the derivative of the factorization."""
@@ -277,10 +291,10 @@ def _kkt_implicit(C, G, W, r1, r2, x, mu, rank, batched, sym):
 
 
 @_kkt_implicit.defjvp
-def _kkt_implicit_jvp(rank, batched, sym, primals, tangents):
+def _kkt_implicit_jvp(rank, batched, sym, path, primals, tangents):
     C, G, W, _, _, x, mu = primals
     dC, dG, dW, dr1, dr2, _, _ = tangents
-    f, WG = _kkt_factor(C, G, W, rank, batched, sym)
+    f, WG = _kkt_factor(C, G, W, rank, batched, sym, path)
     # d(W^-1 x + G mu - r1) = 0, d(C x - r2) = 0
     a = dr1 + dW / (W * W) * x - dG @ mu
     b = dr2 - dC @ x

@@ -1,16 +1,20 @@
 """The linear-solver layer shared by every analysis.
 
-Two paths, chosen once per constraint set (``Constraints.linear_solver``: a
-:class:`DenseSolver` or a :class:`BandedSolver`, resolved from the analyses' ``linear_solver=``
-argument, an object of :mod:`._choice` or its name ``"auto" | "dense" | "sparse"``):
+Three paths, chosen once per constraint set (``Constraints.linear_solver``: a
+:class:`DenseSolver`, an :class:`UnrolledSolver` or a :class:`BandedSolver`, resolved from the
+analyses' ``linear_solver=`` argument, an object of :mod:`._choice` or its name
+``"auto" | "dense" | "unrolled" | "sparse"``):
 
 * dense (:mod:`._dense`): LU of dense matrices built from ``Phi_q``, truncated SVD where
   equations are redundant, a damped (Tikhonov-filtered) SVD at singular positions;
+* unrolled (:mod:`._unrolled`): the dense path for a few rows, its Cholesky and LU
+  factorizations written out as straight-line array code (no LAPACK call per stage);
 * sparse (:mod:`._sparse`): ``Phi_q`` as values on a static pattern, every solve through the
   banded block Cholesky factorization of ``Phi_q W Phi_q^T`` (``W = M^-1``: equations of
   motion; ``W = I``: minimum-norm kinematic steps, refined iteratively where accuracy matters).
 
-:class:`AutoSolver` takes the sparse path for large mechanisms of small bandwidth.
+:class:`AutoSolver` takes the unrolled path for a few rows and the sparse path for large
+mechanisms of small bandwidth.
 ``Constraints.jacobian(q, t)`` returns the path's operator (:mod:`mixdyn.equations._jacobian`),
 whose methods factorize once and return a :class:`Factor` (``solve``, pivot ratio). Redundant
 equations make the Schur complement singular: the sparse path solves it by iterated
@@ -22,6 +26,7 @@ from ._choice import (
     BandedSolver,
     DenseSolver,
     LinearSolver,
+    UnrolledSolver,
     as_linear_solver,
 )
 from ._dense import (
@@ -37,15 +42,18 @@ from ._dense import (
     solve_ranked,
 )
 from ._sparse import AUTO_MIN_ROWS, SchurStructure, schur_structure
+from ._unrolled import UNROLLED_MAX_ROWS
 
 __all__ = [
     "AUTO_MIN_ROWS",
+    "UNROLLED_MAX_ROWS",
     "AutoSolver",
     "BandedSolver",
     "DenseSolver",
     "Factor",
     "LinearSolver",
     "SchurStructure",
+    "UnrolledSolver",
     "as_linear_solver",
     "dependent_rows",
     "factor_ranked",

@@ -1,11 +1,12 @@
 """The linear solver of an analysis, as a value.
 
 Every analysis takes ``linear_solver=``: a :class:`LinearSolver` (:class:`DenseSolver`,
-:class:`BandedSolver`, :class:`AutoSolver`) or its name (``"dense"``, ``"sparse"``,
-``"auto"``), turned into the object once (:func:`as_linear_solver`). A constraint set resolves
-it once (:meth:`LinearSolver.resolve`) into the path its solves take, a
-:class:`DenseSolver` or a :class:`BandedSolver`, and carries that object: every later stage
-reads the decision from it (:attr:`LinearSolver.banded`), none from a string.
+:class:`UnrolledSolver`, :class:`BandedSolver`, :class:`AutoSolver`) or its name
+(``"dense"``, ``"unrolled"``, ``"sparse"``, ``"auto"``), turned into the object once
+(:func:`as_linear_solver`). A constraint set resolves it once (:meth:`LinearSolver.resolve`)
+into the path its solves take, a :class:`DenseSolver`, an :class:`UnrolledSolver` or a
+:class:`BandedSolver`, and carries that object: every later stage reads the decision from it
+(:attr:`LinearSolver.banded`, :meth:`LinearSolver.factor`), none from a string.
 """
 
 from __future__ import annotations
@@ -17,7 +18,9 @@ from typing import ClassVar
 import equinox as eqx
 
 from ..errors import ModelError
+from ._dense import Factor, lu_factor_checked
 from ._sparse import AUTO_MIN_ROWS, MAX_AUTO_BLOCK, SchurStructure
+from ._unrolled import UNROLLED_MAX_ROWS, cholesky_unrolled, lu_factor_unrolled
 
 
 class LinearSolver(eqx.Module):
@@ -32,10 +35,17 @@ class LinearSolver(eqx.Module):
     name: ClassVar[str]
     banded: ClassVar[bool] = False
 
+    def factor(self, A, symmetric: bool = False) -> Factor:
+        """The factorization of a square matrix ``A`` (m, m) built from ``Phi_q`` on the
+        dense paths (a Schur complement; ``Phi_q`` itself where it is square), done once:
+        partial-pivoting LU through LAPACK. ``symmetric``: ``A`` is symmetric positive
+        definite away from singular positions (``Phi_q W Phi_q^T``)."""
+        return lu_factor_checked(A)
+
     @abc.abstractmethod
     def resolve(
         self, rows: int, per_element: bool, structure: Callable[[], SchurStructure]
-    ) -> DenseSolver | BandedSolver:
+    ) -> DenseSolver | UnrolledSolver | BandedSolver:
         """The path a constraint set of ``rows`` kept rows takes.
 
         Args:
@@ -58,6 +68,26 @@ class DenseSolver(LinearSolver):
         return self
 
 
+class UnrolledSolver(LinearSolver):
+    """The dense path with its factorizations written out as straight-line array code at
+    trace time (:mod:`mixdyn.linalg._unrolled`): Cholesky of the symmetric Schur complement,
+    LU with LAPACK's pivots otherwise; no LAPACK call in an integrator's step. Solves equal
+    the dense path's to rounding; for a few rows (the program grows like ``m^3``).
+
+    Attributes:
+        max_rows: most kept rows; a larger set takes the dense path (:class:`DenseSolver`).
+    """
+
+    name: ClassVar[str] = "unrolled"
+    max_rows: int = eqx.field(default=UNROLLED_MAX_ROWS, static=True)
+
+    def factor(self, A, symmetric: bool = False) -> Factor:
+        return cholesky_unrolled(A) if symmetric else lu_factor_unrolled(A)
+
+    def resolve(self, rows, per_element, structure) -> DenseSolver | UnrolledSolver:
+        return self if rows <= self.max_rows else DenseSolver()
+
+
 class BandedSolver(LinearSolver):
     """``Phi_q`` as values on a static pattern, every solve through the banded block Cholesky
     factorization of ``Phi_q W Phi_q^T`` (:mod:`mixdyn.linalg._sparse`): cost linear in the
@@ -78,19 +108,25 @@ class BandedSolver(LinearSolver):
 
 
 class AutoSolver(LinearSolver):
-    """The banded path for large mechanisms of small bandwidth, else the dense one.
+    """The straight-line path for a few rows, the banded path for large mechanisms of small
+    bandwidth, else the dense one.
 
     Attributes:
+        max_unrolled: most kept rows for the straight-line path (:class:`UnrolledSolver`;
+            measured: :data:`~mixdyn.linalg._unrolled.UNROLLED_MAX_ROWS`).
         min_rows: fewest kept rows for the banded path (measured: at 32 rows, a 16-link
             chain, it is 1.7x faster per RK4 step; below, the gain is 10-40%).
         max_block: largest reordered bandwidth of ``Phi_q M^-1 Phi_q^T`` for it.
     """
 
     name: ClassVar[str] = "auto"
+    max_unrolled: int = eqx.field(default=UNROLLED_MAX_ROWS, static=True)
     min_rows: int = eqx.field(default=AUTO_MIN_ROWS, static=True)
     max_block: int = eqx.field(default=MAX_AUTO_BLOCK, static=True)
 
-    def resolve(self, rows, per_element, structure) -> DenseSolver | BandedSolver:
+    def resolve(self, rows, per_element, structure) -> DenseSolver | UnrolledSolver | BandedSolver:
+        if 0 < rows <= self.max_unrolled:
+            return UnrolledSolver(self.max_unrolled)
         if rows == 0 or not per_element or rows < self.min_rows:
             return DenseSolver()
         if structure().bandwidth <= self.max_block:
@@ -101,6 +137,7 @@ class AutoSolver(LinearSolver):
 #: The names a file or a keyword may give, and their objects.
 NAMES: dict[str, type[LinearSolver]] = {
     "dense": DenseSolver,
+    "unrolled": UnrolledSolver,
     "sparse": BandedSolver,
     "banded": BandedSolver,
     "auto": AutoSolver,
@@ -118,8 +155,9 @@ def as_linear_solver(choice: str | LinearSolver) -> LinearSolver:
     if isinstance(choice, str) and choice in NAMES:
         return NAMES[choice]()
     raise ModelError(
-        "linear_solver must be one of 'auto', 'dense', 'sparse' or a mixdyn.LinearSolver "
-        f"(AutoSolver(), DenseSolver(), BandedSolver()), got {choice!r}"
+        "linear_solver must be one of 'auto', 'dense', 'unrolled', 'sparse' or a "
+        "mixdyn.LinearSolver (AutoSolver(), DenseSolver(), UnrolledSolver(), BandedSolver()), "
+        f"got {choice!r}"
     )
 
 
@@ -129,5 +167,6 @@ __all__ = [
     "BandedSolver",
     "DenseSolver",
     "LinearSolver",
+    "UnrolledSolver",
     "as_linear_solver",
 ]
