@@ -488,3 +488,17 @@ def test_an_animation_draws_the_contacts_shapes():
     bearing = md.JournalBearing("jb", "ground", "ball", 5e-4, 0.01, young_modulus=E_STEEL,
                                 restitution=1.0)  # fmt: skip
     assert [c[2] for c in bearing.drawing()["circles"]] == [0.0105, 0.01]
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_the_rattling_stop_example_stays_between_its_stops(tmp_path):
+    """``examples/rattling_stop.yaml``: the shaken arm comes back to both stops again and
+    again, and the stops hold it (its tip less than 0.1 mm into either)."""
+    (r,) = md.run_file(EXAMPLES / "rattling_stop.yaml", tmp_path).values()
+    L, gap = 0.2, 0.02
+    tip_x = L * np.sin(r["arm.phi"] + math.pi / 2)
+    for side, name in ((1, "tip_right"), (-1, "tip_left")):
+        beyond = side * tip_x - gap
+        arrivals = np.flatnonzero(np.diff((beyond > -1e-3).astype(int)) == 1)
+        assert len(arrivals) >= 4, name  # it comes back to that stop again and again
+        assert np.max(beyond) < 1e-4  # the stop holds: steel on steel, 0.1 mm at most
