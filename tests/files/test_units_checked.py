@@ -397,3 +397,16 @@ def test_a_parameter_expression_with_a_unit_is_not_converted_twice(length):
     assert fixed.bodies[0].q0[0] == pytest.approx(2.0 * per_metre, rel=1e-15)
     plain = mio.build(mio.reads(PARAMETER_EXPRESSION.format(length=length, L2="3*k mm"), "p"))
     assert plain.bodies[0].q0[0] == pytest.approx(0.006 * per_metre, rel=1e-15)
+
+
+def test_strict_units_takes_an_expression_whose_parameters_give_its_unit():
+    """Under strict_units, ``inertia: m*L**2/12`` with ``m: 1 kg`` and ``L: 300 mm`` takes its
+    unit from its parameters (7500 kg*mm**2 by hand in a file in mm); numbers alone
+    (``inertia: 750*10``) still need a unit."""
+    text = motor(T0="1.5 N*m", strict="strict_units: true\n").replace(
+        "  n0:", "  L: 300 mm\n  m: 1 kg\n  n0:"
+    )
+    model = mio.build(mio.reads(text.replace("inertia: 7500 kg*mm^2", "inertia: m*L**2/12")))
+    assert model.bodies[1].inertia == pytest.approx(7500.0, rel=1e-15)
+    with pytest.raises(mio.FileError, match="strict_units"):
+        mio.build(mio.reads(text.replace("inertia: 7500 kg*mm^2", "inertia: 750*10")))
