@@ -603,11 +603,7 @@ def _figures(plan: SweepPlan, result: FileSweep, folder: pathlib.Path, painter) 
     from ..viz.plots import result_columns
 
     units = dict(result.units)
-    model = next((r.model for r in result.sweep.results if r is not None), None)
-    for name in plan.values:  # a swept body number has the unit of its kind
-        kind = {"mass": "mass", "inertia": "inertia"}.get(name.rsplit(".", 1)[-1])
-        if kind and model is not None:
-            units[name] = model.units.label(kind)
+    units.update({k: u for k, u in plan.value_units.items() if u})  # the varied values'
     for p in plan.spec.plots:
         if p.band is not None:
             ok = [r for r in result.sweep.results if r is not None]
