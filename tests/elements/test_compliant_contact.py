@@ -374,7 +374,8 @@ def test_a_revolute_joint_with_clearance_is_a_journal_bearing():
 
 def test_a_translational_joint_with_clearance_is_a_slider_in_a_guide():
     """The model replaces the slide's two equations by a slider in a guide of its name, axis
-    and numbers; a pin in a slot takes no clearance."""
+    and numbers, which a file writes back as that contact; a pin in a slot takes no
+    clearance."""
     slide = md.Translational(
         "slide", "ground", "block", axis=(0.0, 1.0), angle=0.2, clearance=5e-4,
         slider_length=0.05, corner_radius=0.004, young_modulus=2e11, restitution=1.0,
@@ -385,6 +386,11 @@ def test_a_translational_joint_with_clearance_is_a_slider_in_a_guide():
     assert isinstance(guide, md.SliderInGuide) and guide.name == "slide"
     assert guide.axis == (0.0, 1.0) and float(guide.angle) == 0.2
     assert float(guide.effective_radius()) == 0.004
+    # written back as the contact it is: read again, the same numbers
+    again = mio.build(mio.reads(mio.dumps(model))).element("slide")
+    assert isinstance(again, md.SliderInGuide) and again.axis == (0.0, 1.0)
+    for field in ("clearance", "slider_length", "corner_radius", "angle", "restitution"):
+        assert float(getattr(again, field)) == float(getattr(guide, field)), field
     with pytest.raises(md.errors.ModelError) as err:
         md.Translational("s", "ground", "block", clearance=5e-4, young_modulus=2e11,
                          restitution=1.0)  # fmt: skip
