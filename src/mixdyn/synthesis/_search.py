@@ -274,7 +274,8 @@ def synthesize(
     chunk: int = 512,
     max_steps: int = 300,
     keep: int = 10,
-    progress: Callable[[int, int, float], None] | None = None,
+    polish: bool = True,
+    progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis:
     """Four-bars whose coupler point passes ``task``'s targets, best first.
 
@@ -286,7 +287,11 @@ def synthesize(
         chunk: starts solved together (one vectorized program, compiled once).
         max_steps: Levenberg-Marquardt's steps at most per start.
         keep: distinct candidates returned at most.
-        progress: called after each chunk with ``(starts done, starts, best score so far)``.
+        polish: with a torque weight, each outcome solved once more for the path alone from
+            where the weighted search left it (the nearest linkage that draws the path as
+            well as it can, at nearly the same torque), then scored by the objective.
+        progress: called after each chunk with ``(stage, starts done, starts, best score so
+            far)``, ``stage`` ``"search"`` or ``"polish"``.
 
     Returns:
         A :class:`Synthesis`.
@@ -294,44 +299,29 @@ def synthesize(
     Raises:
         ModelError: a bad number of starts, chunk or step count.
     """
-    import optimistix as optx
-
     objective = objective or Objective()
     for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
         if int(value) < 1:
             raise ModelError(f"{label} must be at least 1, got {value!r}", label)
     started = time.perf_counter()
+    chunk = min(int(chunk), int(starts))
     box = task.box()
     layout = _Layout(len(task.points), task.size, task.points.mean(axis=0), task.timing)
     residuals = _residuals(layout, task, objective, box)
-    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
-
-    def solve_one(u0, branch):
-        sol = optx.least_squares(
-            residuals, solver, u0, args=branch, max_steps=max_steps, throw=False
-        )
-        u = sol.value
-        r = residuals(u, branch)
-        return u, jnp.sum(r**2)
-
-    solve_chunk = jax.jit(jax.vmap(lambda u0, b: solve_one(u0, b)))
     rng = np.random.default_rng(seed)
     u0 = _starts(layout, task, box, starts, rng)
     branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
-    us, scores = [], []
-    best = np.inf
-    for lo in range(0, starts, chunk):
-        hi = min(lo + chunk, starts)
-        pad = chunk - (hi - lo)
-        batch = np.concatenate([u0[lo:hi], np.repeat(u0[lo : lo + 1], pad, axis=0)])
-        bb = np.concatenate([branches[lo:hi], np.repeat(branches[lo : lo + 1], pad)])
-        u, sc = solve_chunk(jnp.asarray(batch), jnp.asarray(bb))
-        us.append(np.asarray(u)[: hi - lo])
-        scores.append(np.asarray(sc)[: hi - lo])
-        best = min(best, float(np.nanmin(scores[-1])))
-        if progress is not None:
-            progress(hi, starts, best * layout.scale**2)
-    u_all, score_all = np.concatenate(us), np.concatenate(scores) * layout.scale**2
+    s2 = layout.scale**2
+    report = None if progress is None else (lambda d, n, b: progress("search", d, n, b * s2))
+    u_all, score_all = _solve_all(residuals, u0, branches, chunk, max_steps, report)
+    if polish and objective.torque_weight > 0:
+        path_only = _residuals(layout, task, dataclasses.replace(objective, torque_weight=0.0), box)
+        report = None if progress is None else (lambda d, n, b: progress("polish", d, n, b * s2))
+        u_all, _ = _solve_all(path_only, u_all, branches, chunk, max_steps, report)
+        score_all = np.asarray(
+            jax.jit(jax.vmap(lambda u, b: jnp.sum(residuals(u, b) ** 2)))(u_all, branches)
+        )
+    score_all = score_all * s2
     candidates, feasible = _rank(layout, task, objective, box, u_all, branches, score_all, keep)
     return Synthesis(
         task=task,
@@ -342,6 +332,38 @@ def synthesize(
         seed=seed,
         seconds=time.perf_counter() - started,
     )
+
+
+def _solve_all(residuals, u0, branches, chunk, max_steps, progress):
+    """Every start ``u0`` (S, size) solved by Levenberg-Marquardt, ``chunk`` at a time in one
+    vectorized program; ``(u (S, size), sum of squared residuals (S,))``, ``progress(done,
+    total, best)`` after each chunk."""
+    import optimistix as optx
+
+    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
+
+    def one(u, branch):
+        sol = optx.least_squares(
+            residuals, solver, u, args=branch, max_steps=max_steps, throw=False
+        )
+        return sol.value, jnp.sum(residuals(sol.value, branch) ** 2)
+
+    solve_chunk = jax.jit(jax.vmap(one))
+    total = len(u0)
+    us, scores, best = [], [], np.inf
+    for lo in range(0, total, chunk):
+        hi = min(lo + chunk, total)
+        pad = chunk - (hi - lo)
+        batch = np.concatenate([u0[lo:hi], np.repeat(u0[lo : lo + 1], pad, axis=0)])
+        bb = np.concatenate([branches[lo:hi], np.repeat(branches[lo : lo + 1], pad)])
+        u, sc = solve_chunk(jnp.asarray(batch), jnp.asarray(bb))
+        us.append(np.asarray(u)[: hi - lo])
+        scores.append(np.asarray(sc)[: hi - lo])
+        if np.any(np.isfinite(scores[-1])):
+            best = min(best, float(np.nanmin(scores[-1])))
+        if progress is not None:
+            progress(hi, total, best)
+    return np.concatenate(us), np.concatenate(scores)
 
 
 def _figures(layout: _Layout, task: PathTask):
