@@ -2,7 +2,7 @@
 
 from ._body import Body, Ground
 from ._cams import CamFollower
-from ._compliant import (
+from ._contact_pairs import (
     BoxLineContact,
     CircleContact,
     CircleLineContact,

@@ -19,6 +19,7 @@ import jax.numpy as jnp
 
 from .._arrays import as_f64
 from ..errors import ModelError
+from . import _clearance
 from . import _compliant as _c
 from ._declare import direction, element, quantity, reference
 from ._element import Element, Resolver, body_name, moving
@@ -159,7 +160,7 @@ class Revolute(_TwoPoint):
     equation_labels: ClassVar[tuple[str, ...]] = ("x", "y")
 
     def __check_init__(self):
-        _c.check_clearance(self, ("journal_radius",))
+        _clearance.check_clearance(self, ("journal_radius",))
 
     def residual(self, q):
         return self._d(q)
@@ -261,7 +262,7 @@ class Translational(_TwoPoint):
     equation_labels: ClassVar[tuple[str, ...]] = ("normal", "angle")
 
     def __check_init__(self):
-        _c.check_clearance(self, ("slider_length", "corner_radius"))
+        _clearance.check_clearance(self, ("slider_length", "corner_radius"))
 
     def bind(self, r: Resolver):
         kw = self._bind_points(r)

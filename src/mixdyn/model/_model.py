@@ -11,7 +11,7 @@ from .._arrays import as_f64
 from ..errors import ModelError
 from ..units import SI, UnitSystem
 from ._body import GROUND_NAME, Body, Ground
-from ._compliant import clearance_contacts
+from ._clearance import clearance_contacts
 from ._drivers import Driver
 from ._element import Resolver
 from ._forces import ForceElement
