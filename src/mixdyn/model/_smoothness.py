@@ -223,36 +223,68 @@ def _piecewise(law, start, stop, periodic, rtol, n, order=1) -> list[Jump]:
     x = np.asarray(law.breaks, dtype=float)
     c = np.asarray(law.coeffs, dtype=float)
     m = c.shape[1]  # pieces
+    derivatives = [_derivative(c, k) for k in range(order + 2)]
 
-    def at(i, u, k):  # the k-th derivative of piece i at u
-        return float(np.polyval(np.polyder(c[:, i], k), u - x[i]))
+    def at(i, u, k):  # the k-th derivative of pieces i (n,) at u (n,)
+        return _horner(derivatives[k], x, i, u)
 
     def piece(u):
-        return int(np.clip(np.searchsorted(x, u, side="right") - 1, 0, m - 1))
+        return np.clip(np.searchsorted(x, u, side="right") - 1, 0, m - 1)
 
-    pairs = [(b, i - 1, i, b) for i, b in enumerate(x[1:m], start=1) if start < b < stop]
+    inner = [i for i in range(1, m) if start < x[i] < stop]
+    b = x[inner]  # the breaks inside the span, and the pieces either side
+    left, right, b_right = np.array(inner, dtype=int) - 1, np.array(inner, dtype=int), b
     if periodic:
-        pairs.append((stop, piece(stop), piece(start), start))
-    ends = [start, stop, *(b for b, *_ in pairs)]
-    values = [at(piece(u), u, 0) for u in ends]
-    slopes = [at(piece(u), u, 1) for u in ends]
+        b = np.append(b, stop)
+        left = np.append(left, piece(np.array([stop])))
+        right = np.append(right, piece(np.array([start])))
+        b_right = np.append(b_right, start)
+    ends = np.array([start, stop, *b])
+    values = at(piece(ends), ends, 0)
+    slopes = at(piece(ends), ends, 1)
     scale0 = float(np.ptp(values))
     scale1 = float(np.max(np.abs(slopes))) + scale0 / (stop - start)
     floors = [rtol * scale0, rtol * scale1]
     if order == 2:
-        knots = [*x[:m], x[m - 1]]  # every piece at its start and the last at its end
-        curvatures = [at(piece(u), u, 2) for u in (*ends, *knots)]
+        knots = np.array([*ends, *x[:m], x[m - 1]])  # every piece at its start, the last at its end
+        curvatures = at(piece(knots), knots, 2)
         floors.append(rtol * (float(np.max(np.abs(curvatures))) + scale1 / (stop - start)))
-    found = []
     h = (stop - start) / n
-    for b, i, j, b_right in pairs:
-        for k in range(order + 1):
-            size = at(j, b_right, k) - at(i, b, k)
-            bends = abs(at(i, b, k + 1)) + abs(at(j, b_right, k + 1))
-            if abs(size) > floors[k] + (k > 0) * h * bends or not math.isfinite(size):
-                found.append(Jump(k, float(b), size, 0.0))
+    jumped = []  # per derivative: (sizes, seen) at every break
+    for k in range(order + 1):
+        size = at(right, b_right, k) - at(left, b, k)
+        bends = np.abs(at(left, b, k + 1)) + np.abs(at(right, b_right, k + 1))
+        seen = (np.abs(size) > floors[k] + (k > 0) * h * bends) | ~np.isfinite(size)
+        jumped.append((size, seen))
+    found = []
+    for p in range(len(b)):
+        for k, (size, seen) in enumerate(jumped):
+            if seen[p]:
+                found.append(Jump(k, float(b[p]), float(size[p]), 0.0))
                 break
     return found
+
+
+def _derivative(c: np.ndarray, k: int) -> np.ndarray:
+    """The coefficients ``(degree + 1 - k, pieces)`` of the pieces' ``k``-th derivatives,
+    from their coefficients ``c`` ``(degree + 1, pieces)``, highest power first."""
+    degree = c.shape[0] - 1
+    if k > degree:
+        return np.zeros((1, c.shape[1]))
+    powers = np.arange(degree, -1, -1, dtype=float)
+    for j in range(k):
+        c = c * (powers - j)[:, None]
+    return c[: degree + 1 - k]
+
+
+def _horner(d: np.ndarray, x: np.ndarray, i: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Pieces ``i`` (n,) of coefficients ``d`` ``(rows, pieces)`` starting at breaks ``x``,
+    evaluated at ``u`` (n,)."""
+    du = np.asarray(u, dtype=float) - x[i]
+    y = np.zeros_like(du)
+    for row in d:
+        y = y * du + row[i]
+    return y
 
 
 def _key(law, *args):
