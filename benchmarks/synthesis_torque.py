@@ -9,8 +9,8 @@ torque in the objective (bars of 2 kg/m, a 0.5 kg payload at the coupler point, 
 one turn a second, under gravity) the search follows the family towards the lightest-driven
 member, then polishes the path alone.
 
-Both results are written as model files and run by mixdyn's own inverse dynamics
-(``md.inverse`` of the written model: Lagrange multipliers, not the search's energy balance);
+Both results are built as mixdyn models (what their model files hold) and run by mixdyn's own
+inverse dynamics (``md.inverse``: Lagrange multipliers, not the search's energy balance);
 the table compares the path error, the RMS and peak motor torque over the traversed motion.
 Two baselines: the kinematics-only search's best-ranked linkage, and the lowest-torque one
 among all its distinct linkages that reach the same path error (a designer picking by hand
@@ -22,7 +22,6 @@ Run: ``python benchmarks/synthesis_torque.py [--starts 1024] [--seed 0]``.
 from __future__ import annotations
 
 import argparse
-import tempfile
 import time
 
 import numpy as np
@@ -39,13 +38,11 @@ SAME_ERROR = 5e-12
 
 
 def mixdyn_torque(out, k: int) -> tuple[float, float]:
-    """RMS and peak motor torque [N*m] of candidate k by md.inverse of its model file."""
-    with tempfile.NamedTemporaryFile("w", suffix=".yaml", delete=False) as f:
-        f.write(out.model_file(k))
-    loaded = md.load(f.name)
+    """RMS and peak motor torque [N*m] of candidate k by md.inverse of its model (the model
+    its file describes)."""
     c = out.candidates[k]
     t = np.linspace(0.0, (c.angles[-1] - c.angles[0]) / SPEED, 257)
-    tau = md.inverse(loaded.model, t)["motor"]
+    tau = md.inverse(out.model(k), t)["motor"]
     return float(np.sqrt(np.mean(tau**2))), float(np.max(np.abs(tau)))
 
 

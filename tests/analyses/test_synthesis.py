@@ -157,3 +157,27 @@ def test_synthesis_recovers_a_known_four_bar():
     kin = md.kinematic(model, (best.angles - best.angles[0]) / out.objective.speed)
     p, _, _ = kin.point("coupler.P")
     assert np.max(np.abs(p - points)) < 1e-9
+
+
+@pytest.mark.slow  # long: run by CI's slow set (two searches; benchmarks/synthesis_torque.py)
+def test_torque_objective_lowers_the_torque_at_the_same_path_error():
+    """Five points, timing-free (a family of exact four-bars): with the RMS motor torque in
+    the objective the best linkage still passes the points (error ~ 0) and its torque, from
+    md.inverse of its model (the multipliers, not the search's energy balance), is a third
+    or less of the kinematics-only optimum's."""
+    points = np.array([[0.50, 0.30], [0.58, 0.42], [0.48, 0.55], [0.32, 0.50], [0.30, 0.36]])
+    masses, speed = Masses(density=2.0, payload=0.5), 2 * np.pi
+    task = PathTask(points)
+    kin = synthesize(task, Objective(masses=masses, speed=speed), starts=64, seed=3)
+    dyn = synthesize(
+        task, Objective(masses=masses, speed=speed, torque_weight=1e-4), starts=64, seed=3
+    )
+    rms = []
+    for out in (kin, dyn):
+        assert out.best.error < 1e-20
+        c = out.best
+        t = np.linspace(0.0, (c.angles[-1] - c.angles[0]) / speed, 129)
+        tau = md.inverse(out.model(), t)["motor"]
+        assert np.sqrt(np.mean(tau**2)) == pytest.approx(c.torque_rms, rel=0.02)
+        rms.append(np.sqrt(np.mean(tau**2)))
+    assert rms[1] < rms[0] / 3
