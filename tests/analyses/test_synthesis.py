@@ -144,17 +144,20 @@ def test_bad_tasks_are_named_before_searching():
 
 
 @pytest.mark.slow  # long: run by CI's slow set
-def test_synthesis_recovers_a_known_four_bar():
+def test_synthesis_recovers_a_known_four_bar(tmp_path):
     """Six points of the fixture's curve at prescribed input angles: the best linkage draws
-    them exactly (error ~ 0), and its model file's kinematic run by mixdyn passes them."""
+    them exactly (error ~ 0), and its written model file, loaded and run by mixdyn's kinematic
+    analysis, passes them."""
     theta = np.linspace(0.3, 4.0, 6)
     points = np.asarray(coupler_curve(fourbar(1.0), theta))
     out = synthesize(PathTask(points, timing=theta), starts=256, chunk=256, seed=1)
     best = out.best
     assert best.error < 1e-20
     assert np.allclose(np.diff(best.angles), np.diff(theta))
-    model = out.model()
-    kin = md.kinematic(model, (best.angles - best.angles[0]) / out.objective.speed)
+    out.write(tmp_path / "best.yaml")
+    loaded = md.load(tmp_path / "best.yaml")
+    assert {r.kind for r in loaded.runs.values()} == {"kinematic"}
+    kin = md.kinematic(loaded.model, (best.angles - best.angles[0]) / out.objective.speed)
     p, _, _ = kin.point("coupler.P")
     assert np.max(np.abs(p - points)) < 1e-9
 
