@@ -134,7 +134,7 @@ def test_player_plays_on_opening_and_refuses_forces_without_them(motion, tmp_pat
     dom = chromium(tmp_path, page.as_uri(), "dom")
     assert 'data-playing="true"' in dom
     assert "Uncaught" not in dom
-    with pytest.raises(ValueError, match="neither a joint, a point force nor"):
+    with pytest.raises(ValueError, match="neither a joint, a point force"):
         html(motion, tmp_path / "q.html", forces=["crank"])
     kinematic = md.kinematic(slider_crank(), np.linspace(0, 1, 5))
     with pytest.raises(ValueError, match="no forces"):

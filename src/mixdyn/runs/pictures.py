@@ -23,11 +23,15 @@ def show(file, output: pathlib.Path | None = None) -> pathlib.Path:
 
     Args:
         file: the model file.
-        output: the drawing, ``.png``, ``.svg``, ``.pdf`` or ``.html``; None: ``FILE.png``.
+        output: the drawing, ``.png``, ``.svg`` or ``.pdf``, or ``.html``: the HTML player
+            (:func:`mixdyn.viz.player.html`) at the start, to zoom, pan and read coordinates;
+            None: ``FILE.png``.
 
     Returns:
         The file drawn.
     """
+    import numpy as np
+
     from .. import analysis as an
     from ..io import FileError, read
     from ..viz.show import SHOW_SUFFIXES, draw
@@ -49,7 +53,14 @@ def show(file, output: pathlib.Path | None = None) -> pathlib.Path:
     require_size(spec, file)
     model = Runner(spec).model
     asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
-    draw(model, asm.q, target, title=f"{model.name} at its assembled start")
+    title = f"{model.name} at its assembled start"
+    if target.suffix.lower() == ".html":  # the player, at the start: one frame
+        from ..viz.player import html
+
+        q = np.asarray(asm.q, dtype=float)[None]
+        html(model=model, t=np.zeros(1), q=q, path=target, title=title)
+        return target
+    draw(model, asm.q, target, title=title)
     return target
 
 

@@ -26,6 +26,28 @@ COLORS = (
 )
 
 
+#: Line widths of the symbols by kind (:mod:`mixdyn.viz.symbols`).
+SYMBOL_WIDTH = {"spring": 1.2, "damper": 1.4, "spring_damper": 1.2, "rotary_spring": 1.2,
+                "torque": 2.0, "force": 2.2}  # fmt: skip
+
+
+def body_style(color: str, closed: bool) -> dict:
+    """A body's patch style: a plate (closed outline) translucent, so that a body beneath it
+    (a crank under a triangular coupler) shows through; a bar as a thick line."""
+    from matplotlib.colors import to_rgba
+
+    if closed:
+        return {"fc": to_rgba(color, 0.22), "ec": color, "lw": 1.8}
+    return {"fc": "none", "ec": to_rgba(color, 0.9), "lw": 3.0}
+
+
+def legend(ax) -> None:
+    """The legend beside the axes (right of them), never over the mechanism."""
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                  fontsize="small", frameon=False)  # fmt: skip
+
+
 def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 100) -> pathlib.Path:
     """Write the animation ``data`` (see :func:`mixdyn.viz.animate.movie_data`) to ``path``:
     ``.gif`` (Pillow) or ``.mp4`` (ffmpeg).
@@ -66,17 +88,23 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 100) -> path
         color = COLORS[k % len(COLORS)]
         closed = outline.shape[1] > 2
         patch = Polygon(
-            outline[0],
-            closed=closed,
-            fc=color if closed else "none",
-            ec=color,
-            alpha=0.85,
-            lw=3.0 if not closed else 1.5,
-            zorder=3,
-            label=names[k],
+            outline[0], closed=closed, zorder=3, label=names[k], **body_style(color, closed)
         )
         ax.add_patch(patch)
         patches.append(patch)
+    symbols = data.get("symbols", [])
+    symbol_lines = [
+        ax.plot(
+            [],
+            [],
+            "-",
+            color=m["color"],
+            lw=SYMBOL_WIDTH[m["kind"]],
+            zorder=4,
+            label=m["label"] if m["kind"] in ("torque", "force") else None,
+        )[0]
+        for m in symbols
+    ]
     (pins,) = ax.plot([], [], "o", mfc="white", mec="k", ms=6, zorder=5)
     trace_lines = [ax.plot([], [], "-", lw=1.0, color="k", alpha=0.6, zorder=4)[0] for _ in traces]
     arrows = data.get("arrows", [])
@@ -101,7 +129,7 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 100) -> path
         ax.text(0.02, 0.02, data.get("arrow_note", ""), transform=ax.transAxes, fontsize=8)
     label = ax.text(0.02, 0.96, "", transform=ax.transAxes, va="top", fontsize=9)
     ax.set_title(data["title"])
-    ax.legend(loc="upper right", fontsize="small")
+    legend(ax)
     tu = data["time_unit"]
 
     def draw(i):
@@ -111,12 +139,14 @@ def movie(data: dict, path, *, fps: int = 20, size=None, dpi: int = 100) -> path
             pins.set_data(pins_xy[i, :, 0], pins_xy[i, :, 1])
         for line, tr in zip(trace_lines, traces, strict=True):
             line.set_data(tr[: i + 1, 0], tr[: i + 1, 1])
+        for line, m in zip(symbol_lines, symbols, strict=True):
+            line.set_data(m["path"][i, :, 0], m["path"][i, :, 1])
         label.set_text(f"t = {times[i]:.3f} {tu}")
         if quiver is not None:
             quiver.set_offsets(at[i])
             quiver.set_UVC(vec[i, :, 0], vec[i, :, 1])
-            return [*patches, pins, *trace_lines, quiver, label]
-        return [*patches, pins, *trace_lines, label]
+            return [*patches, *symbol_lines, pins, *trace_lines, quiver, label]
+        return [*patches, *symbol_lines, pins, *trace_lines, label]
 
     # Lay the figure out once, then keep that layout for every frame.
     draw(0)

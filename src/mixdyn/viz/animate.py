@@ -16,7 +16,7 @@ import numpy as np
 from ..model import Model
 from . import _draw
 from .arrows import arrow_scale, force_arrows
-from .player import html
+from .player import applied, html, result_at
 from .scene import Scene, _frames, _motion
 
 ANIMATION_SUFFIXES = (".gif", ".mp4", ".html")
@@ -102,12 +102,12 @@ def movie_data(
     their scale's note (see :func:`mixdyn.viz._draw.movie`)."""
     model, ts, qs = _motion(result, model, t, q)
     idx = _frames(len(ts), frames)
-    scene = Scene(model, qs[idx], trace)
+    scene = Scene(model, qs[idx], trace, *result_at(result, idx))
     arrows, note = [], ""
     if forces:
         if result is None:
             raise ValueError("force arrows need a result (its reaction and force columns)")
-        found = force_arrows(result, forces)
+        found = [a for a in force_arrows(result, forces) if a["name"] not in applied(model)]
         scale = arrow_scale(found, scene.bounds)
         arrows = [
             {"name": a["name"], "color": a["color"], "at": a["at"][idx], "v": a["F"][idx] * scale}
@@ -125,6 +125,7 @@ def movie_data(
         "ground": scene.ground,
         "guides": scene.guides,
         "traces": scene.traces,
+        "symbols": scene.symbols,
         "bounds": scene.bounds,
         "times": ts[idx],
         "title": title if title is not None else model.name,

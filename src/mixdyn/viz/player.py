@@ -23,7 +23,7 @@ import pathlib
 
 import numpy as np
 
-from ..model import Model
+from ..model import Model, PointForce
 from ._draw import COLORS
 from .arrows import arrow_scale, force_arrows
 from .scene import Scene, _frames, _motion
@@ -76,6 +76,16 @@ def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=()) -
         "ground": r(scene.ground),
         "guides": r(scene.guides),
         "traces": [r(tr) for tr in scene.traces],
+        "symbols": [
+            {
+                "name": m["name"],
+                "kind": m["kind"],
+                "color": m["color"],
+                "label": m["label"],
+                "path": r(m["path"]),
+            }
+            for m in scene.symbols
+        ],
         "arrows": [
             {
                 "name": a["name"],
@@ -94,6 +104,23 @@ def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=()) -
             else ""
         ),
     }
+
+
+def applied(model: Model) -> set[str]:
+    """The point forces of ``model``: drawn as symbols of the scene
+    (:func:`mixdyn.viz.symbols.symbols`), not among the requested force arrows."""
+    return {f.name for f in model.forces if isinstance(f, PointForce)}
+
+
+def result_at(result, idx) -> tuple[dict | None, dict | None]:
+    """A result's columns at the frames ``idx`` and their units (engineering spelling), for
+    the scene's torques and forces; ``(None, None)`` without a result."""
+    if result is None:
+        return None, None
+    from ..units import engineering
+
+    cols = {k: np.asarray(v)[idx] for k, v in result.columns().items()}
+    return cols, {k: engineering(u) for k, u in result.units().items()}
 
 
 def html(
@@ -126,12 +153,16 @@ def html(
     """
     model, ts, qs = _motion(result, model, t, q)
     idx = np.arange(len(ts)) if frames is None else _frames(len(ts), frames)
-    scene = Scene(model, qs[idx], trace)
+    scene = Scene(model, qs[idx], trace, *result_at(result, idx))
     arrows = []
     if forces:
         if result is None:
             raise ValueError("force arrows need a result (its reaction and force columns)")
-        arrows = [{**a, "at": a["at"][idx], "F": a["F"][idx]} for a in force_arrows(result, forces)]
+        arrows = [
+            {**a, "at": a["at"][idx], "F": a["F"][idx]}
+            for a in force_arrows(result, forces)
+            if a["name"] not in applied(model)
+        ]
     data = player_data(model, ts[idx], qs[idx], scene, title=title, fps=fps, arrows=arrows)
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
     page = _page().replace("__TITLE__", _escape(data["title"])).replace("__DATA__", text)

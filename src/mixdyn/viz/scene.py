@@ -10,6 +10,7 @@ import numpy as np
 from ..model import Model
 from ..model._compliant import contacts
 from ..model._element import Resolver
+from .symbols import symbols
 
 
 def _hull(points: np.ndarray) -> np.ndarray:
@@ -43,6 +44,9 @@ class Scene:
         model: the mechanism.
         q: (N, nq) coordinates at N instants.
         trace: point references whose paths are drawn.
+        cols: the result's columns at the instants of ``q`` (the torques' and forces'
+            magnitudes), or None (a model drawn at rest).
+        units: the columns' units.
 
     Attributes:
         outlines: per body, (N, k, 2) outline vertices (closed polygon, bar or block).
@@ -50,10 +54,12 @@ class Scene:
         ground: (G, 2) ground points.
         guides: (L, 2, 2) guide lines of sliding joints on the ground.
         traces: per traced point, (N, 2).
+        symbols: the force elements as symbols (springs' coils, dampers, torques' arcs,
+            point forces' arrows; :func:`mixdyn.viz.symbols.symbols`).
         bounds: ``(xmin, xmax, ymin, ymax)`` of the whole scene.
     """
 
-    def __init__(self, model: Model, q: np.ndarray, trace=()):
+    def __init__(self, model: Model, q: np.ndarray, trace=(), cols=None, units=None):
         q = np.atleast_2d(np.asarray(q, dtype=float))
         self.model = model
         self.names = [b.name for b in model.bodies]
@@ -121,6 +127,7 @@ class Scene:
         for c in rings:  # drawn as its chords
             guides += [[c[k], c[(k + 1) % len(c)]] for k in range(len(c))]
         self.guides = np.array(guides).reshape(-1, 2, 2)
+        self.symbols = symbols(model, q, span, cols, units)
 
     @staticmethod
     def _scale(model, q):

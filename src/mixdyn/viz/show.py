@@ -8,8 +8,9 @@ import pathlib
 import numpy as np
 
 from .._hints import count
-from ._draw import COLORS
+from ._draw import COLORS, SYMBOL_WIDTH, body_style, legend
 from .animate import Scene
+from .labels import place
 
 #: File types a drawing may be written to.
 SHOW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
@@ -60,11 +61,11 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
     ax.set_ylabel(f"y [{u}]")
     for g in scene.guides:
         ax.plot(g[:, 0], g[:, 1], color="0.55", lw=1.0, ls="-.", zorder=1)
+    labels: list[tuple[str, np.ndarray, dict]] = []  # (text, anchor, style)
     for name, p in model.ground.points.items():
         p = np.asarray(p, dtype=float)
         ax.plot([p[0]], [p[1]], "^", color="0.3", ms=9, zorder=2)
-        ax.annotate(f"ground.{name}", p, xytext=(4, -12), textcoords="offset points",
-                    fontsize=7, color="0.3")  # fmt: skip
+        labels.append((f"ground.{name}", p, {"fontsize": 7, "color": "0.3"}))
     for k, outline in enumerate(scene.outlines):
         color = COLORS[k % len(COLORS)]
         closed = outline.shape[1] > 2
@@ -72,27 +73,29 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
             Polygon(
                 outline[0],
                 closed=closed,
-                fc=color if closed else "none",
-                ec=color,
-                alpha=0.85,
-                lw=3.0 if not closed else 1.5,
                 zorder=3,
                 label=scene.names[k],
+                **body_style(color, closed),
             )
         )
         x, y = q[3 * k], q[3 * k + 1]
         ax.plot([x], [y], "+", color="k", ms=6, zorder=6)
-        ax.annotate(scene.names[k], (x, y), xytext=(4, 4), textcoords="offset points",
-                    fontsize=9, weight="bold", color=color, zorder=7)  # fmt: skip
+        labels.append((scene.names[k], np.array([x, y]),
+                       {"fontsize": 9, "weight": "bold", "color": color}))  # fmt: skip
+    for m in scene.symbols:
+        ax.plot(m["path"][0, :, 0], m["path"][0, :, 1], "-", color=m["color"],
+                lw=SYMBOL_WIDTH[m["kind"]], zorder=4)  # fmt: skip
+        labels.append((m["label"], m["anchor"][0], {"fontsize": 7, "color": m["color"]}))
     for name, p in _joint_points(model, q):
         ax.plot([p[0]], [p[1]], "o", mfc="white", mec="k", ms=6, zorder=5)
-        ax.annotate(name, p, xytext=(5, -10), textcoords="offset points", fontsize=8, zorder=7)
+        labels.append((name, p, {"fontsize": 8}))
     ax.set_title(
         title
         or f"{model.name}: {count(len(model.bodies), 'body', 'bodies')}, "
         f"{count(len(model.joints), 'joint')}"
     )
-    ax.legend(loc="upper right", fontsize="x-small")
+    legend(ax)
+    _write_labels(fig, ax, merge_labels(labels))
     path.parent.mkdir(parents=True, exist_ok=True)
     with matplotlib.rc_context({"svg.fonttype": "none"}):  # names as text in an SVG
         if suffix == ".html":
@@ -108,6 +111,54 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
         else:
             fig.savefig(path, dpi=dpi)
     return path
+
+
+def merge_labels(labels):
+    """One label per place: the names of things at the same point joined (``O2`` and
+    ``ground.O2`` give ``O2``: a ground point's name is left out where a joint of the same
+    name sits on it).
+
+    Args:
+        labels: ``(text, anchor (2,), style)`` each.
+
+    Returns:
+        The labels, those at one place (to 1e-9 of the largest coordinate) merged.
+    """
+    scale = max((float(np.max(np.abs(a))) for _, a, _ in labels), default=1.0) or 1.0
+    spots: dict = {}
+    for text, anchor, style in labels:
+        key = tuple(np.round(np.asarray(anchor, dtype=float) / (1e-9 * scale)).astype(int))
+        spots.setdefault(key, []).append((text, np.asarray(anchor, dtype=float), style))
+    out = []
+    for group in spots.values():
+        texts = [t for t, _, _ in group]
+        short = {t for t in texts if not t.startswith("ground.")}
+        kept = [t for t in texts if not (t.startswith("ground.") and t[7:] in short)]
+        kept = list(dict.fromkeys(kept))
+        style = next((st for t, _, st in group if t in kept), group[0][2])
+        out.append((", ".join(kept), group[0][1], style))
+    return out
+
+
+def _write_labels(fig, ax, labels) -> None:
+    """Write ``labels`` (``(text, anchor, style)``) beside their anchors, placed so that
+    none covers another, a marker or the legend, inside the axes (:func:`.labels.place`).
+    The figure's layout is fixed first (the places are in display pixels)."""
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
+    renderer = fig.canvas.get_renderer()
+    anchors = ax.transData.transform(np.array([a for _, a, _ in labels]).reshape(-1, 2))
+    texts = [ax.text(0, 0, t, zorder=7, ha="left", va="bottom", **st) for t, _, st in labels]
+    sizes = []
+    for t in texts:
+        bb = t.get_window_extent(renderer)
+        sizes.append((bb.width, bb.height))
+    marks = [(x - 5, y - 5, x + 5, y + 5) for x, y in anchors]
+    frame = ax.bbox.extents
+    boxes = place(anchors, sizes, frame, gap=4.0, obstacles=marks)
+    to_data = ax.transData.inverted()
+    for t, box in zip(texts, boxes, strict=True):
+        t.set_position(to_data.transform(box[:2]))
 
 
 def svg(model, q, *, title: str | None = None) -> str:
