@@ -61,18 +61,20 @@ def coil(p0, p1, width: float, turns: int = 6, lead: float = 0.15) -> np.ndarray
 
 def damper(p0, p1, width: float) -> np.ndarray:
     """A damper from ``p0`` to ``p1`` (N, 2): a rod from ``p0`` to a piston plate, a cylinder
-    open towards ``p0`` and a rod from its bottom to ``p1``. The cylinder keeps a fixed length
-    (a third of the distance at the first instant); the piston slides in it.
+    open towards ``p0`` and a rod from its bottom to ``p1``. The cylinder (a third of the
+    distance at the first instant long) moves with ``p1``, the piston with ``p0``: it slides
+    in the cylinder as the distance changes.
 
     Returns:
         (N, k, 2) with NaN rows between the pieces.
     """
     p0, p1 = np.atleast_2d(p0).astype(float), np.atleast_2d(p1).astype(float)
     u, n, L = _frame(p0, p1)
-    c = L[0] / 3 if len(L) else 0.0
-    bottom = L - 0.3 * L  # the cylinder's bottom, from p0
+    L0 = L[0] if len(L) else 0.0
+    c = L0 / 3
+    bottom = L - 0.3 * L0  # the cylinder's bottom, from p0 (fixed to p1)
     mouth = bottom - c
-    piston = np.maximum(mouth + 0.45 * c, 0.0)
+    piston = np.clip(0.7 * L0 - 0.55 * c, mouth, bottom)  # fixed to p0, inside the cylinder
     w = width
     pieces = [
         (np.stack([0 * L, piston], 1), np.zeros((len(L), 2))),  # rod to the piston
