@@ -73,14 +73,6 @@ class _Layout:
             return u[9] + jnp.asarray(self.timing - self.timing[0])
         return u[9] + jnp.concatenate([jnp.zeros(1), jnp.cumsum(u[10:])])
 
-    def u_of(self, v: np.ndarray, theta: np.ndarray) -> np.ndarray:
-        """Variables of a four-bar's numbers ``v`` (9,) and input angles ``theta`` (N,)."""
-        s, c = self.scale, self.centre
-        u = np.concatenate([v[:6] / s, (v[6:8] - c) / s, v[8:9], theta[:1]])
-        if self.timing is None:
-            u = np.concatenate([u, np.diff(theta)])
-        return u
-
 
 def _residuals(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray):
     """``r(u, branch)``: the residual vector of a candidate (see the module's documentation)."""
