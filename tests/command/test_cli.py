@@ -5,6 +5,7 @@ import ast
 import json
 import os
 import pathlib
+import re
 import subprocess
 import sys
 import time
@@ -153,6 +154,13 @@ def test_antonya_writes_the_papers_figures_and_the_animation(antonya):
     assert "fig3_slider_displacement.png" in meta["figures"]
     assert meta["settings"]["method"] == "projection" and meta["settings"]["rtol"] == 1e-10
     assert meta["stats"]["steps"] > 0
+    # The run's one-page report: its three figures and the animation inline, the energies.
+    assert meta["report"] == "report.html"
+    report = (out / "forward" / "report.html").read_text()
+    assert report.count('src="data:image/png;base64,') == 3
+    assert report.count('src="data:image/gif;base64,') == 1
+    balance = re.search(r"relative to the largest range or work</td><td class=n>([^<]*)<", report)
+    assert float(balance.group(1)) < 1e-6  # rtol 1e-10: energy conserved but for Wn
 
 
 def test_plot_and_animate_from_written_results(cli, antonya, tmp_path):

@@ -1,6 +1,7 @@
 """Plots and animations: files of the right kind, size and frame count, and not blank."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -135,3 +136,57 @@ def test_scene_outlines(motion):
     x0, x1, y0, y1 = scene.bounds
     assert x0 < 0 < 0.4 < x1 and y0 < 0 < y1
     assert scene.guides.shape == (1, 2, 2)
+
+
+def test_report_page_is_self_contained_with_ranges_units_and_figures(motion, tmp_path):
+    """The page holds every column's range (its min and max from the result) with its unit,
+    the drawing and the figures inline (data URIs), and nothing fetched."""
+    from mixdyn.viz.report import Report, scene_svg
+
+    figure = plot_columns(
+        *result_columns(motion, ["crank.phi"])[:1], ["crank.phi"], tmp_path / "a.png"
+    )
+    cols = motion.columns()
+    units = motion.units()
+    page = Report(
+        path=tmp_path / "report.html",
+        title="slider-crank: run turn",
+        facts=[("run", "turn (kinematic)")],
+        drawing=scene_svg(Scene(motion.model, motion.q[:1])),
+        figures=[figure, tmp_path / "not-drawn.png"],
+        columns=cols,
+        units=units,
+        settings={"kind": "kinematic", "time": {"span": [0, 3.14]}},
+    ).write()
+    text = page.read_text()
+    assert "http" not in text and "<script" not in text and 'src="file' not in text
+    assert text.count('src="data:image/png;base64,') == 1 and "<svg" in text
+    ranges = re.search(r'<table class="ranges">(.*?)</table>', text).group(1)
+    rows = re.findall(r"<tr><td>([^<]*)</td><td>([^<]*)</td><td class=n>([^<]*)</td>"
+                      r"<td class=n>([^<]*)</td></tr>", ranges)  # fmt: skip
+    assert [r[0] for r in rows] == list(cols)
+    for name, unit, lo, hi in rows:
+        assert unit == units.get(name, "")
+        assert float(lo) == pytest.approx(np.min(cols[name]), rel=1e-5, abs=1e-12)
+        assert float(hi) == pytest.approx(np.max(cols[name]), rel=1e-5, abs=1e-12)
+    assert "<td>time.span</td><td>[0, 3.14]</td>" in text
+    assert "Energy balance" not in text  # a kinematic run has no energies
+
+
+def test_report_energy_balance_against_hand_made_energies():
+    """A falling mass (T = t^2/2, V = -t^2/2) balances; a drag's work Wn = -t^3/3 must be
+    counted; an error put in by hand is the error reported."""
+    from mixdyn.viz.report import energy_balance
+
+    t = np.linspace(0.0, 2.0, 21)
+    T, V, Wn = 0.5 * t**2 - t**3 / 3, -0.5 * t**2, -(t**3) / 3
+    cols = {"energy.kinetic": T, "energy.potential": V, "work.nonconservative": Wn}
+    rows = {w: v for w, v, _ in energy_balance(cols, {"energy.kinetic": "J"})}
+    assert rows["largest balance error |T + V - (T0 + V0) - Wn - Wc|"] == pytest.approx(
+        0, abs=1e-14
+    )
+    assert rows["change of T + V"] == pytest.approx(-8 / 3)
+    cols["energy.kinetic"] = T + 0.01 * t
+    rows = {w: v for w, v, _ in energy_balance(cols, {})}
+    assert rows["largest balance error |T + V - (T0 + V0) - Wn - Wc|"] == pytest.approx(0.02)
+    assert energy_balance({"t": t}, {}) is None

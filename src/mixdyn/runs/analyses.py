@@ -189,7 +189,7 @@ class AnalysisKind(RunKind):
 
     # ----------------------------------------------------------------- outputs
     def output_files(self, runner, plan: Plan, figures: bool) -> list[str]:
-        names = ["results.csv", "meta.json"]
+        names = ["results.csv", "meta.json", REPORT_HTML]
         if figures:
             names += [p.file for p in runner.plots(plan)]
             if plan.spec.animation is not None:
@@ -222,10 +222,15 @@ class AnalysisKind(RunKind):
                 "wall_time_s": round(seconds, 3),
                 "figures": figs,
                 "animation": anim,
+                "report": REPORT_HTML,
             },
         )
         if outputs.painter is not None:
             _figures(runner, plan, result, folder, outputs.painter)
+        report = _report(runner, plan, result, seconds, outputs, [*figs, *anim])
+        if outputs.painter is None:  # no figures to wait for
+            return [*files, report.write()]
+        outputs.reports.append(report)  # written once the painter has drawn its figures
         return files
 
     # ----------------------------------------------------------------- shown
@@ -332,6 +337,52 @@ class Mixed(_Integrated):
 
     def described(self, r) -> str:
         return f", unknown {', '.join(r.unknown)}, solver {r.solver}"
+
+
+# --------------------------------------------------------------------------- report
+#: Every analysis run's one-page report (:class:`mixdyn.viz.report.Report`).
+REPORT_HTML = "report.html"
+
+
+def _report(runner, plan: Plan, result, seconds: float, outputs, figures: list):
+    """The run's report (:class:`mixdyn.viz.report.Report`): its facts, the mechanism at the
+    start, its figures (``figures``, names in its folder), its columns as written (output
+    units) and its settings. No compiled program runs: the columns are the result's."""
+    from .._version import __version__
+    from ..analysis.result import in_units, point_columns
+    from ..io.results import run_settings
+    from ..units import engineering
+    from ..viz.player import result_at
+    from ..viz.report import Report, scene_svg
+    from ..viz.scene import Scene
+
+    folder = outputs.folder(plan)
+    model = result.model
+    cols, units = in_units(result, *point_columns(result, plan.spec.outputs), runner.output_units)
+    units = {c: engineering(u) for c, u in units.items()}
+    t = np.asarray(result.t)
+    try:
+        drawing = scene_svg(Scene(model, np.asarray(result.q)[:1], (), *result_at(result, [0])))
+    except Exception as e:  # a drawing is a courtesy: the numbers still show
+        drawing = f"<p>(no drawing: {e})</p>"
+    facts = [
+        ("model", f"{model.name} ({outputs.file})"),
+        ("run", f"{plan.name} ({plan.spec.kind})"),
+        ("status", "ok"),
+        ("output times", f"{len(t)}, {t[0]:g} .. {t[-1]:g} {model.units.time}" if len(t) else "0"),
+        ("wall time", f"{seconds:.3f} s"),
+        ("mixdyn", __version__),
+    ]
+    return Report(
+        path=folder / REPORT_HTML,
+        title=f"{model.name}: run {plan.name}",
+        facts=facts,
+        drawing=drawing,
+        figures=[folder / f for f in figures],
+        columns=cols,
+        units=units,
+        settings=run_settings(plan.spec),
+    )
 
 
 # --------------------------------------------------------------------------- figures

@@ -34,6 +34,8 @@ class Outputs:
         painter: the figure worker (:class:`~mixdyn.viz.painter.Painter`), None where
             nothing is drawn.
         failed: the first line of each sweep with failed members (its members are written).
+        reports: the runs' reports (:class:`mixdyn.viz.report.Report`) waiting for their
+            figures: written once the painter has drawn them.
     """
 
     out: pathlib.Path
@@ -43,6 +45,7 @@ class Outputs:
     figures: bool = True
     painter: object | None = None
     failed: list[str] = dataclasses.field(default_factory=list)
+    reports: list = dataclasses.field(default_factory=list)
 
     def folder(self, plan) -> pathlib.Path:
         """The run's folder."""
@@ -237,17 +240,26 @@ def write_runs(
                 raise
         if painter is not None:  # in order: the first failure is raised, as if drawn in turn
             written.extend(painter.results())
+        written.extend(_reports(outputs))
     except KeyboardInterrupt:
         raise
-    except Exception:  # a run failed: its predecessors' figures are still written
+    except Exception:  # a run failed: its predecessors' figures and reports are still written
         if painter is not None:
             with contextlib.suppress(Exception):
                 painter.results()
+        with contextlib.suppress(Exception):
+            _reports(outputs)
         raise
     finally:
         if painter is not None:
             painter.close()
     return written
+
+
+def _reports(outputs: Outputs) -> list[pathlib.Path]:
+    """Write the reports waiting for their figures (:attr:`Outputs.reports`)."""
+    reports, outputs.reports = outputs.reports, []
+    return [r.write() for r in reports]
 
 
 def write_study_run(
