@@ -5,6 +5,7 @@ index and cause without losing the others; bad input is refused before any compu
 from __future__ import annotations
 
 import importlib
+import importlib.util
 
 import numpy as np
 import pytest
@@ -53,6 +54,8 @@ def test_forward_members_equal_single_runs(paper, batch_size):
     ``while_loop`` has deadlocked XLA's CPU runtime), equals ``md.forward`` of its model."""
     sw = md.sweep(paper, TS, vary=VARY, batch_size=batch_size, **OPTS)
     assert len(sw) == 4 and not sw.errors
+    if batch_size is not None:  # held as arrays: no member's Result built before it is read
+        assert repr(sw.results) == "<4 results, 0 built>"
     members = vary_models(paper, VARY)
     for i, m in enumerate(members):
         assert float(m.bodies[3].mass) == VARY["slider.mass"][i]
@@ -63,6 +66,40 @@ def test_forward_members_equal_single_runs(paper, batch_size):
     assert list(table.columns) == ["member", "slider.mass", "F1.law.amplitude", "t", "slider.x"]
     assert len(table) == 4 * len(TS)
     assert table.attrs["units"]["slider.x"] == "mm"
+    if batch_size is not None:
+        _held_as_arrays(paper, sw)
+
+
+def _held_as_arrays(paper, sw):
+    """The vectorized sweep is held as arrays: its results are built when read, each equal
+    (every column, 1e-12 of its scale) to the member finished at once from the same
+    integration (the member-by-member finishing of one program: ``_members.run_members``);
+    its (member, t) columns are those results'; its Dataset's coordinates are the varied
+    values and its units the results' (in ``output_units`` where asked)."""
+    members_module = importlib.import_module("mixdyn.analysis._members")
+    eager = members_module.run_members(vary_models(paper, VARY), TS, _forward(), batch_size=2)
+    cols, units = sw.columns()
+    for i, (res, err) in enumerate(eager):
+        assert err is None
+        for c, v in res.columns().items():
+            scale = max(float(np.max(np.abs(v))), 1e-300)
+            assert float(np.max(np.abs(sw[i][c] - v))) <= 1e-12 * scale, c
+            got = cols[c] if c == "t" else cols[c][i]
+            assert float(np.max(np.abs(got - v))) <= 1e-12 * scale, c
+        assert res.units() == units
+    assert cols["slider.x"].shape == (4, len(TS))
+    if importlib.util.find_spec("xarray") is None:
+        return
+    ds = sw.to_xarray(["slider.x", "EF.M"], output_units={"length": "m"})
+    for name in VARY:
+        np.testing.assert_array_equal(ds[name].values, VARY[name])
+    assert ds["slider.x"].attrs["units"] == "m" and ds["EF.M"].attrs["units"] == units["EF.M"]
+    np.testing.assert_allclose(ds["slider.x"].values, cols["slider.x"] / 1000, rtol=1e-15)
+    assert list(ds["status"].values) == ["ok"] * 4 and ds.attrs["analysis"] == "forward"
+
+
+def _forward():
+    return md.analyses.Forward(method=md.Projection(**OPTS))
 
 
 def test_a_second_sweep_with_other_numbers_traces_nothing(paper):

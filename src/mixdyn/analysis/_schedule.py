@@ -74,6 +74,13 @@ def _default_batch_size() -> int | None:
 ACCELERATOR_BATCH = 32768
 
 
+#: Members integrated at a time by one vectorized program where a sweep's members share one
+#: start and give no ``batch_size`` on a CPU (a model file's sweep, ``md.sweep`` of at least
+#: this many members; fewer: the single run's program member by member): one program, of
+#: this shape, for any number of members, compiled once.
+CHUNK = 64
+
+
 Outcome = tuple[Result | None, MixdynError | None]
 
 

@@ -23,6 +23,7 @@ from ..errors import (
 )
 from ..linalg import AutoSolver, LinearSolver, dependent_rows
 from ..model import Model
+from ..model._compliant import refuse_rigid, rigid_contacts
 from ..runtime._programs import cached_jit
 from . import _setup
 from ._assembly import length_scale
@@ -117,9 +118,18 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int, arrays=None):
     reactions, driver efforts and powers, ``lambda.*``, unknown forces and their powers,
     energies and the constraint violation (``arrays``: :func:`_post_arrays`' output if
     already computed, e.g. for a whole sweep at once)."""
-    c = problem.c
     if arrays is None:
         arrays = _post_arrays(problem, ts, Q, QD)
+    qdd, mu, ratio, out = post_columns(problem, arrays, n_drivers)
+    check_contacts(problem.c, np.asarray(ts), out)
+    return qdd, mu, ratio, out
+
+
+def post_columns(problem: Problem, arrays, n_drivers: int):
+    """The result columns of :func:`_post_arrays`' output ``arrays`` (each of leading shape
+    (N,), or (M*N,) for M members' times in a row: every column is read time by time),
+    without the contacts' check: ``(qdd, mu, ratio, columns)``."""
+    c = problem.c
     qdd, mu, ratio, R, powers, E, viol, forces = arrays
     mu, R, powers, E = (np.asarray(a) for a in (mu, R, powers, E))
     out = reaction_columns(c, R)
@@ -132,7 +142,6 @@ def _post(problem: Problem, ts, Q, QD, n_drivers: int, arrays=None):
         out[f"{name}.power"] = powers[:, c.m - problem.p + k]
     out["energy.kinetic"], out["energy.potential"], out["energy.total"] = E[:, 0], E[:, 1], E[:, 2]
     out["constraint.violation"] = np.asarray(viol)
-    check_contacts(c, np.asarray(ts), out)
     return qdd, mu, ratio, out
 
 
@@ -452,6 +461,7 @@ class Integrated(_setup.Analysis):
 def integrate(case: Case, progress=None):
     """The trajectory of ``case`` (an :class:`~.integrators.Trajectory`); ``progress``: an
     optional ``f(t)`` called at each output time."""
+    refuse_rigid(case.problem.model, "a run integrated in one program (a sweep)")
     integrator = _integrator(case.options.method)
     # A progress callback is passed as a key into a registry: one program for every callback.
     with progress_hook(progress) as cb:
@@ -531,7 +541,13 @@ def simulate(case: Case, progress=None) -> Result:
     than its energy tolerance fails (:func:`check_energy_balance`).
 
     The post-processing's program is prepared beside the integration (read, or traced and
-    compiled, in a second thread: :meth:`mixdyn.runtime._programs._CachedJit.ahead`)."""
+    compiled, in a second thread: :meth:`mixdyn.runtime._programs._CachedJit.ahead`).
+    A forward run of a model with rigid contacts is integrated impact by impact
+    (:func:`~._impacts.simulate_impacts`)."""
+    if case.kind == "forward" and rigid_contacts(case.problem.model):
+        from ._impacts import simulate_impacts
+
+        return simulate_impacts(case, progress)
     _post_ahead(case)
     return finish(case, integrate(case, progress))
 
@@ -547,6 +563,8 @@ def ahead(case: Case) -> None:
     its post-processing's) in second threads (:meth:`mixdyn.runtime._programs._CachedJit.ahead`),
     while earlier work goes on: a model file's next run while the one before it computes.
     ``case`` counts by its structure and shapes only. Without a progress callback."""
+    if rigid_contacts(case.problem.model):
+        return
     _integrator(case.options.method).ahead(*_integrator_args(case), progress=None)
     _post_ahead(case)
 

@@ -38,11 +38,12 @@ import numpy as np
 from .. import paths
 from ..errors import MixdynError, ModelError
 from ..model import Model
-from . import _members
+from . import _members, _stacked
 from ._cluster import _on_cluster
 from ._keywords import member_values, study_analysis
 from ._members import model_swapper as model_swapper
 from ._schedule import ACCELERATOR_BATCH as ACCELERATOR_BATCH
+from ._schedule import CHUNK, _default_batch_size
 from ._schedule import for_batch as for_batch
 from ._setup import Analysis
 from .result import Result
@@ -129,6 +130,27 @@ def shares_start(model: Model, vary: Mapping[str, Sequence], unknown: Sequence[s
 def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
     """The member models of ``vary`` (path -> (B,) or (B, ...) values, one row per member):
     ``model`` with the named numbers replaced, member by member."""
+    positions, values, count = varied_leaves(model, vary)
+    leaves, treedef = jax.tree_util.tree_flatten(model)
+    members = []
+    for i in range(count):
+        row = list(leaves)
+        for k, v in zip(positions, values, strict=True):
+            row[k] = jnp.asarray(v[i])
+        members.append(jax.tree_util.tree_unflatten(treedef, row))
+    if any(path.split(".")[1] == "q0" for path in vary):
+        # The elements' constants that come from the bodies' start (a gear mesh's phase, a
+        # rolling disk's side) follow a member's start: its elements bound to it again.
+        members = [paths.bound_again(m) for m in members]
+    return members
+
+
+def varied_leaves(
+    model: Model, vary: Mapping[str, Sequence]
+) -> tuple[list[int], list[np.ndarray], int]:
+    """``vary`` checked (paths, shapes, finite values, the owners' own checks) as
+    ``(positions, values, B)``: each varied number's index among ``model``'s leaves, its
+    (B, ...) values, the number of members."""
     if not isinstance(vary, Mapping):
         raise ModelError(
             f"vary must be a mapping path -> values, got {type(vary).__name__} {vary!r:.60}",
@@ -171,25 +193,15 @@ def vary_models(model: Model, vary: Mapping[str, Sequence]) -> list[Model]:
     # constructors): a value a model file refuses is refused here, naming its member.
     paths.check(model, dict(zip(vary, values, strict=True)))
     # Each varied number's position among the model's leaves (found by putting a marker
-    # there), then each member unflattened from the nominal leaves with its numbers: one
-    # unflatten a member instead of a tree_at per member and number (5 ms a member).
-    leaves, treedef = jax.tree_util.tree_flatten(model)
+    # there): a member is the nominal leaves with its numbers, one unflatten
+    # (vary_models) instead of a tree_at per member and number (5 ms a member), or a
+    # column of the stacked problem (._stacked).
     positions = []
     for get in getters:
         marker = _Marker()
         marked = jax.tree_util.tree_leaves(eqx.tree_at(get, model, marker))
         positions.append(next(k for k, leaf in enumerate(marked) if leaf is marker))
-    members = []
-    for i in range(count):
-        row = list(leaves)
-        for k, v in zip(positions, values, strict=True):
-            row[k] = jnp.asarray(v[i])
-        members.append(jax.tree_util.tree_unflatten(treedef, row))
-    if any(path.split(".")[1] == "q0" for path in vary):
-        # The elements' constants that come from the bodies' start (a gear mesh's phase, a
-        # rolling disk's side) follow a member's start: its elements bound to it again.
-        members = [paths.bound_again(m) for m in members]
-    return members
+    return positions, values, count
 
 
 class _Marker:
@@ -200,19 +212,35 @@ class _Marker:
 class Sweep:
     """The members of a sweep, in order.
 
+    Where the members share one start (only masses, inertias and forces vary) and are
+    integrated by one vectorized program, the sweep is held as arrays (member × time): a
+    member's :class:`~mixdyn.Result` is built when it is first read (``sweep[i]``,
+    ``sweep.results[i]``, iteration), and :meth:`columns` and :meth:`dataset` read every
+    member at once.
+
     Attributes:
-        results: per member its :class:`~mixdyn.Result`, or None where it failed.
+        results: per member its :class:`~mixdyn.Result`, or None where it failed (a
+            sequence; on the array path each result built when read).
         errors: member index -> the named error of a failed member.
         parameters: member index -> the varied values (path -> value), empty for ``models=``.
         seconds: wall times [s]: ``total``; in process also ``setup`` (every member's start;
             one shared start when only masses, inertias and forces vary) and, on the
             vectorized path, ``integration`` (the one program) and ``finishing``.
+        stacked: on the array path, the members as one problem with a member axis
+            (:class:`~._stacked.Stacked`); else None.
+        arrays: on the array path, every member's trajectory and post-processing's arrays
+            (:class:`~._stacked.Arrays`, leading axis: the member); else None.
+        values: on the array path, the varied values (path -> (M,) or (M, ...) [model
+            units]), the coordinates of :meth:`dataset`.
     """
 
-    results: list[Result | None]
+    results: Sequence[Result | None]
     errors: dict[int, MixdynError]
     parameters: list[dict[str, float | list]]
     seconds: dict[str, float]
+    stacked: _stacked.Stacked | None = dataclasses.field(default=None, repr=False)
+    arrays: _stacked.Arrays | None = dataclasses.field(default=None, repr=False)
+    values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
 
     def __len__(self) -> int:
         return len(self.results)
@@ -222,6 +250,40 @@ class Sweep:
         if i in self.errors:
             raise self.errors[i]
         return self.results[i]
+
+    def __iter__(self):
+        """Each member's result in order (None where it failed)."""
+        return iter(self.results)
+
+    def columns(
+        self, output_units: dict | None = None
+    ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """Every result column of every member as NumPy arrays, ``(columns, units)``: ``t``
+        (N,), every other column (M, N) on (member, time), a failed member's rows NaN, in
+        ``output_units`` (kind -> unit, as :meth:`mixdyn.Result.table`; default the
+        model's units), the units named as :meth:`mixdyn.Result.units`. On the array path
+        read from the members' arrays at once; otherwise gathered from the results.
+
+        Raises:
+            ValueError: no member succeeded (nothing gives the output times and columns).
+        """
+        if self.stacked is not None:
+            return _stacked.columns(
+                self.stacked, self.arrays, self.results, self.errors, output_units
+            )
+        from .result import in_units
+
+        first = next((r for r in self.results if r is not None), None)
+        if first is None:
+            raise ValueError("no member of the sweep succeeded: there is nothing to label")
+        cols0, units = in_units(first, first.columns(), first.units(), output_units)
+        out = {c: np.full((len(self.results), len(first.t)), np.nan) for c in cols0 if c != "t"}
+        for i, res in enumerate(self.results):
+            if res is not None:
+                cols, _ = in_units(res, res.columns(), res.units(), output_units)
+                for c in out:
+                    out[c][i] = cols[c]
+        return {"t": np.asarray(cols0["t"]), **out}, units
 
     def table(self, columns: Sequence[str] = (), output_units: dict | None = None):
         """A long-format pandas DataFrame: one row per (member, output time), with the member
@@ -267,36 +329,35 @@ class Sweep:
         """
         import xarray as xr
 
-        from .result import in_units
-
-        first = next((r for r in self.results if r is not None), None)
-        if first is None:
-            raise ValueError("no member of the sweep succeeded: there is nothing to label")
-        cols0, units = in_units(first, first.columns(), first.units(), output_units)
+        cols0, units = self.columns(output_units)
         names = [c for c in (columns or cols0) if c != "t"]
         for c in names:
             if c not in cols0:
+                first = next(r for r in self.results if r is not None)
                 first[c]  # the error names the columns close to it
-        n, nt = len(self.results), len(first.t)
-        data = {c: np.full((n, nt), np.nan) for c in names}
-        for i, res in enumerate(self.results):
-            if res is not None:
-                cols, _ = in_units(res, res.columns(), res.units(), output_units)
-                for c in names:
-                    data[c][i] = cols[c]
+        n = len(self.results)
         coords = {
             "member": np.arange(n),
             "t": ("t", np.asarray(cols0["t"]), {"units": units["t"]}),
             "status": ("member", [type(self.errors[i]).__name__ if i in self.errors else "ok"
                                   for i in range(n)]),
         }  # fmt: skip
-        if self.parameters and all(np.ndim(v) == 0 for v in self.parameters[0].values()):
+        if self.values and all(np.ndim(v) == 1 for v in self.values.values()):
+            coords.update({name: ("member", v) for name, v in self.values.items()})
+        elif self.parameters and all(np.ndim(v) == 0 for v in self.parameters[0].values()):
             for name in self.parameters[0]:
                 coords[name] = ("member", np.array([float(p[name]) for p in self.parameters]))
-        variables = {c: (("member", "t"), data[c], {"units": units.get(c, "")}) for c in names}
-        return xr.Dataset(
-            variables, coords=coords, attrs={"model": first.model.name, "analysis": first.kind}
-        )
+        variables = {c: (("member", "t"), cols0[c], {"units": units.get(c, "")}) for c in names}
+        if self.stacked is not None:
+            model, kind = self.stacked.case.problem.model, self.stacked.case.kind
+        else:
+            first = next(r for r in self.results if r is not None)
+            model, kind = first.model, first.kind
+        return xr.Dataset(variables, coords=coords, attrs={"model": model.name, "analysis": kind})
+
+    def to_xarray(self, columns: Sequence[str] = (), output_units: dict | None = None):
+        """:meth:`dataset`: the sweep as an xarray ``Dataset`` on (member, t)."""
+        return self.dataset(columns, output_units)
 
 
 def sweep(
@@ -381,15 +442,23 @@ def sweep(
     else:
         if model is None:
             raise ModelError("give a model and vary=, or models=[...]", "model")
-        members = vary_models(model, vary or {})
-        params = [
-            {p: (v[i].item() if np.ndim(v[i]) == 0 else v[i].tolist()) for p, v in _rows(vary)}
-            for i in range(len(members))
-        ]
+        positions, values, count = varied_leaves(model, vary or {})
+        params = _parameters(list(vary), values, count)
     same_start = (
         models is None and value.integrated
         and shares_start(model, vary or {}, value._start_forces())
     )  # fmt: skip
+    if (
+        same_start
+        and client is None
+        and (batch_size is not None or _default_batch_size() is not None or count >= CHUNK)
+    ):
+        done = _as_arrays(model, vary, positions, values, value, t, recorded, batch_size,
+                          on_member, params, started)  # fmt: skip
+        if done is not None:
+            return done
+    if models is None:
+        members = vary_models(model, vary)
     if client is not None:
         if not value.integrated:
             raise ModelError(f"a {value.name} sweep runs in this process: no client", "client")
@@ -454,14 +523,45 @@ def run_members(
     return _members.run_members(members, t, analysis, **options)
 
 
+def _parameters(names: list[str], values: list[np.ndarray], count: int) -> list[dict]:
+    """Each member's varied values, path -> a float (or a list for a row)."""
+    columns = [v.tolist() for v in values]
+    return [{p: c[i] for p, c in zip(names, columns, strict=True)} for i in range(count)]
+
+
+def _as_arrays(
+    model, vary, positions, values, value, t, recorded, batch_size, on_member, params, started
+) -> Sweep | None:
+    """The sweep of members sharing one start as arrays (:mod:`._stacked`): member 0 set
+    up, every member integrated by one vectorized program, screened at once, each result
+    built when read; None where the members cannot share the set-up (then member by
+    member)."""
+    clock = time.perf_counter
+    seconds: dict[str, float] = {}
+    try:
+        stacked = _stacked.stack(model, list(vary), positions, values, value, t, recorded)
+    except ModelError:
+        raise  # an input error: refused, named
+    except MixdynError as err:  # the shared start cannot be made: every member fails
+        n = len(values[0])
+        errors = dict.fromkeys(range(n), err)
+        for i in range(n) if on_member is not None else ():
+            on_member(i)
+        seconds["total"] = clock() - started
+        return Sweep([None] * n, errors, params, seconds)
+    if stacked is None:
+        return None
+    seconds["setup"] = clock() - started
+    results, errors, arrays = _stacked.run(stacked, batch_size, on_member, seconds, clock)
+    seconds["total"] = clock() - started
+    named = {p: v for p, v in zip(vary, values, strict=True)}
+    return Sweep(results, errors, params, seconds, stacked, arrays, named)
+
+
 def _describe(params, i) -> str:
     if not params:
         return ""
     return " (" + ", ".join(f"{k} = {v}" for k, v in params[i].items()) + ")"
-
-
-def _rows(vary):
-    return [(p, np.asarray(v, dtype=float)) for p, v in vary.items()]
 
 
 __all__ = [

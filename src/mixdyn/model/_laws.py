@@ -99,9 +99,9 @@ class Harmonic(Law):
     offset: jax.Array
 
     def __init__(self, amplitude, omega, phase=0.0, offset=0.0):
-        finite(
-            (amplitude, omega, phase, offset), "amplitude, omega, phase and offset of a Harmonic"
-        )
+        values = {"amplitude": amplitude, "omega": omega, "phase": phase, "offset": offset}
+        for name, value in values.items():  # one by one: a sweep's check stacks one of them
+            finite(value, f"the {name} of a Harmonic")
         self.amplitude = _f64(amplitude)
         self.omega = _f64(omega)
         self.phase = _f64(phase)

@@ -26,6 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .. import paths
+from ..analysis._schedule import CHUNK
 from ..errors import ModelError
 from ..io._errors import FileError
 from ..io.load import Builder
@@ -176,12 +177,6 @@ def _position(model: Model, where) -> int:
     marker = _Marker()
     marked = jax.tree_util.tree_leaves(eqx.tree_at(where, model, marker))
     return next(k for k, leaf in enumerate(marked) if leaf is marker)
-
-
-#: Members integrated at a time by one vectorized program where a file's sweep shares one
-#: start and gives no ``batch_size`` (on a CPU: the single run's program member by member
-#: otherwise): one program, of this shape, for any number of members, compiled once.
-CHUNK = 64
 
 
 def in_chunks(run, count: int, size: int) -> list:
