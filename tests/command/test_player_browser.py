@@ -48,10 +48,13 @@ FLAGS = [
 ]
 
 
-def chromium(tmp_path, url: str, what: str) -> str | None:
+def chromium(tmp_path, url: str, what: str, height: int = 800) -> str | None:
     assert CHROMIUM is not None, "MIXDYN_REQUIRE_BROWSER is set but no Chromium is installed"
     profile = tmp_path / f"profile-{len(list(tmp_path.iterdir()))}"
-    args = [CHROMIUM, *FLAGS, f"--user-data-dir={profile}"]
+    flags = [
+        f if not f.startswith("--window-size") else f"--window-size=1000,{height}" for f in FLAGS
+    ]
+    args = [CHROMIUM, *flags, f"--user-data-dir={profile}"]
     if what == "dom":
         out = subprocess.run(
             [*args, "--dump-dom", url], capture_output=True, text=True, timeout=120, check=True
@@ -158,3 +161,80 @@ def test_real_time_playback_knows_the_time_unit(unit):
     assert seconds_per_time_unit(model) == pytest.approx(
         1.0 / factor("s", "time", model.units), rel=1e-15
     )
+
+
+def _attrs(dom: str) -> dict:
+    body = re.search(r"<body([^>]*)>", dom).group(1)
+    return {k: htmllib.unescape(v) for k, v in re.findall(r'data-(\w+)="([^"]*)"', body)}
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_plot_cursor_follows_the_frame_and_a_click_moves_the_animation(motion, tmp_path):
+    """The plot's cursor sits at the frame's time on the plot's time axis (and is drawn
+    there), its readout is the result's value; a click at 3/4 of the plot's width shows the
+    frame nearest 3/4 of the time span; another column is chosen by the page."""
+    page = html(motion, tmp_path / "plot.html", columns=["motor", "crank.phi"])
+    t0, t1 = motion.t[0], motion.t[-1]
+    xs = []
+    for i in (10, 60):
+        url = f"{page.as_uri()}#frame={i}"
+        dom = chromium(tmp_path, url, "dom", height=1200)
+        attrs = _attrs(dom)
+        plot, m = json.loads(attrs["plot"]), json.loads(attrs["plot"])["margins"]
+        inner = plot["width"] - m["l"] - m["r"]
+        assert int(attrs["frame"]) == i and plot["column"] == "motor"
+        assert plot["x"] == pytest.approx(m["l"] + inner * (motion.t[i] - t0) / (t1 - t0))
+        value = re.search(r'id="plotval">motor = ([-0-9.e+]+) N·m', dom).group(1)
+        assert float(value) == pytest.approx(motion["motor"][i], rel=1e-5)
+        png = tmp_path / f"plot{i}.png"
+        chromium(tmp_path, url, str(png), height=1200)
+        image = np.asarray(Image.open(png).convert("RGB"))
+        foot = (DPR * (plot["left"] + plot["x"]), DPR * (plot["top"] + plot["height"] - m["b"] - 4))
+        assert near(image, foot, rgb("#d62728")), f"no cursor at frame {i}"
+        xs.append(plot["x"])
+    assert xs[1] - xs[0] == pytest.approx(inner * (motion.t[60] - motion.t[10]) / (t1 - t0))
+    attrs = _attrs(chromium(tmp_path, f"{page.as_uri()}#plotclick=0.75", "dom"))
+    assert int(attrs["frame"]) == int(np.argmin(np.abs(motion.t - (t0 + 0.75 * (t1 - t0)))))
+    assert attrs["playing"] == "false"
+    dom = chromium(tmp_path, f"{page.as_uri()}#frame=20&plotcol=1", "dom")
+    assert json.loads(_attrs(dom)["plot"])["column"] == "crank.phi"
+    value = re.search(r'id="plotval">crank.phi = ([-0-9.e+]+) rad', dom).group(1)
+    assert float(value) == pytest.approx(motion["crank.phi"][20], rel=1e-5)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_report_opens_with_every_column_its_unit_and_the_figures(tmp_path):
+    """``mixdyn run``'s report.html in the browser: a row per column of results.csv with the
+    unit of its header and its range, the figures the run lists in meta.json shown (inline
+    images that decode), the energy balance, and nothing fetched."""
+    from typer.testing import CliRunner
+
+    from fixtures import EXAMPLES
+    from mixdyn.cli import app
+
+    out = tmp_path / "out"
+    res = CliRunner().invoke(
+        app, ["run", str(EXAMPLES / "pendulum.yaml"), "--run", "swing", "--out", str(out)]
+    )
+    assert res.exit_code == 0, res.output
+    folder = out / "swing"
+    meta = json.loads((folder / "meta.json").read_text())
+    page = folder / meta["report"]
+    dom = chromium(tmp_path, page.as_uri(), "dom")
+    table = re.search(r'<table class="ranges">(.*?)</table>', dom, re.S).group(1)
+    rows = re.findall(r"<tr><td>([^<]*)</td><td>([^<]*)</td><td class=\"n\">([^<]*)</td>", table)
+    header = (folder / "results.csv").read_text().splitlines()[0].split(",")
+    written = [re.fullmatch(r"(.*?)(?: \[(.*)\])?", h).groups() for h in header]
+    assert [(n, u or "") for n, u, _ in rows] == [(n, u or "") for n, u in written]
+    data = md.read_table(folder / "results.csv")
+    for name, _, lo in rows:
+        assert float(lo) == pytest.approx(data[name].min(), rel=1e-5, abs=1e-12)
+    images = re.findall(r'<img src="data:image/(png|gif);base64,[^"]+" alt="([^"]+)"', dom)
+    shown = [alt for _, alt in images]
+    assert shown == [f for f in [*meta["figures"], *meta["animation"]] if not f.endswith(".html")]
+    assert "Energy balance" in dom and "<svg" in dom
+    assert not re.search(r'(src|href)="https?:', dom)
+    png = tmp_path / "report.png"
+    chromium(tmp_path, page.as_uri(), str(png))
+    with Image.open(png) as im:
+        assert len(im.convert("RGB").getcolors(maxcolors=1_000_000)) > 200  # drawn, not blank

@@ -200,7 +200,7 @@ def animate(
         forces = False
     for target in targets:
         write_animation(
-            res if forces else None,
+            res if results is None else None,  # a run's result: its symbols and plot too
             target,
             model=model,
             t=np.asarray(t),

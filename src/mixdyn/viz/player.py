@@ -11,9 +11,12 @@ and shows a body's coordinates on hover. The canvas is drawn at the screen's pix
 Why a small canvas player rather than plotly's animation frames (``benchmarks/player.py``, the
 paper's example, 201 frames): this page is 108 kB against plotly's 5.0 MB (plotly.js inline),
 and headless Chromium loads and runs it in 0.58 s against 2.02 s; plotly's frames also cannot
-play at a multiple of real time or step by key. A URL fragment ``#t=0.5`` (or
-``#frame=10``) opens the page paused at that time; the page states the frame shown and its
-view transform in ``data-`` attributes of ``<body>`` for automated checks (the browser test).
+play at a multiple of real time or step by key. Under the view, a plot of a chosen result
+column against time has a cursor at the frame shown; a click on it moves the animation to
+that time. A URL fragment ``#t=0.5`` (or ``#frame=10``) opens the page paused at that time,
+``#plotclick=0.75`` clicks the plot at that fraction of its width; the page states the frame
+shown, its view transform and the plot's cursor in ``data-`` attributes of ``<body>`` for
+automated checks (the browser test).
 """
 
 from __future__ import annotations
@@ -43,9 +46,36 @@ def seconds_per_time_unit(model: Model) -> float:
     return 1.0 / factor("s", "time", model.units)
 
 
-def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=()) -> dict:
+def plot_columns_data(result, names, idx) -> list[dict]:
+    """The columns the player plots against time, at the frames ``idx``: ``name``, ``unit``
+    (the result's output units, engineering spelling) and ``v`` (7 significant digits).
+
+    Raises:
+        ValueError: a name that is not a column of the result.
+    """
+    from ..analysis.result import in_units
+    from ..units import engineering
+    from .plots import result_columns
+
+    try:
+        cols, units = result_columns(result, list(names))
+    except KeyError as e:
+        raise ValueError(f"cannot plot {e.args[0]}") from None
+    cols, units = in_units(result, cols, units, getattr(result, "output_units", None))
+    return [
+        {
+            "name": n,
+            "unit": engineering(units.get(n, "")),
+            "v": [float(f"{v:.7g}") for v in np.asarray(cols[n], dtype=float)[idx]],
+        }
+        for n in names
+    ]
+
+
+def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=(), plots=()) -> dict:
     """The page's data: times, bodies' outlines and coordinates, pins, ground, guides, traces,
-    arrows (already scaled to lengths), units. Numbers rounded to 9 significant digits."""
+    force symbols, arrows (already scaled to lengths), units, the plotted columns
+    (:func:`plot_columns_data`). Numbers rounded to 9 significant digits."""
 
     def r(a):
         a = np.asarray(a, dtype=float)
@@ -97,6 +127,7 @@ def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=()) -
             }
             for a in arrows
         ],
+        "plots": list(plots),
         "arrowNote": (
             f"arrows: {biggest:.4g} {arrows[0]['unit']} = {biggest * scale:.4g} "
             f"{model.units.length}"
@@ -135,6 +166,7 @@ def html(
     trace=(),
     title: str | None = None,
     forces=False,
+    columns=None,
 ) -> pathlib.Path:
     """Write the player page of a motion.
 
@@ -147,6 +179,10 @@ def html(
         title: a title (default: the model's name).
         forces: ``True`` to draw every joint reaction and point force as an arrow, or their
             names (see :func:`mixdyn.viz.arrows.force_arrows`); needs a result with forces.
+        columns: the result's columns plotted against time under the animation (one shown
+            at a time, chosen in the page; a cursor follows the frame, a click on the plot
+            moves the animation there); default the columns a reader looks at first
+            (:func:`mixdyn.viz.show.headline_columns`); ``()`` for no plot. Needs a result.
 
     Returns:
         The path written.
@@ -163,7 +199,18 @@ def html(
             for a in force_arrows(result, forces)
             if a["name"] not in applied(model)
         ]
-    data = player_data(model, ts[idx], qs[idx], scene, title=title, fps=fps, arrows=arrows)
+    plots = []
+    if result is not None:
+        if columns is None:
+            from .show import headline_columns
+
+            columns = headline_columns(result)[:8]
+        plots = plot_columns_data(result, columns, idx)
+    elif columns:
+        raise ValueError("plotted columns need a result")
+    data = player_data(
+        model, ts[idx], qs[idx], scene, title=title, fps=fps, arrows=arrows, plots=plots
+    )
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
     page = _page().replace("__TITLE__", _escape(data["title"])).replace("__DATA__", text)
     path = pathlib.Path(path)
@@ -189,4 +236,4 @@ def _page() -> str:
     return (pathlib.Path(__file__).parent / "_player.html").read_text(encoding="utf-8")
 
 
-__all__ = ["html", "player_data", "seconds_per_time_unit"]
+__all__ = ["html", "player_data", "plot_columns_data", "seconds_per_time_unit"]
