@@ -182,7 +182,9 @@ def run(
     """Run the file's runs (or those named by --run) and write, per run, OUT/NAME/results.csv
     (columns t, {body}.x ..., {joint}.Fx ..., driver efforts and unknown forces by name, each
     header "name \\[unit]"), OUT/NAME/meta.json (units of every column, solver, tolerances,
-    counters, version) and the figures and animation the run asks for."""
+    counters, version), the figures and animation the run asks for and OUT/NAME/report.html
+    (one page: the drawing, the figures, each column's range, the energy balance, the
+    settings)."""
     from .runtime import _command, _programs
 
     # The programs this job used last time are read from the cache beside the checks below
