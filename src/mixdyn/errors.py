@@ -94,5 +94,10 @@ class ContactLostError(NumericalError):
     bodies separate there, which the run's equations do not follow."""
 
 
+class ImpactAccumulationError(NumericalError):
+    """Rigid impacts accumulate (Zeno): two bodies bounce ever faster and smaller as they come
+    to rest against each other, which instantaneous impacts do not follow."""
+
+
 class NonFiniteError(NumericalError):
     """A result column holds a NaN or an infinity (a singular force law, an overflow)."""

@@ -36,6 +36,7 @@ DIMENSIONS: dict[str, tuple[int, int, int]] = {
     "rotational_stiffness": (2, 1, -2),
     "rotational_damping": (2, 1, -1),
     "pressure": (-1, 1, -2),
+    "impulse": (1, 1, -1),
     "dimensionless": (0, 0, 0),
 }
 
@@ -149,6 +150,7 @@ _DERIVED = {
     "rotational_stiffness": "{F}*{L}/rad",
     "rotational_damping": "{F}*{L}*{T}/rad",
     "pressure": "{F}/{L}**2",
+    "impulse": "{F}*{T}",
 }
 
 #: Common spellings accepted without asking pint (fast, and no import at start-up).
@@ -387,6 +389,7 @@ COMMON_UNITS: dict[str, tuple[str, ...]] = {
     "rotational_stiffness": ("N*m/rad", "N*mm/rad", "N*m/deg"),
     "rotational_damping": ("N*m*s/rad", "N*mm*s/rad"),
     "pressure": ("Pa", "kPa", "MPa", "GPa", "N/mm**2"),
+    "impulse": ("N*s", "mN*s"),
 }
 
 
@@ -476,7 +479,7 @@ OUTPUT_PRESETS: dict[str, dict[str, str]] = {
         "angular_acceleration": "rad/s**2", "force": "N", "torque": "N*m",
         "inertia": "kg*m**2", "energy": "J", "power": "W", "stiffness": "N/m",
         "damping": "N*s/m", "rotational_stiffness": "N*m/rad",
-        "rotational_damping": "N*m*s/rad", "pressure": "Pa",
+        "rotational_damping": "N*m*s/rad", "pressure": "Pa", "impulse": "N*s",
     },
     "mm-N-s": {
         "length": "mm", "mass": "kg", "time": "s", "angle": "rad", "velocity": "mm/s",
@@ -484,7 +487,7 @@ OUTPUT_PRESETS: dict[str, dict[str, str]] = {
         "angular_acceleration": "rad/s**2", "force": "N", "torque": "N*mm",
         "inertia": "kg*mm**2", "energy": "mJ", "power": "mW", "stiffness": "N/mm",
         "damping": "N*s/mm", "rotational_stiffness": "N*mm/rad",
-        "rotational_damping": "N*mm*s/rad", "pressure": "MPa",
+        "rotational_damping": "N*mm*s/rad", "pressure": "MPa", "impulse": "N*s",
     },
 }  # fmt: skip
 

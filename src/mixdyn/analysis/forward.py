@@ -4,6 +4,8 @@ from typing import ClassVar
 
 from ..linalg import LinearSolver
 from ..model import Model
+from ..model._compliant import rigid_contacts
+from ._impacts import refuse_rigid_method
 from ._prepare import Prepared, dynamic_start
 from ._problem import Problem
 from ._setup import Setup, keyword_setup
@@ -52,6 +54,7 @@ class Forward(Integrated):
 
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
         refuse_reaction_dependent_in(model, self.method)
+        refuse_rigid_method(model, self.method)
         require_masses(model)
         prep = self._initial(model, t0, given)
         # The partitioning integrator needs independent rows; the others solve redundant
@@ -59,6 +62,10 @@ class Forward(Integrated):
         problem = Problem(model, prep.constraints(self.method.independent_rows))
         stats = {"redundant_equations": prep.report.redundant}
         return Setup(self, model, t0, prep, problem, stats)
+
+    def _shares_setup(self, setup: Setup) -> bool:
+        """A sweep's members with rigid contacts run one by one (each impact by impact)."""
+        return not rigid_contacts(setup.model)
 
     def _run(self, setup: Setup, t, progress=None) -> Result:
         return simulate(self._case(setup, t), progress)

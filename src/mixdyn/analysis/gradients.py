@@ -50,6 +50,7 @@ import numpy as np
 from .. import paths
 from ..errors import ModelError
 from ..model import Model
+from ..model._compliant import refuse_rigid
 from ._keywords import study_analysis
 from ._setup import Analysis, Setup
 from .forward import Forward
@@ -171,6 +172,7 @@ def _integrated(value: Forward | Mixed, model: Model, t, getters, derivatives):
             "while_loop); use method='projection', 'partitioning' or 'baumgarte'",
             "method",
         )
+    refuse_rigid(model, "md.differentiable (an impact's instant and jump are not differentiated)")
     ts = output_times(t)
     setup: Setup = value._prepare(model, float(ts[0]))
     case = value._case(setup, ts)

@@ -32,6 +32,7 @@ from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
+from ..model._compliant import refuse_rigid
 from ..model._element import Resolver
 from ..runtime._programs import cached_jit
 from . import _setup
@@ -292,6 +293,7 @@ class Mixed(Integrated):
         """Everything a mixed run does before integrating: checks, consistent start,
         problem (the start and its mobility analysis checked on ``given`` where given)."""
         solver, method = self.solver, self.method
+        refuse_rigid(model, "a mixed analysis")
         refuse_reaction_dependent_in(model, method)
         require_masses(model)
         unknown = self.unknown

@@ -18,11 +18,15 @@ that without damping (``restitution: 1``) and friction it derives from the poten
 a pure JAX function of ``(q, qd)`` and the numbers of the element (derivatives by automatic
 differentiation).
 
-The stiffness is Hertz's, from one material's Young's modulus and Poisson's ratio and the
-pair's radii (:func:`~mixdyn.model._contact_law.hertz_stiffness`). Joints with a
-``clearance`` are such contacts (:mod:`~mixdyn.model._clearance`). Kinematic and inverse
-analyses refuse a model with contacts (:func:`refuse_contacts`): the contact force follows
-from a motion that no driver fixes.
+A pair whose ``contact_model`` is ``rigid`` exerts no force: its bodies collide with
+Newton's restitution at the instants its penetration reaches zero (forward dynamics with
+impacts, :mod:`mixdyn.analysis._impacts`), and it needs no material.
+
+The stiffness of a compliant pair is Hertz's, from one material's Young's modulus and
+Poisson's ratio and the pair's radii (:func:`~mixdyn.model._contact_law.hertz_stiffness`).
+Joints with a ``clearance`` are such contacts (:mod:`~mixdyn.model._clearance`). Kinematic
+and inverse analyses refuse a model with contacts (:func:`refuse_contacts`): the contact
+force follows from a motion that no driver fixes.
 """
 
 from __future__ import annotations
@@ -126,13 +130,18 @@ def _impact_speed():
     )
 
 
+#: The contact models by file name: the compliant ones (by their damping) and the rigid one.
+RIGID = "rigid"
+CONTACT_MODELS = (*DAMPING_FACTORS, RIGID)
+
+
 def _contact_model(default):
     return option(
-        "The damping model: ``lankarani_nikravesh`` (1990, for ``e`` near 1, default), "
-        "``flores`` (Flores et al. 2011, any ``e``, low restitution included) or "
-        "``hunt_crossley`` (1975).",
+        "The contact model: compliant, damped as ``lankarani_nikravesh`` (1990, ``e`` near 1, "
+        "default), ``flores`` (2011, any ``e``) or ``hunt_crossley`` (1975); or ``rigid`` "
+        "(contact pairs): impacts with Newton's restitution ``e`` (forward dynamics).",
         default,
-        choices=tuple(DAMPING_FACTORS) if default is not None else (None, *DAMPING_FACTORS),
+        choices=CONTACT_MODELS if default is not None else (None, *DAMPING_FACTORS),
         kw_only=True,
     )
 
@@ -163,6 +172,29 @@ def _v_stick():
 
 def _check_law(e, name: str) -> None:
     """The checks of a contact law's numbers that their declared ranges do not make."""
+    if getattr(e, "contact_model", None) == RIGID:
+        if e.mu is not None:
+            raise ModelError(
+                "a rigid contact takes no friction (its impacts are frictionless): remove mu, "
+                "or choose a compliant contact_model (e.g. lankarani_nikravesh)",
+                name,
+                field="mu",
+            )
+        if not np.all(np.asarray(e.restitution) <= 1.0):
+            raise ModelError(
+                "the coefficient of restitution must be in (0, 1], got "
+                f"{np.asarray(e.restitution).tolist()}",
+                name,
+                field="restitution",
+            )
+        return
+    if getattr(e, "contact_model", None) is not None and e.young_modulus is None:
+        raise ModelError(
+            "a compliant contact needs its material's Young's modulus (e.g. 207 GPa for "
+            "steel), or contact_model: rigid",
+            name,
+            field="young_modulus",
+        )
     if e.poisson is not None and not np.all(np.asarray(e.poisson) < 0.5):
         raise ModelError("Poisson's ratio must be below 0.5", name, field="poisson")
     if e.restitution is None:
@@ -193,7 +225,7 @@ class _Compliant(ForceElement):
     ``delta(q)`` [length], the contact point and the tangent (:meth:`frame`) and the
     effective radius ``R*`` of Hertz's stiffness (:meth:`effective_radius`)."""
 
-    young_modulus: jax.Array = _young_modulus()
+    young_modulus: jax.Array | None = _young_modulus(optional=True)
     poisson: jax.Array = _poisson(0.3)
     restitution: jax.Array = _restitution()
     impact_speed: jax.Array | None = _impact_speed()
@@ -231,6 +263,12 @@ class _Compliant(ForceElement):
 
     # the law
     @property
+    def rigid(self) -> bool:
+        """Whether the pair collides by impacts (``contact_model: rigid``) and exerts no
+        force."""
+        return self.contact_model == RIGID
+
+    @property
     def stiffness(self) -> jax.Array:
         """Hertz's stiffness ``K`` [force / length**1.5]."""
         return hertz_stiffness(self.young_modulus, self.poisson, self.effective_radius())
@@ -262,7 +300,9 @@ class _Compliant(ForceElement):
     def passive(self, q, qd, t, nq):
         """The contact's generalized force (nq,): evaluated where a penetration is positive,
         zero without computing it elsewhere (a narrow phase that costs one penetration while
-        the pair is apart)."""
+        the pair is apart); zero for a rigid contact (its impacts are impulses)."""
+        if self.rigid:
+            return jnp.zeros(nq, dtype=jnp.result_type(q, qd))
 
         def touching(q, qd):
             _, J, F, Ft = self._state(q, qd)
@@ -278,14 +318,20 @@ class _Compliant(ForceElement):
 
     def potential(self, q):
         """The elastic energy ``K delta**2.5 / 2.5`` [energy], summed over the contact
-        points (the damping and the friction count as non-conservative work)."""
+        points (the damping and the friction count as non-conservative work); 0 for a rigid
+        contact."""
+        if self.rigid:
+            return jnp.zeros((), dtype=q.dtype)
         return jnp.sum(elastic_energy(self._delta(q), self.stiffness))
 
     def outputs(self, q, qd, t):
         """``normal``: the normal force [force] (>= 0); ``penetration`` [length] (negative:
         the gap); ``friction``: the friction force on body j along ``z x n`` [force], where
         ``mu`` is given. For several contact points: the sum of the forces and the deepest
-        penetration."""
+        penetration. A rigid contact: ``penetration`` only (its impulses are the run's
+        ``{name}.impulse`` events)."""
+        if self.rigid:
+            return {"penetration": jnp.max(self._delta(q))}
         delta, _, F, Ft = self._state(q, qd)
         out = {"normal": jnp.sum(F), "penetration": jnp.max(delta)}
         if Ft is not None:
@@ -305,6 +351,9 @@ class _Compliant(ForceElement):
         coordinates ``q`` and velocities ``qd`` (N, nq)."""
 
         def one(q, qd):
+            if self.rigid:
+                P, _ = (jnp.atleast_2d(x) for x in self.frame(q))
+                return P[0], jnp.zeros(2, dtype=q.dtype)
             _, _, F, Ft = self._state(q, qd)
             P, n = (jnp.atleast_2d(x) for x in self.frame(q))
             force = F[:, None] * n
@@ -317,6 +366,8 @@ class _Compliant(ForceElement):
 
     @property
     def output_kinds(self):
+        if self.rigid:
+            return {"penetration": "length"}
         kinds = {"normal": "force", "penetration": "length"}
         if self.mu is not None:
             kinds["friction"] = "force"
@@ -346,4 +397,24 @@ def refuse_contacts(model, analysis: str) -> None:
     )
 
 
-__all__ = ["contacts", "refuse_contacts"]
+def rigid_contacts(model) -> tuple[_Compliant, ...]:
+    """The model's rigid contacts (``contact_model: rigid``)."""
+    return tuple(c for c in contacts(model) if c.rigid)
+
+
+def refuse_rigid(model, analysis: str) -> None:
+    """Raise a :class:`~mixdyn.errors.ModelError` naming the first rigid contact of
+    ``model``: its impacts are solved by forward dynamics only (``analysis``: what refuses
+    them, e.g. ``"a mixed analysis"``)."""
+    found = rigid_contacts(model)
+    if found:
+        raise ModelError(
+            f"is a rigid contact (contact_model: rigid): {analysis} does not take impacts; run "
+            "a forward analysis, or give the contact a compliant contact_model (e.g. "
+            "lankarani_nikravesh with young_modulus and impact_speed)",
+            found[0].name,
+            field="contact_model",
+        )
+
+
+__all__ = ["contacts", "refuse_contacts", "refuse_rigid", "rigid_contacts"]

@@ -1,0 +1,368 @@
+"""Forward dynamics with rigid impacts: the motion integrated from impact to impact, each
+impact's instant found by diffrax's events and its velocity jump solved with Newton's
+restitution over the constrained system.
+
+A run is a sequence of segments, each one adaptive Runge–Kutta solve (the projection
+method's ``rtol``, ``atol``, ``solver`` and ``max_steps``; one compiled program for every
+segment) that ends at the first instant a rigid contact's gap ``g(q) = -delta(q)``
+[length] falls to zero (``diffrax.Event``, one condition per contact point, downcrossings
+only; the instant found by Newton's method on the step's dense output to 1e-14 of the
+span). Within a segment the index-1 equations of motion are integrated as they are; at its
+end the positions and velocities are projected onto the constraints.
+
+At an impact the velocities jump from ``qd-`` to ``qd+`` with impulses: for a contact point
+whose normal velocity ``v- = G qd-`` approaches (``G = dg/dq`` (1, nq), ``v- < 0``)::
+
+    [M   Phi_q^T  G^T] [qd+ - qd-]   [0              ]
+    [Phi_q  0      0 ] [  -Lambda] = [-Phi_q qd- - Phi_t]
+    [G      0      0 ] [  -P     ]   [-(1 + e) v-    ]
+
+i.e. ``M (qd+ - qd-) = Phi_q^T Lambda + G^T P``, every joint's and driver's velocity
+constraint kept (``Phi_q qd+ + Phi_t = 0``) and the normal velocity reversed by Newton's
+law (``G qd+ = -e v-``); ``P >= 0`` the contact's normal impulse [force * time] and
+``Lambda`` the constraints' impulses (solved through the Schur complement
+``A M^-1 A^T``, ``A = [Phi_q; G]``, in the least-squares sense where rows are redundant).
+
+Several contact points touching at one instant (a row of balls, Newton's cradle) are
+resolved one after the other (sequential impacts): the point approaching fastest first,
+then again while any point within the gap tolerance approaches; each pairwise impact keeps
+momentum and, at ``e = 1``, energy.
+
+Zeno: a ball coming to rest bounces infinitely often in a finite time. An impact whose
+approach speed is below :data:`REST_SPEED` times the model's length over the run's span,
+or a run past :data:`MAX_IMPACTS` impacts, ends the run as an
+:class:`~mixdyn.errors.ImpactAccumulationError` (the pair comes to rest: a resting contact
+needs a compliant contact model), carrying the states computed up to its time.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ImpactAccumulationError, ModelError, NumericalError, StepSizeError
+from ..model._compliant import rigid_contacts
+from ..runtime._programs import cached_jit
+from ._assembly import length_scale
+from ._problem import Problem
+from .methods import Projection
+from .result import Partial, Result
+
+#: An impact approaching slower than this many model lengths per run span ends the run as
+#: accumulating impacts (see the module).
+REST_SPEED = 1e-6
+#: A run with more impacts ends as accumulating impacts.
+MAX_IMPACTS = 10_000
+#: Contact points within this many model lengths of touching take part in an impact.
+GAP_TOL = 1e-9
+#: The impact instant's tolerance, relative to the run's span.
+TIME_TOL = 1e-14
+#: The first step of a segment, relative to the run's span (at most the first output
+#: interval, and shorter after an impact: see :func:`_first_step`).
+FIRST_STEP = 1e-4
+#: The part of the smallest contact radius a body point may move within one step.
+PASS_FRACTION = 0.5
+#: The most steps of one segment's solve (its dense output's size); a segment that runs out
+#: goes on as the next.
+SEGMENT_STEPS = 2048
+
+
+def _gap_of(contacts, i: int, t, y, args, **kwargs):
+    """The gap of contact point ``i`` in the state ``y``: an event's condition."""
+    return _gaps(contacts, y[0])[i]
+
+
+def _gaps(contacts, q):
+    """The gaps ``g = -delta`` (k,) [length] of every rigid contact point, in order."""
+    return jnp.concatenate([-jnp.atleast_1d(c.penetration(q)) for c in contacts])
+
+
+@cached_jit
+def _segment(
+    problem: Problem, contacts, t0, t1, y0, ts, dt0, dtmax, rtol, atol, solver: str, steps: int
+):
+    """One segment from ``t0`` to the first impact or ``t1``: the states at ``ts`` (N,)
+    clipped to the segment (``dt0``: the first step, ``dtmax`` the longest [time]), the end
+    time and state, which gap triggered (k,), whether the
+    solve failed (but for running out of its ``steps``) and its step count."""
+    import diffrax
+    import optimistix as optx
+
+    from .integrators import _constrained as cs
+
+    f = cs.equations_of_motion(problem)
+    k = _gaps(contacts, y0[0]).shape[0]
+    conds = [functools.partial(_gap_of, contacts, i) for i in range(k)]
+    span = t1 - t0
+    event = diffrax.Event(
+        conds,
+        root_finder=optx.Newton(rtol=TIME_TOL, atol=TIME_TOL * jnp.maximum(span, 1.0)),
+        direction=False,
+    )
+    sol = diffrax.diffeqsolve(
+        diffrax.ODETerm(f),
+        cs.runge_kutta(solver),
+        t0,
+        t1,
+        dt0,
+        y0,
+        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, dtmax=dtmax),
+        saveat=diffrax.SaveAt(t1=True, dense=True),
+        event=event,
+        max_steps=steps,
+        throw=False,
+    )
+    t_end = sol.ts[-1]
+    y_end = jax.tree.map(lambda a: a[-1], sol.ys)
+    inside = jnp.clip(ts, t0, t_end)
+    ys = jax.vmap(sol.evaluate)(inside)
+    mask = jnp.stack([jnp.asarray(m) for m in sol.event_mask]) if k else jnp.zeros(0, bool)
+    ran_out = sol.result == diffrax.RESULTS.max_steps_reached
+    ended = (sol.result == diffrax.RESULTS.successful) | (
+        sol.result == diffrax.RESULTS.event_occurred
+    )
+    failed = ~ended & ~ran_out
+    return ys, t_end, y_end, mask, failed, sol.stats["num_steps"]
+
+
+@cached_jit(optimize=False)  # a few times per run
+def _impact_state(problem: Problem, contacts, q, qd, t, tol):
+    """At an impact: the positions and velocities projected on the constraints, the
+    constraint Jacobian (m, nq) and ``Phi_t`` (m,), the gaps (k,) and their gradients
+    (k, nq)."""
+    q, _ = problem.project_positions(q, t, tol)
+    qd = problem.project_velocities(q, qd, t)
+    c = problem.c
+    J = c.phi_q(q, t) if c.m else jnp.zeros((0, q.shape[0]))
+    phit = c.phi_t(q, t) if c.m else jnp.zeros(0)
+    g = _gaps(contacts, q)
+    G = jax.jacfwd(lambda x: _gaps(contacts, x))(q)
+    return q, qd, J, phit, g, G
+
+
+@cached_jit(optimize=False)  # a few times per run
+def _first_step(problem: Problem, contacts, q, qd, t, h, tol):
+    """The first step [time] of a segment from ``(q, qd)`` at ``t``: ``h``, or shorter where
+    a contact point that touches (gap within ``tol``) separates and will close again: at
+    most the time ``g' / |g''|`` to the apex of its gap, so that the step's end sees the gap
+    open (an event is a gap that falls to zero from above, seen at the ends of steps)."""
+    qdd = problem.accelerations(q, qd, t)[0]
+
+    def gaps(s):
+        return _gaps(contacts, q + s * qd + 0.5 * s**2 * qdd)
+
+    s0 = jnp.zeros((), q.dtype)
+    rate = jax.jacfwd(gaps)(s0)
+    accel = jax.jacfwd(jax.jacfwd(gaps))(s0)
+    closing = (gaps(s0) <= tol) & (rate > 0.0) & (accel < 0.0)
+    apex = jnp.where(closing, rate / jnp.where(closing, -accel, 1.0), h)
+    return jnp.minimum(h, jnp.min(apex))
+
+
+def _longest_step(model, contacts, qd, dt_out, scale) -> float:
+    """The longest step [time] of a segment starting at the velocities ``qd``: the shortest
+    output interval, and the time in which the fastest body point (its centre's speed plus
+    its angular speed times the model's length) moves :data:`PASS_FRACTION` of the
+    smallest contact's effective radius, so that no pair passes through the other within a
+    step (a pair seen apart at both ends of a step whose gap closed and opened again inside
+    it would be missed)."""
+    v = np.asarray(qd).reshape(-1, 3)
+    speed = float(np.max(np.hypot(v[:, 0], v[:, 1]) + np.abs(v[:, 2]) * scale)) if v.size else 0.0
+    size = min(float(np.min(np.asarray(c.effective_radius()))) for c in contacts)
+    if speed <= 0.0:
+        return dt_out
+    return min(dt_out, PASS_FRACTION * size / speed)
+
+
+def impulse(Minv, J, phit, G, qd, e):
+    """The velocity jump of one impact at a contact point (see the module).
+
+    Args:
+        Minv: (nq,) inverse of the diagonal mass matrix.
+        J: (m, nq) constraint Jacobian ``Phi_q``; phit: (m,) ``Phi_t``.
+        G: (nq,) the gap's gradient; qd: (nq,) velocities before; e: restitution.
+
+    Returns:
+        ``(qd+ (nq,), Lambda (m,), P)``: the velocities after, the constraints' impulses and
+        the normal impulse [force * time], with ``M (qd+ - qd-) = Phi_q^T Lambda + G^T P``.
+    """
+    A = np.vstack([J, G[None, :]])
+    v = float(G @ qd)
+    b = np.concatenate([-(J @ qd + phit), [-(1.0 + e) * v]])
+    S = (A * Minv) @ A.T
+    x = np.linalg.lstsq(S, b, rcond=1e-13)[0]
+    dqd = Minv * (A.T @ x)
+    return qd + dqd, x[:-1], float(x[-1])
+
+
+def refuse_rigid_method(model, options) -> None:
+    """Rigid impacts are integrated by the projection method's Runge–Kutta solvers."""
+    if rigid_contacts(model) and not isinstance(options, Projection):
+        raise ModelError(
+            f"rigid contacts are integrated with the projection method, not {options.method}: "
+            "use method='projection' (the default), or give the contacts a compliant "
+            "contact_model",
+            rigid_contacts(model)[0].name,
+            field="contact_model",
+        )
+    if rigid_contacts(model) and options.dt is not None:
+        raise ModelError(
+            "rigid contacts need the adaptive steps (their impacts are found by events): remove dt",
+            rigid_contacts(model)[0].name,
+        )
+
+
+def simulate_impacts(case, progress=None) -> Result:
+    """Integrate a forward ``case`` (:class:`~._simulate.Case`) whose model has rigid
+    contacts, impact by impact, and build its result: the forward columns, ``work.impacts``
+    (the kinetic energy the impacts took, accumulated [energy]) and ``{contact}.impulse``
+    (the contact's normal impulses accumulated [force * time]); ``stats["impacts"]``: each
+    impact's ``t``, ``contact``, ``impulse``, ``normal_velocity_before`` and ``_after``,
+    the constraints' impulses ``reactions`` (by constraint row), the positions ``q`` and the
+    velocities ``qd_before`` and ``qd_after`` (model units)."""
+    from ._simulate import _post, check_energy_balance, energy_tolerance, post_kinds
+
+    problem, ts, options = case.problem, np.asarray(case.ts, float), case.options
+    model = problem.model
+    contacts = rigid_contacts(model)
+    owner = [c for c in contacts for _ in range(np.size(np.asarray(c.penetration(case.q0))))]
+    e_point = np.array([float(c.restitution) for c in owner])
+    Minv = np.asarray(problem.Minv, float)
+    span = float(ts[-1] - ts[0])
+    scale = length_scale(model)
+    rest = REST_SPEED * scale / span
+    tol_pos = 1e-12 * max(scale, 1.0)
+    N, nq = len(ts), int(np.size(case.q0))
+    Q, QD, W = np.full((N, nq), np.nan), np.full((N, nq), np.nan), np.zeros((N, 2))
+    W_imp = np.zeros(N)
+    P_acc = {c.name: np.zeros(N) for c in contacts}
+    impacts = {"t": [], "contact": [], "impulse": [], "normal_velocity_before": [],
+               "normal_velocity_after": [], "reactions": [], "q": [], "qd_before": [],
+               "qd_after": []}  # fmt: skip
+    labels = problem.c.active_labels
+    t0 = float(ts[0])
+    y = (jnp.asarray(case.q0), jnp.asarray(case.qd0), jnp.zeros(2))
+    lost, steps, segments = 0.0, 0, 1
+    totals = {c.name: 0.0 for c in contacts}
+    filled = np.zeros(N, bool)
+    dt_out = float(np.min(np.diff(ts))) if N > 1 else span
+
+    def fail(err):
+        err.partial = Partial.before(model, ts[filled], Q[filled], QD[filled], err.time)
+        raise err
+
+    while True:
+        # the impacts at t0: sequential, the fastest approach first
+        q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
+            problem, contacts, y[0], y[1], jnp.asarray(t0), tol_pos))  # fmt: skip
+        for _ in range(4 * len(g) + 4):
+            v = G @ qd
+            near = (g <= GAP_TOL * scale) & (v < 0.0)
+            if not near.any():
+                break
+            i = int(np.argmin(np.where(near, v, np.inf)))
+            if -v[i] < rest or len(impacts["t"]) >= MAX_IMPACTS:
+                fail(
+                    ImpactAccumulationError(
+                        f"impacts accumulate at {owner[i].name} (approach speed {-v[i]:.3g}, "
+                        f"{len(impacts['t'])} impacts): the bodies come to rest against each "
+                        f"other, which rigid impacts do not follow (the run stops below "
+                        f"{rest:.3g} [velocity] = {REST_SPEED:g} model lengths per span); "
+                        "use a compliant contact_model for a resting contact",
+                        t0,
+                        (owner[i].name,),
+                    )
+                )
+            qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_point[i])
+            m_old, m_new = qd @ (qd / Minv), qd_new @ (qd_new / Minv)
+            lost += 0.5 * (m_new - m_old)
+            totals[owner[i].name] += P
+            impacts["t"].append(t0)
+            impacts["contact"].append(owner[i].name)
+            impacts["impulse"].append(P)
+            impacts["normal_velocity_before"].append(float(v[i]))
+            impacts["normal_velocity_after"].append(float(G[i] @ qd_new))
+            impacts["reactions"].append(dict(zip(labels, lam.tolist(), strict=False)))
+            impacts["q"].append(q)
+            impacts["qd_before"].append(qd)
+            impacts["qd_after"].append(qd_new)
+            qd = qd_new
+        y = (jnp.asarray(q), jnp.asarray(qd), y[2])
+        h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
+        dt0 = _first_step(problem, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
+        dtmax = _longest_step(model, contacts, qd, dt_out, scale)
+        ys, t_end, y_end, mask, failed, n = _segment(
+            problem, contacts, jnp.asarray(t0), jnp.asarray(ts[-1]), y, jnp.asarray(ts), dt0,
+            jnp.asarray(dtmax),
+            jnp.asarray(options.rtol, float), jnp.asarray(options.atol, float), options.solver,
+            min(SEGMENT_STEPS, int(options.max_steps)),
+        )  # fmt: skip
+        t_end, steps = float(t_end), steps + int(n)
+        last = t_end >= ts[-1]
+        take = (ts >= t0) & ((ts <= t_end) if last else (ts < t_end)) & ~filled
+        Q[take], QD[take], W[take] = (np.asarray(a)[take] for a in ys)
+        W_imp[take] = lost
+        for name in P_acc:
+            P_acc[name][take] = totals[name]
+        filled |= take
+        if bool(failed):
+            fail(StepSizeError("the step size fell below its floor between impacts", t_end))
+        if steps > options.max_steps:
+            fail(StepSizeError(f"more than max_steps = {options.max_steps} steps", t_end))
+        if not np.all(np.isfinite(np.asarray(y_end[1]))):
+            fail(NumericalError("the velocities are not finite", t_end))
+        if last:
+            break
+        if t_end <= t0 and not np.asarray(mask).any():
+            fail(StepSizeError("the integration did not advance", t0))
+        segments += 1
+        t0, y = t_end, y_end
+
+    if progress is not None:
+        for t in ts:
+            progress(float(t))
+    qdd, _, ratio, cols = _post(problem, ts, Q, QD, case.n_drivers)
+    extra = {k: np.asarray(v) for k, v in cols.items()}
+    extra["work.nonconservative"], extra["work.constraints"] = W[:, 0], W[:, 1]
+    extra["work.impacts"] = W_imp
+    for name, p in P_acc.items():
+        extra[f"{name}.impulse"] = p
+    balance_cols = dict(extra, **{"work.nonconservative": W[:, 0] + W_imp})
+    tol = energy_tolerance(case.energy_tol, options)
+    balance = check_energy_balance(problem, ts, Q, balance_cols, np.asarray(ratio), options, tol)
+    kinds = post_kinds(problem, case.n_drivers)
+    kinds["work.impacts"] = "energy"
+    kinds.update({f"{c.name}.impulse": "impulse" for c in contacts})
+    stats = {
+        "method": options.method,
+        "options": dict(options.recorded() if case.recorded is None else case.recorded),
+        "segments": segments,
+        "steps": steps,
+        "impacts": {
+            k: (v if k in ("reactions", "contact") else np.asarray(v)) for k, v in impacts.items()
+        },
+        "max_violation": float(np.max(extra["constraint.violation"])),
+        "min_pivot_ratio": float(np.min(np.asarray(ratio))),
+        "energy_balance_error": balance,
+        "constraint_rows": problem.c.active_labels,
+        "unknown_forces": problem.unknown,
+        "linear_solver": problem.c.linear_solver.name,
+    }
+    stats.update(case.stats)
+    return Result(
+        kind=case.kind,
+        model=model,
+        t=ts,
+        q=Q,
+        qd=QD,
+        qdd=np.asarray(qdd),
+        extra=extra,
+        kinds=kinds,
+        stats=stats,
+    )
+
+
+__all__ = ["impulse", "refuse_rigid_method", "simulate_impacts"]
