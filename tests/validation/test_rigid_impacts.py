@@ -26,9 +26,9 @@ import math
 
 import numpy as np
 import pytest
-from tests.fixtures.models import four_bar_pose
 
 import mixdyn as md
+from fixtures import four_bar_pose
 from mixdyn.analysis._impacts import impulse
 
 A_, B_, C_, D_ = 0.2, 0.55, 0.4, 0.6  # crank, coupler, rocker, ground [m]
