@@ -22,7 +22,7 @@ from PIL import Image
 
 import mixdyn as md
 from fixtures import slider_crank
-from mixdyn.viz import html
+from mixdyn.viz import Scene, html
 
 CHROMIUM = next(
     (p for p in map(shutil.which, ("chromium", "chromium-browser", "google-chrome")) if p), None
@@ -192,6 +192,12 @@ def test_plot_cursor_follows_the_frame_and_a_click_moves_the_animation(motion, t
         foot = (DPR * (plot["left"] + plot["x"]), DPR * (plot["top"] + plot["height"] - m["b"] - 4))
         assert near(image, foot, rgb("#d62728")), f"no cursor at frame {i}"
         xs.append(plot["x"])
+        # The motor's torque drawn in the view: its arc's middle, where the scene puts it.
+        view = json.loads(attrs["view"])
+        (arc,) = Scene(motion.model, motion.q, (), {"motor": motion["motor"]}).symbols
+        mid = arc["path"][i, 18]
+        at = (DPR * (view["ox"] + view["k"] * mid[0]), DPR * (view["oy"] - view["k"] * mid[1]))
+        assert near(image, at, rgb(arc["color"])), f"no motor torque drawn at frame {i}"
     assert xs[1] - xs[0] == pytest.approx(inner * (motion.t[60] - motion.t[10]) / (t1 - t0))
     attrs = _attrs(chromium(tmp_path, f"{page.as_uri()}#plotclick=0.75", "dom"))
     assert int(attrs["frame"]) == int(np.argmin(np.abs(motion.t - (t0 + 0.75 * (t1 - t0)))))
