@@ -24,6 +24,10 @@ LENGTHS = ("r1", "r2", "r3", "r4")
 class PathTask:
     """Path generation: a four-bar's coupler point through target points, in their order.
 
+    Numbers are in one consistent unit system; the model and model file of a result
+    (:meth:`~._search.Synthesis.model`, :meth:`~._search.Synthesis.write`) read them as SI
+    (m, kg, s).
+
     Attributes:
         points: (N, 2) the target points [length], N >= 2, in the order the coupler point
             passes them as the crank turns in the positive sense.
