@@ -126,7 +126,9 @@ def _count_setups(monkeypatch, analysis: str) -> list:
 
 
 @pytest.mark.slow  # long: run by CI's slow set
-def test_mixed_members_equal_single_runs(paper, monkeypatch):
+@pytest.mark.timeout(900)
+@pytest.mark.parametrize("batch_size", [None, 2], ids=["member-by-member", "vectorized"])
+def test_mixed_members_equal_single_runs(paper, monkeypatch, batch_size):
     """The paper's mixed run (F1 unknown, the slider's x prescribed) over the crank's torque:
     each member equals ``md.mixed``; at the paper's numbers F1 = 10 sin(pi t / 2). The
     torque does not enter the start, and F1 is collocated with the slider's motion: the
@@ -145,8 +147,14 @@ def test_mixed_members_equal_single_runs(paper, monkeypatch):
         atol=1e-10,
     )
     vary = {"T2.law.value": [500.0, 520.0]}
-    sw = md.sweep(paper, TS, vary=vary, analysis="mixed", **kw)
-    assert not sw.errors and len(calls) == 1
+    sw = md.sweep(paper, TS, vary=vary, analysis="mixed", batch_size=batch_size, **kw)
+    assert not sw.errors and len(calls) == (0 if batch_size else 1)
+    if batch_size:  # held as arrays (set up once, by _stacked), built when read
+        assert sw.stacked is not None and repr(sw.results) == "<2 results, 0 built>"
+        cols, units = sw.columns()
+        assert cols["F1"].shape == (2, len(TS)) and units["F1"] == sw[0].units()["F1"]
+        for i in range(2):
+            np.testing.assert_array_equal(cols["F1"][i], sw[i]["F1"])
     for i, m in enumerate(vary_models(paper, vary)):
         single = md.mixed(m, TS, **kw)
         assert np.max(np.abs(sw[i]["F1"] - single["F1"])) <= 1e-10 * 10.0
@@ -154,10 +162,19 @@ def test_mixed_members_equal_single_runs(paper, monkeypatch):
     assert np.max(np.abs(sw[1]["F1"] - 10.0 * np.sin(np.pi * TS / 2))) > 1e-3
 
 
-def test_a_failed_member_is_reported_and_the_others_kept(paper):
-    """A member whose run needs more steps than allowed fails by name; the others finish."""
+@pytest.mark.parametrize(
+    "batch_size",
+    [None, pytest.param(3, marks=pytest.mark.slow)],  # long: run by CI's slow set
+    ids=["member-by-member", "vectorized"],
+)
+def test_a_failed_member_is_reported_and_the_others_kept(paper, batch_size):
+    """A member whose run needs more steps than allowed fails by name; the others finish
+    (held as arrays: the screen finishes the failed member at once, NaN in its rows)."""
     vary = {"T2.law.value": [500.0, 50_000.0, 520.0]}
-    sw = md.sweep(paper, TS, vary=vary, max_steps=400, **OPTS)
+    sw = md.sweep(paper, TS, vary=vary, max_steps=400, batch_size=batch_size, **OPTS)
+    if batch_size:
+        cols, _ = sw.columns()
+        assert np.isnan(cols["slider.x"][1]).all() and np.isfinite(cols["slider.x"][[0, 2]]).all()
     assert set(sw.errors) == {1}
     assert isinstance(sw.errors[1], md.NumericalError)
     assert "step limit" in str(sw.errors[1])
@@ -326,3 +343,32 @@ def test_a_sweep_as_a_labelled_array(tmp_path):
     ds.to_netcdf(path, engine="scipy")
     back = xr.load_dataset(path, engine="scipy")
     np.testing.assert_array_equal(back["motor"].values, ds["motor"].values)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_an_inverse_sweep_held_as_arrays():
+    """64 inverse members over masses share the drivers' motion: member 0 is run, every
+    member post-processed along its motion by one program, no result built before it is
+    read; each member equals ``md.inverse`` of its model (efforts, reactions, motion), its
+    columns those of the arrays, the Dataset's coordinates the varied masses."""
+    model = slider_crank()
+    t = np.linspace(0.0, 1.0, 5)
+    vary = {"slider.mass": np.linspace(1.0, 4.0, 64), "rod.mass": np.linspace(2.0, 0.5, 64)}
+    sw = md.sweep(model, t, vary=vary, analysis=md.analyses.Inverse())
+    assert sw.stacked is not None and repr(sw.results) == "<64 results, 0 built>"
+    cols, units = sw.columns()
+    members = vary_models(model, vary)
+    efforts = set()
+    for i in (0, 17, 63):
+        single = md.inverse(members[i], t)
+        assert set(sw[i].columns()) == set(single.columns()) and units == single.units()
+        for c in ("motor", "B.Fx", "slide.Fy", "slider.x"):
+            scale = float(np.max(np.abs(single[c])))
+            assert float(np.max(np.abs(sw[i][c] - single[c]))) <= 1e-12 * scale, c
+            assert float(np.max(np.abs(cols[c][i] - single[c]))) <= 1e-12 * scale, c
+        efforts.add(float(np.max(np.abs(single["motor"]))))
+    assert len(efforts) == 3  # the masses reach the efforts
+    if importlib.util.find_spec("xarray") is not None:
+        ds = sw.dataset(["motor"])
+        np.testing.assert_array_equal(ds["rod.mass"].values, vary["rod.mass"])
+        assert ds["motor"].attrs["units"] == units["motor"] and ds.attrs["analysis"] == "inverse"

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -24,17 +25,17 @@ import numpy as np
 from ..errors import MixdynError, ModelError
 from ..model import Model
 from ._assembly import length_scale
+from ._reactions import check_contacts
 from ._schedule import (
     CHUNK,
     Outcome,
     _default_batch_size,
-    _finish,
     _integrate_batch_jit,
     _post_batch_jit,
     for_batch,
 )
 from ._setup import Analysis, prepare
-from ._simulate import Case, energy_tolerance, post_columns, require_masses
+from ._simulate import Case, energy_tolerance, finish, post_columns, require_masses
 from .result import _BODY_COLUMNS, Result, in_units
 
 
@@ -98,7 +99,6 @@ def stack(
         MixdynError: member 0's start cannot be made (every member's).
     """
     leaves, treedef = jax.tree_util.tree_flatten(model)
-    count = len(values[0])
 
     def model_of(i: int) -> Model:
         row = list(leaves)
@@ -117,14 +117,57 @@ def stack(
         setup = dataclasses.replace(setup, recorded=recorded)
     if not value._shares_setup(setup):
         return None
-    case = value._case(setup, t)
+    return _stacked(value._case(setup, t), len(leaves), positions, values, masses)
+
+
+def _stacked(case: Case, n_model: int, positions, values, masses) -> Stacked | None:
+    """The members of ``case``'s problem with ``values[k]`` at its leaf ``positions[k]``
+    (the model's leaves come first, ``n_model`` of them, then the constraint set's)."""
     problem_leaves = jax.tree_util.tree_leaves(case.problem)
-    if len(problem_leaves) != len(leaves) + len(jax.tree_util.tree_leaves(case.problem.c)):
+    if len(problem_leaves) != n_model + len(jax.tree_util.tree_leaves(case.problem.c)):
         return None  # pragma: no cover - a problem field beside the model and constraints
     stacked = list(problem_leaves)
     for k, v in zip(positions, values, strict=True):
         stacked[k] = np.asarray(v, dtype=np.float64)
-    return Stacked(case, stacked, frozenset(positions), count, masses)
+    return Stacked(case, stacked, frozenset(positions), len(values[0]), masses)
+
+
+def stack_driven(
+    model: Model,
+    paths: Sequence[str],
+    positions: Sequence[int],
+    values: Sequence[np.ndarray],
+    value: Analysis,
+    t,
+) -> tuple[Stacked, Result] | None:
+    """An inverse sweep's members (the motion fixed by the drivers, the same for every
+    member where only masses, inertias and forces vary), as :func:`stack`: member 0 run
+    whole, ``(stacked, its result)``, whose motion every member shares.
+
+    Raises:
+        ModelError: as :func:`stack`.
+        MixdynError: member 0's run fails (every member's motion).
+    """
+    leaves, treedef = jax.tree_util.tree_flatten(model)
+
+    def model_of(i: int) -> Model:
+        row = list(leaves)
+        for k, v in zip(positions, values, strict=True):
+            row[k] = jnp.asarray(v[i])
+        return jax.tree_util.tree_unflatten(treedef, row)
+
+    masses = _masses_and_inertias(model, dict(zip(paths, values, strict=True)), model_of)
+    t0 = float(np.atleast_1d(np.asarray(t, dtype=float))[0])
+    try:
+        setup = prepare(model_of(0), value, t0=t0)
+        first = value._run(setup, t)
+    except ModelError as err:
+        err.add_note("in member 0 of the sweep")
+        raise
+    ts, n_drivers = np.asarray(first.t), len(model.drivers)
+    case = Case(value.name, setup.problem, ts, first.q[0], first.qd[0], None, n_drivers, None)
+    stacked = _stacked(case, len(leaves), positions, values, masses)
+    return None if stacked is None else (stacked, first)
 
 
 def _masses_and_inertias(model: Model, varied: dict[str, np.ndarray], model_of) -> np.ndarray:
@@ -165,6 +208,60 @@ class Arrays:
         return tuple(jax.tree.map(lambda x, i=i: x[i], a) for a in (self.trajs, self.post))
 
 
+class Motion(NamedTuple):
+    """An inverse sweep's motion, every member's (M, N, nq) (broadcast: shared)."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    w: None = None
+
+
+def _width(count: int, batch_size: int | None) -> tuple[int, int]:
+    """``(members a call, members vectorized at a time)``: :data:`~._schedule.CHUNK` a call
+    on a CPU without ``batch_size``, else every member in one call."""
+    width = batch_size or _default_batch_size()
+    chunk = CHUNK if width is None else count
+    return chunk, min(width or CHUNK, chunk)
+
+
+def _chunks(count: int, chunk: int):
+    """The members of each call (K,), and the call's members filled up to ``chunk`` with
+    copies of its first member."""
+    for first in range(0, count, chunk):
+        idx = np.arange(first, min(first + chunk, count))
+        yield idx, np.concatenate([idx, np.full(chunk - len(idx), first)])
+
+
+def post_driven(stacked: Stacked, first: Result) -> Arrays:
+    """Every member's post-processing (:func:`~._simulate._post_arrays`) along member 0's
+    motion ``first``, by one vectorized program (:data:`~._schedule.CHUNK` members a call
+    on a CPU)."""
+    count = stacked.count
+    chunk, width = _width(count, None)
+    ts = np.asarray(stacked.case.ts, dtype=np.float64)
+    q, qd = np.asarray(first.q), np.asarray(first.qd)
+    Q, QD = (np.broadcast_to(a, (chunk, *a.shape)) for a in (q, qd))
+    parts = []
+    for idx, full in _chunks(count, chunk):
+        post = _post_batch_jit(width, stacked.problems(full), ts, Q, QD)
+        parts.append(jax.tree.map(lambda x, n=len(idx): np.asarray(x)[:n], post))
+    post = parts[0] if len(parts) == 1 else jax.tree.map(lambda *xs: np.concatenate(xs), *parts)
+    motion = Motion(*(np.broadcast_to(a, (count, *a.shape)) for a in (q, qd)))
+    return Arrays(motion, post)
+
+
+def driven_result(stacked: Stacked, first: Result, arrays: Arrays, i: int) -> Result:
+    """Member ``i``'s result of an inverse sweep: member 0's motion with member ``i``'s
+    efforts and reactions, checked as the single run's (its contacts, finite values)."""
+    case = stacked.member(i)
+    _, post = arrays.of(i)
+    _, _, ratio, cols = post_columns(case.problem, post, case.n_drivers)
+    check_contacts(case.problem.c, case.ts, cols)
+    stats = dict(first.stats, min_pivot_ratio_dynamics=float(np.min(np.asarray(ratio))))
+    extra = {k: np.asarray(v) for k, v in cols.items()}
+    return dataclasses.replace(first, model=case.problem.model, extra=extra, stats=stats)
+
+
 def integrate(stacked: Stacked, batch_size: int | None) -> Arrays:
     """Every member integrated and post-processed by one vectorized program: on a CPU
     without ``batch_size``, :data:`~._schedule.CHUNK` members a call (the last call filled
@@ -172,17 +269,13 @@ def integrate(stacked: Stacked, batch_size: int | None) -> Arrays:
     any count); otherwise the whole sweep in one call, ``batch_size`` (default: the
     accelerator's) members at a time vectorized."""
     count = stacked.count
-    width = batch_size or _default_batch_size()
-    chunk = CHUNK if width is None else count
-    width = min(width or CHUNK, chunk)
+    chunk, width = _width(count, batch_size)
     case = stacked.case
     ts = np.asarray(case.ts, dtype=np.float64)
     options = case.options.as_argument()
     q0, qd0 = np.asarray(case.q0), np.asarray(case.qd0)
     parts = []
-    for first in range(0, count, chunk):
-        idx = np.arange(first, min(first + chunk, count))
-        full = np.concatenate([idx, np.full(chunk - len(idx), first)])
+    for idx, full in _chunks(count, chunk):
         problems = stacked.problems(full)
         trajs = _integrate_batch_jit(
             case.options.method,
@@ -211,6 +304,13 @@ def screen(stacked: Stacked, arrays: Arrays) -> np.ndarray:
     count = stacked.count
     if any(getattr(j, "unilateral", None) is not None for j in case.problem.c.joints):
         return np.ones(count, dtype=bool)
+    if isinstance(trajs, Motion):  # an inverse sweep: its post-processing alone varies
+        flagged = np.zeros(count, dtype=bool)
+        for leaf in jax.tree_util.tree_leaves(post):
+            a = np.asarray(leaf)
+            if a.dtype.kind == "f":
+                flagged |= ~np.isfinite(a.reshape(count, -1)).all(axis=1)
+        return flagged
     flagged = np.asarray(trajs.status) != 0
     for leaf in jax.tree_util.tree_leaves((trajs.q, trajs.qd, trajs.w, post)):
         a = np.asarray(leaf)
@@ -254,22 +354,19 @@ class LazyResults(Sequence):
     :class:`~.result.Result` is built the first time it is read (:func:`~._simulate.finish`
     of its arrays, equal to the single run's) and kept."""
 
-    def __init__(self, stacked: Stacked, arrays: Arrays, outcomes: dict[int, Outcome]):
-        self._stacked, self._arrays = stacked, arrays
+    def __init__(self, count: int, build: Callable[[int], Result], outcomes: dict[int, Outcome]):
+        self._count, self._build = count, build
         self._built = {i: r for i, (r, _) in outcomes.items()}
 
     def __len__(self) -> int:
-        return self._stacked.count
+        return self._count
 
     def __getitem__(self, i):
         if isinstance(i, slice):
             return [self[k] for k in range(*i.indices(len(self)))]
         i = range(len(self))[i]
         if i not in self._built:
-            result, err = _finish(self._stacked.member(i), *self._arrays.of(i))
-            if err is not None:
-                raise err  # pragma: no cover - the screen finishes such members at once
-            self._built[i] = result
+            self._built[i] = self._build(i)
         return self._built[i]
 
     def __repr__(self) -> str:
@@ -282,23 +379,38 @@ def run(
     on_member: Callable[[int], None] | None,
     seconds: dict,
     clock: Callable[[], float],
+    first: Result | None = None,
 ) -> tuple[LazyResults, dict[int, MixdynError], Arrays]:
-    """The members of ``stacked`` integrated, screened, the flagged ones finished:
-    ``(results, errors, arrays)``; ``seconds`` gains ``integration`` and ``finishing``."""
+    """The members of ``stacked`` integrated (an inverse sweep, ``first`` member 0's result:
+    post-processed along its motion), screened, the flagged ones finished:
+    ``(results, errors, arrays)``; ``seconds`` gains ``integration`` (or
+    ``post-processing``) and ``finishing``."""
     start = clock()
-    arrays = integrate(stacked, batch_size)
+    if first is None:
+        arrays = integrate(stacked, batch_size)
+
+        def build(i: int) -> Result:
+            return finish(stacked.member(i), *arrays.of(i))
+    else:
+        arrays = post_driven(stacked, first)
+
+        def build(i: int) -> Result:
+            return driven_result(stacked, first, arrays, i)
+
     middle = clock()
-    outcomes = {
-        int(i): _finish(stacked.member(int(i)), *arrays.of(int(i)))
-        for i in np.flatnonzero(screen(stacked, arrays))
-    }
+    outcomes = {}
+    for i in np.flatnonzero(screen(stacked, arrays)):
+        try:
+            outcomes[int(i)] = build(int(i)), None
+        except MixdynError as err:
+            outcomes[int(i)] = None, err
     errors = {i: e for i, (_, e) in outcomes.items() if e is not None}
     if on_member is not None:
         for i in range(stacked.count):
             on_member(i)
-    seconds["integration"] = middle - start
+    seconds["integration" if first is None else "post-processing"] = middle - start
     seconds["finishing"] = clock() - middle
-    return LazyResults(stacked, arrays, outcomes), errors, arrays
+    return LazyResults(stacked.count, build, outcomes), errors, arrays
 
 
 def columns(
@@ -323,8 +435,9 @@ def columns(
         for suffix, src, k, _ in _BODY_COLUMNS:
             cols[f"{body.name}.{suffix}"] = states[src][:, :, 3 * b + k]
     cols.update({k: np.asarray(v).reshape(count, n) for k, v in extra.items()})
-    W = np.asarray(trajs.w)
-    cols["work.nonconservative"], cols["work.constraints"] = W[..., 0], W[..., 1]
+    if trajs.w is not None:
+        W = np.asarray(trajs.w)
+        cols["work.nonconservative"], cols["work.constraints"] = W[..., 0], W[..., 1]
     if set(cols) != set(result.columns()):  # pragma: no cover - a column made elsewhere
         raise RuntimeError("the stacked columns differ from a member's result's")
     if errors:
@@ -339,4 +452,17 @@ def _without(a: np.ndarray, bad: np.ndarray) -> np.ndarray:
     return out
 
 
-__all__ = ["Arrays", "LazyResults", "Stacked", "columns", "integrate", "run", "screen", "stack"]
+__all__ = [
+    "Arrays",
+    "LazyResults",
+    "Motion",
+    "Stacked",
+    "columns",
+    "driven_result",
+    "integrate",
+    "post_driven",
+    "run",
+    "screen",
+    "stack",
+    "stack_driven",
+]

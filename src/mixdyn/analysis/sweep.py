@@ -13,6 +13,11 @@ the members' equations are stacked and one program integrates the whole batch
 run: a failure or a broken energy balance is reported by member index and cause
 (:attr:`Sweep.errors`) without losing the others.
 
+Members that share one start and are integrated by one program (a ``batch_size``, an
+accelerator, or on a CPU at least :data:`~._schedule.CHUNK` members, run that many a call)
+are held as arrays (:mod:`._stacked`): one set-up, one stacked problem, the members screened
+at once, each member's :class:`~.result.Result` built when it is read.
+
 A kinematic, inverse or quasi-static sweep prepares and runs the single analysis member by
 member (its programs are compiled for the first member and reused), from a thread per core.
 
@@ -391,7 +396,10 @@ def sweep(
             ``Inverse(...)`` or ``QuasiStatic(...)``, e.g.
             ``analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10))``.
         batch_size: None (default): on a CPU member by member, each by the single run's
-            program (compiled once), from ``threads`` threads; on an accelerator up to
+            program (compiled once), from ``threads`` threads, but for at least
+            :data:`~._schedule.CHUNK` (64) members sharing one start (:func:`shares_start`),
+            which run that many at a time in one vectorized program (one shape for any
+            count); on an accelerator up to
             :data:`~._schedule.ACCELERATOR_BATCH` (32,768) members at a time. A
             number (forward and mixed sweeps): every member integrated by one program,
             ``batch_size`` members at a time vectorized (``vmap``): on a CPU faster once
@@ -455,6 +463,18 @@ def sweep(
     ):
         done = _as_arrays(model, vary, positions, values, value, t, recorded, batch_size,
                           on_member, params, started)  # fmt: skip
+        if done is not None:
+            return done
+    if (
+        models is None
+        and value.name == "inverse"
+        and client is None
+        and batch_size is None
+        and (count >= CHUNK or _default_batch_size() is not None)
+        and shares_start(model, vary)
+    ):
+        done = _as_arrays(model, vary, positions, values, value, t, None, None,
+                          on_member, params, started, driven=True)  # fmt: skip
         if done is not None:
             return done
     if models is None:
@@ -530,16 +550,33 @@ def _parameters(names: list[str], values: list[np.ndarray], count: int) -> list[
 
 
 def _as_arrays(
-    model, vary, positions, values, value, t, recorded, batch_size, on_member, params, started
+    model,
+    vary,
+    positions,
+    values,
+    value,
+    t,
+    recorded,
+    batch_size,
+    on_member,
+    params,
+    started,
+    driven: bool = False,
 ) -> Sweep | None:
     """The sweep of members sharing one start as arrays (:mod:`._stacked`): member 0 set
-    up, every member integrated by one vectorized program, screened at once, each result
-    built when read; None where the members cannot share the set-up (then member by
+    up, every member integrated by one vectorized program (``driven``, an inverse sweep:
+    member 0 run, every member post-processed along its motion), screened at once, each
+    result built when read; None where the members cannot share the set-up (then member by
     member)."""
     clock = time.perf_counter
     seconds: dict[str, float] = {}
+    first = None
     try:
-        stacked = _stacked.stack(model, list(vary), positions, values, value, t, recorded)
+        if driven:
+            made = _stacked.stack_driven(model, list(vary), positions, values, value, t)
+            stacked, first = made if made is not None else (None, None)
+        else:
+            stacked = _stacked.stack(model, list(vary), positions, values, value, t, recorded)
     except ModelError:
         raise  # an input error: refused, named
     except MixdynError as err:  # the shared start cannot be made: every member fails
@@ -552,7 +589,7 @@ def _as_arrays(
     if stacked is None:
         return None
     seconds["setup"] = clock() - started
-    results, errors, arrays = _stacked.run(stacked, batch_size, on_member, seconds, clock)
+    results, errors, arrays = _stacked.run(stacked, batch_size, on_member, seconds, clock, first)
     seconds["total"] = clock() - started
     named = {p: v for p, v in zip(vary, values, strict=True)}
     return Sweep(results, errors, params, seconds, stacked, arrays, named)
