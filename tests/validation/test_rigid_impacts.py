@@ -16,6 +16,7 @@
   joints' velocity constraints kept after it, the rebound and the impulse as above.
 - Newton's cradle (three balls, ``e = 1``, the last two touching): sequential impacts pass
   the first ball's velocity to the last; momentum and energy kept.
+- A sweep over the restitution: each member's first impulse is ``(1 + e) m v0``.
 - A ball coming to rest (Zeno): a named failure just before the closed-form accumulation
   time ``t_inf = t_1 + 2 e v0 / (g (1 - e))``, never a hang.
 """
@@ -294,3 +295,19 @@ def test_a_ball_coming_to_rest_ends_as_accumulating_impacts():
     assert 0.0 <= t_inf - err.value.time < 1e-6
     assert err.value.elements == ("floor",)
     assert err.value.partial is not None
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_sweep_over_the_restitution_runs_each_member_impact_by_impact():
+    h0, g = 1.0, 9.81
+    v0 = math.sqrt(2 * g * h0)
+    sw = md.sweep(
+        _ball(0.8, h0),
+        np.linspace(0.0, 1.0, 11),
+        vary={"floor.restitution": [0.5, 0.9]},
+        analysis=md.analyses.Forward(method=md.Projection(rtol=1e-10, atol=1e-12)),
+    )
+    for e, r in zip((0.5, 0.9), sw.results, strict=True):
+        np.testing.assert_allclose(r.stats["impacts"]["impulse"][0], (1 + e) * v0, rtol=1e-10)
+        np.testing.assert_allclose(r.stats["impacts"]["normal_velocity_after"][0], e * v0,
+                                   rtol=1e-10)  # fmt: skip

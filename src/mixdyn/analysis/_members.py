@@ -17,9 +17,10 @@ import numpy as np
 
 from ..errors import MixdynError, ModelError
 from ..model import Model
+from ..model._compliant import rigid_contacts
 from ._schedule import Outcome, _batched, _default_batch_size, _finish, _in_threads
 from ._setup import Analysis, prepare, run
-from ._simulate import Case, integrate, require_masses
+from ._simulate import Case, integrate, require_masses, simulate
 
 
 def model_swapper(problem):
@@ -159,7 +160,9 @@ def run_members(
                     "models",
                 )
         order = list(cases)
-        if batch_size is None and _default_batch_size() is None:
+        if rigid_contacts(first.problem.model):  # integrated impact by impact, one by one
+            done = _in_threads(lambda i: _simulated(cases[i]), order, threads, on_member)
+        elif batch_size is None and _default_batch_size() is None:
             done = _in_threads(
                 lambda i: _finish(cases[i], integrate(cases[i])), order, threads, on_member
             )
@@ -170,3 +173,12 @@ def run_members(
                     on_member(i)
         outcomes.update(zip(order, done, strict=True))
     return [outcomes[i] for i in range(len(members))]
+
+
+def _simulated(case: Case) -> Outcome:
+    """A member run whole (:func:`~._simulate.simulate`: a model with rigid contacts), its
+    failure kept as its outcome."""
+    try:
+        return simulate(case), None
+    except MixdynError as err:
+        return None, err
