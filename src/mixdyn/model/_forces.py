@@ -20,7 +20,7 @@ import jax.numpy as jnp
 from ..errors import ModelError
 from ._declare import direction, element, option, quantity, reference
 from ._element import Element, Resolver, moving
-from ._geometry import GROUND, angle, cross, point, vector
+from ._geometry import GROUND, angle, cross, point, rot, vector
 from ._laws import Law, as_law
 
 _UNBOUND = -2
@@ -170,7 +170,7 @@ class PointForce(ForceElement):
         return (self.b,)
 
     def direction(self, q, qd, t, nq):
-        u = self.u if self.frame == "ground" else vector(q, self.b, self.u)
+        u = self.u if self.frame == "ground" else rot(angle(q, self.b)) @ self.u
         return wrench(nq, [(self.b, point_wrench(q, self.b, self.s, u))])
 
     def magnitude(self, q, qd, t):

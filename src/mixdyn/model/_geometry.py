@@ -26,25 +26,16 @@ def rot(phi):
     return jnp.array([[c, -s], [s, c]])
 
 
-def rotate(phi, u):
-    """``A(phi) u`` (2,) for ``u`` (2,), written out element-wise: XLA fuses it with the code
-    around it, where a 2 x 2 matrix product is a call of its own (on a CPU, most of an
-    integrator step's calls were these)."""
-    c, s = jnp.cos(phi), jnp.sin(phi)
-    u = jnp.asarray(u)
-    return jnp.stack([c * u[0] - s * u[1], s * u[0] + c * u[1]])
-
-
 def point(q, b: int, s):
     """Global position (2,) of the point with body-frame coordinates ``s`` (2,) on body ``b``."""
     r, phi = pose(q, b)
-    return r + rotate(phi, s)
+    return r + rot(phi) @ s
 
 
 def vector(q, b: int, u):
     """Global components (2,) of the body-frame vector ``u`` (2,) of body ``b``."""
     _, phi = pose(q, b)
-    return rotate(phi, u)
+    return rot(phi) @ u
 
 
 def angle(q, b: int):
