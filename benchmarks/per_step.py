@@ -53,6 +53,9 @@ def kinematic():
     return lambda: md.kinematic(m, t)
 
 CASES = {{
+    "chain-2 baumgarte 1 s (1000 steps)": chain("baumgarte", 2, 1.0),
+    "chain-3 baumgarte 1 s (1000 steps)": chain("baumgarte", 3, 1.0),
+    "chain-3 generalized-alpha 1 s (1000 steps)": chain("generalized-alpha", 3, 1.0),
     "chain-4 baumgarte 1 s (1000 steps)": chain("baumgarte", 4, 1.0),
     "chain-4 generalized-alpha 1 s (1000 steps)": chain("generalized-alpha", 4, 1.0),
     "chain-16 baumgarte 0.2 s (200 steps)": chain("baumgarte", 16, 0.2),
