@@ -88,6 +88,11 @@ def _held_as_arrays(paper, sw):
             assert float(np.max(np.abs(got - v))) <= 1e-12 * scale, c
         assert res.units() == units
     assert cols["slider.x"].shape == (4, len(TS))
+    table = sw.table(["slider.x"], output_units={"length": "m"})  # read from the arrays
+    for i in range(4):
+        rows = table[table["member"] == i]
+        assert float(rows["slider.mass"].iloc[0]) == VARY["slider.mass"][i]
+        np.testing.assert_array_equal(rows["slider.x"].to_numpy(), sw[i]["slider.x"] / 1000)
     if importlib.util.find_spec("xarray") is None:
         return
     ds = sw.to_xarray(["slider.x", "EF.M"], output_units={"length": "m"})

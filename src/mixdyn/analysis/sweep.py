@@ -256,10 +256,6 @@ class Sweep:
             raise self.errors[i]
         return self.results[i]
 
-    def __iter__(self):
-        """Each member's result in order (None where it failed)."""
-        return iter(self.results)
-
     def columns(
         self, output_units: dict | None = None
     ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
@@ -301,6 +297,8 @@ class Sweep:
         from ..units import engineering
         from .result import in_units
 
+        if self.stacked is not None and len(self.errors) < len(self):
+            return self._table(columns, output_units)
         frames, units = [], {}
         for i, res in enumerate(self.results):
             if res is None:
@@ -318,6 +316,32 @@ class Sweep:
             df.insert(0, "member", i)
             frames.append(df)
         out = pd.concat(frames, ignore_index=True) if frames else pd.DataFrame()
+        out.attrs["units"] = {c: engineering(u) for c, u in units.items() if c in out.columns}
+        return out
+
+    def _table(self, columns: Sequence[str], output_units: dict | None):
+        """:meth:`table` from the members' arrays (:meth:`columns`), at once."""
+        import pandas as pd
+
+        from ..units import engineering
+
+        cols, units = self.columns(output_units)
+        keep = ["t", *columns] if columns else list(cols)
+        for c in keep:
+            if c not in cols:
+                next(r for r in self.results if r is not None)[c]  # names the close columns
+        ok = np.array([i for i in range(len(self)) if i not in self.errors])
+        n = len(cols["t"])
+        data = {"member": np.repeat(ok, n)}
+        for name, v in self.values.items():
+            data[name] = (
+                np.repeat(v[ok], n)
+                if v.ndim == 1
+                else [str(r.tolist()) for r in v[ok] for _ in range(n)]
+            )
+        data["t"] = np.tile(cols["t"], len(ok))
+        data.update({c: cols[c][ok].reshape(-1) for c in keep if c != "t"})
+        out = pd.DataFrame(data)
         out.attrs["units"] = {c: engineering(u) for c, u in units.items() if c in out.columns}
         return out
 
