@@ -49,7 +49,9 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
     scene = Scene(model, q[None])
     x0, x1, y0, y1 = scene.bounds
     aspect = (y1 - y0) / max(x1 - x0, 1e-12)
-    fig = Figure(figsize=(7.0, float(np.clip(7.0 * aspect + 0.9, 3.0, 8.0))), layout="constrained")
+    fig = Figure(  # at the output's resolution: the names are placed in its pixels
+        figsize=(7.0, float(np.clip(7.0 * aspect + 0.9, 3.0, 8.0))), dpi=dpi, layout="constrained"
+    )
     FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     ax.set_xlim(x0, x1)
@@ -152,7 +154,7 @@ def _write_labels(fig, ax, labels) -> None:
     sizes = []
     for t in texts:
         bb = t.get_window_extent(renderer)
-        sizes.append((bb.width, bb.height))
+        sizes.append((1.1 * bb.width + 2, bb.height + 1))  # a margin for the font's hinting
     marks = [(x - 5, y - 5, x + 5, y + 5) for x, y in anchors]
     frame = ax.bbox.extents
     boxes = place(anchors, sizes, frame, gap=4.0, obstacles=marks)
