@@ -75,11 +75,14 @@ def plot_columns_data(result, names, idx) -> list[dict]:
 def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=(), plots=()) -> dict:
     """The page's data: times, bodies' outlines and coordinates, pins, ground, guides, traces,
     force symbols, arrows (already scaled to lengths), units, the plotted columns
-    (:func:`plot_columns_data`). Numbers rounded to 9 significant digits."""
+    (:func:`plot_columns_data`). Numbers rounded to 9 significant digits; a symbol's pen lift
+    (a NaN row) is ``null``."""
 
     def r(a):
         a = np.asarray(a, dtype=float)
-        return [float(f"{v:.9g}") for v in a.ravel()] if a.ndim == 1 else [r(x) for x in a]
+        if a.ndim > 1:
+            return [r(x) for x in a]
+        return [float(f"{v:.9g}") if np.isfinite(v) else None for v in a]  # None: a pen lift
 
     scale = arrow_scale(arrows, scene.bounds) if arrows else 0.0
     biggest = max((float(np.max(np.hypot(*a["F"].T))) for a in arrows), default=0.0)
