@@ -75,6 +75,8 @@ def array_path(model, m: int) -> dict:
         flagged = _stacked.screen(sw.stacked, sw.arrays)
     with Clock() as columns:
         cols, _ = sw.columns()
+    with Clock() as table:
+        sw.table()
     with Clock() as one:
         sw[m // 2]
     assert not flagged.any() and cols["slider.x"].shape == (m, len(T))
@@ -87,6 +89,7 @@ def array_path(model, m: int) -> dict:
         "finishing (CPU)": finishing.cpu,
         "CPU-side (set-up + stacking + finishing)": setup.cpu + stacking.cpu + finishing.cpu,
         "every column as (M, N) arrays (CPU)": columns.cpu,
+        "every column as a long table (CPU)": table.cpu,
         "one member's Result when read (CPU)": one.cpu,
     }
 
