@@ -116,3 +116,22 @@ def test_a_joint_on_a_ground_point_of_its_name_is_named_once():
          ("ground.E", np.array([5.0, 0.0]), style), ("EF", np.array([5.0, 0.0]), style)]
     )  # fmt: skip
     assert sorted(t for t, _, _ in merged) == ["O2", "ground.E, EF"]
+
+
+def test_shows_names_cover_no_other_name_and_stay_inside_the_axes():
+    """The paper's mechanism under its loads, drawn: every name's box (bodies, joints,
+    ground points, torques, the force) clear of every other one and inside the axes."""
+    from fixtures import paper_under_loads
+    from mixdyn.viz.show import figure
+
+    model = paper_under_loads()
+    fig, boxes = figure(model, np.asarray(model.q0))
+    (ax,) = fig.axes
+    x0, y0, x1, y1 = ax.bbox.extents
+    assert len(boxes) >= 10
+    assert np.all(boxes[:, 0] >= x0 - 1e-9) and np.all(boxes[:, 2] <= x1 + 1e-9)
+    assert np.all(boxes[:, 1] >= y0 - 1e-9) and np.all(boxes[:, 3] <= y1 + 1e-9)
+    for i in range(len(boxes)):
+        for j in range(i):
+            a, b = boxes[i], boxes[j]
+            assert min(a[2], b[2]) <= max(a[0], b[0]) or min(a[3], b[3]) <= max(a[1], b[1])

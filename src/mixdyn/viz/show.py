@@ -37,14 +37,36 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
         The path written.
     """
     import matplotlib
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-    from matplotlib.patches import Polygon
 
     path = pathlib.Path(path)
     suffix = path.suffix.lower()
     if suffix not in SHOW_SUFFIXES:
         raise ValueError(f"cannot draw to {path.name!r}; use {', '.join(SHOW_SUFFIXES)}")
+    fig, _ = figure(model, q, title=title, dpi=dpi)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with matplotlib.rc_context({"svg.fonttype": "none"}):  # names as text in an SVG
+        if suffix == ".html":
+            import io
+
+            buf = io.StringIO()
+            fig.savefig(buf, format="svg")
+            path.write_text(
+                "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>"
+                f"{_escape(model.name)}</title></head><body>\n{buf.getvalue()}\n</body></html>\n",
+                encoding="utf-8",
+            )
+        else:
+            fig.savefig(path, dpi=dpi)
+    return path
+
+
+def figure(model, q, *, title: str | None = None, dpi: int = 110):
+    """The figure of :func:`draw` and where its names are: ``(figure, boxes)``, the names'
+    boxes (n, 4) ``(x0, y0, x1, y1)`` in the figure's pixels at ``dpi``."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Polygon
+
     q = np.asarray(q, dtype=float)
     scene = Scene(model, q[None])
     x0, x1, y0, y1 = scene.bounds
@@ -97,22 +119,7 @@ def draw(model, q, path, *, title: str | None = None, dpi: int = 110) -> pathlib
         f"{count(len(model.joints), 'joint')}"
     )
     legend(ax)
-    _write_labels(fig, ax, merge_labels(labels))
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with matplotlib.rc_context({"svg.fonttype": "none"}):  # names as text in an SVG
-        if suffix == ".html":
-            import io
-
-            buf = io.StringIO()
-            fig.savefig(buf, format="svg")
-            path.write_text(
-                "<!DOCTYPE html>\n<html><head><meta charset='utf-8'><title>"
-                f"{_escape(model.name)}</title></head><body>\n{buf.getvalue()}\n</body></html>\n",
-                encoding="utf-8",
-            )
-        else:
-            fig.savefig(path, dpi=dpi)
-    return path
+    return fig, _write_labels(fig, ax, merge_labels(labels))
 
 
 def merge_labels(labels):
@@ -142,10 +149,14 @@ def merge_labels(labels):
     return out
 
 
-def _write_labels(fig, ax, labels) -> None:
+def _write_labels(fig, ax, labels) -> np.ndarray:
     """Write ``labels`` (``(text, anchor, style)``) beside their anchors, placed so that
     none covers another, a marker or the legend, inside the axes (:func:`.labels.place`).
-    The figure's layout is fixed first (the places are in display pixels)."""
+    The figure's layout is fixed first (the places are in display pixels).
+
+    Returns:
+        (n, 4) the boxes ``(x0, y0, x1, y1)`` [display px].
+    """
     fig.draw_without_rendering()
     fig.set_layout_engine("none")
     renderer = fig.canvas.get_renderer()
@@ -161,6 +172,7 @@ def _write_labels(fig, ax, labels) -> None:
     to_data = ax.transData.inverted()
     for t, box in zip(texts, boxes, strict=True):
         t.set_position(to_data.transform(box[:2]))
+    return boxes
 
 
 def svg(model, q, *, title: str | None = None) -> str:
@@ -258,4 +270,12 @@ def _escape(text: str) -> str:
     return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
 
 
-__all__ = ["SHOW_SUFFIXES", "draw", "headline_columns", "model_html", "result_html", "svg"]
+__all__ = [
+    "SHOW_SUFFIXES",
+    "draw",
+    "figure",
+    "headline_columns",
+    "model_html",
+    "result_html",
+    "svg",
+]
