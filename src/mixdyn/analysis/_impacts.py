@@ -5,10 +5,11 @@ restitution over the constrained system.
 A run is a sequence of segments, each one adaptive Runge–Kutta solve (the projection
 method's ``rtol``, ``atol``, ``solver`` and ``max_steps``; one compiled program for every
 segment) that ends at the first instant a rigid contact's gap ``g(q) = -delta(q)``
-[length] falls to zero (``diffrax.Event``, one condition per contact point, downcrossings
-only; the instant found by Newton's method on the step's dense output to 1e-14 of the
-span). Within a segment the index-1 equations of motion are integrated as they are; at its
-end the positions and velocities are projected onto the constraints.
+[length] falls to zero (``diffrax.Event`` on the smallest gap of the contact points apart
+or separating at the segment's start, downcrossings only; the instant found by bisection on
+the step's dense output to 1e-14 of the span). Within a segment the index-1 equations of
+motion are integrated as they are; at its end the positions and velocities are projected
+onto the constraints, and a segment is at most 2048 steps.
 
 At an impact the velocities jump from ``qd-`` to ``qd+`` with impulses: for a contact point
 whose normal velocity ``v- = G qd-`` approaches (``G = dg/dq`` (1, nq), ``v- < 0``)::
@@ -70,9 +71,10 @@ PASS_FRACTION = 0.5
 SEGMENT_STEPS = 2048
 
 
-def _gap_of(contacts, i: int, t, y, args, **kwargs):
-    """The gap of contact point ``i`` in the state ``y``: an event's condition."""
-    return _gaps(contacts, y[0])[i]
+def _nearest_gap(contacts, watched, t, y, args, **kwargs):
+    """The smallest gap [length] of the ``watched`` contact points (k,) in the state ``y``
+    (infinite where none is watched): the event's condition."""
+    return jnp.min(jnp.where(watched, _gaps(contacts, y[0]), jnp.inf))
 
 
 def _gaps(contacts, q):
@@ -82,11 +84,24 @@ def _gaps(contacts, q):
 
 @cached_jit
 def _segment(
-    problem: Problem, contacts, t0, t1, y0, ts, dt0, dtmax, rtol, atol, solver: str, steps: int
+    problem: Problem,
+    contacts,
+    watched,
+    t0,
+    t1,
+    y0,
+    ts,
+    dt0,
+    dtmax,
+    rtol,
+    atol,
+    solver: str,
+    steps: int,
 ):
     """One segment from ``t0`` to the first impact or ``t1``: the states at ``ts`` (N,)
-    clipped to the segment (``dt0``: the first step, ``dtmax`` the longest [time]), the end
-    time and state, which gap triggered (k,), whether the
+    clipped to the segment (``dt0``: the first step, ``dtmax`` the longest [time]; the
+    ``watched`` contact points (k,): those apart or separating at ``t0``), the end time and
+    state, whether an impact ended it, whether the
     solve failed (but for running out of its ``steps``) and its step count."""
     import diffrax
     import optimistix as optx
@@ -94,12 +109,10 @@ def _segment(
     from .integrators import _constrained as cs
 
     f = cs.equations_of_motion(problem)
-    k = _gaps(contacts, y0[0]).shape[0]
-    conds = [functools.partial(_gap_of, contacts, i) for i in range(k)]
     span = t1 - t0
     event = diffrax.Event(
-        conds,
-        root_finder=optx.Newton(rtol=TIME_TOL, atol=TIME_TOL * jnp.maximum(span, 1.0)),
+        functools.partial(_nearest_gap, contacts, watched),
+        root_finder=optx.Bisection(rtol=0.0, atol=TIME_TOL * jnp.maximum(span, 1.0)),
         direction=False,
     )
     sol = diffrax.diffeqsolve(
@@ -119,13 +132,13 @@ def _segment(
     y_end = jax.tree.map(lambda a: a[-1], sol.ys)
     inside = jnp.clip(ts, t0, t_end)
     ys = jax.vmap(sol.evaluate)(inside)
-    mask = jnp.stack([jnp.asarray(m) for m in sol.event_mask]) if k else jnp.zeros(0, bool)
+    hit = jnp.asarray(sol.event_mask)
     ran_out = sol.result == diffrax.RESULTS.max_steps_reached
     ended = (sol.result == diffrax.RESULTS.successful) | (
         sol.result == diffrax.RESULTS.event_occurred
     )
     failed = ~ended & ~ran_out
-    return ys, t_end, y_end, mask, failed, sol.stats["num_steps"]
+    return ys, t_end, y_end, hit, failed, sol.stats["num_steps"], sol.result._value
 
 
 @cached_jit(optimize=False)  # a few times per run
@@ -196,6 +209,13 @@ def impulse(Minv, J, phit, G, qd, e):
     x = np.linalg.lstsq(S, b, rcond=1e-13)[0]
     dqd = Minv * (A.T @ x)
     return qd + dqd, x[:-1], float(x[-1])
+
+
+def _message(code) -> str:
+    """diffrax's message of its result ``code``."""
+    import diffrax
+
+    return diffrax.RESULTS._index_to_message[int(code)]
 
 
 def refuse_rigid_method(model, options) -> None:
@@ -294,10 +314,11 @@ def simulate_impacts(case, progress=None) -> Result:
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
         dt0 = _first_step(problem, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
         dtmax = _longest_step(model, contacts, qd, dt_out, scale)
-        ys, t_end, y_end, mask, failed, n = _segment(
-            problem, contacts, jnp.asarray(t0), jnp.asarray(ts[-1]), y, jnp.asarray(ts), dt0,
-            jnp.asarray(dtmax),
-            jnp.asarray(options.rtol, float), jnp.asarray(options.atol, float), options.solver,
+        watched = (g > GAP_TOL * scale) | (G @ qd > 0.0)
+        ys, t_end, y_end, hit, failed, n, code = _segment(
+            problem, contacts, jnp.asarray(watched), jnp.asarray(t0), jnp.asarray(ts[-1]), y,
+            jnp.asarray(ts), dt0, jnp.asarray(dtmax), jnp.asarray(options.rtol, float),
+            jnp.asarray(options.atol, float), options.solver,
             min(SEGMENT_STEPS, int(options.max_steps)),
         )  # fmt: skip
         t_end, steps = float(t_end), steps + int(n)
@@ -309,14 +330,14 @@ def simulate_impacts(case, progress=None) -> Result:
             P_acc[name][take] = totals[name]
         filled |= take
         if bool(failed):
-            fail(StepSizeError("the step size fell below its floor between impacts", t_end))
+            fail(NumericalError(f"the integration between impacts failed: {_message(code)}", t_end))
         if steps > options.max_steps:
             fail(StepSizeError(f"more than max_steps = {options.max_steps} steps", t_end))
         if not np.all(np.isfinite(np.asarray(y_end[1]))):
             fail(NumericalError("the velocities are not finite", t_end))
         if last:
             break
-        if t_end <= t0 and not np.asarray(mask).any():
+        if t_end <= t0 and not bool(hit):
             fail(StepSizeError("the integration did not advance", t0))
         segments += 1
         t0, y = t_end, y_end
