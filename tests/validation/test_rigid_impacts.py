@@ -311,3 +311,10 @@ def test_a_sweep_over_the_restitution_runs_each_member_impact_by_impact():
         np.testing.assert_allclose(r.stats["impacts"]["impulse"][0], (1 + e) * v0, rtol=1e-10)
         np.testing.assert_allclose(r.stats["impacts"]["normal_velocity_after"][0], e * v0,
                                    rtol=1e-10)  # fmt: skip
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_rigid_contact_penetrating_at_the_start_is_an_input_error():
+    with pytest.raises(md.ModelError, match="penetrates by 0.01 ") as err:
+        md.forward(_ball(0.8, -0.01), [0.0, 1.0])
+    assert err.value.element == "floor"

@@ -211,6 +211,19 @@ def impulse(Minv, J, phit, G, qd, e):
     return qd + dqd, x[:-1], float(x[-1])
 
 
+def _refuse_penetration(owner, gaps, scale) -> None:
+    """A rigid contact that penetrates at the start (beyond :data:`GAP_TOL`) is an input
+    error: its bodies would pass through each other unseen."""
+    deep = np.flatnonzero(gaps < -GAP_TOL * scale)
+    if deep.size:
+        i = int(deep[np.argmin(gaps[deep])])
+        raise ModelError(
+            f"the rigid contact penetrates by {-gaps[i]:.4g} [length] at the start: place its "
+            "bodies apart or touching (q0), or give it a compliant contact_model",
+            owner[i].name,
+        )
+
+
 def _message(code) -> str:
     """diffrax's message of its result ``code``."""
     import diffrax
@@ -274,6 +287,7 @@ def simulate_impacts(case, progress=None) -> Result:
         err.partial = Partial.before(model, ts[filled], Q[filled], QD[filled], err.time)
         raise err
 
+    _refuse_penetration(owner, np.asarray(_gaps(contacts, jnp.asarray(case.q0))), scale)
     while True:
         # the impacts at t0: sequential, the fastest approach first
         q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
