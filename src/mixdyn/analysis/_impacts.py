@@ -292,7 +292,7 @@ def simulate_impacts(case, progress=None) -> Result:
         # the impacts at t0: sequential, the fastest approach first
         q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
             problem, contacts, y[0], y[1], jnp.asarray(t0), tol_pos))  # fmt: skip
-        for _ in range(4 * len(g) + 4):
+        while True:  # ends: no approach left, or an accumulation (rest speed, count)
             v = G @ qd
             near = (g <= GAP_TOL * scale) & (v < 0.0)
             if not near.any():
