@@ -481,6 +481,11 @@ SEMANTIC = [
     ("plot-column", BASE + "    plots: [{file: a.png, columns: [slider.xx]}]\n", "no column"),
     ("animation-suffix", BASE + "    animation: {file: a.avi}\n", "use .gif"),
     (
+        "animation-plot-column",
+        BASE + "    animation: {file: a.gif, plot: [crank.phi, slider.xx]}\n",
+        "animation.plot[1]: no column 'slider.xx'",
+    ),
+    (
         "mixed-unknown-force",
         BASE.replace(
             "drivers:\n  - {type: coordinate, name: motor, coordinate: crank.phi, law: w*t}\n", ""

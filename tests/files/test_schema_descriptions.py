@@ -25,7 +25,7 @@ EXAMPLES = sorted(EXAMPLES.glob("*.yaml"))
 
 # The property names of every definition, recorded before the descriptions were added.
 PROPERTIES = {
-    "AnimationSpec": "file forces fps frames html trace",
+    "AnimationSpec": "file forces fps frames html plot trace",
     "AssemblySpec": "hold",
     "BodySpec": "inertia mass name points q0 vectors",
     "ConstantSpec": "constant",
@@ -85,8 +85,9 @@ PROPERTIES = {
 # the schema before the move, with the same specs left out); and when the cam moved too (the
 # value of the schema with the cam's hand-written spec, the cam's spec left out as well); and
 # with the file's strict_units setting; and with output_units also a preset's name (issue 32);
-# and with a prescribed motion's continuity (issue 31: the same value without it).
-STRIPPED_SHA256 = "02ada1d848dc6528f15b8e38151895423a2546fa71c04670b7c957ba793c5fdc"
+# and with a prescribed motion's continuity (issue 31: the same value without it); and with
+# the animation's plotted columns (issue 32).
+STRIPPED_SHA256 = "c5157438ff3c02fc2bf94d32844accec26b44132bcd171e4275b0ccc7cfdf5db"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

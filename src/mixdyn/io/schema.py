@@ -717,6 +717,11 @@ class AnimationSpec(Spec):
     """Forces drawn as arrows (one scale for all): ``true`` for every joint's reaction (on its
     body j) and every point force, or a list of joint and force names. Not in kinematic runs.
     Default false."""
+    plot: list[str] | None = None
+    """Result columns the HTML player plots against time under the animation, one at a time
+    (chosen in the page), with a cursor following the frame; a click on the plot moves the
+    animation there. Default: the drivers' efforts (else the unknown forces, else the bodies'
+    angles); ``[]`` for no plot."""
 
 
 class _RunSpec(Spec):

@@ -427,13 +427,22 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
                 "writing MP4 needs ffmpeg, which is not installed; write a .gif or .html"
             )
         if path.suffix.lower() == ".html":
-            painter.done(html(result, path, fps=a.fps, trace=a.trace, forces=a.forces))
+            painter.done(
+                html(result, path, fps=a.fps, trace=a.trace, forces=a.forces, columns=a.plot)
+            )
         else:
             data = movie_data(result, frames=a.frames, trace=a.trace, forces=a.forces)
             painter.draw("movie", data, path, fps=a.fps)
         if a.html:
             painter.done(
-                html(result, path.with_suffix(".html"), fps=a.fps, trace=a.trace, forces=a.forces)
+                html(
+                    result,
+                    path.with_suffix(".html"),
+                    fps=a.fps,
+                    trace=a.trace,
+                    forces=a.forces,
+                    columns=a.plot,
+                )
             )
 
 

@@ -209,6 +209,7 @@ def animate(
             frames=frames if target.suffix.lower() != ".html" else None,
             trace=trace,
             forces=forces,
+            columns=(a.plot if a else None) if results is None else None,
         )
         yield f"wrote {esc(target)}"
 

@@ -36,6 +36,7 @@ def animate(
     size: tuple[float, float] | None = None,
     dpi: int = 100,
     forces=False,
+    columns=None,
 ) -> pathlib.Path:
     """Write an animation of a motion: ``.gif`` (Pillow), ``.mp4`` (needs ffmpeg) or
     ``.html`` (see :func:`html`).
@@ -51,6 +52,7 @@ def animate(
         size, dpi: figure size [inch] (default: from the scene's proportions) and resolution.
         forces: ``True`` to draw every joint reaction and point force as an arrow (one scale
             for all), or their names (:func:`mixdyn.viz.arrows.force_arrows`).
+        columns: the columns the HTML player plots against time (:func:`html`).
 
     Returns:
         The path written.
@@ -69,6 +71,7 @@ def animate(
             trace=trace,
             title=title,
             forces=forces,
+            columns=columns,
         )
     if suffix not in (".gif", ".mp4"):
         raise ValueError(

@@ -40,6 +40,8 @@ def check_outputs(runner, plan: Plan) -> None:
         stem = a.file.rsplit(".", 1)[0]
         claim(f"{stem}.html", (*plan.path, "animation", "html"))
     _check_arrows(runner, plan, a.forces, (*plan.path, "animation", "forces"))
+    for k, col in enumerate(a.plot or ()):
+        check_column(runner, col, r, (*plan.path, "animation", "plot", k))
 
 
 def _check_arrows(runner, plan: Plan, forces, path) -> None:
