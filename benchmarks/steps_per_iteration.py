@@ -2,10 +2,12 @@
 (Baumgarte stabilization), ``lax.fori_loop`` with ``unroll=k``, CPU time per step.
 
 The loop is the step of ``md.forward(method="baumgarte")`` without diffrax around it, on the
-linear solver ``md.forward``'s default chooses; the per-step time is the difference of 1,000
-and 100 steps (fixed costs cancel), best of 7, the process's CPU time.
+linear solver ``--solver`` names (``auto``: ``md.forward``'s default; ``unrolled``: the
+straight-line path at any size, ``UnrolledSolver(max_rows=1000)``); the per-step time is the
+difference of 1,000 and 100 steps (fixed costs cancel), best of 7, the process's CPU time.
 
     python benchmarks/steps_per_iteration.py 2 4
+    python benchmarks/steps_per_iteration.py 2 3 4 5 --unroll 1 --solver dense unrolled
 """
 
 from __future__ import annotations
@@ -52,10 +54,11 @@ def rk4_loop(p: Problem, q0, qd0, steps: int, unroll: int):
     return lambda: jax.block_until_ready(run(p, q0, qd0))
 
 
-def per_step(n: int, unroll: int) -> tuple[str, float]:
+def per_step(n: int, unroll: int, solver: str = "auto") -> tuple[str, float]:
     """``(linear solver, CPU us per step)`` of the loop on an ``n``-link chain."""
     model = pendulum_chain(n)
-    c = Constraints.of(model).with_linear_solver("auto")
+    choice = md.UnrolledSolver(max_rows=1000) if solver == "unrolled" else solver
+    c = Constraints.of(model).with_linear_solver(choice)
     p = Problem(model, c)
     start = md.forward(model, np.array([0.0, H]), method="baumgarte", dt=H, energy_tol=None)
     q0, qd0 = jnp.asarray(start.q[0]), jnp.asarray(start.qd[0])
@@ -75,12 +78,15 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("links", nargs="*", type=int, default=[2, 4])
     ap.add_argument("--unroll", nargs="*", type=int, default=[1, 2, 4])
+    ap.add_argument("--solver", nargs="*", default=["auto"], choices=("auto", "dense", "unrolled"))
     args = ap.parse_args()
     print("| links | linear solver | " + " | ".join(f"k = {k} [us]" for k in args.unroll) + " |")
     print("|---|---|" + "---|" * len(args.unroll))
     for n in args.links:
-        cells = [per_step(n, k) for k in args.unroll]
-        print(f"| {n} | {cells[0][0]} | " + " | ".join(f"{t:.1f}" for _, t in cells) + " |")
+        for solver in args.solver:
+            cells = [per_step(n, k, solver) for k in args.unroll]
+            times = " | ".join(f"{t:.1f}" for _, t in cells)
+            print(f"| {n} | {cells[0][0]} | {times} |", flush=True)
 
 
 if __name__ == "__main__":
