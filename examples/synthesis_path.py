@@ -1,7 +1,7 @@
 """Four-bar path generation with the motor torque in the objective, written as a model file.
 
 Five points of a closed curve [m], timing-free; bars of 2 kg/m with a 0.5 kg payload at the
-coupler point, the crank at one turn a second under gravity. ``md.synthesize`` refines 512
+coupler point, the crank at one turn a second under gravity. ``md.synthesize`` refines 256
 random starts by Levenberg-Marquardt at once (the score: the path error plus 1e-4 m^2/(N m)^2
 times the RMS motor torque squared), then writes the best four-bar as ``synthesis_best.yaml``:
 a kinematic run (the coupler point's path) and an inverse run (the motor torque) that
@@ -32,7 +32,7 @@ def main(folder: pathlib.Path) -> md.synthesis.Synthesis:
     def progress(stage, done, total, best):
         print(f"{stage}: {done}/{total} starts, best score {best:.3e}", flush=True)
 
-    out = md.synthesize(PathTask(POINTS), objective, starts=512, seed=0, progress=progress)
+    out = md.synthesize(PathTask(POINTS), objective, starts=256, seed=0, progress=progress)
     print(out.table()[["r1", "r2", "r3", "r4", "error", "torque_rms", "torque_peak"]].head())
     folder.mkdir(parents=True, exist_ok=True)
     out.write(folder / "synthesis_best.yaml")
