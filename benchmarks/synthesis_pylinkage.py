@@ -7,8 +7,9 @@ objective) get the five points of ``benchmarks/synthesis_torque.py``. Every link
 measured by mixdyn alike: the path error ``sum_i min_theta |C(theta) - P_i|^2`` (the nearest
 point of its coupler curve to each target: 20,000 input angles over a turn, refined by
 Brent's method) and the RMS and peak motor torque over the input angles between the first
-and last target (bars of 2 kg/m, 0.5 kg at the coupler point, one turn a second, under gravity; the torque
-from the energy balance, equal to ``md.inverse``'s to 1e-9 in the tests).
+and last target (bars of 2 kg/m, 0.5 kg at the coupler point, one turn a second, under
+gravity; the torque from the energy balance, equal to ``md.inverse``'s to 1e-9 in the
+tests).
 
 pylinkage is not one of mixdyn's dependencies: ``pip install pylinkage`` (1.3.0 measured), or
 ``--pylinkage-path`` a folder holding it.
