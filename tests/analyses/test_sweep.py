@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import pickle
 
 import numpy as np
 import pytest
@@ -88,6 +89,8 @@ def _held_as_arrays(paper, sw):
             assert float(np.max(np.abs(got - v))) <= 1e-12 * scale, c
         assert res.units() == units
     assert cols["slider.x"].shape == (4, len(TS))
+    kept = pickle.loads(pickle.dumps(sw.results))  # pickled as the list of its results
+    assert isinstance(kept, list) and np.array_equal(kept[3]["slider.x"], sw[3]["slider.x"])
     table = sw.table(["slider.x"], output_units={"length": "m"})  # read from the arrays
     for i in range(4):
         rows = table[table["member"] == i]

@@ -372,6 +372,10 @@ class LazyResults(Sequence):
     def __repr__(self) -> str:
         return f"<{len(self)} results, {len(self._built)} built>"
 
+    def __reduce__(self):
+        """Pickled as the list of every member's result (each built)."""
+        return list, (list(self),)
+
 
 def run(
     stacked: Stacked,
