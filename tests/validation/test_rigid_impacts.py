@@ -14,6 +14,8 @@
   integral) and the rebound ``-e omega`` (exact for a rigid impact).
 - The four-bar's rocker striking a stop in a run: the instant found at the hand pose, the
   joints' velocity constraints kept after it, the rebound and the impulse as above.
+- The same four-bar with its crank driven: a named failure at the impact (the drivers fix
+  the stop's normal velocity).
 - Newton's cradle (three balls, ``e = 1``, the last two touching): sequential impacts pass
   the first ball's velocity to the last; momentum and energy kept.
 - A sweep over the restitution: each member's first impulse is ``(1 + e) m v0``.
@@ -211,11 +213,11 @@ def test_a_pendulum_striking_a_wall_rebounds_at_minus_e_omega():
     assert r["rod.omega"][k] > 0  # the output after the impact has rebounded
 
 
-@pytest.mark.slow  # long: run by CI's slow set
-def test_a_four_bar_rocker_striking_a_stop():
-    theta_hit, w0, e = 0.7, 3.0, 0.6
+def _four_bar_with_stop(theta0, theta_hit, e, drivers=()):
+    """The four-bar from ``theta0``, its rocker's tip (radius ``TIP_R``) striking a rigid
+    stop at the crank angle ``theta_hit``."""
     n, p = _stop(theta_hit)
-    q0 = _pose(0.4)
+    q0 = _pose(theta0)
     bodies = [
         md.Body("crank", MASS[0], INERTIA[0], q0=q0[0:3],
                 points={"O": (-A_ / 2, 0), "A": (A_ / 2, 0)}),
@@ -234,7 +236,16 @@ def test_a_four_bar_rocker_striking_a_stop():
         "stop", "rocker.B", TIP_R, ("ground", (float(p[0]), float(p[1]))),
         axis=(float(n[1]), -float(n[0])), contact_model="rigid", restitution=e,
     )  # fmt: skip
-    model = md.Model(bodies, joints, forces=[stop], ground={"O2": (0, 0), "O4": (D_, 0)})
+    ground = {"O2": (0, 0), "O4": (D_, 0)}
+    return md.Model(bodies, joints, list(drivers), forces=[stop], ground=ground)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_four_bar_rocker_striking_a_stop():
+    theta_hit, w0, e = 0.7, 3.0, 0.6
+    n, _ = _stop(theta_hit)
+    q0 = _pose(0.5)  # the tip 2.6 mm from the stop
+    model = _four_bar_with_stop(0.5, theta_hit, e)
     r = md.forward(model, np.linspace(0.0, 0.2, 21), qd0={"crank.phi": w0}, rtol=1e-11,
                    atol=1e-13)  # fmt: skip
     imp = r.stats["impacts"]
@@ -315,6 +326,18 @@ def test_a_sweep_over_the_restitution_runs_each_member_impact_by_impact():
 
 @pytest.mark.slow  # long: run by CI's slow set
 def test_a_rigid_contact_penetrating_at_the_start_is_an_input_error():
-    with pytest.raises(md.ModelError, match="penetrates by 0.01 ") as err:
+    with pytest.raises(md.ModelError, match=r"penetrates by 0\.01 ") as err:
         md.forward(_ball(0.8, -0.01), [0.0, 1.0])
     assert err.value.element == "floor"
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_driven_four_bar_against_a_rigid_stop_is_a_named_failure():
+    """With its crank driven the four-bar cannot rebound: the impulse would be infinite. The
+    run fails at the impact, (0.7 - 0.5) / 3 s, naming the stop."""
+    motor = md.CoordinateDriver("motor", "crank", "phi", law=md.Ramp(0.5, 3.0))
+    model = _four_bar_with_stop(0.5, 0.7, 0.6, [motor])
+    with pytest.raises(md.SingularityError, match="cannot reverse its normal velocity") as err:
+        md.forward(model, np.linspace(0.0, 0.2, 21), rtol=1e-11, atol=1e-13)
+    assert abs(err.value.time - 0.2 / 3.0) < 1e-9
+    assert err.value.elements == ("stop",)

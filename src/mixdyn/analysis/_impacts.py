@@ -44,7 +44,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..errors import ImpactAccumulationError, ModelError, NumericalError, StepSizeError
+from ..errors import (
+    ImpactAccumulationError,
+    ModelError,
+    NumericalError,
+    SingularityError,
+    StepSizeError,
+)
 from ..model._compliant import rigid_contacts
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
@@ -61,6 +67,9 @@ MAX_IMPACTS = 10_000
 GAP_TOL = 1e-9
 #: The impact instant's tolerance, relative to the run's span.
 TIME_TOL = 1e-14
+#: An impact whose normal velocity after misses Newton's law by more than this part of the
+#: approach speed is singular (the constraints fix the normal velocity).
+IMPULSE_TOL = 1e-6
 #: The first step of a segment, relative to the run's span (at most the first output
 #: interval, and shorter after an impact: see :func:`_first_step`).
 FIRST_STEP = 1e-4
@@ -311,6 +320,17 @@ def simulate_impacts(case, progress=None) -> Result:
                     )
                 )
             qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_point[i])
+            if abs(G[i] @ qd_new + e_point[i] * v[i]) > IMPULSE_TOL * abs(v[i]):
+                fail(
+                    SingularityError(
+                        f"the impact at {owner[i].name} cannot reverse its normal velocity: "
+                        "the joints and drivers fix it (a driven mechanism against a rigid "
+                        "stop takes an infinite impulse); free the driven coordinate, or give "
+                        "the contact a compliant contact_model",
+                        t0,
+                        (owner[i].name,),
+                    )
+                )
             m_old, m_new = qd @ (qd / Minv), qd_new @ (qd_new / Minv)
             lost += 0.5 * (m_new - m_old)
             totals[owner[i].name] += P
