@@ -264,7 +264,8 @@ def simulate_impacts(case, progress=None) -> Result:
     (the contact's normal impulses accumulated [force * time]); ``stats["impacts"]``: each
     impact's ``t``, ``contact``, ``impulse``, ``normal_velocity_before`` and ``_after``,
     the constraints' impulses ``reactions`` (by constraint row), the positions ``q`` and the
-    velocities ``qd_before`` and ``qd_after`` (model units)."""
+    velocities ``qd_before`` and ``qd_after`` (model units). ``progress``: an optional
+    ``f(t)`` called at each output time once the run is done."""
     from ._simulate import _post, check_energy_balance, energy_tolerance, post_kinds
 
     problem, ts, options = case.problem, np.asarray(case.ts, float), case.options

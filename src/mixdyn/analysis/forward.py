@@ -141,6 +141,10 @@ def forward(
         ``.tension``, a rotary spring's ``.angle`` and ``.torque``, each one's ``.power``),
         energies (``energy.kinetic``, ``energy.potential``, ``energy.total``), accumulated
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
+        A model with rigid contacts (``contact_model="rigid"``) is integrated from impact to
+        impact (:mod:`mixdyn.analysis._impacts`, with ``method="projection"``): columns
+        ``{contact}.impulse`` and ``work.impacts``, each impact in ``stats["impacts"]``; a
+        body coming to rest on one ends as :class:`~mixdyn.errors.ImpactAccumulationError`.
     """
     ts = output_times(t)
     analysis, recorded = Forward._from_keywords(
