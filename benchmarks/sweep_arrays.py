@@ -15,7 +15,10 @@ loaded by other work it moves far less than wall clock) and wall seconds:
   into each member's problem; each member's stacked leaf by leaf; each member's
   ``Result`` built and checked), scaled to ``M``; and the ratio.
 
-Run: ``python benchmarks/sweep_arrays.py [M] [--members-by-member K]``.
+With ``--mixed``: the paper's mixed run (F1 unknown, the slider's x prescribed by the
+forward run) over the crank's torque T2 and the coupler's mass.
+
+Run: ``python benchmarks/sweep_arrays.py [M] [--members-by-member K] [--mixed]``.
 """
 
 from __future__ import annotations
@@ -41,10 +44,25 @@ ANALYSIS = md.analyses.Forward(method=md.Projection(rtol=1e-8, atol=1e-10))
 
 def vary(m: int) -> dict:
     rng = np.random.default_rng(0)
+    if isinstance(ANALYSIS, md.analyses.Mixed):  # F1 is unknown: the crank's torque varies
+        return {
+            "T2.law.value": rng.uniform(480.0, 520.0, m),
+            "coupler.mass": rng.uniform(0.02, 0.03, m),
+        }
     return {
         "slider.mass": rng.uniform(0.005, 0.02, m),
         "F1.law.amplitude": rng.uniform(-25.0, 25.0, m),
     }
+
+
+def mixed(model) -> md.analyses.Mixed:
+    """The paper's mixed run: F1 unknown, the slider's x prescribed by the forward run."""
+    fwd = md.forward(model, T, rtol=1e-10, atol=1e-10)
+    return md.analyses.Mixed(
+        prescribed=[md.prescribe(fwd, "slider.x")],
+        unknown=["F1"],
+        method=md.Projection(rtol=1e-8, atol=1e-10),
+    )
 
 
 class Clock:
@@ -128,8 +146,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("members", nargs="?", type=int, default=10_000)
     parser.add_argument("--members-by-member", type=int, default=4 * CHUNK)
+    parser.add_argument("--mixed", action="store_true", help="the paper's mixed run")
     args = parser.parse_args()
     model = paper_under_loads()
+    if args.mixed:
+        global ANALYSIS
+        ANALYSIS = mixed(model)
     md.sweep(model, T, vary=vary(CHUNK), analysis=ANALYSIS)  # warm-up: the chunk's program
     print(f"load average: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     arrays = array_path(model, args.members)
