@@ -190,3 +190,16 @@ def test_report_energy_balance_against_hand_made_energies():
     rows = {w: v for w, v, _ in energy_balance(cols, {})}
     assert rows["largest balance error |T + V - (T0 + V0) - Wn - Wc|"] == pytest.approx(0.02)
     assert energy_balance({"t": t}, {}) is None
+
+
+def test_the_players_numbers_are_rounded_as_python_formats_them():
+    """The player's numbers, rounded to 9 significant digits at once, equal Python's own
+    ``float(f"{v:.9g}")`` number by number, across magnitudes (tiny, subnormal, huge, zero)
+    and for the NaN rows that lift a symbol's pen (``null`` in the page)."""
+    from mixdyn.viz.player import nine_digits
+
+    rng = np.random.default_rng(7)
+    a = rng.normal(size=20_000) * 10.0 ** rng.integers(-40, 40, 20_000)
+    a[:6] = [0.0, -0.0, 1e-300, 5e-324, 1.7e308, 123456789.5]
+    want = [float(f"{v:.9g}") for v in a.tolist()]
+    assert nine_digits(a).tolist() == want

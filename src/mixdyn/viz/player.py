@@ -46,6 +46,24 @@ def seconds_per_time_unit(model: Model) -> float:
     return 1.0 / factor("s", "time", model.units)
 
 
+def nine_digits(a: np.ndarray) -> np.ndarray:
+    """``a`` (any shape, finite) rounded to 9 significant digits, as ``float(f"{v:.9g}")``
+    rounds each number: ``round(v * 10**p) / 10**p`` is the double nearest to the rounded
+    decimal where ``10**p`` is exact (``|p| <= 22``); other numbers are rounded one by one."""
+    a = np.asarray(a, dtype=float)
+    magnitude = np.abs(a)
+    p = np.zeros(a.shape, dtype=int)
+    nonzero = magnitude > 0
+    p[nonzero] = 8 - np.floor(np.log10(magnitude[nonzero])).astype(int)
+    exact = np.abs(p) <= 22
+    up = 10.0 ** np.clip(p, 0, 22)
+    down = 10.0 ** np.clip(-p, 0, 22)
+    out = np.where(p >= 0, np.round(a * up) / up, np.round(a / down) * down)
+    for i in zip(*np.nonzero(~exact), strict=True):
+        out[i] = float(f"{a[i]:.9g}")
+    return out
+
+
 def plot_columns_data(result, names, idx) -> list[dict]:
     """The columns the player plots against time, at the frames ``idx``: ``name``, ``unit``
     (the result's output units, engineering spelling) and ``v`` (7 significant digits).
@@ -80,9 +98,12 @@ def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=(), p
 
     def r(a):
         a = np.asarray(a, dtype=float)
-        if a.ndim > 1:
-            return [r(x) for x in a]
-        return [float(f"{v:.9g}") if np.isfinite(v) else None for v in a]  # None: a pen lift
+        finite = np.isfinite(a)
+        if finite.all():
+            return nine_digits(a).tolist()
+        out = nine_digits(np.where(finite, a, 0.0)).astype(object)
+        out[~finite] = None  # a pen lift
+        return out.tolist()
 
     scale = arrow_scale(arrows, scene.bounds) if arrows else 0.0
     biggest = max((float(np.max(np.hypot(*a["F"].T))) for a in arrows), default=0.0)
