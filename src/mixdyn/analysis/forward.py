@@ -5,7 +5,6 @@ from typing import ClassVar
 from ..linalg import LinearSolver
 from ..model import Model
 from ..model._compliant import rigid_contacts
-from ._impacts import refuse_rigid_method
 from ._prepare import Prepared, dynamic_start
 from ._problem import Problem
 from ._setup import Setup, keyword_setup
@@ -54,7 +53,10 @@ class Forward(Integrated):
 
     def _prepare(self, model: Model, t0: float, given: Prepared | None = None) -> Setup:
         refuse_reaction_dependent_in(model, self.method)
-        refuse_rigid_method(model, self.method)
+        if rigid_contacts(model):  # (the impacts' module is loaded where there are some)
+            from ._impacts import refuse_rigid_method
+
+            refuse_rigid_method(model, self.method)
         require_masses(model)
         prep = self._initial(model, t0, given)
         # The partitioning integrator needs independent rows; the others solve redundant
