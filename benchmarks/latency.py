@@ -100,7 +100,11 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
     """Seconds per variant (a mixdyn ``src`` folder) and scenario, the variants taking turns
     run by run (so that a drift of the machine's speed touches them alike)."""
     py = sys.executable
-    cli = [py, "-m", "mixdyn.cli", "run"]
+    # The command as the README runs it: the environment's ``mixdyn`` script (its process is
+    # the command's own, which starts the figure worker and reads the file's programs ahead;
+    # ``python -m mixdyn.cli`` is not), importing each variant's mixdyn from PYTHONPATH.
+    script = pathlib.Path(py).with_name("mixdyn")
+    cli = [str(script), "run"] if script.exists() else [py, "-m", "mixdyn.cli", "run"]
     out = {v: {} for v in srcs}
     with tempfile.TemporaryDirectory(prefix="mixdyn-latency-") as tmp_:
         tmp = pathlib.Path(tmp_)
