@@ -505,3 +505,29 @@ def preset(name: str) -> dict[str, str]:
 
 
 SI = UnitSystem("m", "kg", "s")
+
+
+def in_units(result, columns: dict, units: dict, output_units: dict | None):
+    """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
+    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``, or a preset's name: ``"SI"``,
+    ``"mm-N-s"``, :data:`mixdyn.units.OUTPUT_PRESETS`) converted into that unit; the others
+    as they are (the model's units). ``columns`` and ``units`` as from
+    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
+    if not output_units:
+        return columns, units
+    import numpy as np
+
+    factor = size_in
+
+    if isinstance(output_units, str):
+        output_units = preset(output_units)
+
+    cols, out = dict(columns), dict(units)
+    for name in columns:
+        kind = result.kind_of(name)
+        if kind in output_units:
+            cols[name] = np.asarray(columns[name]) / factor(
+                output_units[kind], kind, result.model.units
+            )
+            out[name] = output_units[kind]
+    return cols, out

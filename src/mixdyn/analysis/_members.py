@@ -20,7 +20,7 @@ from ..model import Model
 from ..model._compliant import rigid_contacts
 from ._schedule import Outcome, _batched, _default_batch_size, _finish, _in_threads
 from ._setup import Analysis, prepare, run
-from ._simulate import Case, integrate, require_masses, simulate
+from ._simulate import Case, integrate, require_masses
 
 
 def model_swapper(problem):
@@ -176,9 +176,11 @@ def run_members(
 
 
 def _simulated(case: Case) -> Outcome:
-    """A member run whole (:func:`~._simulate.simulate`: a model with rigid contacts), its
-    failure kept as its outcome."""
+    """A member with rigid contacts run whole, impact by impact
+    (:func:`~._impacts.simulate_impacts`), its failure kept as its outcome."""
+    from ._impacts import simulate_impacts
+
     try:
-        return simulate(case), None
+        return simulate_impacts(case), None
     except MixdynError as err:
         return None, err

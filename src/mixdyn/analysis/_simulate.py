@@ -542,12 +542,8 @@ def simulate(case: Case, progress=None) -> Result:
 
     The post-processing's program is prepared beside the integration (read, or traced and
     compiled, in a second thread: :meth:`mixdyn.runtime._programs._CachedJit.ahead`).
-    A forward run of a model with rigid contacts is integrated impact by impact
-    (:func:`~._impacts.simulate_impacts`)."""
-    if case.kind == "forward" and rigid_contacts(case.problem.model):
-        from ._impacts import simulate_impacts
-
-        return simulate_impacts(case, progress)
+    A forward run of a model with rigid contacts is integrated impact by impact instead
+    (:func:`~._impacts.simulate_impacts`, which the forward analysis calls)."""
     _post_ahead(case)
     return finish(case, integrate(case, progress))
 

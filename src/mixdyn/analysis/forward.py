@@ -70,6 +70,10 @@ class Forward(Integrated):
         return not rigid_contacts(setup.model)
 
     def _run(self, setup: Setup, t, progress=None) -> Result:
+        if rigid_contacts(setup.model):  # integrated impact by impact
+            from ._impacts import simulate_impacts
+
+            return simulate_impacts(self._case(setup, t), progress)
         return simulate(self._case(setup, t), progress)
 
 

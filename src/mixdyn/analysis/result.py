@@ -13,6 +13,7 @@ from .._hints import count, did_you_mean
 from ..model import Model
 from ..model._element import Resolver
 from ..model._geometry import point
+from ..units import in_units
 
 #: Per-body columns: (suffix, source array, index in [x, y, phi], kind of quantity).
 _BODY_COLUMNS = (
@@ -54,31 +55,6 @@ def require_finite(result: Result) -> None:
         t,
         (name.split(".")[0],),
     )
-
-
-def in_units(result: Result, columns: dict, units: dict, output_units: dict | None):
-    """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
-    unit, e.g. ``{"angle": "deg", "torque": "N*m"}``, or a preset's name: ``"SI"``,
-    ``"mm-N-s"``, :data:`mixdyn.units.OUTPUT_PRESETS`) converted into that unit; the others
-    as they are (the model's units). ``columns`` and ``units`` as from
-    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
-    if not output_units:
-        return columns, units
-    from ..units import preset
-    from ..units import size_in as factor
-
-    if isinstance(output_units, str):
-        output_units = preset(output_units)
-
-    cols, out = dict(columns), dict(units)
-    for name in columns:
-        kind = result.kind_of(name)
-        if kind in output_units:
-            cols[name] = np.asarray(columns[name]) / factor(
-                output_units[kind], kind, result.model.units
-            )
-            out[name] = output_units[kind]
-    return cols, out
 
 
 def point_columns(result: Result, points=()) -> tuple[dict, dict]:

@@ -71,8 +71,7 @@ def plot_columns_data(result, names, idx) -> list[dict]:
     Raises:
         ValueError: a name that is not a column of the result.
     """
-    from ..analysis.result import in_units
-    from ..units import engineering
+    from ..units import engineering, in_units
     from .plots import result_columns
 
     try:
@@ -206,7 +205,7 @@ def html(
         columns: the result's columns plotted against time under the animation (one shown
             at a time, chosen in the page; a cursor follows the frame, a click on the plot
             moves the animation there); default the columns a reader looks at first
-            (:func:`mixdyn.viz.show.headline_columns`); ``()`` for no plot. Needs a result.
+            (:func:`mixdyn.viz.plots.headline_columns`); ``()`` for no plot. Needs a result.
 
     Returns:
         The path written.
@@ -226,7 +225,7 @@ def html(
     plots = []
     if result is not None:
         if columns is None:
-            from .show import headline_columns
+            from .plots import headline_columns
 
             columns = headline_columns(result)[:8]
         plots = plot_columns_data(result, columns, idx)

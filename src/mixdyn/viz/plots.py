@@ -166,4 +166,21 @@ def _column(table, name: str) -> np.ndarray:
         raise KeyError(f"no column {name!r}; the table has {listed}") from None
 
 
-__all__ = ["PLOT_SUFFIXES", "plot_columns", "result_columns", "save_figure"]
+def headline_columns(result) -> list[str]:
+    """The columns a reader looks at first: the drivers' efforts, else the unknown forces
+    (a mixed run), else every body's angle."""
+    cols = result.columns()
+    efforts = [d.name for d in result.model.drivers if d.name in cols]
+    if efforts:
+        return efforts
+    unknown = [name for name in result.stats.get("unknown_forces", ()) if name in cols]
+    return unknown or [f"{b.name}.phi" for b in result.model.bodies]
+
+
+__all__ = [
+    "PLOT_SUFFIXES",
+    "headline_columns",
+    "plot_columns",
+    "result_columns",
+    "save_figure",
+]

@@ -9,8 +9,9 @@ import numpy as np
 
 from .._hints import count
 from ._draw import COLORS, SYMBOL_WIDTH, body_style, legend
-from .animate import Scene
 from .labels import place
+from .plots import headline_columns
+from .scene import Scene
 
 #: File types a drawing may be written to.
 SHOW_SUFFIXES = (".png", ".svg", ".pdf", ".html")
@@ -209,17 +210,6 @@ def model_html(model) -> str:
         + table(["kind", "name", "type", "between", "numbers"], elements)
         + "</div>"
     )
-
-
-def headline_columns(result) -> list[str]:
-    """The columns a reader looks at first: the drivers' efforts, else the unknown forces
-    (a mixed run), else every body's angle."""
-    cols = result.columns()
-    efforts = [d.name for d in result.model.drivers if d.name in cols]
-    if efforts:
-        return efforts
-    unknown = [name for name in result.stats.get("unknown_forces", ()) if name in cols]
-    return unknown or [f"{b.name}.phi" for b in result.model.bodies]
 
 
 def result_html(result) -> str:
