@@ -23,6 +23,16 @@ from ._forces import _f64
 from ._geometry import GROUND, angle, point, rot, vector
 
 
+def _apart(r: Resolver, name: str, first: str, second: str, both: str):
+    """The bodies and local points ``((b, s), (b, s))`` of two point references, resolved in
+    that order, which must lie on two different bodies; ``both`` (with ``{body}``, the one
+    body) says what is wrong where they do not."""
+    one, two = r.point(first, name), r.point(second, name)
+    if one[0] == two[0]:
+        raise ModelError(both.format(body=repr(body_name(first))), name)
+    return one, two
+
+
 @element("circle_line_contact", "forces")
 class CircleLineContact(_Compliant):
     """A circle (a disk, a ball, a rounded tip) on body j touching a straight line of body i
@@ -49,14 +59,13 @@ class CircleLineContact(_Compliant):
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
 
     def bind(self, r: Resolver):
-        bj, sj = r.point(self.center, self.name)
-        bi, si = r.point(self.line_point, self.name)
-        if bi == bj:
-            raise ModelError(
-                f"the circle and the line are both on {body_name(self.center)!r}: they must "
-                "be on two different bodies",
-                self.name,
-            )
+        (bj, sj), (bi, si) = _apart(
+            r,
+            self.name,
+            self.center,
+            self.line_point,
+            "the circle and the line are both on {body}: they must be on two different bodies",
+        )
         u = r.vector(self.axis, bi, self.name)
         return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u)
 
@@ -133,14 +142,13 @@ class BoxLineContact(_Compliant):
             )
 
     def bind(self, r: Resolver):
-        bj, sj = r.point(self.center, self.name)
-        bi, si = r.point(self.line_point, self.name)
-        if bi == bj:
-            raise ModelError(
-                f"the box and the line are both on {body_name(self.center)!r}: they must be "
-                "on two different bodies",
-                self.name,
-            )
+        (bj, sj), (bi, si) = _apart(
+            r,
+            self.name,
+            self.center,
+            self.line_point,
+            "the box and the line are both on {body}: they must be on two different bodies",
+        )
         u = r.vector(self.axis, bi, self.name)
         return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u)
 
@@ -197,14 +205,13 @@ class CircleContact(_Compliant):
     radius_j: jax.Array = quantity("length", "Radius of circle j, > 0.", converter=_f64, above=0.0)
 
     def bind(self, r: Resolver):
-        bi, si = r.point(self.point_i, self.name)
-        bj, sj = r.point(self.point_j, self.name)
-        if bi == bj:
-            raise ModelError(
-                f"both circles are on {body_name(self.point_i)!r}: they must be on two "
-                "different bodies",
-                self.name,
-            )
+        (bi, si), (bj, sj) = _apart(
+            r,
+            self.name,
+            self.point_i,
+            self.point_j,
+            "both circles are on {body}: they must be on two different bodies",
+        )
         return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj)
 
     def _d(self, q):
@@ -257,14 +264,13 @@ class JournalBearing(_Compliant):
     of_a_joint: ClassVar[bool] = True
 
     def bind(self, r: Resolver):
-        bi, si = r.point(self.point_i, self.name)
-        bj, sj = r.point(self.point_j, self.name)
-        if bi == bj:
-            raise ModelError(
-                f"the journal and the bearing are both on {body_name(self.point_i)!r}: they "
-                "must be on two different bodies",
-                self.name,
-            )
+        (bi, si), (bj, sj) = _apart(
+            r,
+            self.name,
+            self.point_i,
+            self.point_j,
+            "the journal and the bearing are both on {body}: they must be on two different bodies",
+        )
         return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj)
 
     def _d(self, q):
@@ -349,14 +355,13 @@ class SliderInGuide(_Compliant):
     u: jax.Array | None = eqx.field(default=None, kw_only=True)
 
     def bind(self, r: Resolver):
-        bi, si = r.point(self.point_i, self.name)
-        bj, sj = r.point(self.point_j, self.name)
-        if bi == bj:
-            raise ModelError(
-                f"the slider and the guide are both on {body_name(self.point_i)!r}: they must "
-                "be on two different bodies",
-                self.name,
-            )
+        (bi, si), (bj, sj) = _apart(
+            r,
+            self.name,
+            self.point_i,
+            self.point_j,
+            "the slider and the guide are both on {body}: they must be on two different bodies",
+        )
         u = r.vector(self.axis, bi, self.name)
         return dataclasses.replace(self, bi=bi, bj=bj, si=si, sj=sj, u=u)
 
