@@ -206,6 +206,16 @@ CASES = [
         "cannot replay itself",
         None,
     ),
+    (  # a tag-like unknown field is told against the prescribed motion's own fields
+        "tag-like-unknown-field",
+        sub(
+            "{coordinate: crank.phi, law: w*t}",
+            "{coordinate: crank.phi, law: w*t, type: revolute}",
+            MIXED,
+        ),
+        "unknown field 'type'; remove it or fix its spelling; allowed fields: coordinate, name",
+        None,
+    ),
 ]
 
 

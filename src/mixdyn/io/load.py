@@ -187,7 +187,7 @@ def _pydantic_error(e: ValidationError, data, lines, file) -> FileError:
         msg = f"missing field {missing!r}"
         hint = f"add '{missing}:'"
     elif typ == "extra_forbidden":
-        parent = _allowed_fields(data, path[:-1])
+        parent = _allowed_fields(data, path[:-1], unknown=str(field))
         msg = f"unknown field {field!r}"
         close = suggestions(str(field), parent)
         hint = (f"did you mean {' or '.join(map(repr, close))}? " if close else "") + (
@@ -223,8 +223,9 @@ def _pydantic_error(e: ValidationError, data, lines, file) -> FileError:
     )
 
 
-def _allowed_fields(data, path) -> list[str]:
-    """Field names of the part of the schema that the mapping at ``path`` is (for hints)."""
+def _allowed_fields(data, path, unknown: str | None = None) -> list[str]:
+    """Field names of the part of the schema that the mapping at ``path`` is (for hints);
+    ``unknown``: a field that part refused, so no part that declares it is the one."""
     cur = data
     for part in path:
         cur = cur[part]
@@ -236,6 +237,8 @@ def _allowed_fields(data, path) -> list[str]:
         if not (isinstance(obj, type) and issubclass(obj, s.Spec) and obj is not s.Spec):
             continue
         fields = obj.model_fields
+        if unknown in fields:
+            continue
         tagged = [k for k in ("type", "kind") if k in fields and k in cur]
         if tagged and all(repr(cur[k]) in str(fields[k].annotation) for k in tagged):
             return list(fields)
