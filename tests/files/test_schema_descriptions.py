@@ -87,7 +87,7 @@ PROPERTIES = {
 # with the file's strict_units setting; and with output_units also a preset's name (issue 32);
 # and with a prescribed motion's continuity (issue 31: the same value without it); and with
 # the animation's plotted columns (issue 32).
-STRIPPED_SHA256 = "c5157438ff3c02fc2bf94d32844accec26b44132bcd171e4275b0ccc7cfdf5db"
+STRIPPED_SHA256 = "a30362d881b4e1459e666ca13d2c973cb403e9d1f3d45e5c3b6a1d8bd8b11d39"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:
@@ -201,3 +201,13 @@ def test_the_examples_still_load(path):
     spec = mio.read(path)
     assert isinstance(spec, ModelFile)
     assert mio.build(spec).bodies
+
+
+def test_a_file_names_every_linear_solver_the_api_names():
+    import typing
+
+    from mixdyn.io.schema import _RunSpec
+    from mixdyn.linalg._choice import NAMES
+
+    allowed = typing.get_args(_RunSpec.model_fields["linear_solver"].annotation)
+    assert set(allowed) == set(NAMES)

@@ -731,9 +731,11 @@ class _RunSpec(Spec):
     """Unique name of the run (its output folder's name)."""
     time: TimeSpec
     """Output times: ``{span: [0, 2], n: 201}``, ``{span, step}`` or ``{values: [...]}``."""
-    linear_solver: Literal["auto", "dense", "sparse"] = "auto"
-    """Linear algebra: ``auto`` (default: sparse for large mechanisms of small bandwidth),
-    ``dense`` or ``sparse``."""
+    linear_solver: Literal["auto", "dense", "unrolled", "sparse", "banded"] = "auto"
+    """Linear algebra, as :class:`mixdyn.LinearSolver` names it: ``auto`` (default:
+    straight-line code for a few rows, sparse for large mechanisms of small bandwidth, else
+    dense), ``dense``, ``unrolled`` (straight-line factorizations, for a few rows) or
+    ``sparse`` (also ``banded``)."""
     drivers: list[Name] | None = None
     """Names of the model's drivers used by this run (default: all)."""
     prescribed: list[PrescribedSpec] = Field(default_factory=list)
