@@ -11,12 +11,17 @@ and shows a body's coordinates on hover. The canvas is drawn at the screen's pix
 Why a small canvas player rather than plotly's animation frames (``benchmarks/player.py``, the
 paper's example, 201 frames): this page is 108 kB against plotly's 5.0 MB (plotly.js inline),
 and headless Chromium loads and runs it in 0.58 s against 2.02 s; plotly's frames also cannot
-play at a multiple of real time or step by key. Under the view, a plot of a chosen result
-column against time has a cursor at the frame shown; a click on it moves the animation to
-that time. A URL fragment ``#t=0.5`` (or ``#frame=10``) opens the page paused at that time,
-``#plotclick=0.75`` clicks the plot at that fraction of its width; the page states the frame
-shown, its view transform and the plot's cursor in ``data-`` attributes of ``<body>`` for
-automated checks (the browser test).
+play at a multiple of real time or step by key. Under the view, a plot of a result column
+against time, or against another column (a phase plot: the slider's position against the crank
+angle), has a cursor at the frame shown; a click on it moves the animation to the frame nearest
+the click (nearest in time against time, nearest on the screen against another column). The
+page carries every column of the result at every frame, so any column can be chosen on either
+axis; the chosen columns come first. A URL fragment ``#t=0.5`` (or ``#frame=10``) opens the
+page paused at that time, ``#plotcol=crank.phi`` and ``#plotx=crank.phi`` choose the columns
+plotted, ``#plotclick=0.75`` clicks the plot at that fraction of its width (``0.75,0.2``: of
+its width and of its height from the top); the page states the frame shown, its view transform
+and the plot's cursor in ``data-`` attributes of ``<body>`` for automated checks (the browser
+test).
 """
 
 from __future__ import annotations
@@ -65,8 +70,14 @@ def nine_digits(a: np.ndarray) -> np.ndarray:
 
 
 def plot_columns_data(result, names, idx) -> list[dict]:
-    """The columns the player plots against time, at the frames ``idx``: ``name``, ``unit``
-    (the result's output units, engineering spelling) and ``v`` (7 significant digits).
+    """Columns of a result for the player's plot, at the frames ``idx``: ``name``, ``unit``
+    (the result's output units, engineering spelling) and ``v`` (rounded to 9 significant
+    digits, :func:`nine_digits`; a non-finite value is ``None``).
+
+    Args:
+        result: a :class:`mixdyn.Result`.
+        names: column names (a point's ``body.P.x`` too, :func:`mixdyn.viz.result_columns`).
+        idx: (F,) indices of the frames among the result's output times.
 
     Raises:
         ValueError: a name that is not a column of the result.
@@ -83,17 +94,49 @@ def plot_columns_data(result, names, idx) -> list[dict]:
         {
             "name": n,
             "unit": engineering(units.get(n, "")),
-            "v": [float(f"{v:.7g}") for v in np.asarray(cols[n], dtype=float)[idx]],
+            "v": _finite_or_none(np.asarray(cols[n], dtype=float)[idx]),
         }
         for n in names
     ]
 
 
-def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=(), plots=()) -> dict:
+def plotted_columns(result, chosen, idx) -> list[dict]:
+    """Every column the player can plot (:func:`plot_columns_data`, at the frames ``idx``):
+    the ``chosen`` ones first, then the result's other columns in the result's order (time
+    is the page's own ``t``)."""
+    names = list(dict.fromkeys([*chosen, *(c for c in result.columns() if c != "t")]))
+    return plot_columns_data(result, names, idx)
+
+
+def _finite_or_none(a: np.ndarray) -> list:
+    """``a`` (N,) rounded to 9 significant digits, a non-finite value as ``None``."""
+    finite = np.isfinite(a)
+    out = nine_digits(np.where(finite, a, 0.0)).tolist()
+    return out if finite.all() else [v if f else None for v, f in zip(out, finite, strict=True)]
+
+
+def player_data(
+    model: Model,
+    ts,
+    qs,
+    scene,
+    *,
+    title=None,
+    fps=20,
+    arrows=(),
+    plots=(),
+    shown=None,
+    plot_x="t",
+) -> dict:
     """The page's data: times, bodies' outlines and coordinates, pins, ground, guides, traces,
-    force symbols, arrows (already scaled to lengths), units, the plotted columns
-    (:func:`plot_columns_data`). Numbers rounded to 9 significant digits; a symbol's pen lift
-    (a NaN row) is ``null``."""
+    force symbols, arrows (already scaled to lengths), units, the columns the page can plot
+    (``plots``, :func:`plot_columns_data`), the names of those offered first (``shown``,
+    default all of them; the first is plotted on opening) and the column on the plot's x axis
+    (``plot_x``: ``"t"`` or a name among ``plots``). Numbers rounded to 9 significant digits;
+    a symbol's pen lift (a NaN row) is ``null``. A plotted column equal to a body's
+    coordinate as the page carries it (``crank.phi`` in the model's units) is carried once:
+    its ``v`` is replaced by ``q: [body, coordinate]``, the page reading
+    ``bodies[body].q[frame][coordinate]``."""
 
     def r(a):
         a = np.asarray(a, dtype=float)
@@ -103,6 +146,16 @@ def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=(), p
         out = nine_digits(np.where(finite, a, 0.0)).astype(object)
         out[~finite] = None  # a pen lift
         return out.tolist()
+
+    body = {name: k for k, name in enumerate(scene.names)}
+
+    def carried(c: dict) -> dict:
+        owner, _, coordinate = c["name"].rpartition(".")
+        if owner in body and coordinate in ("x", "y", "phi"):
+            k, j = body[owner], ("x", "y", "phi").index(coordinate)
+            if r(qs[:, 3 * k + j]) == c["v"]:
+                return {"name": c["name"], "unit": c["unit"], "q": [k, j]}
+        return c
 
     scale = arrow_scale(arrows, scene.bounds) if arrows else 0.0
     biggest = max((float(np.max(np.hypot(*a["F"].T))) for a in arrows), default=0.0)
@@ -150,7 +203,9 @@ def player_data(model: Model, ts, qs, scene, *, title=None, fps=20, arrows=(), p
             }
             for a in arrows
         ],
-        "plots": list(plots),
+        "plots": [carried(c) for c in plots],
+        "shown": [c["name"] for c in plots] if shown is None else list(shown),
+        "plotX": plot_x,
         "arrowNote": (
             f"arrows: {biggest:.4g} {arrows[0]['unit']} = {biggest * scale:.4g} "
             f"{model.units.length}"
@@ -190,6 +245,7 @@ def html(
     title: str | None = None,
     forces=False,
     columns=None,
+    plot_x: str = "t",
 ) -> pathlib.Path:
     """Write the player page of a motion.
 
@@ -202,10 +258,13 @@ def html(
         title: a title (default: the model's name).
         forces: ``True`` to draw every joint reaction and point force as an arrow, or their
             names (see :func:`mixdyn.viz.arrows.force_arrows`); needs a result with forces.
-        columns: the result's columns plotted against time under the animation (one shown
-            at a time, chosen in the page; a cursor follows the frame, a click on the plot
-            moves the animation there); default the columns a reader looks at first
-            (:func:`mixdyn.viz.plots.headline_columns`); ``()`` for no plot. Needs a result.
+        columns: the result's columns offered first by the plot under the animation (one
+            shown at a time, any other column of the result chosen in the page; a cursor
+            follows the frame, a click on the plot moves the animation there); default the
+            columns a reader looks at first (:func:`mixdyn.viz.plots.headline_columns`);
+            ``()`` for no plot. Needs a result.
+        plot_x: the column on the plot's x axis on opening: ``"t"`` (default) or a column
+            of the result (``"crank.phi"``: a phase plot), another chosen in the page.
 
     Returns:
         The path written.
@@ -228,11 +287,22 @@ def html(
             from .plots import headline_columns
 
             columns = headline_columns(result)[:8]
-        plots = plot_columns_data(result, columns, idx)
-    elif columns:
+        if columns:
+            extra = [] if plot_x == "t" else [plot_x]
+            plots = plotted_columns(result, [*columns, *extra], idx)
+    elif columns or plot_x != "t":
         raise ValueError("plotted columns need a result")
     data = player_data(
-        model, ts[idx], qs[idx], scene, title=title, fps=fps, arrows=arrows, plots=plots
+        model,
+        ts[idx],
+        qs[idx],
+        scene,
+        title=title,
+        fps=fps,
+        arrows=arrows,
+        plots=plots,
+        shown=list(columns or ()),
+        plot_x=plot_x,
     )
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
     page = _page().replace("__TITLE__", _escape(data["title"])).replace("__DATA__", text)
@@ -259,4 +329,10 @@ def _page() -> str:
     return (pathlib.Path(__file__).parent / "_player.html").read_text(encoding="utf-8")
 
 
-__all__ = ["html", "player_data", "plot_columns_data", "seconds_per_time_unit"]
+__all__ = [
+    "html",
+    "player_data",
+    "plot_columns_data",
+    "plotted_columns",
+    "seconds_per_time_unit",
+]
