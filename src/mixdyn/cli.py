@@ -161,6 +161,14 @@ def run(
             "varied numbers as coordinates (needs xarray: pip install 'mixdyn\\[xarray]').",
         ),
     ] = False,
+    excel: Annotated[
+        bool,
+        typer.Option(
+            "--excel",
+            help="Also write results.xlsx (a sweep's sweep.xlsx): the table with its units and "
+            "a sheet of settings (needs openpyxl: pip install 'mixdyn\\[excel]').",
+        ),
+    ] = False,
     figures: Annotated[
         bool,
         typer.Option(
@@ -195,7 +203,14 @@ def run(
         from .runs.job import run_job
 
         written, failed = run_job(
-            file, runs, out, parquet=parquet, netcdf=netcdf, figures=figures, progress=progress
+            file,
+            runs,
+            out,
+            parquet=parquet,
+            netcdf=netcdf,
+            excel=excel,
+            figures=figures,
+            progress=progress,
         )
         say(f"wrote {count(len(written), 'file')} under {esc(out)}")
         if failed:  # a sweep with failed members: the others are written

@@ -1,4 +1,4 @@
-"""Results on disk: ``results.csv`` (or Parquet) and ``meta.json`` per run.
+"""Results on disk: ``results.csv`` (or Parquet, or an Excel workbook) and ``meta.json`` per run.
 
 ``results.csv`` has a column ``t`` and every column of the :class:`mixdyn.Result` (body
 coordinates ``{body}.x`` ..., reactions ``{joint}.Fx`` ..., driver efforts and unknown forces by
@@ -6,7 +6,9 @@ name, energies), in the file's ``output_units`` (else the model's units), at ful
 Each header names its column and unit, ``name [unit]`` (``t [s]``, ``crank.phi [deg]``,
 ``motor [N·m]``; a column without unit by its name alone); :func:`read_table` reads them back
 as names and units. ``results.parquet`` carries the units in its schema metadata
-(:data:`PARQUET_KEY`). ``meta.json`` holds the unit of every column, the run's settings
+(:data:`PARQUET_KEY`). ``results.xlsx`` (openpyxl) holds the same table with the same
+headers in a sheet ``results`` and ``meta.json``'s entries in a sheet ``meta``
+(:func:`write_workbook`). ``meta.json`` holds the unit of every column, the run's settings
 (solver, tolerances), the solver's counters and the mixdyn version. Units are engineering
 labels (:func:`mixdyn.units.engineering`), which :mod:`mixdyn.units` reads back.
 """
@@ -31,6 +33,7 @@ from ..units import engineering
 
 RESULTS_CSV = "results.csv"
 RESULTS_PARQUET = "results.parquet"
+RESULTS_XLSX = "results.xlsx"
 META_JSON = "meta.json"
 
 
@@ -59,17 +62,20 @@ def write_result(
     folder,
     *,
     parquet: bool = False,
+    excel: bool = False,
     settings: dict | None = None,
     extra: dict | None = None,
     output_units: dict | None = None,
     points=(),
 ) -> list[pathlib.Path]:
-    """Write ``result`` to ``folder/results.csv`` (and ``.parquet``) and ``folder/meta.json``.
+    """Write ``result`` to ``folder/results.csv`` (and ``.parquet``, ``.xlsx``) and
+    ``folder/meta.json``.
 
     Args:
         result: the analysis result.
         folder: the output folder (created).
         parquet: also write ``results.parquet``.
+        excel: also write ``results.xlsx`` (:func:`write_workbook`; needs openpyxl).
         settings: the run's settings (analysis kind, solver, tolerances...) for ``meta.json``.
         extra: further entries of ``meta.json``.
         output_units: kind -> unit for the written columns (:func:`in_units`; default: the
@@ -121,7 +127,120 @@ def write_result(
         "status": "ok",
     }
     written.append(write_meta(folder, meta, extra))
+    if excel:
+        import pandas as pd
+
+        frame = pd.DataFrame(table, columns=headers(names, units))
+        written.append(write_workbook(folder / RESULTS_XLSX, {"results": frame}, meta))
     return written
+
+
+def write_excel(result: Result, path, *, points=(), output_units: dict | None = None):
+    """Write ``result`` as an Excel workbook at ``path``: a sheet ``results`` with the
+    columns of ``results.csv`` (``t`` first, headers ``name [unit]``) and a sheet ``meta``
+    (the units of the columns, the model's unit system, the solver's counters), as
+    :func:`write_workbook` writes them. Needs openpyxl (``pip install "mixdyn[excel]"``).
+
+    Args:
+        result: the analysis result.
+        path: the workbook to write (``.xlsx``).
+        points: point references whose columns are written too (``coupler.P.x``...).
+        output_units: kind -> unit of the columns (default: the result's ``output_units``,
+            else the model's units).
+
+    Returns:
+        The workbook's path.
+
+    Raises:
+        FileError: openpyxl is not installed.
+        NumericalError: a column holds a NaN or an infinity (nothing is written).
+    """
+    import pandas as pd
+
+    from .._version import __version__
+    from .tables import excel_module
+
+    path = pathlib.Path(path)
+    excel_module(path, "writing")
+    if output_units is None:
+        output_units = result.output_units
+    cols, units = in_units(result, *point_columns(result, points), output_units)
+    units = {c: engineering(u) for c, u in units.items()}
+    names = list(cols)
+    table = np.column_stack([np.asarray(cols[n]) for n in names])
+    _refuse_non_finite(table, names)
+    meta = {
+        "mixdyn_version": __version__,
+        "model": result.model.name,
+        "kind": result.kind,
+        "unit_system": _unit_system(result.model.units),
+        "rows": len(table),
+        "units": {c: units.get(c, "") for c in names},
+        "output_units": dict(output_units or {}),
+        "stats": jsonable(result.stats),
+    }
+    frame = pd.DataFrame(table, columns=headers(names, units))
+    return write_workbook(path, {"results": frame}, meta)
+
+
+#: The most rows an Excel sheet holds, its header row included (Excel's own limit).
+EXCEL_ROWS = 1_048_576
+
+
+def write_workbook(path: pathlib.Path, sheets: dict, meta: dict) -> pathlib.Path:
+    """An Excel workbook (``.xlsx``, written by pandas through openpyxl) at ``path``, whole
+    or not at all (through a temporary file replaced at the end).
+
+    Args:
+        path: the workbook.
+        sheets: sheet name -> pandas DataFrame, headers ``name [unit]`` (:func:`headers`);
+            each a sheet, in order, without an index column. Numbers are written with 16
+            significant digits (openpyxl's format: within 5e-16 of the double's value,
+            relative); a NaN (a failed sweep member's summary) is an empty cell.
+        meta: the run's ``meta.json`` entries: the last sheet, ``meta``, a row per entry
+            (``entry``, ``value``; nested entries as ``units.motor``, lists as JSON text).
+
+    Raises:
+        FileError: openpyxl is not installed, or a sheet has more rows than Excel holds
+            (:data:`EXCEL_ROWS`).
+    """
+    import pandas as pd
+
+    from ._errors import FileError
+    from .tables import excel_module
+
+    excel_module(path, "writing")
+    for name, df in sheets.items():
+        if len(df) + 1 > EXCEL_ROWS:
+            raise FileError(
+                f"sheet {name!r} has {len(df):,} rows, more than Excel holds ({EXCEL_ROWS - 1:,})",
+                file=str(path),
+                hint="write fewer output times, or use the CSV or --parquet",
+            )
+    rows = _flat(jsonable(meta))
+    tmp = path.with_name(path.name + ".tmp")
+    with pd.ExcelWriter(tmp, engine="openpyxl") as book:
+        for name, df in sheets.items():
+            df.to_excel(book, sheet_name=name, index=False)
+        pd.DataFrame(rows, columns=["entry", "value"]).to_excel(
+            book, sheet_name="meta", index=False
+        )
+    os.replace(tmp, path)
+    return path
+
+
+def _flat(meta: dict, prefix: str = "") -> list[tuple[str, object]]:
+    """``meta``'s entries as ``(entry, value)`` rows: nested dicts as ``a.b``, lists as
+    JSON text, numbers and text as they are."""
+    rows = []
+    for k, v in meta.items():
+        if isinstance(v, dict):
+            rows += _flat(v, f"{prefix}{k}.") if v else [(f"{prefix}{k}", "")]
+        elif isinstance(v, list):
+            rows.append((f"{prefix}{k}", json.dumps(v)))
+        else:
+            rows.append((f"{prefix}{k}", "" if v is None else v))
+    return rows
 
 
 def write_failure(
@@ -293,6 +412,7 @@ MEMBERS_CSV = "members.csv"
 TABLE_CSV = "table.csv"
 TABLE_PARQUET = "table.parquet"
 SWEEP_NC = "sweep.nc"
+SWEEP_XLSX = "sweep.xlsx"
 
 
 def write_sweep(
@@ -301,19 +421,21 @@ def write_sweep(
     *,
     parquet: bool = False,
     netcdf: bool = False,
+    excel: bool = False,
     settings: dict | None = None,
     extra: dict | None = None,
 ) -> list[pathlib.Path]:
     """Write a sweep run's result (:class:`mixdyn.runs.sweep.FileSweep`) to ``folder``:
-    ``members.csv`` (a row per member: index, varied values, status, error, summaries),
-    ``table.csv`` (and ``table.parquet``: a row per member and output time), both with
-    headers ``name [unit]`` as in ``results.csv`` (a column without a unit: its name), with
-    ``netcdf`` ``sweep.nc`` (the table's columns as a labelled array on (member, t), the
-    varied numbers and the status as coordinates, units in attributes; NetCDF 3 through
-    SciPy) and ``meta.json`` (units, settings, counts, timings).
+        ``members.csv`` (a row per member: index, varied values, status, error, summaries),
+        ``table.csv`` (and ``table.parquet``: a row per member and output time), both with
+        headers ``name [unit]`` as in ``results.csv`` (a column without a unit: its name), with
+        ``netcdf`` ``sweep.nc`` (the table's columns as a labelled array on (member, t), the
+        varied numbers and the status as coordinates, units in attributes; NetCDF 3 through
+        SciPy), with ``excel`` ``sweep.xlsx`` (sheets ``members``, ``table`` and ``meta``, as
+    :func:`write_workbook` writes them) and ``meta.json`` (units, settings, counts, timings).
 
-    Returns:
-        The files written.
+        Returns:
+            The files written.
     """
     from .._version import __version__
 
@@ -324,7 +446,8 @@ def write_sweep(
     members = sweep.members()
     member_units = {c: engineering(u) for c, u in sweep.member_units().items()}
     named = dict(zip(members.columns, headers(list(members.columns), member_units), strict=True))
-    written.append(write_frame(members.rename(columns=named), folder / MEMBERS_CSV))
+    members = members.rename(columns=named)
+    written.append(write_frame(members, folder / MEMBERS_CSV))
     table = sweep.table()
     units = {c: engineering(u) for c, u in sweep.units.items()}
     named = dict(zip(table.columns, headers(list(table.columns), units), strict=True))
@@ -363,6 +486,9 @@ def write_sweep(
         "status": "ok",
     }
     written.append(write_meta(folder, meta, extra))
+    if excel:
+        sheets = {"members": members, "table": table.rename(columns=named)}
+        written.append(write_workbook(folder / SWEEP_XLSX, sheets, meta))
     return written
 
 
@@ -544,10 +670,13 @@ def run_settings(spec) -> dict:
 
 
 __all__ = [
+    "EXCEL_ROWS",
     "MEMBERS_CSV",
     "META_JSON",
     "RESULTS_CSV",
     "RESULTS_PARQUET",
+    "RESULTS_XLSX",
+    "SWEEP_XLSX",
     "TABLE_CSV",
     "TABLE_PARQUET",
     "column_in_unit",
@@ -559,7 +688,9 @@ __all__ = [
     "read_result",
     "read_table",
     "split_headers",
+    "write_excel",
     "write_failure",
     "write_result",
     "write_sweep",
+    "write_workbook",
 ]

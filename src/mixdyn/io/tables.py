@@ -144,6 +144,28 @@ def parquet_module(file, doing: str, option: str | None = None):
     return papq
 
 
+def excel_module(file, doing: str, option: str | None = None):
+    """``openpyxl`` (what pandas writes and reads ``.xlsx`` with), or the
+    :class:`~mixdyn.io.FileError` saying it is missing.
+
+    Args:
+        file: the file read or written (or the model file), for the message.
+        doing: ``"writing"`` or ``"reading"``, for the message.
+        option: the command-line option asking for Excel (``"--excel"``), if any.
+    """
+    try:
+        import openpyxl
+    except ImportError:
+        instead = f" (or leave {option} out)" if option else ""
+        raise FileError(
+            f"{doing} Excel needs openpyxl, which is not installed",
+            option,
+            file=str(file),
+            hint=f'pip install "mixdyn[excel]"{instead}',
+        ) from None
+    return openpyxl
+
+
 def require_numbers(table, columns, file, option: str) -> None:
     """Refuse a column of ``table`` among ``columns`` that holds text instead of numbers.
 
@@ -175,6 +197,7 @@ def require_numbers(table, columns, file, option: str) -> None:
 
 __all__ = [
     "MAX_DATA_BYTES",
+    "excel_module",
     "parquet_module",
     "read_bytes",
     "read_csv",

@@ -213,6 +213,7 @@ class AnalysisKind(RunKind):
             result,
             folder,
             parquet=outputs.parquet,
+            excel=outputs.excel,
             settings=run_settings(plan.spec),
             output_units=runner.output_units,
             points=plan.spec.outputs,
@@ -428,7 +429,15 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
             )
         if path.suffix.lower() == ".html":
             painter.done(
-                html(result, path, fps=a.fps, trace=a.trace, forces=a.forces, columns=a.plot)
+                html(
+                    result,
+                    path,
+                    fps=a.fps,
+                    trace=a.trace,
+                    forces=a.forces,
+                    columns=a.plot,
+                    plot_x=a.plot_x,
+                )
             )
         else:
             data = movie_data(result, frames=a.frames, trace=a.trace, forces=a.forces)
@@ -442,6 +451,7 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
                     trace=a.trace,
                     forces=a.forces,
                     columns=a.plot,
+                    plot_x=a.plot_x,
                 )
             )
 

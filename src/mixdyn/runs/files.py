@@ -52,6 +52,7 @@ class LoadedFile:
         *,
         out=None,
         parquet: bool = False,
+        excel: bool = False,
         figures: bool = False,
     ) -> dict[str, Result]:
         """Execute runs ``names`` (default all, with the runs they need) and return their
@@ -63,6 +64,8 @@ class LoadedFile:
             out: a folder to write each run's outputs to (``out/NAME/results.csv``,
                 ``meta.json``...: what ``mixdyn run --out`` writes), or None.
             parquet: with ``out``, also write ``results.parquet``.
+            excel: with ``out``, also write ``results.xlsx`` (a sweep's ``sweep.xlsx``;
+                needs openpyxl: ``pip install "mixdyn[excel]"``).
             figures: with ``out``, also draw the plots and animations the runs ask for.
 
         Raises:
@@ -82,12 +85,19 @@ class LoadedFile:
         else:
             out = pathlib.Path(out)
             o.check_run_outputs(out, plans, figures, runner)
+            if excel:
+                from ..io.tables import excel_module
+
+                excel_module(self.path, "writing")
+                o.check_excel_rows(plans, self.path)
             painter = None
             if o.draws(runner, plans, figures):
                 from ..viz.painter import Painter
 
                 painter = Painter()
-            outputs = o.Outputs(out, self.path, parquet=parquet, figures=figures, painter=painter)
+            outputs = o.Outputs(
+                out, self.path, parquet=parquet, excel=excel, figures=figures, painter=painter
+            )
             results = {}
             o.write_runs(runner, plans, outputs, "off", results)
         return {name: shown(r, self.output_units) for name, r in results.items()}
@@ -138,6 +148,7 @@ def run_file(
     *,
     runs=None,
     parquet: bool = False,
+    excel: bool = False,
     figures: bool = False,
 ) -> dict[str, Result]:
     """Run a model file's runs from Python: ``load(path).run(runs, out=out, ...)``.
@@ -147,13 +158,13 @@ def run_file(
         out: a folder to write each run's outputs to, as ``mixdyn run --out`` (None: nothing
             written).
         runs: a run's name or a list of names (with the runs they need); None: every run.
-        parquet, figures: as for :meth:`LoadedFile.run`.
+        parquet, excel, figures: as for :meth:`LoadedFile.run`.
 
     Returns:
         The results by run name, in execution order (a :class:`~mixdyn.Result` per analysis,
         in the file's ``output_units``; a sweep's, a fit's or an optimization's own result).
     """
-    return load(path).run(runs, out=out, parquet=parquet, figures=figures)
+    return load(path).run(runs, out=out, parquet=parquet, excel=excel, figures=figures)
 
 
 __all__ = ["LoadedFile", "load", "run_file", "shown"]

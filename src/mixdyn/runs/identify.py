@@ -258,13 +258,15 @@ class IdentifyKind(RunKind):
         return execute(runner, plan)
 
     def output_files(self, runner, plan: IdentifyPlan, figures: bool) -> list[str]:
-        return ["fit.csv", "results.csv", "meta.json"] + (["fit.png"] if figures else [])
+        names = ["fit.csv", "results.csv", "meta.json", "report.html"]
+        return names + (["fit.png"] if figures else [])
 
     def draws(self, runner, plan: IdentifyPlan) -> bool:
         return True
 
     def write(self, runner, plan: IdentifyPlan, result: FileFit, seconds: float, outputs):
         from ..io.results import write_frame
+        from .run_reports import fit_report
 
         f = result.fit
         details = {
@@ -295,6 +297,7 @@ class IdentifyKind(RunKind):
                 units=units,
                 title=f"{plan.name}: measured and fitted ({', '.join(f.params)})",
             )
+        files += outputs.add_report(fit_report(runner, plan, result, seconds, outputs))
         return files
 
     def describe(self, plan: IdentifyPlan, report, model) -> str:

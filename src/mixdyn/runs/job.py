@@ -20,6 +20,7 @@ def run_job(
     *,
     parquet: bool = False,
     netcdf: bool = False,
+    excel: bool = False,
     figures: bool = True,
     progress: bool | None = None,
 ) -> tuple[list[pathlib.Path], list[str]]:
@@ -35,6 +36,7 @@ def run_job(
         out: the output folder; each run writes ``out/NAME/``.
         parquet: also write ``results.parquet``.
         netcdf: also write each sweep as ``sweep.nc`` (needs xarray).
+        excel: also write ``results.xlsx`` (a sweep's ``sweep.xlsx``; needs openpyxl).
         figures: write the plots and animations the runs ask for.
         progress: True: a bar per run following the simulated time; False: nothing; None: a
             line per run on a terminal, else the notice of the first compile
@@ -67,16 +69,18 @@ def run_job(
 
         painter = Painter()
     from .console import clean, compiling
-    from .outputs import Outputs, check_run_outputs, draws, write_runs
+    from .outputs import Outputs, check_excel_rows, check_run_outputs, draws, write_runs
 
     try:
         from ..io import FileError, read
-        from ..io.tables import parquet_module
+        from ..io.tables import excel_module, parquet_module
         from .checks import require_size
         from .runner import Runner
 
         if parquet:  # refused before anything runs
             parquet_module(file, "writing", "--parquet")
+        if excel:
+            excel_module(file, "writing", "--excel")
         spec = read(file)
         require_size(spec, file)
         runner = Runner(spec)
@@ -88,6 +92,8 @@ def run_job(
             )
         plans = runner.order(runs or None)
         check_run_outputs(out, plans, figures, runner)
+        if excel:
+            check_excel_rows(plans, file)
         if painter is not None and not draws(runner, plans, figures):
             painter.abort()  # nothing to draw
             painter = None
@@ -102,7 +108,9 @@ def run_job(
         mode = "runs" if sys.stderr.isatty() else "off"
     else:
         mode = "steps" if progress else "off"
-    outputs = Outputs(out, file, parquet=parquet, netcdf=netcdf, figures=figures, painter=painter)
+    outputs = Outputs(
+        out, file, parquet=parquet, netcdf=netcdf, excel=excel, figures=figures, painter=painter
+    )
     from ..runtime._programs import on_first_compile
 
     if progress is None and mode == "off":  # no line per run: what takes long is said

@@ -188,7 +188,7 @@ class OptimizeKind(RunKind):
         return execute(runner, plan)
 
     def output_files(self, runner, plan: OptimizePlan, figures: bool) -> list[str]:
-        names = ["optimum.csv", "results.csv", "meta.json"]
+        names = ["optimum.csv", "results.csv", "meta.json", "report.html"]
         return names + (["optimize.png"] if figures else [])
 
     def draws(self, runner, plan: OptimizePlan) -> bool:
@@ -196,6 +196,7 @@ class OptimizeKind(RunKind):
 
     def write(self, runner, plan: OptimizePlan, result: FileOptimum, seconds: float, outputs):
         from ..io.results import write_frame
+        from .run_reports import optimum_report
 
         o, r = result.optimum, plan.spec
         details = {
@@ -236,6 +237,7 @@ class OptimizeKind(RunKind):
                 units=units,
                 title=f"{plan.name}: {r.sense} the {r.objective.reduce} of {col}",
             )
+        files += outputs.add_report(optimum_report(runner, plan, result, seconds, outputs))
         return files
 
     def describe(self, plan: OptimizePlan, report, model) -> str:

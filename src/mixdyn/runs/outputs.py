@@ -2,9 +2,9 @@
 the run's previous outputs as it starts (:func:`clear_outputs`) and written as the run ends,
 by its kind (:meth:`.kinds.RunKind.write`); the figures drawn by the figure worker
 (:class:`mixdyn.viz.painter.Painter`) while the next runs compute. A run that fails
-numerically writes what it computed up to the failure and a ``meta.json`` saying
-``status: failed``, with the failure's time and cause (:func:`write_failed`); a run that
-succeeds says ``status: ok``.
+numerically writes what it computed up to the failure, a ``meta.json`` saying
+``status: failed``, with the failure's time and cause, and a ``report.html`` stating the
+failure (:func:`write_failed`); a run that succeeds says ``status: ok``.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ class Outputs:
         file: the model file (named in each ``meta.json``).
         parquet: also write ``results.parquet``.
         netcdf: also write each sweep as ``sweep.nc``.
+        excel: also write ``results.xlsx`` (a sweep's ``sweep.xlsx``).
         figures: write the plots and animations the runs ask for.
         painter: the figure worker (:class:`~mixdyn.viz.painter.Painter`), None where
             nothing is drawn.
@@ -42,6 +43,7 @@ class Outputs:
     file: str | pathlib.Path
     parquet: bool = False
     netcdf: bool = False
+    excel: bool = False
     figures: bool = True
     painter: object | None = None
     failed: list[str] = dataclasses.field(default_factory=list)
@@ -50,6 +52,14 @@ class Outputs:
     def folder(self, plan) -> pathlib.Path:
         """The run's folder."""
         return pathlib.Path(self.out) / plan.name
+
+    def add_report(self, report) -> list[pathlib.Path]:
+        """Write a run's report now where no figures are drawn (returns its path), else keep
+        it in :attr:`reports` until the painter has drawn them (returns nothing yet)."""
+        if self.painter is None:
+            return [report.write()]
+        self.reports.append(report)
+        return []
 
 
 # --------------------------------------------------------------------------- output paths
@@ -104,6 +114,32 @@ def check_run_outputs(out: pathlib.Path, plans, figures: bool, runner) -> None:
             check_output(folder / name, "--out")
 
 
+def check_excel_rows(plans, file) -> None:
+    """Refuse, before anything is computed, an Excel sheet longer than Excel holds
+    (:data:`mixdyn.io.results.EXCEL_ROWS`): a run's output times, a sweep's members times
+    their output times.
+
+    Raises:
+        FileError: the first run whose table is too long, named as ``--excel``.
+    """
+    from ..io.results import EXCEL_ROWS
+
+    for plan in plans:
+        own = getattr(plan, "member_times", None)
+        if own is not None:
+            rows = sum(len(t) for t in own)
+        else:
+            rows = len(plan.times) * getattr(plan, "members", 1)
+        if rows + 1 > EXCEL_ROWS:
+            raise FileError(
+                f"run {plan.name!r} writes {rows:,} rows, more than an Excel sheet holds "
+                f"({EXCEL_ROWS - 1:,})",
+                "--excel",
+                file=str(file),
+                hint="write fewer output times, or leave --excel out (the CSV has them all)",
+            )
+
+
 def animation_targets(outputs, file) -> list[pathlib.Path]:
     """The files ``mixdyn animate --output`` writes, checked: a GIF, an MP4 (with ffmpeg) or
     an HTML page each; a name without a suffix gives both ``NAME.gif`` and ``NAME.html``.
@@ -142,15 +178,19 @@ def animation_targets(outputs, file) -> list[pathlib.Path]:
     return targets
 
 
-#: The files a run writes in some invocations only (``--parquet``, ``--netcdf``), by a file
-#: its kind always writes.
-_FORMAT_FILES = {"results.csv": ("results.parquet",), "table.csv": ("table.parquet", "sweep.nc")}
+#: The files a run writes in some invocations only (``--parquet``, ``--netcdf``,
+#: ``--excel``), by a file its kind always writes.
+_FORMAT_FILES = {
+    "results.csv": ("results.parquet", "results.xlsx"),
+    "table.csv": ("table.parquet", "sweep.nc", "sweep.xlsx"),
+}
 
 
 def run_outputs(runner, plan) -> list[str]:
     """Every file the run writes in its folder in any invocation: its kind's
     (:meth:`.kinds.RunKind.output_files`, figures included) and those of the optional
-    formats (``results.parquet``; a sweep's ``table.parquet`` and ``sweep.nc``)."""
+    formats (``results.parquet``, ``results.xlsx``; a sweep's ``table.parquet``,
+    ``sweep.nc`` and ``sweep.xlsx``)."""
     names = list(kind_of(plan).output_files(runner, plan, True))
     for name in list(names):
         names += [n for n in _FORMAT_FILES.get(name, ()) if n not in names]
@@ -168,12 +208,14 @@ def clear_outputs(runner, plan, folder: pathlib.Path) -> None:
 
 
 def write_failed(runner, plan, error, outputs: Outputs) -> list[pathlib.Path]:
-    """A failed run's folder: the states computed up to the failure and ``meta.json`` with
-    ``status: failed``, the failure's time and cause (:func:`mixdyn.io.results.write_failure`)."""
+    """A failed run's folder: the states computed up to the failure, ``meta.json`` with
+    ``status: failed``, the failure's time and cause (:func:`mixdyn.io.results.write_failure`)
+    and ``report.html`` stating them (:func:`.run_reports.failure_report`)."""
     from ..io.results import run_settings, write_failure
+    from .run_reports import failure_report
 
     extra = {"file": str(outputs.file), "run": plan.name, "kind": plan.spec.kind}
-    return write_failure(
+    written = write_failure(
         error,
         outputs.folder(plan),
         settings=run_settings(plan.spec),
@@ -181,6 +223,7 @@ def write_failed(runner, plan, error, outputs: Outputs) -> list[pathlib.Path]:
         output_units=runner.output_units,
         model=runner.model,
     )
+    return [*written, failure_report(runner, plan, error, outputs).write()]
 
 
 def draws(runner, plans, figures: bool) -> bool:
@@ -282,6 +325,7 @@ def write_study_run(
         run,
         outputs.folder(plan),
         parquet=outputs.parquet,
+        excel=outputs.excel,
         settings=run_settings(plan.base.spec),
         extra=extra,
         output_units=runner.output_units,
@@ -292,6 +336,7 @@ def write_study_run(
 __all__ = [
     "Outputs",
     "animation_targets",
+    "check_excel_rows",
     "check_output",
     "check_run_outputs",
     "clear_outputs",

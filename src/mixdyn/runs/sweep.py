@@ -665,7 +665,7 @@ class SweepKind(RunKind):
         return execute(runner, plan, progress)
 
     def output_files(self, runner, plan: SweepPlan, figures: bool) -> list[str]:
-        names = ["members.csv", "table.csv", "meta.json"]
+        names = ["members.csv", "table.csv", "meta.json", "report.html"]
         return names + ([p.file for p in plan.spec.plots] if figures else [])
 
     def draws(self, runner, plan: SweepPlan) -> bool:
@@ -673,6 +673,7 @@ class SweepKind(RunKind):
 
     def write(self, runner, plan: SweepPlan, result: FileSweep, seconds: float, outputs):
         from ..io.results import run_settings, write_sweep
+        from .run_reports import sweep_report
 
         folder = outputs.folder(plan)
         files = write_sweep(
@@ -680,6 +681,7 @@ class SweepKind(RunKind):
             folder,
             parquet=outputs.parquet,
             netcdf=outputs.netcdf,
+            excel=outputs.excel,
             settings=run_settings(plan.spec),
             extra={
                 "file": str(outputs.file),
@@ -691,6 +693,7 @@ class SweepKind(RunKind):
         )
         if outputs.painter is not None:
             _figures(plan, result, folder, outputs.painter)
+        files += outputs.add_report(sweep_report(runner, plan, result, seconds, outputs))
         if result.sweep.errors:
             outputs.failed.append(_failure(plan, result, outputs))
         return files

@@ -118,7 +118,15 @@ def run_tag(file, runs) -> str:
 
 #: ``mixdyn run``'s options that take no value, and those that take one (its next word,
 #: or after ``=``): whether that value names a run.
-_RUN_FLAGS = {"--parquet", "--netcdf", "--figures", "--no-figures", "--progress", "--no-progress"}
+_RUN_FLAGS = {
+    "--parquet",
+    "--netcdf",
+    "--excel",
+    "--figures",
+    "--no-figures",
+    "--progress",
+    "--no-progress",
+}
 _RUN_VALUED = {"--run": True, "-r": True, "--out": False, "-o": False}
 
 

@@ -1,6 +1,8 @@
 """A run's one-page report (``report.html``): the mechanism drawn at the start, the run's
 figures, each result column's range with its unit, the energy balance and the run's settings,
-in one self-contained page (inline CSS, images as data URIs, no script, no network).
+in one self-contained page (inline CSS, images as data URIs, no script, no network). A study's
+page (a sweep, a fit, an optimization) adds its own tables (:class:`Table`: the varied values,
+the numbers found with their units); a failed run's page states the failure first.
 
 The drawing is SVG written here from the scene (no matplotlib); the figures are the files the
 run has drawn already, read and inlined. Building a page costs a few milliseconds.
@@ -35,6 +37,7 @@ figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: .85em; color: #555; }
 .drawing svg { border: 1px solid #ddd; background: #fff; max-width: 100%; height: auto; }
 .ok { color: #1a7f37; } .bad { color: #b42318; }
+p.failure { border: 1px solid #b42318; background: #fdecea; padding: .5em .8em; }
 """
 
 
@@ -145,6 +148,11 @@ def _num(v) -> str:
     return "nan" if math.isnan(v) else f"{v:.6g}"
 
 
+def number(v) -> str:
+    """A number as a report shows it: 6 significant digits (``nan`` for a NaN)."""
+    return _num(v)
+
+
 def _table(head: list[str], rows: list[list[str]], numeric=(), cls: str = "") -> str:
     th = "".join(f"<th>{escape(h)}</th>" for h in head) if any(head) else ""
     body = "".join(
@@ -180,6 +188,31 @@ def data_uri(path: pathlib.Path) -> str:
 
 
 # --------------------------------------------------------------------------- the page
+@dataclasses.dataclass(frozen=True)
+class Table:
+    """A table of a report under its own heading.
+
+    Attributes:
+        heading: the section's heading.
+        head: the column heads (a unit in its own column, or in the head as ``name [unit]``).
+        rows: the rows, each a list of cells (text; numbers as :func:`number` writes them).
+        numeric: the positions of the columns aligned as numbers.
+        cls: the table's HTML class (what a test or a style finds it by).
+    """
+
+    heading: str
+    head: list
+    rows: list
+    numeric: tuple = ()
+    cls: str = ""
+
+    def html(self) -> str:
+        """The section's text: heading and table."""
+        return f"<h2>{escape(self.heading)}</h2>" + _table(
+            self.head, self.rows, numeric=self.numeric, cls=self.cls
+        )
+
+
 @dataclasses.dataclass
 class Report:
     """What a run's report shows, gathered as the run is written; :meth:`write` reads the
@@ -192,9 +225,13 @@ class Report:
         drawing: the mechanism as SVG text (:func:`scene_svg`), or "".
         figures: the run's figure and animation files, in order (those not written are left
             out: a run without figures).
-        columns: the result columns as written (in the output units), name -> (N,).
+        columns: the result columns as written (in the output units), name -> (N,); their
+            ranges are shown under ``columns_heading`` (no section where empty).
         units: the columns' units.
         settings: the run's settings (nested dicts flattened to ``a.b`` rows).
+        tables: a study's own tables (:class:`Table`), shown after the facts.
+        failure: the failure a failed run ends with, one line shown first ("" where none).
+        columns_heading: the heading of the columns' ranges.
     """
 
     path: pathlib.Path
@@ -205,6 +242,9 @@ class Report:
     columns: dict
     units: dict
     settings: dict
+    tables: list = dataclasses.field(default_factory=list)
+    failure: str = ""
+    columns_heading: str = "Result columns"
 
     def html(self) -> str:
         """The page's text."""
@@ -223,19 +263,21 @@ class Report:
                     f'<figure><img src="{data_uri(f)}" alt="{escape(f.name)}">'
                     f"<figcaption>{escape(f.name)}</figcaption></figure>"
                 )
-        sections = [
-            f"<h1>{escape(self.title)}</h1>",
-            _table(["", ""], [[k, v] for k, v in self.facts], cls="facts"),
-        ]
+        sections = [f"<h1>{escape(self.title)}</h1>"]
+        if self.failure:
+            sections.append(f'<p class="failure bad">{escape(self.failure)}</p>')
+        sections.append(_table(["", ""], [[k, v] for k, v in self.facts], cls="facts"))
+        sections += [t.html() for t in self.tables]
         if self.drawing:
             sections.append(f'<h2>The mechanism at the start</h2><div class="drawing">'
                             f"{self.drawing}</div>")  # fmt: skip
         if figures:
             sections.append('<h2>Figures</h2><div class="figures">' + "".join(figures) + "</div>")
-        sections.append(
-            "<h2>Result columns</h2>"
-            + _table(["column", "unit", "min", "max"], ranges, numeric=(2, 3), cls="ranges")
-        )
+        if ranges:
+            sections.append(
+                f"<h2>{escape(self.columns_heading)}</h2>"
+                + _table(["column", "unit", "min", "max"], ranges, numeric=(2, 3), cls="ranges")
+            )
         if energy is not None:
             sections.append(
                 "<h2>Energy balance</h2>"
@@ -267,4 +309,4 @@ class Report:
         return self.path
 
 
-__all__ = ["Report", "data_uri", "energy_balance", "scene_svg"]
+__all__ = ["Report", "Table", "data_uri", "energy_balance", "number", "scene_svg"]
