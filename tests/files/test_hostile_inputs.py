@@ -486,6 +486,16 @@ SEMANTIC = [
         "animation.plot[1]: no column 'slider.xx'",
     ),
     (
+        "animation-plot-x-column",
+        BASE + "    animation: {file: a.gif, plot: [slider.x],\n      plot_x: crank.phii}\n",
+        f":{BASE.count(chr(10)) + 2}: run 'kin', animation.plot_x: no column 'crank.phii'",
+    ),
+    (
+        "animation-plot-x-no-plot",
+        BASE + "    animation: {file: a.gif, plot: [], plot_x: crank.phi}\n",
+        "animation.plot_x: the player has no plot",
+    ),
+    (
         "mixed-unknown-force",
         BASE.replace(
             "drivers:\n  - {type: coordinate, name: motor, coordinate: crank.phi, law: w*t}\n", ""

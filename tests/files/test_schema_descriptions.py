@@ -25,7 +25,7 @@ EXAMPLES = sorted(EXAMPLES.glob("*.yaml"))
 
 # The property names of every definition, recorded before the descriptions were added.
 PROPERTIES = {
-    "AnimationSpec": "file forces fps frames html plot trace",
+    "AnimationSpec": "file forces fps frames html plot plot_x trace",
     "AssemblySpec": "hold",
     "BodySpec": "inertia mass name points q0 vectors",
     "ConstantSpec": "constant",
@@ -86,8 +86,9 @@ PROPERTIES = {
 # value of the schema with the cam's hand-written spec, the cam's spec left out as well); and
 # with the file's strict_units setting; and with output_units also a preset's name (issue 32);
 # and with a prescribed motion's continuity (issue 31: the same value without it); and with
-# the animation's plotted columns (issue 32).
-STRIPPED_SHA256 = "a30362d881b4e1459e666ca13d2c973cb403e9d1f3d45e5c3b6a1d8bd8b11d39"
+# the animation's plotted columns (issue 32); and with the column on the x axis of the
+# player's plot (issue 32).
+STRIPPED_SHA256 = "ec8d09eb545b47d049120a88108a312f59a71380617befbdfc572696787a6eb9"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

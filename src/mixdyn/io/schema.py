@@ -718,10 +718,14 @@ class AnimationSpec(Spec):
     body j) and every point force, or a list of joint and force names. Not in kinematic runs.
     Default false."""
     plot: list[str] | None = None
-    """Result columns the HTML player plots against time under the animation, one at a time
-    (chosen in the page), with a cursor following the frame; a click on the plot moves the
-    animation there. Default: the drivers' efforts (else the unknown forces, else the bodies'
-    angles); ``[]`` for no plot."""
+    """Result columns the HTML player offers first in its plot (any other is chosen in the
+    page); a cursor follows the frame, a click on the plot moves the animation there. Default:
+    the drivers' efforts (else the unknown forces, else the bodies' angles); ``[]`` for no
+    plot."""
+    plot_x: str = "t"
+    """The column on the x axis of the HTML player's plot on opening (default ``t``), e.g.
+    ``crank.phi`` for the slider's position against the crank angle (a phase plot: the cursor
+    is the frame's point, a click goes to the nearest point on the curve)."""
 
 
 class _RunSpec(Spec):

@@ -210,6 +210,7 @@ def animate(
             trace=trace,
             forces=forces,
             columns=(a.plot if a else None) if results is None else None,
+            plot_x=a.plot_x if a and results is None else "t",
         )
         yield f"wrote {esc(target)}"
 

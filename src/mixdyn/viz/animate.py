@@ -37,6 +37,7 @@ def animate(
     dpi: int = 100,
     forces=False,
     columns=None,
+    plot_x: str = "t",
 ) -> pathlib.Path:
     """Write an animation of a motion: ``.gif`` (Pillow), ``.mp4`` (needs ffmpeg) or
     ``.html`` (see :func:`html`).
@@ -52,7 +53,8 @@ def animate(
         size, dpi: figure size [inch] (default: from the scene's proportions) and resolution.
         forces: ``True`` to draw every joint reaction and point force as an arrow (one scale
             for all), or their names (:func:`mixdyn.viz.arrows.force_arrows`).
-        columns: the columns the HTML player plots against time (:func:`html`).
+        columns: the columns the HTML player offers first in its plot (:func:`html`).
+        plot_x: the column on the x axis of the HTML player's plot (:func:`html`).
 
     Returns:
         The path written.
@@ -72,6 +74,7 @@ def animate(
             title=title,
             forces=forces,
             columns=columns,
+            plot_x=plot_x,
         )
     if suffix not in (".gif", ".mp4"):
         raise ValueError(

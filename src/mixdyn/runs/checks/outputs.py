@@ -42,6 +42,11 @@ def check_outputs(runner, plan: Plan) -> None:
     _check_arrows(runner, plan, a.forces, (*plan.path, "animation", "forces"))
     for k, col in enumerate(a.plot or ()):
         check_column(runner, col, r, (*plan.path, "animation", "plot", k))
+    if a.plot_x != "t":
+        p = (*plan.path, "animation", "plot_x")
+        if a.plot == []:
+            runner.fail(p, "the player has no plot ('plot: []')", "drop plot_x or name columns")
+        check_column(runner, a.plot_x, r, p)
 
 
 def _check_arrows(runner, plan: Plan, forces, path) -> None:
