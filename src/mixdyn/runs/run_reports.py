@@ -124,7 +124,7 @@ def sweep_report(runner, plan, result, seconds: float, outputs) -> Report:
         ),
         Table(
             f"Summaries over the {n - failed} members that succeeded",
-            ["summary", "of", "unit", "min", "member", "max", "member"],
+            ["summary", "of", "unit", "min", "member at min", "max", "member at max"],
             summaries,
             numeric=(3, 4, 5, 6),
             cls="summaries",
