@@ -192,6 +192,12 @@ def test_a_failed_member_is_named_and_the_others_written(tmp_path):
     assert np.isnan(members["x_end"][1]) and np.isfinite(members["x_end"][[0, 2]]).all()
     table = mio.read_table(out / "sweep")
     assert sorted(set(table["member"])) == [0, 2]
+    # its report says so: the count, and the failed member with its cause and time
+    page = (out / "sweep" / "report.html").read_text(encoding="utf-8")
+    assert "1 of 3 members failed" in page and "3 (grid): 2 ok, 1 failed" in page
+    failed = page.split('class="failed"')[1].split("</table>")[0]
+    assert "<td class=n>1</td><td class=n>50000</td>" in failed
+    assert members["status"][1] in failed and f"{members['t_error'][1]:.6g}" in failed
 
 
 @pytest.mark.parametrize(
