@@ -244,3 +244,60 @@ def test_report_opens_with_every_column_its_unit_and_the_figures(tmp_path):
     chromium(tmp_path, page.as_uri(), str(png))
     with Image.open(png) as im:
         assert len(im.convert("RGB").getcolors(maxcolors=1_000_000)) > 200  # drawn, not blank
+
+
+def _screen(plot: dict, x, y):
+    """A plot's data point -> CSS px in the plot canvas, through the page's stated ranges."""
+    m, (x0, x1), (y0, y1) = plot["margins"], plot["xrange"], plot["yrange"]
+    inner_w, inner_h = plot["width"] - m["l"] - m["r"], plot["height"] - m["t"] - m["b"]
+    return (
+        m["l"] + inner_w * (np.asarray(x) - x0) / (x1 - x0),
+        m["t"] + inner_h * (y1 - np.asarray(y)) / (y1 - y0),
+    )
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_phase_plot_cursor_and_click_go_to_the_frame(motion, tmp_path):
+    """Against another column: the slider's position against the crank angle opened at a
+    frame by the address has its cursor at the result's (crank angle, slider position) of that
+    frame, drawn there, on axes that span the columns' ranges (6 % margin) with their units;
+    on the slider's phase portrait (velocity against position: x goes out and back), a click
+    shows the frame whose point is nearest the click on the screen, not the one nearest in x
+    alone."""
+    page = html(motion, tmp_path / "phase.html")  # the default columns: any other chosen
+    i = 37
+    url = f"{page.as_uri()}#frame={i}&plotx=crank.phi&plotcol=slider.x"
+    dom = chromium(tmp_path, url, "dom", height=1200)
+    attrs = _attrs(dom)
+    plot = json.loads(attrs["plot"])
+    phi, x = motion["crank.phi"], motion["slider.x"]
+    assert int(attrs["frame"]) == i
+    assert (plot["xcolumn"], plot["column"]) == ("crank.phi", "slider.x")
+    assert plot["xv"] == pytest.approx(phi[i], rel=5e-9)
+    assert plot["yv"] == pytest.approx(x[i], rel=5e-9)
+    for got, v in ((plot["xrange"], phi), (plot["yrange"], x)):
+        span = v.max() - v.min()
+        assert got == pytest.approx([v.min() - 0.06 * span, v.max() + 0.06 * span], rel=1e-7)
+    assert (plot["x"], plot["y"]) == pytest.approx(_screen(plot, phi[i], x[i]), abs=1e-6)
+    readout = re.search(r'id="plotval">([^<]*)<', dom).group(1)
+    assert re.match(r"slider\.x = [-0-9.e]+ m,\s+crank\.phi = [-0-9.e]+ rad", readout), readout
+    png = tmp_path / "phase.png"
+    chromium(tmp_path, url, str(png), height=1200)
+    image = np.asarray(Image.open(png).convert("RGB"))
+    at = (DPR * (plot["left"] + plot["x"]), DPR * (plot["top"] + plot["y"]))
+    assert near(image, at, rgb("#d62728")), "no cursor at the frame's point"
+    # A click beside a point of the return stroke of the phase portrait.
+    v = motion["slider.vx"]
+    dom = chromium(tmp_path, f"{page.as_uri()}#frame=0&plotx=slider.x&plotcol=slider.vx", "dom")
+    plot = json.loads(_attrs(dom)["plot"])
+    sx, sy = _screen(plot, x, v)
+    j = 80
+    cx, cy = sx[j] + 4.0, sy[j] - 3.0
+    nearest = int(np.argmin(np.hypot(sx - cx, sy - cy)))
+    assert int(np.argmin(np.abs(sx - cx))) != nearest  # x alone would go elsewhere
+    m = plot["margins"]
+    f = (cx - m["l"]) / (plot["width"] - m["l"] - m["r"])
+    g = (cy - m["t"]) / (plot["height"] - m["t"] - m["b"])
+    url = f"{page.as_uri()}#plotx=slider.x&plotcol=slider.vx&plotclick={f:.9f},{g:.9f}"
+    attrs = _attrs(chromium(tmp_path, url, "dom"))
+    assert int(attrs["frame"]) == nearest and attrs["playing"] == "false"
