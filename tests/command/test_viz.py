@@ -190,6 +190,10 @@ def test_report_energy_balance_against_hand_made_energies():
     rows = {w: v for w, v, _ in energy_balance(cols, {})}
     assert rows["largest balance error |T + V - (T0 + V0) - Wn - Wc|"] == pytest.approx(0.02)
     assert energy_balance({"t": t}, {}) is None
+    # without work columns (an inverse run's) the energies are shown, no balance claimed
+    rows = energy_balance({"energy.kinetic": T, "energy.potential": V}, {})
+    assert not any("balance" in w or "work" in w for w, _, _ in rows)
+    assert {w: v for w, v, _ in rows}["change of T + V"] == pytest.approx(T[-1] + V[-1])
 
 
 def test_the_players_numbers_are_rounded_as_python_formats_them():

@@ -110,7 +110,9 @@ def energy_balance(cols: dict, units: dict) -> list[tuple[str, float, str]] | No
     """The energy balance of a dynamic run's columns (kinetic ``T``, potential ``V``, the
     non-conservative work ``Wn`` and the constraints' work ``Wc``): each at the end, the
     change of ``T + V`` and the balance's largest error ``max |T + V - (T0 + V0) - Wn - Wc|``,
-    absolute and relative to the largest of the energies' ranges and the works.
+    absolute and relative to the largest of the energies' ranges and the works. A run without
+    work columns (an inverse run: its drivers' work is not among its columns) shows its
+    energies without a balance.
 
     Returns:
         ``(what, value, unit)`` rows, or None where the columns have no energies.
@@ -136,6 +138,8 @@ def energy_balance(cols: dict, units: dict) -> list[tuple[str, float, str]] | No
         rows.append(("non-conservative work Wn (to the end)", float(Wn[-1]), u))
     if "work.constraints" in cols:
         rows.append(("constraints' work Wc (to the end)", float(Wc[-1]), u))
+    if "work.nonconservative" not in cols and "work.constraints" not in cols:
+        return rows  # no works to balance against
     rows += [
         ("largest balance error |T + V - (T0 + V0) - Wn - Wc|", float(np.max(np.abs(bal))), u),
         ("the same, relative to the largest range or work", float(np.max(np.abs(bal)) / scale), ""),
