@@ -133,10 +133,18 @@ def _run(tmp_path, text: str, *args: str):
 
 
 def test_a_sweeps_report_holds_its_members_ranges_with_units(tmp_path):
-    res, out = _run(tmp_path, CRANK + SWEEP, "--run", "masses")
+    res, out = _run(tmp_path, CRANK + SWEEP, "--run", "masses", "--excel")
     assert res.exit_code == 0, res.output
     folder = out / "masses"
     members = mio.read_table(folder / "members.csv")
+    # --excel: sweep.xlsx holds members.csv and table.csv, the same headers and numbers
+    pytest.importorskip("openpyxl")
+    book = pd.read_excel(folder / "sweep.xlsx", sheet_name=None)
+    assert list(book) == ["members", "table", "meta"]
+    for sheet, name in (("members", "members.csv"), ("table", "table.csv")):
+        csv = pd.read_csv(folder / name).select_dtypes("number")
+        assert list(book[sheet].columns) == list(pd.read_csv(folder / name).columns)
+        np.testing.assert_allclose(book[sheet][csv.columns], csv, rtol=6.2e-16, atol=0)
     units = members.attrs["units"]
     page = _Page((folder / "report.html").read_text(encoding="utf-8"))
     facts = page.facts()
