@@ -11,6 +11,10 @@ A page shows a number with 6 significant digits: it is compared within 5e-6, rel
 from __future__ import annotations
 
 import json
+import os
+import re
+import shutil
+import subprocess
 import textwrap
 from html.parser import HTMLParser
 
@@ -258,3 +262,51 @@ runs:
     assert residual["unit"] == "m/s" and float(residual["noise"]) == pytest.approx(1e-3)
     np.testing.assert_allclose(float(residual["rms"]), rms, RTOL)
     assert 0.5 < float(residual["rms / noise"]) < 1.5  # the noise the data was given
+
+
+CHROMIUM = next(
+    (p for p in map(shutil.which, ("chromium", "chromium-browser", "google-chrome")) if p), None
+)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (figures drawn, a browser started)
+@pytest.mark.skipif(
+    CHROMIUM is None and not os.environ.get("MIXDYN_REQUIRE_BROWSER"),
+    reason="no Chromium here (CI installs it)",
+)
+def test_a_sweeps_report_opens_in_the_browser_with_its_figures(tmp_path):
+    """The sweep's page in headless Chromium: its tables as written, its two figures shown
+    as inline images that decode (each its natural size > 0), nothing fetched."""
+    assert CHROMIUM is not None, "MIXDYN_REQUIRE_BROWSER is set but no Chromium is installed"
+    plots = """\
+    plots:
+      - {file: torque.png, x: crank.mass, y: torque_max}
+      - {file: band.png, band: motor}
+"""
+    path = tmp_path / "m.yaml"
+    path.write_text(CRANK + SWEEP + plots)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(out), "--run", "masses"])
+    assert res.exit_code == 0, res.output
+    page = out / "masses" / "report.html"
+    probe = (
+        "<script>addEventListener('load', () => document.body.dataset.sizes = "
+        "[...document.images].map(i => i.naturalWidth + 'x' + i.naturalHeight).join(' '))"
+        "</script>"
+    )
+    probed = tmp_path / "probed.html"  # the page with a probe of its images' decoded sizes
+    probed.write_text(page.read_text(encoding="utf-8").replace("</body>", probe + "</body>"))
+    flags = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run"]
+    dom = subprocess.run(
+        [CHROMIUM, *flags, f"--user-data-dir={tmp_path / 'profile'}", "--dump-dom",
+         probed.as_uri()],
+        capture_output=True, text=True, timeout=120, check=True,
+    ).stdout  # fmt: skip
+    shown = _Page(dom)
+    assert shown.rows("summaries") == _Page(page.read_text(encoding="utf-8")).rows("summaries")
+    alts = re.findall(r'<img src="data:image/png;base64,[^"]+" alt="([^"]+)"', dom)
+    assert alts == ["torque.png", "band.png"]
+    sizes = re.search(r'data-sizes="([^"]*)"', dom).group(1).split()
+    assert len(sizes) == 2 and all(int(w) > 100 and int(h) > 100 for w, h in
+                                   (s.split("x") for s in sizes))  # fmt: skip
+    assert not re.search(r'(src|href)="https?:', dom)
