@@ -9,9 +9,10 @@ and shows a body's coordinates on hover. The canvas is drawn at the screen's pix
 (sharp on high-DPI screens). Keys: space, arrows, Home, End.
 
 Why a small canvas player rather than plotly's animation frames (``benchmarks/player.py``, the
-paper's example, 201 frames): this page is 108 kB against plotly's 5.0 MB (plotly.js inline),
-and headless Chromium loads and runs it in 0.58 s against 2.02 s; plotly's frames also cannot
-play at a multiple of real time or step by key. Under the view, a plot of a result column
+paper's example, 201 frames, every result column carried for the plot): this page is 665 kB
+against plotly's 5.0 MB (plotly.js inline), and headless Chromium loads and runs it in about a
+third of plotly's time (``benchmarks/RESULTS.md``); plotly's frames also cannot play at a
+multiple of real time or step by key. Under the view, a plot of a result column
 against time, or against another column (a phase plot: the slider's position against the crank
 angle), has a cursor at the frame shown; a click on it moves the animation to the frame nearest
 the click (nearest in time against time, nearest on the screen against another column). The
