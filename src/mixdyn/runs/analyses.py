@@ -25,6 +25,7 @@ from . import checks, setup
 from .console import esc
 from .kinds import KINDS, RunKind, register
 from .plan import Plan, times
+from .run_reports import REPORT_HTML
 
 
 def _prescribed_ref(runner, ref: str, path) -> None:
@@ -341,10 +342,6 @@ class Mixed(_Integrated):
 
 
 # --------------------------------------------------------------------------- report
-#: Every analysis run's one-page report (:class:`mixdyn.viz.report.Report`).
-REPORT_HTML = "report.html"
-
-
 def _report(runner, plan: Plan, result, seconds: float, outputs, figures: list):
     """The run's report (:class:`mixdyn.viz.report.Report`): its facts, the mechanism at the
     start, its figures (``figures``, names in its folder), its columns as written (output

@@ -212,9 +212,10 @@ def write_failed(runner, plan, error, outputs: Outputs) -> list[pathlib.Path]:
     ``status: failed``, the failure's time and cause (:func:`mixdyn.io.results.write_failure`)
     and ``report.html`` stating them (:func:`.run_reports.failure_report`)."""
     from ..io.results import run_settings, write_failure
-    from .run_reports import failure_report
+    from .run_reports import REPORT_HTML, failure_report
 
     extra = {"file": str(outputs.file), "run": plan.name, "kind": plan.spec.kind}
+    extra["report"] = REPORT_HTML
     written = write_failure(
         error,
         outputs.folder(plan),
@@ -320,6 +321,7 @@ def write_study_run(
         "wall_time_s": round(seconds, 3),
         key: details,
         "figures": [figure] if outputs.painter is not None else [],
+        "report": "report.html",
     }
     return write_result(
         run,

@@ -689,6 +689,7 @@ class SweepKind(RunKind):
                 "wall_time_s": round(seconds, 3),
                 "figures": [p.file for p in plan.spec.plots] if outputs.figures else [],
                 "base_settings": run_settings(plan.base.spec),
+                "report": "report.html",
             },
         )
         if outputs.painter is not None:
