@@ -120,3 +120,30 @@ def test_the_help_names_the_extra(monkeypatch):
     monkeypatch.setenv("COLUMNS", "100")
     text = CliRunner().invoke(app, ["run", "--help"]).output
     assert "mixdyn[excel]" in text.replace("│ ", "").replace(" │", "")
+
+
+def test_a_table_longer_than_a_sheet_is_refused_before_computing(tmp_path):
+    """Excel's sheet holds 1,048,576 rows, the header one of them: a sweep of 2 members of
+    600,000 output times (1,200,000 rows) is refused with --excel before anything runs."""
+    text = CRANK.replace("n: 11}", "n: 600000}") + textwrap.indent(
+        textwrap.dedent(
+            """\
+            - name: masses
+              kind: sweep
+              run: turn
+              vary:
+                crank.mass: {values: [1 kg, 2 kg]}
+              summaries:
+                - {name: torque_max, column: motor, reduce: max}
+            """
+        ),
+        "  ",
+    )
+    path = tmp_path / "big.yaml"
+    path.write_text(text)
+    out = tmp_path / "out"
+    args = ["run", str(path), "--out", str(out), "--run", "masses", "--excel"]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 2, res.output
+    assert "1,200,000 rows, more than an Excel sheet holds (1,048,575)" in res.output
+    assert not out.exists()
