@@ -24,6 +24,8 @@ import numpy as np
 
 from ..errors import MixdynError, ModelError
 from ..model import Model
+from ..model._element import Resolver
+from ..model._geometry import point
 from ._assembly import length_scale
 from ._reactions import check_contacts
 from ._schedule import (
@@ -418,12 +420,19 @@ def run(
 
 
 def columns(
-    stacked: Stacked, arrays: Arrays, results: LazyResults, errors: dict, output_units=None
+    stacked: Stacked,
+    arrays: Arrays,
+    results: LazyResults,
+    errors: dict,
+    output_units=None,
+    points: Sequence[str] = (),
 ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
-    """Every result column of every member, (M, N) each (``t``: (N,)), in ``output_units``
-    as :func:`~.result.in_units`, and their units; a failed member's rows NaN. Read from the
-    stacked arrays at once (the result of the first member that did not fail gives the
-    names, kinds and units)."""
+    """Every result column of every member, (M, N) each (``t``: (N,)), with, for each point
+    reference of ``points``, its global position, velocity and acceleration
+    (``coupler.P.x``, ``.y``, ``.vx``, ``.vy``, ``.ax``, ``.ay``: :meth:`~.result.Result.point`),
+    in ``output_units`` as :func:`~.result.in_units`, and their units; a failed member's
+    rows NaN. Read from the stacked arrays at once (the result of the first member that did
+    not fail gives the names, kinds and units)."""
     first = next((i for i in range(stacked.count) if i not in errors), None)
     if first is None:
         raise ValueError("no member of the sweep succeeded: there is nothing to label")
@@ -444,10 +453,39 @@ def columns(
         cols["work.nonconservative"], cols["work.constraints"] = W[..., 0], W[..., 1]
     if set(cols) != set(result.columns()):  # pragma: no cover - a column made elsewhere
         raise RuntimeError("the stacked columns differ from a member's result's")
+    units = result.units()
+    model = case.problem.model
+    for ref in points:
+        pva = _point(model, ref, *(states[k].reshape(count * n, -1) for k in ("q", "qd", "qdd")))
+        for arr, pre, kind in zip(pva, ("", "v", "a"), _POINT_KINDS, strict=True):
+            for k, axis in enumerate("xy"):
+                cols[f"{ref}.{pre}{axis}"] = arr[:, k].reshape(count, n)
+                units[f"{ref}.{pre}{axis}"] = model.units.label(kind)
     if errors:
         bad = np.asarray(sorted(errors))
         cols = {k: v if k == "t" else _without(v, bad) for k, v in cols.items()}
-    return in_units(result, cols, result.units(), output_units)
+    return in_units(result, cols, units, output_units)
+
+
+#: The kinds of quantity of a point's position, velocity and acceleration.
+_POINT_KINDS = ("length", "velocity", "acceleration")
+
+
+def _point(model: Model, ref: str, q, qd, qdd) -> tuple[np.ndarray, ...]:
+    """A point's global position, velocity and acceleration, each (K, 2) [model units], at
+    the K states ``q``, ``qd``, ``qdd`` (K, nq), as :meth:`~.result.Result.point`."""
+    b, s = Resolver(model.ground, model.bodies).point(ref, "point")
+
+    def pos(q):
+        return point(q, b, s)
+
+    def pva(q, qd, qdd):
+        p, v = jax.jvp(pos, (q,), (qd,))
+        _, a2 = jax.jvp(lambda qq: jax.jvp(pos, (qq,), (qd,))[1], (q,), (qd,))
+        return p, v, a2 + jax.jacfwd(pos)(q) @ qdd
+
+    out = jax.vmap(pva)(jnp.asarray(q), jnp.asarray(qd), jnp.asarray(qdd))
+    return tuple(np.asarray(a) for a in out)
 
 
 def _without(a: np.ndarray, bad: np.ndarray) -> np.ndarray:

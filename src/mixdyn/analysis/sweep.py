@@ -257,10 +257,12 @@ class Sweep:
         return self.results[i]
 
     def columns(
-        self, output_units: dict | None = None
+        self, output_units: dict | None = None, points: Sequence[str] = ()
     ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
         """Every result column of every member as NumPy arrays, ``(columns, units)``: ``t``
-        (N,), every other column (M, N) on (member, time), a failed member's rows NaN, in
+        (N,), every other column (M, N) on (member, time), a failed member's rows NaN, with
+        each point reference of ``points``' global position, velocity and acceleration
+        (``coupler.P.x``, ``.vx``, ``.ax``...: :meth:`mixdyn.Result.point`), in
         ``output_units`` (kind -> unit, as :meth:`mixdyn.Result.table`; default the
         model's units), the units named as :meth:`mixdyn.Result.units`. On the array path
         read from the members' arrays at once; otherwise gathered from the results.
@@ -270,18 +272,18 @@ class Sweep:
         """
         if self.stacked is not None:
             return _stacked.columns(
-                self.stacked, self.arrays, self.results, self.errors, output_units
+                self.stacked, self.arrays, self.results, self.errors, output_units, points
             )
-        from .result import in_units
+        from .result import in_units, point_columns
 
         first = next((r for r in self.results if r is not None), None)
         if first is None:
             raise ValueError("no member of the sweep succeeded: there is nothing to label")
-        cols0, units = in_units(first, first.columns(), first.units(), output_units)
+        cols0, units = in_units(first, *point_columns(first, points), output_units)
         out = {c: np.full((len(self.results), len(first.t)), np.nan) for c in cols0 if c != "t"}
         for i, res in enumerate(self.results):
             if res is not None:
-                cols, _ = in_units(res, res.columns(), res.units(), output_units)
+                cols, _ = in_units(res, *point_columns(res, points), output_units)
                 for c in out:
                     out[c][i] = cols[c]
         return {"t": np.asarray(cols0["t"]), **out}, units
@@ -485,8 +487,8 @@ def sweep(
         and client is None
         and (batch_size is not None or _default_batch_size() is not None or count >= CHUNK)
     ):
-        done = _as_arrays(model, vary, positions, values, value, t, recorded, batch_size,
-                          on_member, params, started)  # fmt: skip
+        done = as_arrays(model, list(vary), positions, values, value, t, recorded, batch_size,
+                         on_member, params, started)  # fmt: skip
         if done is not None:
             return done
     if (
@@ -497,8 +499,8 @@ def sweep(
         and (count >= CHUNK or _default_batch_size() is not None)
         and shares_start(model, vary)
     ):
-        done = _as_arrays(model, vary, positions, values, value, t, None, None,
-                          on_member, params, started, driven=True)  # fmt: skip
+        done = as_arrays(model, list(vary), positions, values, value, t, None, None,
+                         on_member, params, started, driven=True)  # fmt: skip
         if done is not None:
             return done
     if models is None:
@@ -573,9 +575,9 @@ def _parameters(names: list[str], values: list[np.ndarray], count: int) -> list[
     return [{p: c[i] for p, c in zip(names, columns, strict=True)} for i in range(count)]
 
 
-def _as_arrays(
+def as_arrays(
     model,
-    vary,
+    names,
     positions,
     values,
     value,
@@ -586,21 +588,36 @@ def _as_arrays(
     params,
     started,
     driven: bool = False,
+    named: dict[str, np.ndarray] | None = None,
 ) -> Sweep | None:
     """The sweep of members sharing one start as arrays (:mod:`._stacked`): member 0 set
     up, every member integrated by one vectorized program (``driven``, an inverse sweep:
     member 0 run, every member post-processed along its motion), screened at once, each
     result built when read; None where the members cannot share the set-up (then member by
-    member)."""
+    member).
+
+    Args:
+        model: the nominal model.
+        names, positions, values: per varied leaf, a name (a body's ``"slider.mass"``
+            gives its members' masses), its index among ``model``'s leaves and its (M, ...)
+            values [model units].
+        value, t, recorded: the analysis value, the output times (N,) [time], the
+            integrator options the results record (None: the value's own).
+        batch_size, on_member: as :func:`sweep` takes them.
+        params: per member, its varied values (:attr:`Sweep.parameters`).
+        started: the sweep's start (``time.perf_counter()``) [s].
+        named: the varied values, name -> (M,) or (M, ...) (:attr:`Sweep.values`; default
+            ``names`` with ``values``).
+    """
     clock = time.perf_counter
     seconds: dict[str, float] = {}
     first = None
     try:
         if driven:
-            made = _stacked.stack_driven(model, list(vary), positions, values, value, t)
+            made = _stacked.stack_driven(model, names, positions, values, value, t)
             stacked, first = made if made is not None else (None, None)
         else:
-            stacked = _stacked.stack(model, list(vary), positions, values, value, t, recorded)
+            stacked = _stacked.stack(model, names, positions, values, value, t, recorded)
     except ModelError:
         raise  # an input error: refused, named
     except MixdynError as err:  # the shared start cannot be made: every member fails
@@ -615,7 +632,8 @@ def _as_arrays(
     seconds["setup"] = clock() - started
     results, errors, arrays = _stacked.run(stacked, batch_size, on_member, seconds, clock, first)
     seconds["total"] = clock() - started
-    named = {p: v for p, v in zip(vary, values, strict=True)}
+    if named is None:
+        named = {p: v for p, v in zip(names, values, strict=True)}
     return Sweep(results, errors, params, seconds, stacked, arrays, named)
 
 

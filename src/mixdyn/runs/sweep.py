@@ -46,7 +46,8 @@ import numpy as np
 from .. import paths
 from ..analysis._keywords import from_keywords, member_values
 from ..analysis._members import run_members
-from ..analysis.sweep import Sweep, grid, latin_hypercube, shares_start
+from ..analysis._schedule import CHUNK, _default_batch_size
+from ..analysis.sweep import Sweep, as_arrays, grid, latin_hypercube, shares_start
 from ..errors import MixdynError, ModelError
 from ..io import schema as s
 from ..io._errors import FileError
@@ -195,6 +196,21 @@ class FileSweep:
         varied values, ``t`` and the ``outputs`` columns (failed members have no rows)."""
         import pandas as pd
 
+        cols = _stacked_columns(self.sweep, self.plan.spec_outputs, self.output_units)
+        if cols is not None:  # every member at once
+            errors = self.sweep.errors
+            ok = np.array([i for i in range(self.plan.members) if i not in errors])
+            n = len(cols["t"])
+            data = {"member": np.repeat(ok, n)}
+            data.update(
+                {
+                    k: np.repeat(np.asarray(v, dtype=float)[ok], n)
+                    for k, v in self.plan.values.items()
+                }
+            )
+            data["t"] = np.tile(cols["t"], len(ok))
+            data.update({c: cols[c][ok].reshape(-1) for c in cols if c != "t"})
+            return pd.DataFrame(data)
         frames = []
         for i, res in enumerate(self.sweep.results):
             if res is None:
@@ -486,11 +502,22 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     if quick is None:
         analysis, models, kwargs = _members_from_file(runner, plan)
     else:
-        models, kwargs = quick.models, [kw] * plan.members
-        value = from_keywords(analysis, plan.times, kw)[0]
+        value, record = from_keywords(analysis, plan.times, kw)
         same_start = value.integrated and shares_start(
             model, dict.fromkeys(quick.reached), value._start_forces()
         )
+        built = time.perf_counter()
+        try:
+            sweep = _as_arrays(plan, quick, value, record, same_start, progress, built)
+        except ModelError as e:
+            notes = " ".join(getattr(e, "__notes__", []))
+            runner.fail((*plan.path, "vary"), f"{_message(e)} {notes}".strip(), "narrow the values")
+        if sweep is not None:
+            done = time.perf_counter()
+            summaries, units = _summaries(runner, plan, sweep)
+            seconds = {"build": built - started, "run": done - built}
+            return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
+        models, kwargs = quick.models, [kw] * plan.members
     built = time.perf_counter()
     try:
 
@@ -530,11 +557,55 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     done = time.perf_counter()
     results = [res for res, _ in outcomes]
     errors = {i: e for i, (_, e) in enumerate(outcomes) if e is not None}
-    params = [{k: float(v[i]) for k, v in plan.values.items()} for i in range(plan.members)]
-    sweep = Sweep(results, errors, params, {"total": done - built})
-    summaries, units = _summaries(runner, plan, results)
+    sweep = Sweep(results, errors, _params(plan), {"total": done - built})
+    summaries, units = _summaries(runner, plan, sweep)
     seconds = {"build": built - started, "run": done - built}
     return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
+
+
+def _params(plan: SweepPlan) -> list[dict[str, float]]:
+    """Each member's varied values, name -> value [model units]."""
+    columns = {k: np.asarray(v, dtype=float).tolist() for k, v in plan.values.items()}
+    return [{k: c[i] for k, c in columns.items()} for i in range(plan.members)]
+
+
+def _as_arrays(
+    plan: SweepPlan, quick, value, record, same_start: bool, progress, started: float
+) -> Sweep | None:
+    """The sweep held as arrays (:func:`mixdyn.analysis.sweep.as_arrays`: one set-up, one
+    stacked problem, no member's model or result made before it is read) where the members
+    run as one vectorized program: an integrated run whose members share one start, or an
+    inverse run whose varied numbers reach only masses, inertias and forces (its members
+    share its motion), at the file's ``batch_size`` or at least :data:`CHUNK` members (as
+    :func:`mixdyn.sweep` takes the array path); None otherwise (then the members run by
+    :func:`~mixdyn.analysis._members.run_members`)."""
+    r: s.SweepRunSpec = plan.spec
+    if plan.member_times is not None or not quick.positions:
+        return None
+    many = plan.members >= CHUNK or _default_batch_size() is not None
+    driven = (
+        value.name == "inverse"
+        and r.batch_size is None
+        and many
+        and shares_start(quick.model, dict.fromkeys(quick.reached))
+    )
+    if not driven and not (same_start and (r.batch_size is not None or many)):
+        return None
+    return as_arrays(
+        quick.model,
+        list(quick.names),
+        list(quick.positions),
+        list(quick.values),
+        value,
+        plan.times,
+        None if driven else record,
+        None if driven else r.batch_size,
+        progress,
+        _params(plan),
+        started,
+        driven=driven,
+        named=dict(plan.values),
+    )
 
 
 def _at_own_times(plan: SweepPlan, models, analysis: str, kwargs, describe, progress) -> list:
@@ -557,25 +628,28 @@ def _at_own_times(plan: SweepPlan, models, analysis: str, kwargs, describe, prog
     return outcomes
 
 
+#: A summary's reduction of a member's column along its last axis (time): (N,) -> a
+#: number, (M, N) -> (M,).
 _REDUCE = {
-    "max": np.max,
-    "min": np.min,
-    "absmax": lambda y: np.max(np.abs(y)),
-    "mean": np.mean,
-    "rms": lambda y: np.sqrt(np.mean(np.square(y))),
-    "first": lambda y: y[0],
-    "last": lambda y: y[-1],
-    "range": np.ptp,
+    "max": lambda y: np.max(y, axis=-1),
+    "min": lambda y: np.min(y, axis=-1),
+    "absmax": lambda y: np.max(np.abs(y), axis=-1),
+    "mean": lambda y: np.mean(y, axis=-1),
+    "rms": lambda y: np.sqrt(np.mean(np.square(y), axis=-1)),
+    "first": lambda y: y[..., 0],
+    "last": lambda y: y[..., -1],
+    "range": lambda y: np.ptp(y, axis=-1),
 }
 
 
-def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
+def _summaries(runner: Runner, plan: SweepPlan, sweep: Sweep) -> tuple[dict, dict]:
     """Each summary per member and the units of the summaries and table columns (in the
     file's ``output_units``)."""
     from ..io.results import in_units
     from ..viz.plots import result_columns
 
     r: s.SweepRunSpec = plan.spec
+    results = sweep.results
     ok = next((res for res in results if res is not None), None)
     units: dict[str, str] = {}
     if ok is not None:
@@ -587,7 +661,11 @@ def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
         units = in_units(ok, cols, units, runner.output_units)[1]
     out = {x.name: np.full(len(results), np.nan) for x in r.summaries}
     columns = list(dict.fromkeys(x.column for x in r.summaries))
-    for i, res in enumerate(results):
+    stacked = _stacked_columns(sweep, columns, runner.output_units) if columns else None
+    if stacked is not None:  # every member at once (a failed member's rows NaN)
+        for x in r.summaries:
+            out[x.name] = np.asarray(_REDUCE[x.reduce](stacked[x.column]), dtype=float)
+    for i, res in enumerate(results if stacked is None else ()):
         if res is not None and columns:
             cols = _columns(res, columns, runner.output_units)  # once a member
             for x in r.summaries:
@@ -595,6 +673,25 @@ def _summaries(runner: Runner, plan: SweepPlan, results) -> tuple[dict, dict]:
     for x in r.summaries:
         units[x.name] = units.get(x.column, "")
     return out, units
+
+
+def _stacked_columns(sweep: Sweep, names, output_units=None) -> dict[str, np.ndarray] | None:
+    """Columns ``names`` of every member, (M, N) each, a failed member's rows NaN, and
+    ``t`` (N,), in ``output_units`` (as :func:`_columns` gives them member by member), read
+    at once from a sweep held as arrays (:attr:`mixdyn.Sweep.stacked`); None for another
+    sweep or where no member succeeded."""
+    from ..viz.plots import _POINT_SUFFIXES
+
+    if sweep.stacked is None or len(sweep.errors) == len(sweep):
+        return None
+    own = next(r for r in sweep.results if r is not None).columns()
+    points = {
+        n.rsplit(".", 1)[0]
+        for n in names
+        if n not in own and n.count(".") == 2 and n.split(".")[2] in _POINT_SUFFIXES
+    }
+    cols, _ = sweep.columns(output_units, points=sorted(points))
+    return {c: cols[c] for c in ("t", *names)}
 
 
 # --------------------------------------------------------------------------- writing
@@ -606,10 +703,16 @@ def _figures(plan: SweepPlan, result: FileSweep, folder: pathlib.Path, painter) 
     units.update({k: u for k, u in plan.value_units.items() if u})  # the varied values'
     for p in plan.spec.plots:
         if p.band is not None:
-            ok = [r for r in result.sweep.results if r is not None]
-            if not ok:
-                continue
-            rows = [np.asarray(result_columns(r, [p.band])[0][p.band]) for r in ok]
+            stacked = _stacked_columns(result.sweep, [p.band])
+            if stacked is not None:  # every member at once, the failed ones left out
+                errors = result.sweep.errors
+                ok = [next(r for r in result.sweep.results if r is not None)]
+                rows = stacked[p.band][[i for i in range(plan.members) if i not in errors]]
+            else:
+                ok = [r for r in result.sweep.results if r is not None]
+                if not ok:
+                    continue
+                rows = [np.asarray(result_columns(r, [p.band])[0][p.band]) for r in ok]
             units["t"] = ok[0].units()["t"]
             painter.draw(
                 "band",

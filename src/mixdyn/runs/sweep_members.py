@@ -3,10 +3,12 @@
 A member is the swept run of the file with the member's numbers (:mod:`.sweep`). Building
 the whole model from the file again for every member costs as much as running it (~10-20
 ms on the paper's model), so where the varied numbers reach only force elements and the
-bodies' masses and inertias, :func:`quick_members` builds just those again, member by member,
-and puts their numbers into the run's model (one unflatten a member): the same numbers as a
-model built from the file, and a start the members share
-(:func:`mixdyn.analysis.sweep.shares_start`). A file parameter reaches what names it: the
+bodies' masses and inertias, :func:`quick_members` builds just those again (once for each
+value of the parameters they name) and holds their numbers as columns of the run's model's
+leaves, a row per member (:class:`Members`; a member's model is one unflatten): the same
+numbers as a model built from the file, and a start the members share
+(:func:`mixdyn.analysis.sweep.shares_start`), hence one stacked problem
+(:mod:`mixdyn.analysis._stacked`). A file parameter reaches what names it: the
 text of a body's or element's entries, or of another parameter (whose value then changes
 too); a number named by its path (``slider.mass``, ``F1.law.amplitude``) reaches itself.
 
@@ -42,16 +44,40 @@ _INERTIAL = ("mass", "inertia")
 @dataclasses.dataclass(frozen=True)
 class Members:
     """The member models of a sweep whose varied numbers reach only forces and bodies'
-    masses and inertias.
+    masses and inertias, held as the swept run's model and the columns of its leaves that
+    the members change.
 
     Attributes:
-        models: (M,) the member models: the swept run's model with the member's numbers.
+        model: the swept run's model.
+        count: M, the number of members.
+        positions: the indices, among ``model``'s leaves, of the leaves the members change.
+        values: for each of ``positions``, its (M, ...) values, a row per member [model
+            units].
+        names: for each of ``positions``, a name: a body's ``"slider.mass"``, a force's
+            ``"F1[k]"`` (its ``k``-th leaf), a number's path.
         reached: the parameter paths the varied numbers reach (``"slider.mass"``, ``"F1"``
             for a force built again), for :func:`mixdyn.analysis.sweep.shares_start`.
     """
 
-    models: list[Model]
+    model: Model
+    count: int
+    positions: tuple[int, ...]
+    values: tuple[np.ndarray, ...]
+    names: tuple[str, ...]
     reached: tuple[str, ...]
+
+    @property
+    def models(self) -> list[Model]:
+        """(M,) the member models: the swept run's model with the member's numbers (one
+        unflatten a member)."""
+        leaves, treedef = jax.tree_util.tree_flatten(self.model)
+        models = []
+        for i in range(self.count):
+            row = list(leaves)
+            for k, v in zip(self.positions, self.values, strict=True):
+                row[k] = jnp.asarray(v[i])
+            models.append(jax.tree_util.tree_unflatten(treedef, row))
+        return models
 
 
 def _names(value) -> set[str]:
@@ -97,10 +123,12 @@ class _Part:
 
 
 def quick_members(runner, plan, model: Model) -> Members | None:
-    """The member models of sweep ``plan``, made from ``model`` (the swept run's model) by
-    building again only the forces and the bodies' masses and inertias that the varied
-    numbers reach; None where they reach anything else, or a member's part cannot be built
-    or differs in structure (then each member is built from its file, which reports it).
+    """The members of sweep ``plan`` as ``model`` (the swept run's model) and the columns
+    of its leaves that change, made by building again only the forces and the bodies'
+    masses and inertias that the varied numbers reach (a part once for each value of the
+    parameters it names: a grid's axes are built, not its combinations); None where they
+    reach anything else, or a member's part cannot be built or differs in structure (then
+    each member is built from its file, which reports it).
     """
     spec = runner.spec
     values = plan.values
@@ -133,26 +161,72 @@ def quick_members(runner, plan, model: Model) -> Members | None:
         parts.append(_Part(at, tree.num_leaves, force=k, tree=tree))
     for path in named:
         parts.append(_Part(_position(model, paths.getter(model, path)[0]), 1, path=path))
-    leaves, treedef = jax.tree_util.tree_flatten(model)
-    models = []
+    parameters = set(nominal)
+    keys = [sorted(_names(_entry(spec, p)) & parameters) for p in parts]
+    built: list[dict] = [{} for _ in parts]  # per part: its parameters' values -> its leaves
+    rows: list[list] = [[] for _ in parts]  # per part: each member's leaves
     for i, (member, b) in enumerate(builders):
-        row = list(leaves)
-        for part in parts:
-            try:
-                new = _leaves(part, model, member, b, values, i)
-            except (FileError, ModelError):
-                return None
+        for n, part in enumerate(parts):
+            key = None if part.path is not None else tuple(b.parameters[k] for k in keys[n])
+            new = built[n].get(key)
             if new is None:
-                return None
-            row[part.start : part.start + part.count] = new
-        models.append(jax.tree_util.tree_unflatten(treedef, row))
-    reached = [
-        f"{spec.bodies[p.body].name}.{p.field}" if p.body is not None
-        else spec.forces[p.force].name if p.force is not None
-        else p.path
-        for p in parts
-    ]  # fmt: skip
-    return Members(models, tuple(reached))
+                try:
+                    new = _leaves(part, model, member, b, values, i)
+                except (FileError, ModelError):
+                    return None
+                if new is None:
+                    return None
+                if key is not None:
+                    built[n][key] = new
+            rows[n].append(new)
+    return _columns(model, parts, rows, plan.members, spec)
+
+
+def _columns(
+    model: Model, parts: list[_Part], rows: list[list], count: int, spec
+) -> Members | None:
+    """The members of ``parts`` built (``rows``: per part, each member's leaves) as the
+    columns of the model's leaves that change (a later part of one leaf wins: a number
+    named by its path over a parameter's); None where a changing leaf is not a float."""
+    leaves = jax.tree_util.tree_leaves(model)
+    columns: dict[int, tuple[str, np.ndarray]] = {}
+    for part, member_leaves in zip(parts, rows, strict=True):
+        force = spec.forces[part.force].name if part.force is not None else None
+        for k in range(part.count):
+            column = np.stack([np.asarray(r[k]) for r in member_leaves])
+            at = part.start + k
+            if at not in columns and np.array_equal(
+                column, np.broadcast_to(leaves[at], column.shape)
+            ):
+                continue  # the same in every member: the model's own leaf
+            if column.dtype.kind != "f":
+                return None  # pragma: no cover - a varied leaf that is not a float
+            name = f"{force}[{k}]" if force is not None else _reached(spec, part)
+            columns[at] = name, np.asarray(column, dtype=np.float64)
+    order = sorted(columns)
+    reached = [_reached(spec, p) for p in parts]
+    return Members(
+        model,
+        count,
+        tuple(order),
+        tuple(columns[k][1] for k in order),
+        tuple(columns[k][0] for k in order),
+        tuple(reached),
+    )
+
+
+def _entry(spec, part: _Part):
+    """The file's entry that ``part`` is built from (a number named by its path: none)."""
+    if part.body is not None:
+        return getattr(spec.bodies[part.body], part.field)
+    return spec.forces[part.force] if part.force is not None else ""
+
+
+def _reached(spec, part: _Part) -> str:
+    """The parameter path ``part`` reaches: ``"slider.mass"``, a force's name, a path."""
+    if part.body is not None:
+        return f"{spec.bodies[part.body].name}.{part.field}"
+    return spec.forces[part.force].name if part.force is not None else part.path
 
 
 def _leaves(part: _Part, model: Model, member, b: Builder | None, values, i: int):

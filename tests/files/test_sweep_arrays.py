@@ -1,0 +1,171 @@
+"""A model file's sweep held as arrays (:func:`mixdyn.runs.sweep._as_arrays`): where the
+varied numbers reach only forces and bodies' masses and inertias and the members run as one
+vectorized program, the members are one stacked problem, and the member table, the long
+table (a point's columns and the file's ``output_units`` included) and the summaries are read
+from the arrays, no member's result built. Truth: each member's single run of the file with
+its numbers written in (a second method, member by member), and the same sweep run member by
+member (:func:`~mixdyn.analysis._members.run_members`)."""
+
+from __future__ import annotations
+
+import jax
+import numpy as np
+import pytest
+
+import mixdyn.io as mio
+from fixtures import EXAMPLES
+from mixdyn.runs import Runner, execute, setup, sweep_members
+from mixdyn.runs import sweep as file_sweep
+
+MODEL = (EXAMPLES / "antonya_sweep.yaml").read_text().split("\nruns:")[0]
+
+BASE = """
+runs:
+  - name: forward
+    kind: forward
+    time: {span: [0, 1], n: 21}
+    rtol: 1.0e-8
+    atol: 1.0e-10
+"""
+
+#: Three values of F1's amplitude (a parameter in its law) by two slider masses (a
+#: parameter in the body's mass), two members vectorized at a time.
+SWEEP = """
+  - name: sweep
+    kind: sweep
+    run: forward
+    batch_size: 2
+    vary:
+      F0: {values: [6, 9, 14]}
+      m5: {values: [0.006, 0.01]}
+    summaries:
+      - {name: x_max, column: slider.x, reduce: max}
+      - {name: turn, column: crank.phi, reduce: last}
+      - {name: d_rms, column: D.Fx, reduce: rms}
+      - {name: f_range, column: slider.F.vx, reduce: range}
+      - {name: d_mean, column: D.Fx, reduce: mean}
+    outputs: [slider.x, crank.phi, D.Fx, slider.F.vx]
+"""
+
+SWEEP_OUTPUTS = ["slider.x", "crank.phi", "D.Fx", "slider.F.vx"]
+
+OUTPUT_UNITS = {"angle": "deg", "force": "N"}
+UNITS = "output_units: {angle: deg, force: N}\n"
+
+#: The reductions of a member's column, written out (the truth of the summaries).
+REDUCE = {
+    "x_max": ("slider.x", np.max),
+    "turn": ("crank.phi", lambda y: y[-1]),
+    "d_rms": ("D.Fx", lambda y: np.sqrt(np.mean(y**2))),
+    "f_range": ("slider.F.vx", lambda y: np.max(y) - np.min(y)),
+    "d_mean": ("D.Fx", np.mean),
+}
+
+
+def _single(f0: float, m5: float):
+    """The member's truth: the file's nominal run with ``F0`` and ``m5`` written in."""
+    text = MODEL.replace("  F0: 10 ", f"  F0: {float(f0)!r} ")
+    text = text.replace("  m5: 0.00786", f"  m5: {float(m5)!r}")
+    return execute(mio.reads(text + BASE))["forward"]
+
+
+@pytest.fixture(scope="module")
+def swept():
+    return execute(mio.reads(UNITS + MODEL + BASE + SWEEP), ["sweep"])["sweep"]
+
+
+def _close(a, b, rtol: float, what) -> None:
+    """``a`` equals ``b`` to ``rtol`` of ``b``'s largest magnitude (NaN where ``b`` is)."""
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    assert np.array_equal(np.isnan(a), np.isnan(b)), what
+    a, b = a[~np.isnan(b)], b[~np.isnan(b)]
+    scale = max(float(np.max(np.abs(b), initial=0.0)), 1e-300)
+    assert float(np.max(np.abs(a - b), initial=0.0)) <= rtol * scale, what
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_the_sweep_is_held_as_arrays_and_no_member_result_is_built(swept):
+    assert swept.sweep.stacked is not None and swept.sweep.stacked.count == 6
+    swept.members(), swept.table()
+    assert len(swept.sweep.results._built) <= 1  # the first member's, for the names
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_tables_equal_the_single_runs_of_the_edited_file(swept):
+    """Each member's rows of the long table and its summaries equal its single run's
+    columns (in degrees and newtons) and their reductions."""
+    members, table = swept.members(), swept.table()
+    assert list(members.columns) == [
+        "member", "F0", "m5", "status", "error", "t_error", *REDUCE
+    ]  # fmt: skip
+    assert list(table.columns) == ["member", "F0", "m5", "t", *SWEEP_OUTPUTS]
+    for i, (f0, m5) in enumerate(zip(members["F0"], members["m5"], strict=True)):
+        single = _single(f0, m5)
+        cols = single.table(points=["slider.F"], output_units=OUTPUT_UNITS)
+        rows = table[table["member"] == i]
+        assert (rows["F0"] == f0).all() and (rows["m5"] == m5).all()
+        np.testing.assert_array_equal(rows["t"], cols["t"])
+        for c in SWEEP_OUTPUTS:
+            _close(rows[c], cols[c], 1e-10, (i, c))
+        for name, (column, reduce) in REDUCE.items():
+            _close(members[name][i], reduce(np.asarray(cols[column])), 1e-10, (i, name))
+    assert swept.units["turn"] == "deg" and swept.units["d_rms"] == "N"
+    assert len(set(members["x_max"].round(9))) == 6  # the numbers did change the motion
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_tables_equal_the_sweep_run_member_by_member(swept, monkeypatch):
+    monkeypatch.setattr(file_sweep, "_as_arrays", lambda *a, **k: None)
+    one_by_one = execute(mio.reads(UNITS + MODEL + BASE + SWEEP), ["sweep"])["sweep"]
+    assert one_by_one.sweep.stacked is None
+    for a, b in ((swept.members(), one_by_one.members()), (swept.table(), one_by_one.table())):
+        assert list(a.columns) == list(b.columns) and len(a) == len(b)
+        for c in a.columns:
+            if a[c].dtype.kind == "f":
+                _close(a[c], b[c], 1e-12, c)
+            else:
+                assert list(a[c]) == list(b[c]), c
+    assert swept.units == one_by_one.units
+
+
+def test_a_part_is_built_once_for_each_value_of_its_parameters(monkeypatch):
+    """The members' varied leaves are those of the model built from the file with the
+    member's numbers written in, and each part (F1's law, the slider's mass) is built once
+    for each value of the parameter it names: 3 + 2 builds for the 3 x 2 grid."""
+    built = []
+    leaves_of = sweep_members._leaves
+    monkeypatch.setattr(sweep_members, "_leaves", lambda *a: built.append(a[0]) or leaves_of(*a))
+    runner = Runner(mio.reads(MODEL + BASE + SWEEP))
+    plan = runner.plans["sweep"]
+    _, model, _ = setup.call(runner, plan.base, {}, checked=False)
+    quick = sweep_members.quick_members(runner, plan, model)
+    assert len(built) == 3 + 2 and quick.count == 6
+    assert quick.names == ("slider.mass", "F1[0]")
+    for i, (f0, m5) in enumerate(zip(plan.values["F0"], plan.values["m5"], strict=True)):
+        text = MODEL.replace("  F0: 10 ", f"  F0: {float(f0)!r} ")
+        truth = jax.tree.leaves(
+            Runner(mio.reads(text.replace("  m5: 0.00786", f"  m5: {float(m5)!r}") + BASE)).model
+        )
+        for k, column in zip(quick.positions, quick.values, strict=True):
+            np.testing.assert_array_equal(column[i], np.asarray(truth[k]))
+        member = jax.tree.leaves(quick.models[i])
+        for a, b in zip(member, truth, strict=True):
+            np.testing.assert_array_equal(np.asarray(a), np.asarray(b))
+
+
+def test_the_summaries_reduce_every_member_at_once_as_one_by_one():
+    """A summary's reduction of (M, N) columns gives, row by row, the reduction of each
+    member's (N,) column, written out here."""
+    y = np.random.default_rng(3).normal(size=(5, 17))
+    truth = {
+        "max": max, "min": min, "absmax": lambda r: max(abs(v) for v in r),
+        "mean": lambda r: sum(r) / len(r), "rms": lambda r: (sum(v * v for v in r) / len(r)) ** 0.5,
+        "first": lambda r: r[0], "last": lambda r: r[-1], "range": lambda r: max(r) - min(r),
+    }  # fmt: skip
+    assert set(truth) == set(file_sweep._REDUCE)
+    for name, reduce in file_sweep._REDUCE.items():
+        rows = reduce(y)
+        assert rows.shape == (5,)
+        for i in range(5):
+            assert abs(rows[i] - truth[name](list(y[i]))) <= 1e-14, name
+            assert rows[i] == reduce(y[i]), name
