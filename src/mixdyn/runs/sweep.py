@@ -9,8 +9,11 @@ written with a parameter follows it: laws, masses, points, start values), the nu
 bodies and elements replaced, set up exactly as the single run would be; the members run as
 one :func:`mixdyn.analysis._members.run_members` (one compiled program for all). Where the
 varied numbers reach only forces and bodies' masses and inertias, only those parts are built
-again per member (:mod:`.sweep_members`: the same numbers), the members share one start and,
-on a CPU, run in vectorized chunks of :data:`.sweep_members.CHUNK`.
+again (:mod:`.sweep_members`: the same numbers) and the members share one start; where they
+also run as one vectorized program (the file's ``batch_size``, or at least
+:data:`~mixdyn.analysis._schedule.CHUNK` members) the sweep is held as arrays, as
+:func:`mixdyn.sweep` holds it (:func:`_as_arrays`: one set-up, one stacked problem), and its
+tables, summaries and bands are read from the arrays, no member's result built.
 
 Example (``examples/antonya_sweep.yaml``)::
 
