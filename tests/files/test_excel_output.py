@@ -123,16 +123,16 @@ def test_the_help_names_the_extra(monkeypatch):
 
 
 def test_a_table_longer_than_a_sheet_is_refused_before_computing(tmp_path):
-    """Excel's sheet holds 1,048,576 rows, the header one of them: a sweep of 2 members of
-    600,000 output times (1,200,000 rows) is refused with --excel before anything runs."""
-    text = CRANK.replace("n: 11}", "n: 600000}") + textwrap.indent(
+    """Excel's sheet holds 1,048,576 rows, the header one of them: a sweep of 1,049 members
+    of 1,000 output times (1,049,000 rows) is refused with --excel before anything runs."""
+    text = CRANK.replace("n: 11}", "n: 1000}") + textwrap.indent(
         textwrap.dedent(
             """\
             - name: masses
               kind: sweep
               run: turn
               vary:
-                crank.mass: {values: [1 kg, 2 kg]}
+                crank.mass: {span: [1 kg, 2 kg], n: 1049}
               summaries:
                 - {name: torque_max, column: motor, reduce: max}
             """
@@ -142,8 +142,8 @@ def test_a_table_longer_than_a_sheet_is_refused_before_computing(tmp_path):
     path = tmp_path / "big.yaml"
     path.write_text(text)
     out = tmp_path / "out"
-    args = ["run", str(path), "--out", str(out), "--run", "masses", "--excel"]
+    args = ["run", str(path), "--out", str(out), "--run", "masses", "--excel", "--no-figures"]
     res = CliRunner().invoke(app, args)
     assert res.exit_code == 2, res.output
-    assert "1,200,000 rows, more than an Excel sheet holds (1,048,575)" in res.output
+    assert "1,049,000 rows, more than an Excel sheet holds (1,048,575)" in res.output
     assert not out.exists()
