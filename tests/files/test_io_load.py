@@ -15,6 +15,8 @@ from fixtures import EXAMPLES, four_bar, paper_mechanism, slider_crank
 from mixdyn.runs import Runner
 
 FILES = sorted(EXAMPLES.glob("*.yaml"))
+#: The examples that describe a mechanism (a file of synthesis runs alone has none).
+MODEL_FILES = [f for f in FILES if mio.read(f).bodies]
 
 
 def test_the_four_examples_exist():
@@ -29,17 +31,17 @@ def _equal(a, b) -> bool:
 @pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
 def test_load_dump_load_is_the_identity(path, tmp_path):
     spec = mio.read(path)
-    model = mio.build(spec)
     out = tmp_path / "again.yaml"
     mio.dump(spec, out)
     again = mio.read(out)
     assert again == spec
-    assert _equal(mio.build(again), model)
+    if spec.bodies:
+        assert _equal(mio.build(again), mio.build(spec))
     # and once more: the normal form is a fixed point
     assert mio.dumps(again) == mio.dumps(spec)
 
 
-@pytest.mark.parametrize("path", FILES, ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", MODEL_FILES, ids=lambda p: p.stem)
 def test_model_to_file_to_model(path):
     """A model (not its description) written out and read back is the same model."""
     model = mio.load(path)

@@ -1052,6 +1052,59 @@ class OptimizeRunSpec(Spec):
     """Iterations of L-BFGS-B at most. Default 500."""
 
 
+class SynthesisMassesSpec(Spec):
+    """How a synthesized four-bar's links weigh: bars of one linear density (the coupler a
+    triangle of bars through its pins and the coupler point) and a payload at the coupler
+    point."""
+
+    density: Scalar
+    """The bars' linear density [mass/length], e.g. ``2 kg/m``."""
+    payload: Scalar = 0.0
+    """A point mass at the coupler point [mass], e.g. ``0.5 kg``. Default 0."""
+
+
+class SynthesisRunSpec(Spec):
+    """A four-bar synthesized to draw a path (``mixdyn.synthesize``): random starts refined
+    by Levenberg-Marquardt, the motor torque optionally in the objective. Needs no mechanism
+    in the file."""
+
+    kind: Literal["synthesis"]
+    """Run kind: ``synthesis``."""
+    name: Name
+    """Unique name of the run (its output folder's name)."""
+    points: list[Vec2] = Field(min_length=2)
+    """The target points ``[x, y]`` [length], in the order the coupler point passes them as
+    the crank turns positively, e.g. ``[[500 mm, 300 mm], ...]``."""
+    timing: Literal["free"] | list[Scalar] = "free"
+    """``free`` (default: the crank's angles at the points are found, increasing within a
+    turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only
+    their differences count)."""
+    bounds: dict[str, tuple[Scalar, Scalar]] = Field(default_factory=dict)
+    """``[low, high]`` of four-bar numbers ``r1``-``r4`` (ground, crank, coupler, rocker),
+    ``rcx``, ``rcy`` (coupler point), ``x0``, ``y0`` (crank pivot) [length] and ``theta0``
+    [rad]. Default: lengths 0.05-5 target sizes."""
+    min_transmission: Scalar = 0.0
+    """The least transmission angle along the motion [rad], e.g. ``40 deg``. Default 0."""
+    masses: SynthesisMassesSpec | None = None
+    """How the links weigh (needed for the torque): ``{density: 2 kg/m, payload: 0.5
+    kg}``; gravity is the file's ``gravity``. Default: none (kinematics only)."""
+    speed: Scalar = 1.0
+    """The crank's constant speed [rad/time], e.g. ``2*pi rad/s``. Default 1."""
+    torque: Literal["rms", "peak"] = "rms"
+    """The motor torque's measure in the objective: ``rms`` (default) or ``peak``."""
+    torque_weight: Scalar = 0.0
+    """Weight of the torque measure squared beside the squared path error
+    [length**2/torque**2], e.g. ``1e-4 m^2/(N*m)^2``. Default 0: the path alone."""
+    starts: int = Field(default=2048, ge=1, le=1_000_000)
+    """Random starts, each refined by Levenberg-Marquardt. Default 2048."""
+    seed: int = Field(default=0, ge=0)
+    """Seed of the random starts (the same seed, the same result). Default 0."""
+    keep: int = Field(default=10, ge=1, le=1000)
+    """Distinct candidates kept and written at most. Default 10."""
+    max_steps: int = Field(default=300, ge=1, le=100_000)
+    """Levenberg-Marquardt steps per start at most. Default 300."""
+
+
 RunSpec = Annotated[
     KinematicRunSpec
     | StaticsRunSpec
@@ -1060,7 +1113,8 @@ RunSpec = Annotated[
     | MixedRunSpec
     | SweepRunSpec
     | IdentifyRunSpec
-    | OptimizeRunSpec,
+    | OptimizeRunSpec
+    | SynthesisRunSpec,
     Field(discriminator="kind"),
 ]
 
@@ -1092,8 +1146,9 @@ class ModelFile(Spec):
     """Named constants usable in expressions and quantities, e.g. ``{L: 120 mm, F0: 10 N}``."""
     ground: GroundSpec = GroundSpec()
     """The fixed frame and its named points."""
-    bodies: list[BodySpec] = Field(min_length=1)
-    """The rigid bodies (at least one)."""
+    bodies: list[BodySpec] = Field(default_factory=list)
+    """The rigid bodies: at least one, except in a file whose runs are all ``synthesis``
+    runs, which need no mechanism."""
     joints: list[JointSpec] = Field(default_factory=list)
     """Joints: ``revolute``, ``weld``, ``translational``, ``pin_in_slot``, ``distance``,
     ``gear_pair``, ``rolling_disks``, ``rack_pinion``, ``rolling_on_line``, ``cam_follower``."""
@@ -1108,7 +1163,17 @@ class ModelFile(Spec):
     """Named analyses: ``kinematic``, ``statics``, ``forward``, ``inverse``, ``mixed``,
     ``sweep`` (another
     run over many values of some numbers), ``identify`` (numbers fitted to measurements) and
-    ``optimize`` (numbers chosen to minimize a scalar of a run)."""
+    ``optimize`` (numbers chosen to minimize a scalar of a run), ``synthesis`` (a four-bar
+    that draws a path)."""
+
+    @model_validator(mode="after")
+    def _a_mechanism(self):
+        if self.bodies or (self.runs and all(r.kind == "synthesis" for r in self.runs)):
+            return self
+        only = "only a file whose runs are all synthesis runs describes no mechanism"
+        if "bodies" not in self.model_fields_set:
+            raise ValueError(f"missing field 'bodies': add 'bodies:' ({only})")
+        raise ValueError(f"'bodies' is empty: a mechanism needs at least one body ({only})")
 
     def __eq__(self, other) -> bool:
         # Equal descriptions, whatever file (and lines) they were read from.

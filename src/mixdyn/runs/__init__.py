@@ -2,8 +2,8 @@
 
 A file's runs are found by their ``kind:`` in one registry (:mod:`.kinds`), each kind
 registered by its module: :mod:`.analyses` (kinematic, statics, inverse, forward, mixed),
-:mod:`.sweep`, :mod:`.identify` and :mod:`.optimize`. A :class:`Runner` holds a file's plans
-and does its jobs through one module each:
+:mod:`.sweep`, :mod:`.identify`, :mod:`.optimize` and :mod:`.synthesis`. A :class:`Runner`
+holds a file's plans and does its jobs through one module each:
 
 * :mod:`.plan`: a run checked into a :class:`Plan` (output times, order, what a study may
   change);
@@ -27,7 +27,7 @@ Example::
     results = Runner(spec).execute()     # every run, by name
 """
 
-from . import analyses, identify, optimize, sweep  # noqa: F401  (they register their kinds)
+from . import analyses, identify, optimize, sweep, synthesis  # noqa: F401  (they register their kinds)
 from .files import LoadedFile, load, run_file
 from .kinds import KINDS, RunKind, kind_of
 from .plan import Plan

@@ -30,7 +30,7 @@ class LoadedFile:
     Attributes:
         path: the file.
         spec: its validated description (:class:`mixdyn.io.ModelFile`).
-        model: its model.
+        model: its model; None for a file of synthesis runs alone (no bodies).
         runs: its runs' descriptions by name, in the file's order (their ``kind``, ``t_end``,
             ``dt``...).
         units: the model's unit system.
@@ -40,7 +40,7 @@ class LoadedFile:
 
     path: pathlib.Path
     spec: s.ModelFile = dataclasses.field(repr=False)
-    model: m.Model = dataclasses.field(repr=False)
+    model: m.Model | None = dataclasses.field(repr=False)
     runs: dict[str, s.RunSpec]
     units: UnitSystem
     output_units: dict[str, str]
@@ -136,7 +136,7 @@ def load(path: str | os.PathLike) -> LoadedFile:
         spec=spec,
         model=runner.model,
         runs={r.name: r for r in spec.runs},
-        units=runner.model.units,
+        units=runner.b.units,
         output_units=dict(runner.output_units),
         _runner=runner,
     )

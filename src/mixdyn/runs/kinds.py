@@ -3,10 +3,10 @@
 A run's ``kind:`` names a :class:`RunKind`, registered once in :data:`KINDS` by the module
 that implements it: :mod:`.analyses` (the runs of one analysis: kinematic, statics, inverse,
 forward, mixed), :mod:`.sweep`, :mod:`.identify` and :mod:`.optimize` (the runs that repeat
-another run). The kind knows how its runs are planned and checked, what they compute, how they
-execute, what they write and how they are shown; the runner, the checks and the command look
-the kind up (:func:`kind_of`) and ask it, as :mod:`scipy.integrate` looks a method up in its
-``METHODS``.
+another run) and :mod:`.synthesis` (a four-bar made to draw a path). The kind knows how its
+runs are planned and checked, what they compute, how they execute, what they write and how
+they are shown; the runner, the checks and the command look the kind up (:func:`kind_of`) and
+ask it, as :mod:`scipy.integrate` looks a method up in its ``METHODS``.
 
 Example::
 
@@ -53,6 +53,10 @@ class RunKind:
     #: The run's differentiable outputs (:func:`mixdyn.differentiable`) hold the joints'
     #: reactions and the drivers' efforts, besides the motion.
     differentiable_efforts: ClassVar[bool] = False
+    #: The run analyses the file's mechanism: its model is built and its start and mobility
+    #: are checked. False for a run that makes a mechanism of its own (a synthesis), which a
+    #: file without bodies may hold.
+    needs_mechanism: ClassVar[bool] = True
     #: How a run that replays this kind's motion (``from_run``) is refused, after
     #: ``"run NAME is "``; None where the motion can be replayed.
     not_replayable: ClassVar[str | None] = None

@@ -1,6 +1,7 @@
 """``mixdyn check``'s report of a model file: the model, its assembled start, its degrees of
-freedom, each run checked and described by its kind, the warnings and, asked for, every
-number as understood (:func:`mixdyn.io.explain.lines`).
+freedom (none of these for a file of synthesis runs alone, which has no mechanism), each run
+checked and described by its kind, the warnings and, asked for, every number as understood
+(:func:`mixdyn.io.explain.lines`).
 
 Example::
 
@@ -40,6 +41,15 @@ def report(file, explain: bool = False) -> Iterator[str]:
     require_size(spec, file)
     runner = Runner(spec)
     model = runner.model
+    if model is None:  # a file of synthesis runs alone: no mechanism to assemble
+        yield f"[bold]{esc(file)}[/bold]: no mechanism (its runs make their own)"
+        for plan in runner.order():
+            yield kind_of(plan).describe(plan, None, None)
+        for w in runner.b.readings.warnings:
+            yield f"[yellow]warning[/yellow]: {esc(w)}"
+        yield from _explained(runner, explain)
+        yield "[green]ok[/green]"
+        return
     asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
     dofs = an.degrees_of_freedom(model, asm.q)
     yield f"[bold]{esc(file)}[/bold]: {esc(model.summary())}"
@@ -56,12 +66,17 @@ def report(file, explain: bool = False) -> Iterator[str]:
         yield kind_of(plan).describe(plan, mobility, model)
     for w in warnings:
         yield f"[yellow]warning[/yellow]: {esc(w)}"
+    yield from _explained(runner, explain)
+    yield "[green]ok[/green]"
+
+
+def _explained(runner, explain: bool) -> Iterator[str]:
+    """With ``explain``, every number as understood (:func:`mixdyn.io.explain.lines`)."""
     if explain:
         from ..io.explain import lines
 
         for line in lines(runner.b):
             yield esc(line)
-    yield "[green]ok[/green]"
 
 
 __all__ = ["report"]

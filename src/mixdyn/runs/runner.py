@@ -46,7 +46,8 @@ class Runner:
     Attributes:
         spec: the description.
         b: its builder (quantities, names, where each fault lies in the file).
-        model: its model.
+        model: its model; None for a file without bodies (its runs are all syntheses, which
+            need no mechanism).
         plans: the plans of its runs, by name, in the file's order.
         output_units: the file's ``output_units``, checked.
         setups: the runs' set-ups made by the checks (:class:`~.setup.Setups`).
@@ -55,7 +56,9 @@ class Runner:
     def __init__(self, spec: s.ModelFile, model: m.Model | None = None):
         self.spec = spec
         self.b = Builder(spec)
-        self.model = model if model is not None else self.b.model()
+        if model is None and spec.bodies:  # no bodies: a file of synthesis runs alone
+            model = self.b.model()
+        self.model = model
         self.setups = setup.Setups()
         self.plans = {}  # sweeps and fits last: they take their settings from other runs
         for repeats in (False, True):

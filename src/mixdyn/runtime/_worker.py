@@ -35,6 +35,7 @@ def _load(name: str):
 
 def main() -> None:
     plots, draw, sweeps = _load("plots"), _load("_draw"), _load("sweep_plots")
+    synthesis = _load("synthesis_plots")
     from matplotlib.figure import Figure
 
     Figure()  # matplotlib reads its settings and fonts once, before the first task
@@ -45,6 +46,7 @@ def main() -> None:
         "band": sweeps.plot_band,
         "fit": sweeps.plot_fit,
         "optimum": sweeps.plot_optimum,
+        "synthesis": synthesis.plot_synthesis,
     }
     tasks, replies = sys.stdin, sys.stdout
     if len(sys.argv) == 4 and sys.argv[1] == "--fork":

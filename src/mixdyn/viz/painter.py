@@ -137,7 +137,7 @@ class Painter:
 
 def draw_here(kind: str, args, kwargs) -> pathlib.Path:
     """Draw task ``(kind, args, kwargs)`` in this process, as the worker draws it."""
-    from . import _draw, sweep_plots
+    from . import _draw, sweep_plots, synthesis_plots
     from .plots import plot_columns
 
     do = {
@@ -147,6 +147,7 @@ def draw_here(kind: str, args, kwargs) -> pathlib.Path:
         "band": sweep_plots.plot_band,
         "fit": sweep_plots.plot_fit,
         "optimum": sweep_plots.plot_optimum,
+        "synthesis": synthesis_plots.plot_synthesis,
     }
     return do[kind](*args, **kwargs)
 

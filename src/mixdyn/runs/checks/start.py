@@ -63,7 +63,8 @@ def mobility(runner, plan: Plan):
             numbers).
 
     Returns:
-        The :class:`~mixdyn.DofReport` of the run's model and drivers.
+        The :class:`~mixdyn.DofReport` of the run's model and drivers; None for a run that
+        needs no mechanism (:attr:`.kinds.RunKind.needs_mechanism`).
 
     Raises:
         FileError: a fully driven run (kinematic, inverse) does not have one driver per
@@ -73,6 +74,8 @@ def mobility(runner, plan: Plan):
     plan = plan.subject
     r = plan.spec
     kind = kind_of(plan)
+    if not kind.needs_mechanism:
+        return None
     mixed = isinstance(r, s.MixedRunSpec)
     report = None
     if plan.replays:

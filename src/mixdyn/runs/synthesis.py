@@ -1,0 +1,361 @@
+"""Synthesis runs of a model file: a four-bar made to draw a path (:func:`mixdyn.synthesize`).
+
+A ``synthesis`` run describes the task (the target points, the timing, bounds of the
+four-bar's numbers, the least transmission angle), how the links weigh and how the motor
+torque counts, and the search (starts, seed). It needs no mechanism in the file: a file whose
+runs are all synthesis runs may have no bodies (``mixdyn check`` then reports no mechanism).
+Its numbers are read with their units and handed to the search in SI (m, kg, s), the unit
+system of the model file it writes.
+
+Example (``examples/synthesis_path.yaml``)::
+
+    - name: path
+      kind: synthesis
+      points: [[500 mm, 300 mm], [580 mm, 420 mm], [480 mm, 550 mm], [320 mm, 500 mm]]
+      masses: {density: 2 kg/m, payload: 0.5 kg}
+      speed: 2*pi rad/s
+      torque_weight: 1e-4 m^2/(N*m)^2
+      starts: 64
+
+``mixdyn run`` writes ``candidates.csv`` (a row per distinct four-bar, best first, headers
+``name [unit]``), ``best.yaml`` (the best four-bar as a model file that ``mixdyn run`` runs:
+the coupler point's path and, with masses, the motor torque), ``meta.json`` (the search's
+figures and the best candidate) and ``synthesis.png`` (the targets and the candidates'
+coupler curves).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import sys
+import time
+
+import numpy as np
+
+from ..errors import ModelError, NumericalError
+from ..io import schema as s
+from ..synthesis import (
+    NAMES,
+    Masses,
+    Objective,
+    PathTask,
+    Synthesis,
+    coupler_curve,
+    transmission_cosine,
+)
+from ..units import SI, dimension, factor
+from .console import PROGRESS_LOG_EVERY, clean, esc
+from .kinds import RunKind, register
+from .plan import Plan
+
+#: Candidates whose curves the figure draws at most (the best first).
+DRAWN = 5
+
+#: The kind of quantity of each column of ``candidates.csv`` (SI units written beside).
+_COLUMN_KINDS = {
+    **{n: "length" for n in NAMES if n != "theta0"},
+    "theta0": "angle",
+    "theta_first": "angle",
+    "theta_last": "angle",
+    "error": (2, 0, 0),
+    "score": (2, 0, 0),
+    "torque_rms": "torque",
+    "torque_peak": "torque",
+    "min_transmission": "angle",
+}
+_SI_LABELS = {"length": "m", "angle": "rad", (2, 0, 0): "m²", "torque": "N·m"}
+
+
+@dataclasses.dataclass(frozen=True)
+class SynthesisPlan(Plan):
+    """A checked synthesis run: the task and objective built (SI) and the search's settings.
+
+    Attributes:
+        task: the path task.
+        objective: the objective.
+    """
+
+    task: PathTask | None = None
+    objective: Objective | None = None
+
+    @property
+    def polished(self) -> bool:
+        """Whether the search polishes its outcomes for the path (with a torque weight)."""
+        return self.objective.torque_weight > 0
+
+
+@dataclasses.dataclass
+class FileSynthesis:
+    """The result of a synthesis run."""
+
+    plan: SynthesisPlan
+    synthesis: Synthesis
+
+    @property
+    def kind(self) -> str:
+        return "synthesis"
+
+
+def _si(runner, value, kind, path) -> float:
+    """A number of the file in SI: read in the model's units, then converted."""
+    x = runner.b.scalar(value, kind, path)
+    units = runner.b.units
+    exps = dimension(kind)
+    base = (units.length, units.mass, units.time)
+    for k, (unit, e) in enumerate(zip(base, exps, strict=True)):
+        if e:
+            x *= factor(unit, ("length", "mass", "time")[k], SI) ** e
+    return x
+
+
+def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
+    """Check a synthesis run: its numbers read with their units, the task and objective built
+    (every fault an input error at its line)."""
+    path = ("runs", index)
+    points = np.array(
+        [[_si(runner, v, "length", (*path, "points", i, k)) for k, v in enumerate(p)]
+         for i, p in enumerate(r.points)]
+    )  # fmt: skip
+    timing = None
+    if r.timing != "free":
+        timing = np.array(
+            [_si(runner, v, "angle", (*path, "timing", i)) for i, v in enumerate(r.timing)]
+        )
+    bounds = {}
+    for name, ends in r.bounds.items():
+        if name not in NAMES:
+            runner.fail(
+                (*path, "bounds", name),
+                f"no number {name!r} of a four-bar",
+                f"bound one of {', '.join(NAMES)}",
+            )
+        kind = "angle" if name == "theta0" else "length"
+        bounds[name] = tuple(
+            _si(runner, v, kind, (*path, "bounds", name, k)) for k, v in enumerate(ends)
+        )
+    min_mu = _si(runner, r.min_transmission, "angle", (*path, "min_transmission"))
+    try:
+        task = PathTask(points, timing=timing, bounds=bounds, min_transmission=min_mu)
+    except ModelError as e:
+        where = ("bounds", e.element) if e.element in bounds else (e.element,)
+        runner.fail((*path, *where) if e.element else path, e.message, "")
+    masses = None
+    if r.masses is not None:
+        mp = (*path, "masses")
+        density = _si(runner, r.masses.density, (-1, 1, 0), (*mp, "density"))
+        payload = _si(runner, r.masses.payload, "mass", (*mp, "payload"))
+        if not density > 0:
+            runner.fail((*mp, "density"), f"the density must be > 0, got {density:g}", "")
+        if not payload >= 0:
+            runner.fail((*mp, "payload"), f"the payload must be >= 0, got {payload:g}", "")
+        gravity = tuple(_si(runner, g, "acceleration", ("gravity", k)) for k, g in
+                        enumerate(runner.spec.gravity))  # fmt: skip
+        masses = Masses(density=density, payload=payload, gravity=gravity)
+    speed = _si(runner, r.speed, "angular_velocity", (*path, "speed"))
+    weight = _si(runner, r.torque_weight, (-2, -2, 4), (*path, "torque_weight"))
+    if weight > 0 and masses is None:
+        runner.fail(
+            (*path, "torque_weight"),
+            "a torque objective needs the links' masses",
+            "give masses: {density: 2 kg/m}, or leave torque_weight out",
+        )
+    try:
+        objective = Objective(masses=masses, speed=speed, torque_weight=weight, torque=r.torque)
+    except ModelError as e:
+        runner.fail((*path, e.element) if e.element else path, e.message, "")
+    return SynthesisPlan(r, index, np.zeros(1), (), task=task, objective=objective)
+
+
+def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
+    """Search (:func:`mixdyn.synthesize`); no feasible four-bar is a numerical failure."""
+    from ..synthesis import synthesize
+
+    r: s.SynthesisRunSpec = plan.spec
+    out = synthesize(
+        plan.task,
+        plan.objective,
+        starts=r.starts,
+        seed=r.seed,
+        max_steps=r.max_steps,
+        keep=r.keep,
+        progress=progress,
+    )
+    if not out.candidates:
+        raise NumericalError(
+            f"no feasible four-bar among {r.starts} starts (none closes its loop along the "
+            "motion, in order, within the bounds and the transmission angle): give more "
+            "starts, wider bounds or a smaller min_transmission"
+        )
+    return FileSynthesis(plan, out)
+
+
+def candidates_table(out: Synthesis):
+    """``(names, units, rows)``: a row per candidate, best first (SI); the motor torque's
+    columns where the links weigh."""
+    names = [*NAMES, "branch", "theta_first", "theta_last", "error", "score"]
+    if out.objective.masses is not None:
+        names += ["torque_rms", "torque_peak"]
+    names.append("min_transmission")
+    rows = []
+    for c in out.candidates:
+        row = c.numbers()
+        row.update(
+            theta_first=float(c.angles[0]),
+            theta_last=float(c.angles[-1]),
+            error=c.error,
+            score=c.score,
+            torque_rms=c.torque_rms,
+            torque_peak=c.torque_peak,
+            min_transmission=c.min_transmission,
+        )
+        rows.append([row[n] for n in names])
+    units = {n: _SI_LABELS[k] for n, k in _COLUMN_KINDS.items() if n in names}
+    return names, units, np.array(rows, dtype=float)
+
+
+def _curves(c, samples: int = 241) -> tuple[np.ndarray, np.ndarray]:
+    """A candidate's coupler curve (K, 2) [m] over its traversed motion (first target to
+    last), and over the rest of the turn (NaN where the loop does not close there)."""
+    a0, a1 = float(c.angles[0]), float(c.angles[-1])
+    run = np.asarray(coupler_curve(c.fourbar, np.linspace(a0, a1, samples)))
+    rest_angles = np.linspace(a1, a0 + 2 * np.pi, samples)
+    rest = np.asarray(coupler_curve(c.fourbar, rest_angles))
+    opens = np.abs(np.asarray(transmission_cosine(c.fourbar, rest_angles))) > 1.0
+    rest[opens] = np.nan
+    return run, rest
+
+
+def _log(plan: SynthesisPlan, every: float = PROGRESS_LOG_EVERY):
+    """A progress callback writing a plain line on stderr at most every ``every`` seconds."""
+    start = time.monotonic()
+    last = [start]
+
+    def at(stage, done, total, best):
+        now = time.monotonic()
+        if now - last[0] < every and done < total:
+            return
+        last[0] = now
+        sys.stderr.write(
+            clean(f"{plan.name}: {stage} {done} of {total} starts, best score {best:.3g}, ")
+            + f"{now - start:.0f} s\n"
+        )
+        sys.stderr.flush()
+
+    return at
+
+
+@register
+class SynthesisKind(RunKind):
+    """A synthesis: a four-bar searched to draw a path, with the motor torque by weight."""
+
+    name = "synthesis"
+    needs_mechanism = False
+    not_replayable = "a synthesis run"
+
+    def plan(self, runner, index: int, spec) -> SynthesisPlan:
+        return plan(runner, index, spec)
+
+    def execute(self, runner, plan: SynthesisPlan, results: dict, progress) -> FileSynthesis:
+        return execute(runner, plan, progress)
+
+    def output_files(self, runner, plan: SynthesisPlan, figures: bool) -> list[str]:
+        names = ["candidates.csv", "best.yaml", "meta.json"]
+        return names + (["synthesis.png"] if figures else [])
+
+    def draws(self, runner, plan: SynthesisPlan) -> bool:
+        return True
+
+    def write(self, runner, plan: SynthesisPlan, result: FileSynthesis, seconds: float, outputs):
+        from .._version import __version__
+        from ..io.results import _write_csv, headers, jsonable, write_meta
+
+        out, r = result.synthesis, plan.spec
+        folder = outputs.folder(plan)
+        folder.mkdir(parents=True, exist_ok=True)
+        names, units, table = candidates_table(out)
+        csv = folder / "candidates.csv"
+        _write_csv(csv, headers(names, units), table)
+        best = folder / "best.yaml"
+        out.write(best)
+        c = out.best
+        figures = ["synthesis.png"] if outputs.painter is not None else []
+        meta = {
+            "mixdyn_version": __version__,
+            "created": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+            "file": str(outputs.file),
+            "run": plan.name,
+            "kind": "synthesis",
+            "status": "ok",
+            "wall_time_s": round(seconds, 3),
+            "unit_system": {"length": "m", "mass": "kg", "time": "s", "angle": "rad"},
+            "settings": r.model_dump(mode="json"),
+            "synthesis": {
+                "starts": out.starts,
+                "feasible": out.feasible,
+                "candidates": len(out.candidates),
+                "seed": out.seed,
+                "seconds": out.seconds,
+                "best": {
+                    **c.numbers(),
+                    "angles": np.asarray(c.angles),
+                    "error": c.error,
+                    "score": c.score,
+                    "torque_rms": c.torque_rms if np.isfinite(c.torque_rms) else None,
+                    "torque_peak": c.torque_peak if np.isfinite(c.torque_peak) else None,
+                    "min_transmission": c.min_transmission,
+                },
+                "units": units,
+            },
+            "figures": figures,
+        }
+        files = [csv, best, write_meta(folder, jsonable(meta))]
+        if outputs.painter is not None:
+            drawn = out.candidates[:DRAWN]
+            outputs.painter.draw(
+                "synthesis",
+                out.task.points,
+                [_curves(cand) for cand in drawn],
+                [cand.error for cand in drawn],
+                folder / "synthesis.png",
+                title=f"{plan.name}: {len(out.candidates)} four-bars, best first",
+            )
+        return files
+
+    def describe(self, plan: SynthesisPlan, report, model) -> str:
+        r, o = plan.spec, plan.objective
+        timing = "timing free" if plan.task.timing is None else "timing given"
+        what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
+        return (
+            f"run [bold]{esc(r.name)}[/bold] (synthesis): a four-bar through "
+            f"{len(plan.task.points)} points, {timing}{what}, {r.starts} starts, seed {r.seed}"
+        )
+
+    def task(self, plan: SynthesisPlan, mode: str) -> tuple[str, float | None]:
+        total = plan.spec.starts * (2 if plan.polished else 1)
+        return f"{plan.name} (synthesis)", total if mode == "steps" else None
+
+    def progress(self, plan: SynthesisPlan, console):
+        if console.mode == "log":
+            return _log(plan)
+        if console.mode != "steps":
+            return None
+        task, starts = console.tasks[plan.name], plan.spec.starts
+
+        def at(stage, done, total, best):
+            console.bar.update(task, completed=done + (starts if stage == "polish" else 0))
+
+        return at
+
+    def done(self, plan: SynthesisPlan, result: FileSynthesis, seconds: float, folder) -> str:
+        out = result.synthesis
+        c = out.best
+        torque = f", motor torque RMS {c.torque_rms:.4g} N·m" if np.isfinite(c.torque_rms) else ""
+        return (
+            f"{plan.name}: synthesis, {len(out.candidates)} four-bars of {out.feasible} "
+            f"feasible from {out.starts} starts, best path error {c.error:.3g} m²{torque}, "
+            f"{seconds:.2f} s -> {folder}"
+        )
+
+
+__all__ = ["FileSynthesis", "SynthesisKind", "SynthesisPlan", "candidates_table", "execute", "plan"]

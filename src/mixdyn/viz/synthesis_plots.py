@@ -1,0 +1,70 @@
+"""The figure of a synthesis: the target points and the candidates' coupler curves (PNG, SVG
+or PDF), without pyplot's global state.
+
+Loaded by the figure worker by its path (:mod:`mixdyn.runtime._worker`): NumPy and matplotlib only.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+import numpy as np
+
+
+def plot_synthesis(
+    targets: np.ndarray,
+    curves: list,
+    errors: list,
+    path,
+    *,
+    unit: str = "m",
+    title: str | None = None,
+    dpi: int = 120,
+) -> pathlib.Path:
+    """The targets and the candidates' coupler curves, the best (the first) bold, written to
+    ``path`` (``.png``, ``.svg`` or ``.pdf``).
+
+    Args:
+        targets: (N, 2) the target points [``unit``].
+        curves: per candidate ``(run, rest)``: its coupler curve (K, 2) over the traversed
+            motion (solid) and over the rest of the crank's turn (dotted; NaN rows where the
+            loop does not close).
+        errors: each candidate's path error [``unit``**2], in the legend.
+        path: the figure's file.
+        unit: the unit of length.
+        title: the figure's title.
+        dpi: resolution of a PNG.
+    """
+    from matplotlib import colormaps
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    path = pathlib.Path(path)
+    if path.suffix.lower() not in (".png", ".svg", ".pdf"):
+        raise ValueError(f"cannot write a plot to {path.name!r}; use .png, .svg or .pdf")
+    fig = Figure(figsize=(6.4, 5.6), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    colors = [colormaps["viridis"](v) for v in np.linspace(0.35, 0.9, max(len(curves), 1))]
+    for k in reversed(range(len(curves))):
+        best = k == 0
+        run, rest = (np.asarray(c) for c in curves[k])
+        color = "tab:blue" if best else colors[k]
+        label = f"{'best' if best else f'#{k + 1}'}: error {errors[k]:.3g} {unit}²"
+        ax.plot(*run.T, "-", lw=2.2 if best else 1.0, alpha=1.0 if best else 0.7,
+                color=color, label=label)  # fmt: skip
+        ax.plot(*rest.T, ":", lw=1.0, alpha=0.8 if best else 0.4, color=color)
+    ax.plot(*np.asarray(targets).T, "x", ms=9, mew=2, color="tab:red", label="targets")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"x [{unit}]")
+    ax.set_ylabel(f"y [{unit}]")
+    ax.grid(True, alpha=0.35)
+    ax.legend(fontsize="small", loc="best")
+    if title:
+        fig.suptitle(title)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=dpi)
+    return path
+
+
+__all__ = ["plot_synthesis"]

@@ -1,0 +1,162 @@
+"""Synthesis runs in model files (``kind: synthesis``): a file without a mechanism, its
+numbers read with their units, bad input refused at its line before anything computes; the
+file's search is the Python API's (same seed, same best error), and the written best.yaml,
+run by mixdyn's own kinematic and inverse analyses, passes the targets within the reported
+error at the reported torque (slow: each search compiles its program)."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+import mixdyn as md
+import mixdyn.io as mio
+from fixtures import EXAMPLES
+from mixdyn.cli import app
+from mixdyn.io import FileError
+from mixdyn.runs import Runner
+from mixdyn.runs.report import report
+from mixdyn.synthesis import FourBar, Objective, PathTask, coupler_curve
+
+EXAMPLE = EXAMPLES / "synthesis_path.yaml"
+
+HEAD = "mixdyn: 1\nunits: {length: mm, mass: kg, time: s}\nruns:\n  - name: path\n"
+
+
+def _text(*lines: str) -> str:
+    body = ["    kind: synthesis", "    points: [[0, 0], [100, 50], [150, 120]]", *lines]
+    return HEAD + "\n".join(body) + "\n"
+
+
+def test_the_example_is_checked_without_a_mechanism():
+    """``mixdyn check``: no mechanism, the run described; its numbers in SI (the example in
+    mm, kg/m, m^2/(N m)^2, rad/s, deg: converted by hand here)."""
+    lines = list(report(EXAMPLE))
+    assert "no mechanism" in lines[0] and lines[-1].endswith("ok[/green]")
+    assert any("synthesis" in line and "5 points" in line for line in lines)
+    plan = Runner(mio.read(EXAMPLE)).plans["path"]
+    np.testing.assert_allclose(plan.task.points[0], [0.5, 0.3], rtol=1e-15)
+    assert plan.task.min_transmission == pytest.approx(np.pi / 9, rel=1e-15)
+    o = plan.objective
+    assert o.masses.density == pytest.approx(2.0) and o.masses.payload == 0.5
+    assert o.masses.gravity == pytest.approx((0.0, -9.81))
+    assert o.speed == pytest.approx(2 * np.pi) and o.torque_weight == pytest.approx(1e-4)
+
+
+def _line(text: str, marker: str) -> int:
+    return next(k for k, line in enumerate(text.splitlines(), 1) if marker in line)
+
+
+@pytest.mark.parametrize(
+    "extra, marker, words",
+    [
+        (["    timing: [0 deg, 50 deg, 40 deg]"], "timing", "increase"),
+        (["    bounds: {r9: [1, 2]}"], "bounds", "no number 'r9'"),
+        (["    bounds:", "      r2: [50 mm, 10 mm]"], "r2:", "low < high"),
+        (["    bounds:", "      r2: [1 kg, 2 kg]"], "r2:", "kg"),
+        (["    min_transmission: 95 deg"], "min_transmission", "pi/2"),
+        (["    torque_weight: 1e-4 m^2/(N*m)^2"], "torque_weight", "masses"),
+        (["    masses: {density: -2 kg/m}"], "masses", "density must be > 0"),
+        (["    speed: 3 m/s"], "speed", "m/s"),
+    ],
+)
+def test_bad_input_is_refused_at_its_line(extra, marker, words):
+    """Each fault an input error (exit 2) at the line that holds it, before any search."""
+    text = _text(*extra)
+    with pytest.raises(FileError) as e:
+        Runner(mio.reads(text, "bad.yaml"))
+    assert e.value.line == _line(text, marker), str(e.value)
+    assert words in str(e.value)
+
+
+def test_bad_input_exits_2_from_the_command(tmp_path):
+    path = tmp_path / "bad.yaml"
+    path.write_text(_text("    timing: [0, 1]"))
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 2 and "bad.yaml:7" in res.output and "timing" in res.output
+    assert not (tmp_path / "out" / "path").exists()
+
+
+def test_only_synthesis_runs_go_without_a_mechanism():
+    text = "runs:\n  - {name: k, kind: kinematic, time: {span: [0, 1], n: 2}}\n"
+    with pytest.raises(FileError, match="missing field 'bodies'"):
+        mio.reads(text)
+
+
+# A Grashof crank-rocker [m, rad] and six points near its coupler curve (moved by a few mm:
+# no four-bar passes them exactly), at given input angles.
+V = np.array([0.6, 0.2, 0.55, 0.4, 0.275, 0.55 / 3, 0.1, -0.05, 0.2])
+THETA_DEG = np.array([20.0, 60.0, 100.0, 140.0, 180.0, 220.0])
+MOVED = np.array([[3, -2], [-4, 1], [2, 5], [0, -3], [-5, 2], [4, 4]]) * 1e-3
+
+
+def _targets() -> np.ndarray:
+    fb = FourBar.from_vector(V, 1.0)
+    return np.asarray(coupler_curve(fb, np.deg2rad(THETA_DEG))) + MOVED
+
+
+@pytest.mark.slow  # long: run by CI's slow set (two searches compile their programs)
+def test_file_search_is_the_apis_and_best_yaml_passes_the_targets(tmp_path):
+    """The file's run (targets in mm, timing in deg) finds the API's best four-bar with the
+    same seed; its best.yaml, loaded and run by md.kinematic (Newton's assembly of the
+    written model, not the search's closed form), passes the targets with the reported
+    error."""
+    targets = _targets()
+    mm = targets * 1e3
+    points = ", ".join(f"[{x!r} mm, {y!r} mm]" for x, y in mm)
+    timing = ", ".join(f"{a:g} deg" for a in THETA_DEG)
+    path = tmp_path / "task.yaml"
+    path.write_text(
+        _text("    starts: 24", "    seed: 5", "    keep: 3").replace(
+            "[[0, 0], [100, 50], [150, 120]]", f"[{points}]"
+        )
+        + f"    timing: [{timing}]\n"
+    )
+    md.run_file(path, tmp_path / "out")
+    folder = tmp_path / "out" / "path"
+    table = pd.read_csv(folder / "candidates.csv")
+    assert list(table.columns[:3]) == ["r1 [m]", "r2 [m]", "r3 [m]"]
+    assert "error [m²]" in table.columns and "branch" in table.columns
+    error = float(table["error [m²]"].iloc[0])
+    meta = json.loads((folder / "meta.json").read_text())
+    assert meta["status"] == "ok" and meta["synthesis"]["best"]["error"] == error
+
+    api = md.synthesize(
+        PathTask(mm * 1e-3, timing=np.deg2rad(THETA_DEG)), Objective(), starts=24, seed=5
+    )
+    assert error == pytest.approx(api.best.error, rel=1e-9)
+    assert 1e-7 < error < 1e-3  # the moved points: a real, small error
+
+    best = md.load(folder / "best.yaml")
+    t = np.deg2rad(THETA_DEG - THETA_DEG[0]) / 1.0  # the crank at the default 1 rad/s
+    p, _, _ = md.kinematic(best.model, t).point("coupler.P")
+    assert np.sum((p - targets) ** 2) == pytest.approx(error, rel=1e-8)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the torque objective's search compiles ~1 min)
+def test_the_example_runs_and_its_best_yaml_runs(tmp_path):
+    """``mixdyn run`` of the example writes the ranked candidates, best.yaml, meta.json and
+    the figure; ``mixdyn run best.yaml`` runs, its coupler point through the five targets
+    (exact: five points, timing free) and its motor torque by md.inverse's multipliers the
+    search's energy-balance torque."""
+    cli = CliRunner()
+    res = cli.invoke(app, ["run", str(EXAMPLE), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    folder = tmp_path / "out" / "path"
+    for name in ("candidates.csv", "best.yaml", "meta.json", "synthesis.png"):
+        assert (folder / name).is_file(), name
+    table = pd.read_csv(folder / "candidates.csv")
+    assert table["error [m²]"].iloc[0] < 1e-20
+    res = cli.invoke(app, ["run", str(folder / "best.yaml"), "--out", str(tmp_path / "best")])
+    assert res.exit_code == 0, res.output
+    path = md.read_table(tmp_path / "best" / "path" / "results.csv")
+    curve = np.column_stack([path["coupler.P.x"], path["coupler.P.y"]])
+    targets = Runner(mio.read(EXAMPLE)).plans["path"].task.points
+    gaps = np.min(np.linalg.norm(curve[:, None, :] - targets[None], axis=2), axis=0)
+    assert gaps[0] < 1e-9 and gaps[-1] < 1e-9  # the first and last output times
+    assert np.all(gaps < 0.02)  # the others between output times, 101 along the motion
+    torque = md.read_table(tmp_path / "best" / "torque" / "results.csv")["motor"]
+    rms = float(np.sqrt(np.mean(np.asarray(torque) ** 2)))
+    assert rms == pytest.approx(table["torque_rms [N·m]"].iloc[0], rel=0.02)
