@@ -312,42 +312,193 @@ def ball_mujoco(repeat: int) -> list[dict]:
 
 
 # ------------------------------------------------------------------------------ slider-crank
-def slider_crank_mixdyn(repeat: int) -> list[dict]:
+def slider_crank_mixdyn(repeat: int) -> tuple[list[dict], dict]:
+    """mixdyn on the example's slider-crank, with its clearance and with the ideal joint;
+    also the slider's x (241,) [m] of each, by ``True`` (clearance) and ``False``."""
     import mixdyn as md
     import mixdyn.io as mio
 
     md.set_cache(False)  # the first call's extra time: the compilation
-
     model = mio.load(ROOT / "examples" / "clearance_slider_crank.yaml")
-    omega = 5000 * 2 * math.pi / 60
-    T = 2 * math.pi / omega
-    ts = np.linspace(0.0, T, 241)
-    drive = md.CoordinateDriver("drive", "crank", "phi", law=md.Polynomial([0.0, omega]))
+    ts = np.linspace(0.0, T_TURN, 241)
+    drive = md.CoordinateDriver("drive", "crank", "phi", law=md.Polynomial([0.0, OMEGA]))
     # the clearance joint is a journal-bearing contact (a force) in place of the revolute
     ideal = model.replace(
         joints=(*model.joints, md.Revolute("B", "rod.B", "slider")),
         forces=tuple(f for f in model.forces if f.name != "B"),
     )
-    rows = []
-    for label, m in (("clearance 0.5 mm (Lankarani-Nikravesh)", model), ("ideal joint", ideal)):
+    rows, xs = [], {}
+    for label, m, clearance in (
+        ("clearance 0.5 mm (Lankarani-Nikravesh)", model, True),
+        ("ideal joint", ideal, False),
+    ):
         first, run, r = timed(
             lambda m=m: md.mixed(
                 m, ts, prescribed=[drive], unknown=["motor"], rtol=1e-7, atol=1e-9
             ),
             repeat,
         )
+        xs[clearance] = np.asarray(r["slider.x"])
         rows.append(
             {
-                "case": label,
+                "code": "mixdyn",
+                "case": f"{label}, projection tsit5, rtol 1e-7",
                 "compile_s": first - run,
-                "run_s": run,
-                "s_per_sim_s": run / T,
+                "s_per_sim_s": run / T_TURN,
                 "steps": int(r.stats["steps"]),
-                "peak_torque": float(np.max(np.abs(r["motor"]))),
-                "peak_contact": float(np.max(r["B.normal"])) if "B.normal" in r.columns() else None,
+                "dx": None,  # the reference of the last column
             }
         )
-        print(f"  slider-crank {label}: {run / T:.3g} CPU s per simulated s", flush=True)
+        print(f"  slider-crank mixdyn {label}: {run / T_TURN:.3g} CPU s per simulated s")
+    return rows, xs
+
+
+#: Flores' slider-crank (tests/data/flores_clearance_slider_crank.txt): lengths [m], masses
+#: [kg], inertias [kg m^2] of crank, rod and slider; the clearance and journal radius [m].
+L1, L2 = 0.05, 0.12
+MASSES, INERTIAS = (0.30, 0.21, 0.14), (1e-4, 2.5e-4, 1e-4)
+CLEARANCE, JOURNAL_RADIUS, E_FLORES = 0.5e-3, 9.5e-3, 207e9
+OMEGA = 5000 * 2 * math.pi / 60  # [rad/s]
+T_TURN = 2 * math.pi / OMEGA  # one turn [s]
+
+
+def slider_crank_exudyn(repeat: int, mixdyn_x: dict) -> list[dict]:
+    """Exudyn's slider-crank: planar rigid bodies, revolute and prismatic joints, the crank's
+    speed a velocity-level ``CoordinateConstraint``; the clearance an
+    ``ObjectContactSphereSphere`` between the slider's journal and the rod's hollow sphere
+    (the bearing) with the same Hertz stiffness and exponent 1.5, its ``impactModel`` 1
+    (Hunt-Crossley with the stored impact speed; Exudyn has no Lankarani-Nikravesh law);
+    generalized-alpha (spectral radius 0.9), the paper's step 1e-5 s and a finer one."""
+    import exudyn as exu
+    from exudyn.itemInterface import (
+        CoordinateConstraint,
+        LoadMassProportional,
+        MarkerBodyMass,
+        MarkerBodyPosition,
+        MarkerBodyRigid,
+        MarkerNodeCoordinate,
+        NodeGenericData,
+        NodePointGround,
+        NodeRigidBody2D,
+        ObjectContactSphereSphere,
+        ObjectGround,
+        ObjectJointPrismatic2D,
+        ObjectJointRevolute2D,
+        ObjectRigidBody2D,
+        SensorNode,
+    )
+
+    bearing = JOURNAL_RADIUS + CLEARANCE
+    k = 4.0 / 3.0 * E_FLORES / (2 * (1 - NU**2)) * math.sqrt(JOURNAL_RADIUS * bearing / CLEARANCE)
+
+    def build(clearance: bool):
+        SC = exu.SystemContainer()
+        mbs = SC.AddSystem()
+        ground = mbs.AddObject(ObjectGround())
+        # the ideal mechanism's start: crank along the guide, turning at OMEGA
+        start = [(L1 / 2, 0.0), (L1 + L2 / 2, 0.0), (L1 + L2, 0.0)]
+        speed = [(0, OMEGA * L1 / 2, OMEGA), (0, OMEGA * L1 / 2, -OMEGA * L1 / L2), (0, 0, 0)]
+        nodes, bodies = [], []
+        for p, v, m, J in zip(start, speed, MASSES, INERTIAS, strict=True):
+            node = mbs.AddNode(
+                NodeRigidBody2D(referenceCoordinates=[*p, 0.0], initialVelocities=list(v))
+            )
+            body = mbs.AddObject(ObjectRigidBody2D(nodeNumber=node, mass=m, inertia=J))
+            mass = mbs.AddMarker(MarkerBodyMass(bodyNumber=body))
+            mbs.AddLoad(LoadMassProportional(markerNumber=mass, loadVector=[0, -9.81, 0]))
+            nodes.append(node)
+            bodies.append(body)
+        crank, rod, slider = bodies
+
+        def at(body, x):
+            return mbs.AddMarker(MarkerBodyPosition(bodyNumber=body, localPosition=[x, 0, 0]))
+
+        def frame(body, x):
+            return mbs.AddMarker(MarkerBodyRigid(bodyNumber=body, localPosition=[x, 0, 0]))
+
+        mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[at(ground, 0), at(crank, -L1 / 2)]))
+        mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[at(crank, L1 / 2), at(rod, -L2 / 2)]))
+        if clearance:
+            data = mbs.AddNode(
+                NodeGenericData(initialCoordinates=[CLEARANCE, 0, 0, 0], numberOfDataCoordinates=4)
+            )
+            mbs.AddObject(
+                ObjectContactSphereSphere(
+                    markerNumbers=[frame(slider, 0), frame(rod, L2 / 2)], nodeNumber=data,
+                    spheresRadii=[JOURNAL_RADIUS, bearing], isHollowSphere1=True,
+                    contactStiffness=k, contactStiffnessExponent=1.5,
+                    restitutionCoefficient=0.9, impactModel=1,
+                )
+            )  # fmt: skip
+        else:
+            mbs.AddObject(ObjectJointRevolute2D(markerNumbers=[at(rod, L2 / 2), at(slider, 0)]))
+        mbs.AddObject(
+            ObjectJointPrismatic2D(
+                markerNumbers=[frame(ground, L1 + L2), frame(slider, 0)], axisMarker0=[1, 0, 0],
+                normalMarker1=[0, 1, 0], constrainRotation=True,
+            )
+        )  # fmt: skip
+        origin = mbs.AddNode(NodePointGround())
+        mbs.AddObject(
+            CoordinateConstraint(
+                markerNumbers=[
+                    mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=origin, coordinate=0)),
+                    mbs.AddMarker(MarkerNodeCoordinate(nodeNumber=nodes[0], coordinate=2)),
+                ],
+                velocityLevel=True,
+                offset=OMEGA,
+            )
+        )
+        sensor = mbs.AddSensor(
+            SensorNode(
+                nodeNumber=nodes[2], outputVariableType=exu.OutputVariableType.Position,
+                storeInternal=True,
+            )
+        )  # fmt: skip
+        mbs.Assemble()
+        return SC, mbs, sensor
+
+    def settings(h):
+        ss = exu.SimulationSettings()
+        ss.timeIntegration.endTime = T_TURN
+        ss.timeIntegration.numberOfSteps = round(T_TURN / h)
+        ss.timeIntegration.verboseMode = 0
+        ss.solution.file.write = False
+        ss.solution.sensors.writePeriod = T_TURN / 240
+        ss.timeIntegration.generalizedAlpha.spectralRadius = 0.9
+        ss.timeIntegration.newton.useModifiedNewton = True
+        # the contact state follows the gap after each step (no step-size control on it)
+        ss.timeIntegration.discontinuous.useRecommendedStepSize = False
+        ss.timeIntegration.discontinuous.iterationTolerance = 1e100
+        return ss
+
+    rows = []
+    for label, clearance, h in (
+        ("clearance 0.5 mm (Hunt-Crossley)", True, 1e-5),
+        ("clearance 0.5 mm (Hunt-Crossley)", True, 2e-6),
+        ("ideal joint", False, 1e-5),
+    ):
+
+        def solve(clearance=clearance, h=h):
+            sc, mbs, sensor = build(clearance)
+            mbs.SolveDynamic(settings(h))
+            return sc, mbs, sensor
+
+        _, run, (_sc, mbs, sensor) = timed(solve, repeat)
+        x = mbs.GetSensorStoredData(sensor)[:, 1]
+        ref = mixdyn_x.get(clearance)
+        n = min(len(x), len(ref)) if ref is not None else 0
+        rows.append(
+            {
+                "code": "Exudyn",
+                "case": f"{label}, generalized-alpha h {h:g}",
+                "compile_s": None,
+                "s_per_sim_s": run / T_TURN,
+                "steps": round(T_TURN / h),
+                "dx": float(np.max(np.abs(x[:n] - ref[:n]))) if n else None,
+            }
+        )
+        print(f"  slider-crank Exudyn {label} h {h:g}: {run / T_TURN:.3g} CPU s per simulated s")
     return rows
 
 
@@ -390,14 +541,14 @@ def ball_table(rows: list[dict]) -> str:
 
 def slider_table(rows: list[dict]) -> str:
     out = [
-        "| case | compile [s] | CPU s per simulated s | steps | peak motor torque [N·m] "
-        "| peak contact force [N] |",
+        "| code | case, integrator | compile [s] | CPU s per simulated s | steps "
+        "| max abs(x - x mixdyn), slider [m] |",
         "|---|---|---|---|---|---|",
     ]
     for r in rows:
         out.append(
-            f"| {r['case']} | {r['compile_s']:.1f} | {r['s_per_sim_s']:.3g} | {r['steps']} "
-            f"| {r['peak_torque']:.1f} | {fmt(r['peak_contact'], '.0f')} |"
+            f"| {r['code']} | {r['case']} | {fmt(r['compile_s'], '.1f')} "
+            f"| {r['s_per_sim_s']:.3g} | {r['steps']} | {fmt(r['dx'], '.1e')} |"
         )
     return "\n".join(out)
 
@@ -428,7 +579,13 @@ def main() -> None:
         print(ball_table(rows))
         print()
     if "slider-crank" not in args.skip:
-        print(slider_table(slider_crank_mixdyn(repeat)))
+        rows, xs = slider_crank_mixdyn(repeat)
+        if have("exudyn"):
+            rows += slider_crank_exudyn(repeat, xs)
+        else:
+            print("  exudyn is not installed: skipped")
+        print()
+        print(slider_table(rows))
     print()
     print("load average at the end:", os.getloadavg())
 
