@@ -209,6 +209,7 @@ def test_an_optimizations_report_holds_its_optimum_and_constraints(tmp_path):
     page = _Page((folder / "report.html").read_text(encoding="utf-8"))
     row = page.rows("optimum")["crank.mass"]
     assert row["unit"] == "kg"
+    assert "The mechanism at the start" in page.headings  # of the run at the optimum
     for head in ("low", "high", "start", "optimum", "gradient"):
         np.testing.assert_allclose(float(row[head]), optimum.loc["crank.mass", head], RTOL)
     # the rms torque grows with the mass: the optimum is the low bound, which is active

@@ -350,19 +350,13 @@ def _report(runner, plan: Plan, result, seconds: float, outputs, figures: list):
     from ..analysis.result import in_units, point_columns
     from ..io.results import run_settings
     from ..units import engineering
-    from ..viz.player import result_at
-    from ..viz.report import Report, scene_svg
-    from ..viz.scene import Scene
+    from ..viz.report import Report, start_drawing
 
     folder = outputs.folder(plan)
     model = result.model
     cols, units = in_units(result, *point_columns(result, plan.spec.outputs), runner.output_units)
     units = {c: engineering(u) for c, u in units.items()}
     t = np.asarray(result.t)
-    try:
-        drawing = scene_svg(Scene(model, np.asarray(result.q)[:1], (), *result_at(result, [0])))
-    except Exception as e:  # a drawing is a courtesy: the numbers still show
-        drawing = f"<p>(no drawing: {e})</p>"
     facts = [
         ("model", f"{model.name} ({outputs.file})"),
         ("run", f"{plan.name} ({plan.spec.kind})"),
@@ -375,7 +369,7 @@ def _report(runner, plan: Plan, result, seconds: float, outputs, figures: list):
         path=folder / REPORT_HTML,
         title=f"{model.name}: run {plan.name}",
         facts=facts,
-        drawing=drawing,
+        drawing=start_drawing(result),
         figures=[folder / f for f in figures],
         columns=cols,
         units=units,

@@ -25,7 +25,7 @@ import datetime
 
 import numpy as np
 
-from ..viz.report import Report, Table, number
+from ..viz.report import Report, Table, number, start_drawing
 
 #: Every run's one-page report.
 REPORT_HTML = "report.html"
@@ -324,7 +324,7 @@ def _study_page(runner, plan, result, outputs, facts, tables, figure: str, at: s
         path=folder / REPORT_HTML,
         title=f"{runner.model.name}: {plan.spec.kind} {plan.name}",
         facts=facts,
-        drawing="",
+        drawing=start_drawing(result.result),
         figures=[folder / figure] if outputs.figures else [],
         columns=cols,
         units=units,

@@ -105,6 +105,20 @@ def scene_svg(scene, frame: int = 0, width: int = 640) -> str:
     return "".join(parts)
 
 
+def start_drawing(result) -> str:
+    """The mechanism of a :class:`mixdyn.Result` at its first output time as SVG text
+    (:func:`scene_svg`, the forces' symbols included); a short note where it cannot be drawn
+    (a drawing is a courtesy: the page's numbers still show)."""
+    from .player import result_at
+    from .scene import Scene
+
+    try:
+        q = np.asarray(result.q)[:1]
+        return scene_svg(Scene(result.model, q, (), *result_at(result, [0])))
+    except Exception as e:
+        return f"<p>(no drawing: {escape(str(e))})</p>"
+
+
 # --------------------------------------------------------------------------- numbers
 def energy_balance(cols: dict, units: dict) -> list[tuple[str, float, str]] | None:
     """The energy balance of a dynamic run's columns (kinetic ``T``, potential ``V``, the
@@ -313,4 +327,12 @@ class Report:
         return self.path
 
 
-__all__ = ["Report", "Table", "data_uri", "energy_balance", "number", "scene_svg"]
+__all__ = [
+    "Report",
+    "Table",
+    "data_uri",
+    "energy_balance",
+    "number",
+    "scene_svg",
+    "start_drawing",
+]
