@@ -230,10 +230,7 @@ class AnalysisKind(RunKind):
         if outputs.painter is not None:
             _figures(runner, plan, result, folder, outputs.painter)
         report = _report(runner, plan, result, seconds, outputs, [*figs, *anim])
-        if outputs.painter is None:  # no figures to wait for
-            return [*files, report.write()]
-        outputs.reports.append(report)  # written once the painter has drawn its figures
-        return files
+        return [*files, *outputs.add_report(report)]  # now, or once its figures are drawn
 
     # ----------------------------------------------------------------- shown
     def describe(self, plan: Plan, report, model) -> str:
