@@ -301,3 +301,36 @@ def test_phase_plot_cursor_and_click_go_to_the_frame(motion, tmp_path):
     url = f"{page.as_uri()}#plotx=slider.x&plotcol=slider.vx&plotclick={f:.9f},{g:.9f}"
     attrs = _attrs(chromium(tmp_path, url, "dom"))
     assert int(attrs["frame"]) == nearest and attrs["playing"] == "false"
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_journals_orbit_is_drawn_in_its_clearance_circle_with_equal_axes(tmp_path):
+    """A journal bearing's ey against its ex: the axes are centred on the bearing, scaled
+    alike (as many mm per pixel across as up), and hold the clearance circle, which is drawn
+    (grey pixels on it); the cursor is at the frame's offset."""
+    from test_player_plot import journal_motion
+
+    result = journal_motion()
+    page = html(result, tmp_path / "orbit.html", columns=["jb.ey"], plot_x="jb.ex")
+    url = f"{page.as_uri()}#frame=5"
+    dom = chromium(tmp_path, url, "dom", height=1700)
+    plot = json.loads(_attrs(dom)["plot"])
+    assert (plot["xcolumn"], plot["column"], plot["orbit"]) == ("jb.ex", "jb.ey", 0.5)
+    (x0, x1), (y0, y1), m = plot["xrange"], plot["yrange"], plot["margins"]
+    assert x0 == pytest.approx(-x1) and y0 == pytest.approx(-y1)
+    per_x = (x1 - x0) / (plot["width"] - m["l"] - m["r"])
+    per_y = (y1 - y0) / (plot["height"] - m["t"] - m["b"])
+    assert per_x == pytest.approx(per_y, rel=1e-9)
+    assert min(x1, y1) > 0.5
+    a = 2 * np.pi * result.t[5]
+    assert (plot["xv"], plot["yv"]) == pytest.approx((0.4 * np.cos(a), 0.4 * np.sin(a)), rel=1e-8)
+    png = tmp_path / "orbit.png"
+    chromium(tmp_path, url, str(png), height=1700)
+    image = np.asarray(Image.open(png).convert("RGB"))
+    angles = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    sx, sy = _screen(plot, 0.5 * np.cos(angles), 0.5 * np.sin(angles))
+    grey = [
+        near(image, (DPR * (plot["left"] + u), DPR * (plot["top"] + w)), rgb("#888888"))
+        for u, w in zip(sx, sy, strict=True)
+    ]
+    assert sum(grey) >= 24, f"the clearance circle is drawn at {sum(grey)} of 48 places"

@@ -78,3 +78,38 @@ def test_a_column_the_result_lacks_is_refused(motion, tmp_path):
         html(None, tmp_path / "q.html", model=motion.model, t=motion.t, q=motion.q, plot_x="t1")
     data = page_data(html(motion, tmp_path / "r.html", columns=()))
     assert data["plots"] == [] and data["shown"] == []
+
+
+def journal_motion(clearance=5e-4, radius=4e-4, n=33):
+    """A journal (body ``pin``) whose centre goes once round a circle of ``radius`` [m] about
+    its bearing's centre (at the origin, on the ground), as a forward result in metres with
+    the bearing's eccentricity columns (the centre's offset), shown in millimetres."""
+    pin = md.Body("pin", 0.1, 1e-6, q0=(radius, 0.0, 0.0))
+    bearing = md.JournalBearing(
+        "jb", "ground", "pin", clearance, 0.01, young_modulus=2e11, restitution=1.0
+    )
+    model = md.Model([pin], forces=[bearing])
+    t = np.linspace(0.0, 1.0, n)
+    a = 2 * math.pi * t
+    q = np.stack([radius * np.cos(a), radius * np.sin(a), np.zeros(n)], axis=1)
+    extra = {"jb.ex": q[:, 0], "jb.ey": q[:, 1]}  # the bearing's frame is the ground's
+    zeros = np.zeros_like(q)
+    return md.Result(
+        "forward", model, t, q, zeros, zeros, extra=extra,
+        kinds={"jb.ex": "length", "jb.ey": "length"}, output_units={"length": "mm"},
+    )  # fmt: skip
+
+
+def test_a_journals_orbit_is_carried_with_its_clearance_in_the_plotted_unit(tmp_path):
+    """A journal bearing's eccentricity columns are offered as an orbit whose circle is the
+    radial clearance, in the unit the columns are plotted in (0.5 mm of a model in metres,
+    shown in mm, is 0.5); the columns themselves are the journal's offset in mm."""
+    result = journal_motion()
+    page = html(result, tmp_path / "orbit.html", columns=["jb.ey"], plot_x="jb.ex")
+    data = page_data(page)
+    assert data["orbits"] == [{"x": "jb.ex", "y": "jb.ey", "r": 0.5}]
+    columns = carried(data)
+    a = 2 * np.pi * result.t
+    np.testing.assert_allclose(columns["jb.ex"][0], 0.4 * np.cos(a), rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(columns["jb.ey"][0], 0.4 * np.sin(a), rtol=1e-8, atol=1e-12)
+    assert columns["jb.ex"][1] == columns["jb.ey"][1] == "mm"

@@ -109,6 +109,29 @@ def plotted_columns(result, chosen, idx) -> list[dict]:
     return plot_columns_data(result, names, idx)
 
 
+def journal_orbits(result) -> list[dict]:
+    """The orbits the page draws in their bearing: per journal bearing of the result's model
+    (a revolute joint with ``clearance``), ``x`` and ``y``, the names of its eccentricity
+    columns (``B.ex``, ``B.ey``), and ``r``, its radial clearance in the unit those columns
+    are plotted in (the result's output units). Plotted one against the other, the page
+    draws the clearance circle and scales both axes alike."""
+    from ..model import JournalBearing
+    from ..units import in_units
+
+    out = []
+    for f in result.model.forces:
+        if isinstance(f, JournalBearing):
+            x = f"{f.name}.ex"
+            c, _ = in_units(
+                result,
+                {x: np.asarray([float(f.clearance)])},
+                {x: result.model.units.length},
+                getattr(result, "output_units", None),
+            )
+            out.append({"x": x, "y": f"{f.name}.ey", "r": float(nine_digits(c[x])[0])})
+    return out
+
+
 def _finite_or_none(a: np.ndarray) -> list:
     """``a`` (N,) rounded to 9 significant digits, a non-finite value as ``None``."""
     finite = np.isfinite(a)
@@ -128,12 +151,14 @@ def player_data(
     plots=(),
     shown=None,
     plot_x="t",
+    orbits=(),
 ) -> dict:
     """The page's data: times, bodies' outlines and coordinates, pins, ground, guides, traces,
     force symbols, arrows (already scaled to lengths), units, the columns the page can plot
     (``plots``, :func:`plot_columns_data`), the names of those offered first (``shown``,
     default all of them; the first is plotted on opening) and the column on the plot's x axis
-    (``plot_x``: ``"t"`` or a name among ``plots``). Numbers rounded to 9 significant digits;
+    (``plot_x``: ``"t"`` or a name among ``plots``), the journals' orbits (``orbits``,
+    :func:`journal_orbits`). Numbers rounded to 9 significant digits;
     a symbol's pen lift (a NaN row) is ``null``. A plotted column equal to a body's
     coordinate as the page carries it (``crank.phi`` in the model's units) is carried once:
     its ``v`` is replaced by ``q: [body, coordinate]``, the page reading
@@ -207,6 +232,7 @@ def player_data(
         "plots": [carried(c) for c in plots],
         "shown": [c["name"] for c in plots] if shown is None else list(shown),
         "plotX": plot_x,
+        "orbits": list(orbits),
         "arrowNote": (
             f"arrows: {biggest:.4g} {arrows[0]['unit']} = {biggest * scale:.4g} "
             f"{model.units.length}"
@@ -282,7 +308,7 @@ def html(
             for a in force_arrows(result, forces)
             if a["name"] not in applied(model)
         ]
-    plots = []
+    plots, orbits = [], []
     if result is not None:
         if columns is None:
             from .plots import headline_columns
@@ -291,6 +317,7 @@ def html(
         if columns:
             extra = [] if plot_x == "t" else [plot_x]
             plots = plotted_columns(result, [*columns, *extra], idx)
+            orbits = journal_orbits(result)
     elif columns or plot_x != "t":
         raise ValueError("plotted columns need a result")
     data = player_data(
@@ -304,6 +331,7 @@ def html(
         plots=plots,
         shown=list(columns or ()),
         plot_x=plot_x,
+        orbits=orbits,
     )
     text = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
     page = _page().replace("__TITLE__", _escape(data["title"])).replace("__DATA__", text)
@@ -332,6 +360,7 @@ def _page() -> str:
 
 __all__ = [
     "html",
+    "journal_orbits",
     "player_data",
     "plot_columns_data",
     "plotted_columns",
