@@ -4,6 +4,7 @@ file's search is the Python API's (same seed, same best error), and the written 
 run by mixdyn's own kinematic and inverse analyses, passes the targets within the reported
 error at the reported torque (slow: each search compiles its program)."""
 
+import dataclasses
 import json
 
 import numpy as np
@@ -18,7 +19,7 @@ from mixdyn.cli import app
 from mixdyn.io import FileError
 from mixdyn.runs import Runner
 from mixdyn.runs.report import report
-from mixdyn.synthesis import FourBar, Objective, PathTask, coupler_curve
+from mixdyn.synthesis import FourBar, Objective, PathTask, coupler_curve, transmission_cosine
 
 EXAMPLE = EXAMPLES / "synthesis_path.yaml"
 
@@ -79,6 +80,18 @@ def test_bad_input_exits_2_from_the_command(tmp_path):
     assert not (tmp_path / "out" / "path").exists()
 
 
+@pytest.mark.parametrize("command", [["show"], ["animate", "--run", "path"]])
+def test_no_mechanism_to_draw_is_an_input_error(command, tmp_path):
+    """``mixdyn show`` and ``mixdyn animate`` of a file of synthesis runs alone: exit 2,
+    saying where the mechanism is (best.yaml), before anything is computed."""
+    args = [command[0], str(EXAMPLE), *command[1:], "--output", str(tmp_path / "x.png")]
+    if command[0] == "animate":
+        args[-1] = str(tmp_path / "x.html")
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 2 and "best.yaml" in res.output, res.output
+    assert not list(tmp_path.iterdir())
+
+
 def test_only_synthesis_runs_go_without_a_mechanism():
     text = "runs:\n  - {name: k, kind: kinematic, time: {span: [0, 1], n: 2}}\n"
     with pytest.raises(FileError, match="missing field 'bodies'"):
@@ -88,6 +101,14 @@ def test_only_synthesis_runs_go_without_a_mechanism():
 # A Grashof crank-rocker [m, rad] and six points near its coupler curve (moved by a few mm:
 # no four-bar passes them exactly), at given input angles.
 V = np.array([0.6, 0.2, 0.55, 0.4, 0.275, 0.55 / 3, 0.1, -0.05, 0.2])
+W = np.array([0.6, 0.5, 0.55, 0.4, 0.275, 0.55 / 3, 0.1, -0.05, 0.2])  # opens part of a turn
+
+
+def _curves_angles(c, samples=241):
+    """The input angles of the rest of the turn in the figure (:func:`_curves`)."""
+    return np.linspace(c.angles[-1], c.angles[0] + 2 * np.pi, samples)
+
+
 THETA_DEG = np.array([20.0, 60.0, 100.0, 140.0, 180.0, 220.0])
 MOVED = np.array([[3, -2], [-4, 1], [2, 5], [0, -3], [-5, 2], [4, 4]]) * 1e-3
 
@@ -95,6 +116,44 @@ MOVED = np.array([[3, -2], [-4, 1], [2, 5], [0, -3], [-5, 2], [4, 4]]) * 1e-3
 def _targets() -> np.ndarray:
     fb = FourBar.from_vector(V, 1.0)
     return np.asarray(coupler_curve(fb, np.deg2rad(THETA_DEG))) + MOVED
+
+
+def test_a_synthesis_is_written_as_its_files(tmp_path):
+    """The run's files from a known outcome (no search): candidates.csv with SI headers and
+    the candidate's numbers, best.yaml a model file whose crank pivot, coupler point and
+    driver are the candidate's, meta.json, and the figure drawn."""
+    from mixdyn.runs.outputs import Outputs
+    from mixdyn.runs.synthesis import FileSynthesis, SynthesisKind, _curves
+    from mixdyn.synthesis import Candidate, Synthesis
+
+    theta = np.deg2rad(THETA_DEG)
+    fb = FourBar(*(np.float64(x) for x in V), np.float64(1.0))
+    points = np.asarray(coupler_curve(fb, theta))
+    runner = Runner(mio.reads(_text()))
+    plan = runner.plans["path"]
+    c = Candidate(fb, theta, 0.0, 0.0, np.nan, np.nan, 0.7)
+    out = Synthesis(PathTask(points, theta), Objective(), (c,), 4, 1, 0, 0.1)
+    SynthesisKind().write(runner, plan, FileSynthesis(plan, out), 0.1, Outputs(tmp_path, "x"))
+    table = pd.read_csv(tmp_path / "path" / "candidates.csv")
+    assert list(table.columns) == [
+        *(f"{n} [m]" for n in ("r1", "r2", "r3", "r4", "rcx", "rcy", "x0", "y0")),
+        "theta0 [rad]", "branch", "theta_first [rad]", "theta_last [rad]", "error [m²]",
+        "score [m²]", "min_transmission [rad]",
+    ]  # fmt: skip
+    np.testing.assert_array_equal(table.iloc[0, :9], V)
+    best = mio.read(tmp_path / "path" / "best.yaml")
+    assert best.ground.points["O2"] == (V[6], V[7])
+    coupler = next(b for b in best.bodies if b.name == "coupler")
+    a, p = (np.asarray(coupler.points[k], float) for k in ("A", "P"))
+    np.testing.assert_allclose(p - a, V[4:6], atol=1e-15)  # in the coupler's frame
+    meta = json.loads((tmp_path / "path" / "meta.json").read_text())
+    assert meta["synthesis"]["best"]["torque_rms"] is None  # no masses: no torque
+    run, rest = _curves(c)  # the figure's curves: the loop closes over the whole turn
+    np.testing.assert_allclose(run[[0, -1]], points[[0, -1]], atol=1e-12)
+    assert not np.isnan(rest).any()
+    c_open = dataclasses.replace(c, fourbar=FourBar(*(np.float64(x) for x in W), fb.branch))
+    cos_mu = np.array([transmission_cosine(c_open.fourbar, a) for a in _curves_angles(c)])
+    np.testing.assert_array_equal(np.isnan(_curves(c_open)[1][:, 0]), np.abs(cos_mu) > 1)
 
 
 @pytest.mark.slow  # long: run by CI's slow set (two searches compile their programs)
@@ -105,7 +164,7 @@ def test_file_search_is_the_apis_and_best_yaml_passes_the_targets(tmp_path):
     error."""
     targets = _targets()
     mm = targets * 1e3
-    points = ", ".join(f"[{x!r} mm, {y!r} mm]" for x, y in mm)
+    points = ", ".join(f"[{float(x)!r} mm, {float(y)!r} mm]" for x, y in mm)
     timing = ", ".join(f"{a:g} deg" for a in THETA_DEG)
     path = tmp_path / "task.yaml"
     path.write_text(

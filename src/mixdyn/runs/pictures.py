@@ -52,6 +52,12 @@ def show(file, output: pathlib.Path | None = None) -> pathlib.Path:
     spec = read(file)
     require_size(spec, file)
     model = Runner(spec).model
+    if model is None:  # a file of synthesis runs alone
+        raise FileError(
+            "the file describes no mechanism (its runs are synthesis runs)",
+            file=str(file),
+            hint="mixdyn run it, then show the best.yaml it writes",
+        )
     asm = an.assemble(model, start_q(model), hold=spec.assembly.hold)
     title = f"{model.name} at its assembled start"
     if target.suffix.lower() == ".html":  # the player, at the start: one frame

@@ -42,7 +42,6 @@ from ..synthesis import (
     PathTask,
     Synthesis,
     coupler_curve,
-    transmission_cosine,
 )
 from ..units import SI, dimension, factor
 from .console import PROGRESS_LOG_EVERY, clean, esc
@@ -216,13 +215,17 @@ def candidates_table(out: Synthesis):
 
 def _curves(c, samples: int = 241) -> tuple[np.ndarray, np.ndarray]:
     """A candidate's coupler curve (K, 2) [m] over its traversed motion (first target to
-    last), and over the rest of the turn (NaN where the loop does not close there)."""
+    last), and over the rest of the turn (NaN where the loop does not close there: the
+    triangle ``A B O4`` impossible, ``|cos mu| > 1``, as :func:`transmission_cosine`)."""
+    fb = c.fourbar
     a0, a1 = float(c.angles[0]), float(c.angles[-1])
-    run = np.asarray(coupler_curve(c.fourbar, np.linspace(a0, a1, samples)))
+    run = np.asarray(coupler_curve(fb, np.linspace(a0, a1, samples)))
     rest_angles = np.linspace(a1, a0 + 2 * np.pi, samples)
-    rest = np.asarray(coupler_curve(c.fourbar, rest_angles))
-    opens = np.abs(np.asarray(transmission_cosine(c.fourbar, rest_angles))) > 1.0
-    rest[opens] = np.nan
+    rest = np.array(coupler_curve(fb, rest_angles))
+    r1, r2, r3, r4, t0 = (float(getattr(fb, n)) for n in ("r1", "r2", "r3", "r4", "theta0"))
+    crank = t0 + rest_angles  # |A O4|^2 in the ground link's frame, O2 at the origin
+    gap = (r1 - r2 * np.cos(crank - t0)) ** 2 + (r2 * np.sin(crank - t0)) ** 2
+    rest[np.abs((r3**2 + r4**2 - gap) / (2 * r3 * r4)) > 1.0] = np.nan
     return run, rest
 
 
@@ -346,6 +349,12 @@ class SynthesisKind(RunKind):
             console.bar.update(task, completed=done + (starts if stage == "polish" else 0))
 
         return at
+
+    def animation_refusal(self, plan: SynthesisPlan) -> tuple[str, str] | None:
+        return (
+            f"run {plan.name!r} is a synthesis run: it makes a four-bar, not a motion",
+            "mixdyn run it, then animate a run of the best.yaml it writes",
+        )
 
     def done(self, plan: SynthesisPlan, result: FileSynthesis, seconds: float, folder) -> str:
         out = result.synthesis
