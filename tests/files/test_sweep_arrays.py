@@ -169,3 +169,57 @@ def test_the_summaries_reduce_every_member_at_once_as_one_by_one():
         for i in range(5):
             assert abs(rows[i] - truth[name](list(y[i]))) <= 1e-14, name
             assert rows[i] == reduce(y[i]), name
+
+
+INVERSE = (
+    (EXAMPLES / "slider_crank.yaml").read_text().split("\nruns:")[0]
+    + """
+runs:
+  - name: inverse
+    kind: inverse
+    time: {span: [0, 1], n: 11}
+  - name: sweep
+    kind: sweep
+    run: inverse
+    vary:
+      slider.mass: {values: [0.5, 1.0, 2.5]}
+      rod.inertia: {values: [0.01, 0.03]}
+    summaries:
+      - {name: peak, column: motor, reduce: absmax}
+    outputs: [motor, B.Fx]
+"""
+)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_an_inverse_file_sweep_shares_the_motion_and_equals_the_single_runs(monkeypatch):
+    """An inverse sweep over masses and inertias (its members sharing the drivers' motion:
+    the array path taken at 2 members here) writes the tables of each member's single run
+    of the file with its numbers written in, and of the sweep run member by member."""
+    monkeypatch.setattr(file_sweep, "CHUNK", 2)
+    swept = execute(mio.reads(INVERSE), ["sweep"])["sweep"]
+    assert swept.sweep.stacked is not None and not swept.sweep.errors
+    members, table = swept.members(), swept.table()
+    for i, (m, j) in enumerate(zip(members["slider.mass"], members["rod.inertia"], strict=True)):
+        text = INVERSE.replace(
+            "  - name: slider\n    mass: 1\n", f"  - name: slider\n    mass: {m!r}\n"
+        )
+        text = text.replace(
+            "  - name: rod\n    mass: 1\n    inertia: 0.01\n",
+            f"  - name: rod\n    mass: 1\n    inertia: {j!r}\n",
+        )
+        single = execute(mio.reads(text), ["inverse"])["inverse"]
+        rows = table[table["member"] == i]
+        for c in ("motor", "B.Fx"):
+            _close(rows[c], single[c], 1e-12, (i, c))
+        _close(members["peak"][i], np.max(np.abs(single["motor"])), 1e-12, i)
+    assert len(set(members["peak"].round(9))) == 6  # the numbers did change the torque
+    monkeypatch.setattr(file_sweep, "_as_arrays", lambda *a, **k: None)
+    one_by_one = execute(mio.reads(INVERSE), ["sweep"])["sweep"]
+    for a, b in ((members, one_by_one.members()), (table, one_by_one.table())):
+        assert list(a.columns) == list(b.columns) and len(a) == len(b)
+        for c in a.columns:
+            if a[c].dtype.kind == "f":
+                _close(a[c], b[c], 1e-12, c)
+            else:
+                assert list(a[c]) == list(b[c]), c
