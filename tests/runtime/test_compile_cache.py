@@ -567,3 +567,25 @@ def test_programs_are_lowered_with_one_source_line_per_operation():
     assert plain.as_text(debug_info=True).count("callsite(") > 0
     assert short.as_text(debug_info=True).count("callsite(") == 0
     assert float(short.compile()(0.5)) == float(plain.compile()(0.5)) == np.sin(0.5) * 2.0 + 1.0
+
+
+def test_imports_ahead_run_beside_the_caller_and_leave_failures_to_it():
+    """``mixdyn run``'s first compile imports what tracing needs in a thread of its own: the
+    module is imported once the thread ends, the caller was not held, and a module that cannot
+    be imported raises nothing there (the tracing meets it and reports it)."""
+    script = textwrap.dedent(
+        """
+        import sys, threading
+        from mixdyn.runtime._command import import_ahead
+        assert "xml.dom.minidom" not in sys.modules
+        import_ahead(("no_such_module_for_mixdyn", "xml.dom.minidom"))
+        (t,) = [t for t in threading.enumerate() if t.name == "mixdyn-imports"]
+        t.join(60)
+        print("xml.dom.minidom" in sys.modules, "no_such_module_for_mixdyn" in sys.modules)
+        """
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split() == ["True", "False"]

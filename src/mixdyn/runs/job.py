@@ -111,10 +111,17 @@ def run_job(
     outputs = Outputs(
         out, file, parquet=parquet, netcdf=netcdf, excel=excel, figures=figures, painter=painter
     )
+    from ..runtime._command import import_ahead
     from ..runtime._programs import on_first_compile
 
-    if progress is None and mode == "off":  # no line per run: what takes long is said
-        on_first_compile(lambda: compiling(file))
+    notice = progress is None and mode == "off"  # no line per run: what takes long is said
+
+    def first_compile():
+        if notice:
+            compiling(file)
+        import_ahead()
+
+    on_first_compile(first_compile)
     try:
         written = write_runs(runner, plans, outputs, mode)
     finally:
