@@ -70,6 +70,20 @@ class Stacked:
         ]
         return jax.tree_util.tree_unflatten(treedef, rows)
 
+    @property
+    def model(self) -> Model:
+        """Member 0's model (the names, units and structure every member shares)."""
+        return self.case.problem.model
+
+    @property
+    def kind(self) -> str:
+        """The analysis' name (``"forward"``, ``"mixed"``, ``"inverse"``)."""
+        return self.case.kind
+
+    def columns(self, arrays, results, errors, output_units=None, points=()):
+        """Every member's columns as arrays (:func:`columns`)."""
+        return columns(self, arrays, results, errors, output_units, points)
+
     def member(self, i: int) -> Case:
         """Member ``i``'s run: member 0's with member ``i``'s numbers, as the single run of
         its model is set up."""
@@ -441,12 +455,8 @@ def columns(
     count, n = stacked.count, len(case.ts)
     flat = jax.tree.map(lambda x: np.asarray(x).reshape(count * n, *np.shape(x)[2:]), post)
     qdd, _, _, extra = post_columns(case.problem, flat, case.n_drivers)
-    states = {"q": np.asarray(trajs.q), "qd": np.asarray(trajs.qd)}
-    states["qdd"] = np.asarray(qdd).reshape(count, n, -1)
-    cols = {"t": np.asarray(case.ts)}
-    for b, body in enumerate(case.problem.model.bodies):
-        for suffix, src, k, _ in _BODY_COLUMNS:
-            cols[f"{body.name}.{suffix}"] = states[src][:, :, 3 * b + k]
+    qdd = np.asarray(qdd).reshape(count, n, -1)
+    cols = body_columns(case.problem.model, case.ts, np.asarray(trajs.q), np.asarray(trajs.qd), qdd)
     cols.update({k: np.asarray(v).reshape(count, n) for k, v in extra.items()})
     if trajs.w is not None:
         W = np.asarray(trajs.w)
@@ -454,37 +464,67 @@ def columns(
     if set(cols) != set(result.columns()):  # pragma: no cover - a column made elsewhere
         raise RuntimeError("the stacked columns differ from a member's result's")
     units = result.units()
-    model = case.problem.model
-    for ref in points:
-        pva = _point(model, ref, *(states[k].reshape(count * n, -1) for k in ("q", "qd", "qdd")))
-        for arr, pre, kind in zip(pva, ("", "v", "a"), _POINT_KINDS, strict=True):
-            for k, axis in enumerate("xy"):
-                cols[f"{ref}.{pre}{axis}"] = arr[:, k].reshape(count, n)
-                units[f"{ref}.{pre}{axis}"] = model.units.label(kind)
+    states = (np.asarray(trajs.q), np.asarray(trajs.qd), qdd)
+    add_points(cols, units, case.problem.model, points, *states)
     if errors:
         bad = np.asarray(sorted(errors))
         cols = {k: v if k == "t" else _without(v, bad) for k, v in cols.items()}
     return in_units(result, cols, units, output_units)
 
 
+def body_columns(model: Model, ts, q, qd, qdd) -> dict[str, np.ndarray]:
+    """``t`` (N,) and each body's ``x, y, phi, vx, vy, omega, ax, ay, alpha``, (M, N) each,
+    from every member's ``q``, ``qd``, ``qdd`` (M, N, nq) [model units]."""
+    states = {"q": q, "qd": qd, "qdd": qdd}
+    cols = {"t": np.asarray(ts)}
+    for b, body in enumerate(model.bodies):
+        for suffix, src, k, _ in _BODY_COLUMNS:
+            cols[f"{body.name}.{suffix}"] = states[src][:, :, 3 * b + k]
+    return cols
+
+
+def add_points(cols: dict, units: dict, models, points: Sequence[str], q, qd, qdd) -> None:
+    """Add to ``cols`` and ``units`` each point reference of ``points``' global position,
+    velocity and acceleration (``coupler.P.x``, ``.y``, ``.vx``, ``.vy``, ``.ax``, ``.ay``:
+    :meth:`~.result.Result.point`), (M, N) each [model units], from every member's ``q``,
+    ``qd``, ``qdd`` (M, N, nq); ``models``: the model every member shares, or each member's
+    (M,) (its points' body-frame coordinates)."""
+    count, n = np.shape(q)[:2]
+    one = isinstance(models, Model)
+    first = models if one else models[0]
+    flat = [np.reshape(a, (count * n, -1)) for a in (q, qd, qdd)]
+    for ref in points:
+        b, s = Resolver(first.ground, first.bodies).point(ref, "point")
+        if one:
+            S = np.broadcast_to(np.asarray(s), (count * n, 2))
+        else:
+            own = [Resolver(m.ground, m.bodies).point(ref, "point")[1] for m in models]
+            S = np.repeat(np.stack([np.asarray(x) for x in own]), n, axis=0)
+        pva = _point(b, S, *flat)
+        for arr, pre, kind in zip(pva, ("", "v", "a"), _POINT_KINDS, strict=True):
+            for k, axis in enumerate("xy"):
+                cols[f"{ref}.{pre}{axis}"] = arr[:, k].reshape(count, n)
+                units[f"{ref}.{pre}{axis}"] = first.units.label(kind)
+
+
 #: The kinds of quantity of a point's position, velocity and acceleration.
 _POINT_KINDS = ("length", "velocity", "acceleration")
 
 
-def _point(model: Model, ref: str, q, qd, qdd) -> tuple[np.ndarray, ...]:
-    """A point's global position, velocity and acceleration, each (K, 2) [model units], at
-    the K states ``q``, ``qd``, ``qdd`` (K, nq), as :meth:`~.result.Result.point`."""
-    b, s = Resolver(model.ground, model.bodies).point(ref, "point")
+def _point(b: int, S, q, qd, qdd) -> tuple[np.ndarray, ...]:
+    """The global position, velocity and acceleration, each (K, 2) [model units], of the
+    point with body-frame coordinates ``S`` (K, 2) on body ``b`` at the K states ``q``,
+    ``qd``, ``qdd`` (K, nq), as :meth:`~.result.Result.point`."""
 
-    def pos(q):
-        return point(q, b, s)
+    def pva(q, qd, qdd, s):
+        def pos(q):
+            return point(q, b, s)
 
-    def pva(q, qd, qdd):
         p, v = jax.jvp(pos, (q,), (qd,))
         _, a2 = jax.jvp(lambda qq: jax.jvp(pos, (qq,), (qd,))[1], (q,), (qd,))
         return p, v, a2 + jax.jacfwd(pos)(q) @ qdd
 
-    out = jax.vmap(pva)(jnp.asarray(q), jnp.asarray(qd), jnp.asarray(qdd))
+    out = jax.vmap(pva)(jnp.asarray(q), jnp.asarray(qd), jnp.asarray(qdd), jnp.asarray(S))
     return tuple(np.asarray(a) for a in out)
 
 
@@ -499,6 +539,8 @@ __all__ = [
     "LazyResults",
     "Motion",
     "Stacked",
+    "add_points",
+    "body_columns",
     "columns",
     "driven_result",
     "integrate",

@@ -265,12 +265,26 @@ def run_kinematic(
 ) -> Result:
     """:func:`kinematic` from its prepared start (:func:`~mixdyn.analysis._prepare.
     kinematic_start`): the jitted scan over the output times ``ts`` (N,), then the checks."""
-    model = prep.model
     c = prep.constraints()
-    tol = 1e-12 * length_scale(model) if tol is None else tol
-    q_all, qd, qdd, it, res, ratio = _kinematic_scan(
-        c, prep.q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter)
-    )
+    tol = tolerance(prep.model, tol)
+    scan = _kinematic_scan(c, prep.q, jnp.asarray(ts), jnp.asarray(tol), jnp.asarray(max_iter))
+    return kinematic_result(prep, c, ts, scan, tol, max_iter, singular_tol)
+
+
+def tolerance(model: Model, tol: float | None) -> float:
+    """The Newton tolerance of a kinematic run [length]: ``tol``, or ``1e-12 x`` the model's
+    size."""
+    return 1e-12 * length_scale(model) if tol is None else tol
+
+
+def kinematic_result(
+    prep: Prepared, c: Constraints, ts, scan, tol: float, max_iter: int, singular_tol
+) -> Result:
+    """The result of a kinematic scan ``scan`` (``q, qd, qdd, it, res, ratio``, each with
+    the output times ``ts`` (N,) first) of the start ``prep`` on the constraint set ``c``,
+    checked (:func:`check_run`: the named error of its first failed time)."""
+    model = prep.model
+    q_all, qd, qdd, it, res, ratio = scan
     q_all = np.asarray(q_all)
     try:
         check_run(c, ts, q_all, it, res, ratio, tol, max_iter, singular_tol)

@@ -18,8 +18,13 @@ accelerator, or on a CPU at least :data:`~._schedule.CHUNK` members, run that ma
 are held as arrays (:mod:`._stacked`): one set-up, one stacked problem, the members screened
 at once, each member's :class:`~.result.Result` built when it is read.
 
-A kinematic, inverse or quasi-static sweep prepares and runs the single analysis member by
-member (its programs are compiled for the first member and reused), from a thread per core.
+A kinematic sweep of at least :data:`~._schedule.CHUNK` members (or on an accelerator) is
+held as arrays too (:mod:`._kinematic_members`): each member prepared like a single run (its
+own start), their constraint sets stacked, one vectorized program running the single run's
+scan. An inverse sweep of members sharing the drivers' motion is held as arrays (member 0
+run, every member post-processed along its motion). Other inverse, kinematic and
+quasi-static sweeps prepare and run the single analysis member by member (its programs are
+compiled for the first member and reused), from a thread per core.
 
 Members differ in numbers only: masses, inertias, law and force parameters, start guesses
 (any float leaf of the model, named by a parameter path such as ``"slider.mass"`` or
@@ -31,6 +36,7 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
+import os
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
@@ -43,7 +49,7 @@ import numpy as np
 from .. import paths
 from ..errors import MixdynError, ModelError
 from ..model import Model
-from . import _members, _stacked
+from . import _kinematic_members, _members, _stacked
 from ._cluster import _on_cluster
 from ._keywords import member_values, study_analysis
 from ._members import model_swapper as model_swapper
@@ -218,7 +224,8 @@ class Sweep:
     """The members of a sweep, in order.
 
     Where the members share one start (only masses, inertias and forces vary) and are
-    integrated by one vectorized program, the sweep is held as arrays (member × time): a
+    integrated by one vectorized program, or a kinematic sweep's members are run by one
+    vectorized program, the sweep is held as arrays (member × time): a
     member's :class:`~mixdyn.Result` is built when it is first read (``sweep[i]``,
     ``sweep.results[i]``, iteration), and :meth:`columns` and :meth:`dataset` read every
     member at once.
@@ -232,9 +239,11 @@ class Sweep:
             one shared start when only masses, inertias and forces vary) and, on the
             vectorized path, ``integration`` (the one program) and ``finishing``.
         stacked: on the array path, the members as one problem with a member axis
-            (:class:`~._stacked.Stacked`); else None.
+            (:class:`~._stacked.Stacked`; a kinematic sweep's:
+            :class:`~._kinematic_members.KinematicStack`); else None.
         arrays: on the array path, every member's trajectory and post-processing's arrays
-            (:class:`~._stacked.Arrays`, leading axis: the member); else None.
+            (:class:`~._stacked.Arrays`, leading axis: the member; a kinematic sweep's
+            scans are its ``stacked``'s); else None.
         values: on the array path, the varied values (path -> (M,) or (M, ...) [model
             units]), the coordinates of :meth:`dataset`.
     """
@@ -243,7 +252,9 @@ class Sweep:
     errors: dict[int, MixdynError]
     parameters: list[dict[str, float | list]]
     seconds: dict[str, float]
-    stacked: _stacked.Stacked | None = dataclasses.field(default=None, repr=False)
+    stacked: _stacked.Stacked | _kinematic_members.KinematicStack | None = dataclasses.field(
+        default=None, repr=False
+    )
     arrays: _stacked.Arrays | None = dataclasses.field(default=None, repr=False)
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
 
@@ -271,8 +282,8 @@ class Sweep:
             ValueError: no member succeeded (nothing gives the output times and columns).
         """
         if self.stacked is not None:
-            return _stacked.columns(
-                self.stacked, self.arrays, self.results, self.errors, output_units, points
+            return self.stacked.columns(
+                self.arrays, self.results, self.errors, output_units, points
             )
         from .result import in_units, point_columns
 
@@ -380,7 +391,7 @@ class Sweep:
                 coords[name] = ("member", np.array([float(p[name]) for p in self.parameters]))
         variables = {c: (("member", "t"), cols0[c], {"units": units.get(c, "")}) for c in names}
         if self.stacked is not None:
-            model, kind = self.stacked.case.problem.model, self.stacked.case.kind
+            model, kind = self.stacked.model, self.stacked.kind
         else:
             first = next(r for r in self.results if r is not None)
             model, kind = first.model, first.kind
@@ -505,6 +516,21 @@ def sweep(
             return done
     if models is None:
         members = vary_models(model, vary)
+    if (
+        value.name == "kinematic"
+        and client is None
+        and batch_size is None
+        and (len(members) >= CHUNK or _default_batch_size() is not None)
+    ):
+        made = _kinematic_members.run(
+            members, value, t, threads or os.cpu_count() or 1, on_member,
+            lambda i: _describe(params, i),
+        )  # fmt: skip
+        if made is not None:
+            stack, results, errors = made
+            named = {} if models is not None else dict(zip(vary, values, strict=True))
+            seconds = {"total": time.perf_counter() - started}
+            return Sweep(results, errors, params, seconds, stack, None, named)
     if client is not None:
         if not value.integrated:
             raise ModelError(f"a {value.name} sweep runs in this process: no client", "client")

@@ -1,0 +1,204 @@
+"""A kinematic sweep held as arrays.
+
+Each member is prepared like a single run (:func:`~._setup.prepare`: its start assembled from
+its own rough pose, the drivers checked to fix every degree of freedom), from a thread per
+core; the members' constraint sets, of one structure, are stacked (leading axis: the member)
+and one vectorized program runs the single run's scan (:func:`~.kinematic._kinematic_scan`)
+for :data:`~._schedule.CHUNK` members a call (the last call filled up with copies of its
+first member: one program shape for any count). The members are screened at once (a time
+whose Newton iteration did not converge or whose Jacobian lost rank); a flagged member is
+finished like a single run (:func:`~.kinematic.kinematic_result`, which names its error), and
+every other member's :class:`~.result.Result` is built when it is read
+(:class:`~._stacked.LazyResults`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import MixdynError, ModelError
+from ..model import Model
+from ..runtime._programs import cached_jit
+from . import _setup
+from ._schedule import CHUNK, _in_threads
+from ._stacked import LazyResults, add_points, body_columns
+from .kinematic import Kinematic, _kinematic_scan, kinematic_result, output_times, tolerance
+from .result import Result, in_units
+
+
+def _scan_batch(width: int, c, q_start, ts, tol, max_iter):
+    """The kinematic scans of a batch of members (leading axis: the member), ``width`` at a
+    time vectorized: each member's ``(q, qd, qdd, it, res, ratio)``."""
+
+    def one(x):
+        cc, q, tl = x
+        return _kinematic_scan(cc, q, ts, tl, max_iter)
+
+    return jax.lax.map(one, (c, q_start, tol), batch_size=width)
+
+
+_scan_batch_jit = cached_jit(_scan_batch)
+
+
+@dataclasses.dataclass(frozen=True)
+class KinematicStack:
+    """The members of a kinematic sweep, each set up, as arrays.
+
+    Attributes:
+        value: the analysis value.
+        setups: per member its set-up (:class:`~._setup.Setup`), None where it failed.
+        ts: (N,) the output times [time].
+        tol: (M,) each member's Newton tolerance [length].
+        scans: each member's scan, ``(q, qd, qdd, it, res, ratio)``, leading axes
+            (member, time); a failed member's rows are its copy of another member's.
+    """
+
+    value: Kinematic
+    setups: list
+    ts: np.ndarray
+    tol: np.ndarray
+    scans: tuple
+
+    @property
+    def count(self) -> int:
+        return len(self.setups)
+
+    @property
+    def model(self) -> Model:
+        """The first member's model (the names, units and structure every member shares)."""
+        return next(s for s in self.setups if s is not None).model
+
+    kind = "kinematic"
+
+    def result(self, i: int) -> Result:
+        """Member ``i``'s result, checked as the single run's (its named error raised)."""
+        setup = self.setups[i]
+        c = setup.start.constraints()
+        scan = tuple(np.asarray(a[i]) for a in self.scans)
+        v = self.value
+        return kinematic_result(
+            setup.start, c, self.ts, scan, float(self.tol[i]), v.max_iter, v.singular_tol
+        )
+
+    def flagged(self) -> np.ndarray:
+        """(M,) the members whose scan fails a check of :func:`~.kinematic.check_run`."""
+        _, _, _, _, res, ratio = self.scans
+        bad = ~(np.asarray(res) <= self.tol[:, None]) | (
+            np.asarray(ratio) < self.value.singular_tol
+        )
+        return bad.any(axis=1)
+
+    def columns(
+        self,
+        arrays,
+        results: LazyResults,
+        errors: dict,
+        output_units=None,
+        points: Sequence[str] = (),
+    ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """Every result column of every member, (M, N) each (``t``: (N,)), with the points'
+        columns, in ``output_units``, and their units; a failed member's rows NaN (as
+        :func:`~._stacked.columns`). Each member's own model gives its points."""
+        first = next((i for i in range(self.count) if i not in errors), None)
+        if first is None:
+            raise ValueError("no member of the sweep succeeded: there is nothing to label")
+        result: Result = results[first]
+        q, qd, qdd = (np.asarray(a) for a in self.scans[:3])
+        cols, units = body_columns(result.model, self.ts, q, qd, qdd), result.units()
+        if points:
+            models = [s.model if s is not None else result.model for s in self.setups]
+            add_points(cols, units, models, points, q, qd, qdd)
+        if errors:
+            bad = np.asarray(sorted(errors))
+            for k, v in cols.items():
+                if k != "t":
+                    v = np.array(v, dtype=float)
+                    v[bad] = np.nan
+                    cols[k] = v
+        return in_units(result, cols, units, output_units)
+
+
+def run(
+    members: Sequence[Model],
+    value: Kinematic,
+    t,
+    threads: int,
+    on_member: Callable[[int], None] | None,
+    describe: Callable[[int], str],
+) -> tuple[KinematicStack, LazyResults, dict[int, MixdynError]] | None:
+    """The members of a kinematic sweep set up, run by one vectorized program and screened:
+    ``(stack, results, errors)``; None where their constraint sets differ in structure
+    (then member by member).
+
+    Raises:
+        ModelError: a member's input error (with its index in a note).
+    """
+    ts = output_times(t, minimum=1)
+    t0 = float(ts[0])
+
+    def setup_of(i: int):
+        try:
+            setup = _setup.prepare(members[i], value, t0=t0)
+            _setup.check_start(setup, ts)
+            return setup, setup.start.constraints().for_batch()
+        except ModelError as err:
+            err.add_note(f"in member {i} of the sweep{describe(i)}")
+            raise
+        except MixdynError as err:  # a start that cannot be assembled: this member fails
+            return None, err
+
+    made = _in_threads(setup_of, list(range(len(members))), threads, None)
+    setups = [s for s, _ in made]
+    errors = {i: e for i, (s, e) in enumerate(made) if s is None}
+    ok = [i for i, s in enumerate(setups) if s is not None]
+    if not ok:
+        for i in range(len(members)) if on_member is not None else ():
+            on_member(i)
+        return (
+            KinematicStack(value, setups, ts, np.zeros(0), ()),
+            LazyResults(len(members), lambda i: None, {i: (None, e) for i, e in errors.items()}),
+            errors,
+        )
+    tree = jax.tree_util.tree_structure(made[ok[0]][1])
+    if any(jax.tree_util.tree_structure(made[i][1]) != tree for i in ok):
+        return None
+    tol = np.array([tolerance(setups[i].model, value.tol) if i in ok else 1.0
+                    for i in range(len(members))])  # fmt: skip
+    # a failed member takes the first member's place in the program (its rows dropped)
+    fill = [i if setups[i] is not None else ok[0] for i in range(len(members))]
+    parts = []
+    for first in range(0, len(members), CHUNK):
+        idx = fill[first : first + CHUNK]
+        idx = idx + [idx[0]] * (CHUNK - len(idx))
+        c = jax.tree.map(lambda *xs: np.stack([np.asarray(x) for x in xs]),
+                         *(made[i][1] for i in idx))  # fmt: skip
+        q0 = np.stack([np.asarray(setups[i].start.q) for i in idx])
+        scan = _scan_batch_jit(
+            CHUNK, c, q0, jnp.asarray(ts), jnp.asarray(tol[idx]), jnp.asarray(value.max_iter)
+        )
+        n = min(CHUNK, len(members) - first)
+        parts.append(tuple(np.asarray(a)[:n] for a in scan))
+    scans = tuple(np.concatenate(cols) for cols in zip(*parts, strict=True))
+    stack = KinematicStack(value, setups, ts, tol, scans)
+    outcomes = {i: (None, e) for i, e in errors.items()}
+    for i in np.flatnonzero(stack.flagged()):
+        i = int(i)
+        if i in outcomes:
+            continue
+        try:
+            outcomes[i] = stack.result(i), None
+        except MixdynError as err:
+            outcomes[i] = None, err
+            errors[i] = err
+    if on_member is not None:
+        for i in range(len(members)):
+            on_member(i)
+    return stack, LazyResults(len(members), stack.result, outcomes), errors
+
+
+__all__ = ["KinematicStack", "run"]
