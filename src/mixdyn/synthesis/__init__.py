@@ -1,13 +1,15 @@
-"""Linkage synthesis: four-bars that draw a given path, searched by gradients, with dynamics
-in the objective.
+"""Linkage synthesis: four-bars that draw a given path or generate a function, searched by
+gradients, with dynamics in a path's objective.
 
 * :mod:`._fourbar` — a four-bar's numbers, its closed-form assembly on a fixed branch with
   implicit derivatives, its coupler curve and transmission angle;
 * :mod:`._dynamics` — the links' inertia from the dimensions and the motor torque;
 * :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
-  angle) and :class:`Objective` (path error, motor torque by weight);
+  angle), :class:`FunctionTask` (input-output angle pairs, or a function over a range) and
+  :class:`Objective` (path error, motor torque by weight);
 * :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
   Levenberg-Marquardt at once, checked, ranked and deduplicated;
+* :mod:`._function` — the same search for a function task (:class:`FunctionSynthesis`);
 * :mod:`.build` — a synthesized four-bar as a :class:`mixdyn.Model` and a model file.
 
 Example::
@@ -23,18 +25,23 @@ Example::
 
 from ._dynamics import Masses, link_inertia, motor_torque
 from ._fourbar import NAMES, FourBar, coupler_curve, coupler_point, link_angles, transmission_cosine
+from ._function import FunctionCandidate, FunctionSynthesis
 from ._search import Candidate, Synthesis, synthesize
-from ._task import Objective, PathTask
+from ._task import FunctionTask, Objective, PathTask, chebyshev
 from .build import four_bar_model, model_file_text
 
 __all__ = [
     "NAMES",
     "Candidate",
     "FourBar",
+    "FunctionCandidate",
+    "FunctionSynthesis",
+    "FunctionTask",
     "Masses",
     "Objective",
     "PathTask",
     "Synthesis",
+    "chebyshev",
     "coupler_curve",
     "coupler_point",
     "four_bar_model",

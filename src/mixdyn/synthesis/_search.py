@@ -39,7 +39,7 @@ import numpy as np
 from ..errors import ModelError
 from ._dynamics import motor_torque
 from ._fourbar import NAMES, FourBar, coupler_point, transmission_cosine
-from ._task import Objective, PathTask
+from ._task import FunctionTask, Objective, PathTask
 
 #: The penalties' weight (residuals of infeasibility times this).
 PENALTY = 10.0
@@ -258,7 +258,7 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
 
 
 def synthesize(
-    task: PathTask,
+    task: PathTask | FunctionTask,
     objective: Objective | None = None,
     *,
     starts: int = 2048,
@@ -269,11 +269,15 @@ def synthesize(
     polish: bool = True,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis:
-    """Four-bars whose coupler point passes ``task``'s targets, best first.
+    """Four-bars whose coupler point passes ``task``'s targets (a :class:`PathTask`), or
+    whose rocker follows its crank as asked (a :class:`~._function.FunctionTask`), best first.
 
     Args:
-        task: the path task (targets, timing, bounds, transmission angle).
-        objective: the objective (default: the path error alone).
+        task: the path task (targets, timing, bounds, transmission angle), or the function
+            task (input-output angle pairs; :func:`~._function.synthesize_function`, which
+            takes ``starts``, ``seed``, ``chunk``, ``max_steps``, ``keep`` and ``progress``).
+        objective: the objective (default: the path error alone; a function task's is its
+            angle error, and it takes none).
         starts: random starts, half on each assembly branch.
         seed: the random generator's seed (the same seed, the same starts and outcome).
         chunk: starts solved together (one vectorized program, compiled once).
@@ -286,11 +290,28 @@ def synthesize(
             far)``, ``stage`` ``"search"`` or ``"polish"``.
 
     Returns:
-        A :class:`Synthesis`.
+        A :class:`Synthesis` (a :class:`~._function.FunctionSynthesis` for a function task).
 
     Raises:
-        ModelError: a bad number of starts, chunk or step count.
+        ModelError: a bad number of starts, chunk or step count; an objective for a
+            function task.
     """
+    if isinstance(task, FunctionTask):
+        if objective is not None:
+            raise ModelError(
+                "a function task's objective is its angle error: give no objective", "objective"
+            )
+        from ._function import synthesize_function
+
+        return synthesize_function(
+            task,
+            starts=starts,
+            seed=seed,
+            chunk=chunk,
+            max_steps=max_steps,
+            keep=keep,
+            progress=progress,
+        )
     objective = objective or Objective()
     for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
         if int(value) < 1:

@@ -1,14 +1,17 @@
-"""What a synthesis asks for: the path task and the objective, checked when made.
+"""What a synthesis asks for: the path or function task and the objective, checked when made.
 
 :class:`PathTask` holds the target points, the timing (prescribed input angles, or free), the
-bounds of the four-bar's numbers and the least transmission angle. :class:`Objective` says how
-the path error and the motor torque are weighed. Both are plain, immutable values; the search
-(:mod:`._search`) turns them into one residual function of a candidate's variables.
+bounds of the four-bar's numbers and the least transmission angle. :class:`FunctionTask` holds
+input-output angle pairs (or a function over a range at precision points). :class:`Objective`
+says how the path error and the motor torque are weighed. All are plain, immutable values; the
+search (:mod:`._search`, :mod:`._function`) turns them into one residual function of a
+candidate's variables.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 
 import numpy as np
 
@@ -132,4 +135,100 @@ class Objective:
             raise ModelError("samples must be at least 4", "samples")
 
 
-__all__ = ["Objective", "PathTask"]
+#: The default bounds of the crank, coupler and rocker as multiples of the ground link.
+RATIO_BOUNDS = (0.05, 20.0)
+
+
+def chebyshev(low: float, high: float, n: int) -> np.ndarray:
+    """Chebyshev's ``n`` precision points over ``[low, high]``, increasing:
+    ``(low + high)/2 - (high - low)/2 cos((2j - 1) pi / (2n))``, ``j = 1..n``."""
+    j = np.arange(1, n + 1)
+    return 0.5 * (low + high) - 0.5 * (high - low) * np.cos((2 * j - 1) * np.pi / (2 * n))
+
+
+@dataclasses.dataclass(frozen=True)
+class FunctionTask:
+    """Function generation: the rocker's angle at given crank angles.
+
+    Attributes:
+        inputs: (N,) the crank's angles ``theta2`` [rad], N >= 2, strictly monotone, within
+            a turn: from the ground link, or with ``free_start`` from the crank's unknown
+            start angle.
+        outputs: (N,) the rocker's angles ``theta4`` [rad] at them (from the ground link, or
+            with ``free_start`` from the rocker's unknown start angle).
+        free_start: the angles count from start angles found by the search (two more
+            unknowns) instead of from the ground link.
+        bounds: ``(low, high)`` of the crank, coupler and rocker lengths as multiples of the
+            ground link (default ``(0.05, 20)``).
+        min_transmission: the least transmission angle from the first input to the last [rad].
+    """
+
+    inputs: np.ndarray
+    outputs: np.ndarray
+    free_start: bool = False
+    bounds: tuple[float, float] = RATIO_BOUNDS
+    min_transmission: float = 0.0
+
+    def __post_init__(self):
+        x = np.asarray(self.inputs, dtype=float)
+        y = np.asarray(self.outputs, dtype=float)
+        if x.ndim != 1 or len(x) < 2 or y.shape != x.shape:
+            raise ModelError(
+                f"inputs and outputs must be two or more angles each, as many of one as of the "
+                f"other; got shapes {x.shape} and {y.shape}",
+                "inputs",
+            )
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+            raise ModelError("inputs and outputs must be finite angles [rad]", "inputs")
+        steps = np.diff(x)
+        if not (np.all(steps > 0) or np.all(steps < 0)) or abs(x[-1] - x[0]) >= 2 * np.pi:
+            raise ModelError("inputs must increase (or decrease) within one turn", "inputs")
+        lo, hi = (float(b) for b in self.bounds)
+        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+            raise ModelError(f"bounds must be 0 < low < high, got {self.bounds!r}", "bounds")
+        if not 0.0 <= self.min_transmission < np.pi / 2:
+            raise ModelError("min_transmission must lie in [0, pi/2) rad", "min_transmission")
+        object.__setattr__(self, "inputs", x)
+        object.__setattr__(self, "outputs", y)
+        object.__setattr__(self, "bounds", (lo, hi))
+
+    @classmethod
+    def from_function(
+        cls,
+        f: Callable,
+        x_range: tuple[float, float],
+        input_span: float,
+        output_span: float,
+        *,
+        points: int = 3,
+        input_start: float = 0.0,
+        output_start: float = 0.0,
+        spacing: str = "chebyshev",
+        **options,
+    ) -> FunctionTask:
+        """The task of generating ``y = f(x)`` over ``x_range``: ``x`` mapped linearly onto
+        the crank's angles ``input_start + input_span (x - x0) / (x1 - x0)`` and ``y`` onto
+        the rocker's ``output_start + output_span (y - f(x0)) / (f(x1) - f(x0))`` [rad], at
+        ``points`` precision points (``"chebyshev"`` or ``"even"`` spacing, ends excluded
+        for Chebyshev's). ``options``: the other attributes (``free_start``...)."""
+        x0, x1 = (float(v) for v in x_range)
+        if not (np.isfinite(x0) and np.isfinite(x1) and x1 > x0):
+            raise ModelError(f"x_range must be (low, high), low < high, got {x_range!r}", "x")
+        if int(points) < 2:
+            raise ModelError("points must be at least 2", "points")
+        if spacing == "chebyshev":
+            x = chebyshev(x0, x1, int(points))
+        elif spacing == "even":
+            x = np.linspace(x0, x1, int(points))
+        else:
+            raise ModelError(f"spacing must be 'chebyshev' or 'even', got {spacing!r}", "spacing")
+        y0, y1 = float(f(x0)), float(f(x1))
+        if not (np.isfinite(y0) and np.isfinite(y1) and y1 != y0):
+            raise ModelError("f must take different finite values at the range's ends", "f")
+        y = np.asarray(f(x), dtype=float)
+        inputs = input_start + input_span * (x - x0) / (x1 - x0)
+        outputs = output_start + output_span * (y - y0) / (y1 - y0)
+        return cls(inputs, outputs, **options)
+
+
+__all__ = ["RATIO_BOUNDS", "FunctionTask", "Objective", "PathTask", "chebyshev"]
