@@ -506,6 +506,50 @@ def preset(name: str) -> dict[str, str]:
 
 SI = UnitSystem("m", "kg", "s")
 
+#: Names of energy and power units by their size in J and W (:func:`completed`).
+_NAMED = {
+    "energy": {1.0: "J", 1e3: "kJ", 1e6: "MJ", 1e-3: "mJ", 1e-6: "uJ"},
+    "power": {1.0: "W", 1e3: "kW", 1e6: "MW", 1e-3: "mW", 1e-6: "uW"},
+}
+
+
+def _named(kind: str, size: float, spelled: str) -> str:
+    """The unit of ``kind`` of ``size`` [J or W]: its name where it has one (``mJ``), else
+    ``spelled``."""
+    for s, name in _NAMED[kind].items():
+        if abs(size - s) <= 1e-12 * s:
+            return name
+    return spelled
+
+
+def completed(output_units: dict[str, str], model_units: UnitSystem | None) -> dict[str, str]:
+    """``output_units`` with the energy and the power following the units given by hand,
+    where they are not given themselves: the energy in the torque's unit (``N*m`` -> ``J``,
+    ``N*mm`` -> ``mJ``), else in the force's unit times the length's; the power in the
+    energy's unit per the time's unit (the model's where not given): ``{torque: N*m}`` shows a
+    motor's power in W, not in the model's µW.
+
+    Args:
+        output_units: kind of quantity -> unit (presets expanded).
+        model_units: the model's unit system (its time unit where none is given).
+    """
+    out = dict(output_units)
+    if "energy" not in out:
+        if "torque" in out:
+            spelled = out["torque"]
+        elif "force" in out and "length" in out:
+            spelled = f"{out['force']}*{out['length']}"
+        else:
+            spelled = None
+        if spelled is not None:
+            out["energy"] = _named("energy", size_in(spelled, "energy", SI), spelled)
+    if "power" not in out and "energy" in out:
+        time = out.get("time") or (model_units.time if model_units is not None else "s")
+        spelled = f"({out['energy']})/{time}"
+        size = size_in(out["energy"], "energy", SI) / size_in(time, "time", SI)
+        out["power"] = _named("power", size, spelled)
+    return out
+
 
 def in_units(result, columns: dict, units: dict, output_units: dict | None):
     """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
@@ -521,6 +565,7 @@ def in_units(result, columns: dict, units: dict, output_units: dict | None):
 
     if isinstance(output_units, str):
         output_units = preset(output_units)
+    output_units = completed(output_units, result.model.units)
 
     cols, out = dict(columns), dict(units)
     for name in columns:

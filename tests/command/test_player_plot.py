@@ -17,7 +17,13 @@ from mixdyn.viz import html
 
 #: Output units of the page and each column's factor from the model's unit (by its unit).
 OUTPUT_UNITS = {"angle": "deg", "torque": "N*mm"}
-FACTORS = {"rad": (180 / math.pi, "deg"), "N*m": (1e3, "N·mm")}
+#: A torque in N*mm gives energies in mJ and powers in mW (the time in s).
+FACTORS = {
+    "rad": (180 / math.pi, "deg"),
+    "N*m": (1e3, "N·mm"),
+    "J": (1e3, "mJ"),
+    "W": (1e3, "mW"),
+}
 
 
 @pytest.fixture(scope="module")

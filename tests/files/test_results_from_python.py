@@ -177,6 +177,29 @@ def test_engineering_labels_are_the_same_units(unit):
     assert plain(label) == unit.replace("um", "µm")
 
 
+def test_energy_and_power_follow_the_torque_and_force_units_given_by_hand(crank, tmp_path):
+    """Units given by hand without a preset: the energy and the power follow them (a motor's
+    power in W, not in the model's mm-based unit) unless given themselves; the numbers are the
+    closed form's in those units."""
+    _, _, results, _ = crank
+    r = results["turn"]
+    df = r.table(output_units={"torque": "N*m"})  # the model in mm, kg, s
+    truth = _truth(df["t"].to_numpy())
+    units = df.attrs["units"]
+    assert (units["motor"], units["energy.kinetic"], units["motor.power"]) == ("N·m", "J", "W")
+    for col in ("motor", "energy.kinetic", "motor.power"):
+        np.testing.assert_allclose(df[col], truth[col], rtol=1e-9, err_msg=col)
+    df = r.table(output_units={"force": "kN", "length": "m", "time": "ms"})
+    assert (df.attrs["units"]["energy.kinetic"], df.attrs["units"]["motor.power"]) == ("kJ", "MW")
+    np.testing.assert_allclose(df["motor.power"], 1e-6 * truth["motor.power"], rtol=1e-9)
+    df = r.table(output_units={"torque": "N*m", "power": "kW"})  # given: kept
+    np.testing.assert_allclose(df["motor.power"], 1e-3 * truth["motor.power"], rtol=1e-9)
+    path = tmp_path / "c.yaml"  # a file's output_units say the same
+    path.write_text(CRANK.replace("{preset: SI, angle: deg}", "{torque: N*m}"))
+    f = md.load(path)
+    assert (f.output_units["energy"], f.output_units["power"]) == ("J", "W")
+
+
 def test_a_preset_is_checked_at_its_line(tmp_path):
     path = tmp_path / "c.yaml"
     for given, words in (("SI", None), ("{preset: SI, torque: N*mm}", None), ("SJ", "SI, mm-N-s")):

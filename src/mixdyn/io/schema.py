@@ -1141,7 +1141,8 @@ class ModelFile(Spec):
     output_units: dict[str, str] | str = Field(default_factory=dict)
     """Units of the results by kind of quantity, e.g. ``{angle: deg, torque: N*m}``; or a
     preset for every kind: ``SI`` (m, N, N*m, J, W) or ``mm-N-s`` (mm, N, N*mm, mJ, mW),
-    changed as ``{preset: SI, angle: deg}``. Default: the model's units."""
+    changed as ``{preset: SI, angle: deg}``; energy and power, not given, follow the torque's
+    and time's. Default: the model's units."""
     parameters: dict[str, Scalar] = Field(default_factory=dict)
     """Named constants usable in expressions and quantities, e.g. ``{L: 120 mm, F0: 10 N}``."""
     ground: GroundSpec = GroundSpec()

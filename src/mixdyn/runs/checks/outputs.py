@@ -100,9 +100,10 @@ def _check_arrows(runner, plan: Plan, forces, path) -> None:
 def output_units(runner) -> dict[str, str]:
     """The file's ``output_units`` checked: a preset's name (``SI``, ``mm-N-s``:
     :data:`mixdyn.units.OUTPUT_PRESETS`) or kinds and their units, a ``preset`` among them
-    expanded first; known kinds, units of their dimension."""
+    expanded first; known kinds, units of their dimension; the energy and the power following
+    the units given by hand (:func:`mixdyn.units.completed`)."""
     from ..._hints import did_you_mean
-    from ...units import DIMENSIONS, OUTPUT_PRESETS
+    from ...units import DIMENSIONS, OUTPUT_PRESETS, completed
 
     given = runner.spec.output_units
     if isinstance(given, str):
@@ -132,7 +133,7 @@ def output_units(runner) -> dict[str, str]:
             )
         runner.b.factor(unit, kind, path)  # the dimension checked
         out[kind] = unit
-    return out
+    return completed(out, runner.model.units if runner.model is not None else None)
 
 
 def columns(runner, r) -> tuple[list[str], set[str]]:
