@@ -219,3 +219,22 @@ def test_the_example_runs_and_its_best_yaml_runs(tmp_path):
     torque = md.read_table(tmp_path / "best" / "torque" / "results.csv")["motor"]
     rms = float(np.sqrt(np.mean(np.asarray(torque) ** 2)))
     assert rms == pytest.approx(table["torque_rms [N·m]"].iloc[0], rel=0.02)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search compiles its program)
+def test_no_feasible_four_bar_is_a_named_numerical_failure(tmp_path):
+    """Bounds no four-bar can meet (a crank ten times the ground link and the rocker): exit
+    1 with the cause and what to relax, meta.json ``status: failed`` and the failure's page."""
+    path = tmp_path / "task.yaml"
+    path.write_text(
+        _text(
+            "    bounds: {r1: [10 mm, 11 mm], r2: [1000 mm, 1001 mm], r4: [10 mm, 11 mm]}",
+            "    starts: 4",
+        )
+    )
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 1 and "no feasible four-bar among 4 starts" in res.output
+    assert "wider bounds" in res.output and "internal error" not in res.output
+    meta = json.loads((tmp_path / "out" / "path" / "meta.json").read_text())
+    assert meta["status"] == "failed" and meta["failure"]["error"] == "NumericalError"
+    assert (tmp_path / "out" / "path" / "report.html").is_file()

@@ -37,9 +37,8 @@ _MAX_FAILED_ROWS = 20
 def _facts(runner, plan, outputs, status: str, seconds: float | None) -> list:
     from .._version import __version__
 
-    model = runner.model
-    facts = [
-        ("model", f"{model.name} ({outputs.file})"),
+    facts = [  # the file's name: its model's, where it has one (not a synthesis file)
+        ("model", f"{runner.spec.name} ({outputs.file})"),
         ("run", f"{plan.name} ({plan.spec.kind})"),
         ("status", status),
     ]
@@ -343,8 +342,7 @@ def failure_report(runner, plan, error, outputs) -> Report:
     from ..io.results import run_settings
     from ..units import engineering
 
-    model = runner.model
-    tu = model.units.label("time")
+    tu = runner.b.units.label("time")  # the model's (a synthesis file has no model)
     at = f" at t = {error.time:g} {tu}" if getattr(error, "time", None) is not None else ""
     name = type(error).__name__
     line = f"The run failed{at}: {name}: {error.message}"
@@ -370,7 +368,7 @@ def failure_report(runner, plan, error, outputs) -> Report:
     folder = outputs.folder(plan)
     return Report(
         path=folder / REPORT_HTML,
-        title=f"{model.name}: run {plan.name} failed",
+        title=f"{runner.spec.name}: run {plan.name} failed",
         facts=facts,
         drawing="",
         figures=[],
