@@ -220,15 +220,20 @@ class OptimizeKind(RunKind):
         )
         files.append(write_frame(o.table(), folder / "optimum.csv"))
         if outputs.painter is not None:
+            from ..units import in_units
             from ..viz.plots import result_columns
 
-            col = r.objective.column
-            first, units = result_columns(result.first, [col])
+            col = r.objective.column  # drawn in its output unit, as the report and the tables
+            first, units = result_columns(result.first, ["t", col])
             best, _ = result_columns(result.result, [col])
+            history = {col: np.asarray(o.history, dtype=float)}
+            first, _ = in_units(result.first, first, units, runner.output_units)
+            best, _ = in_units(result.result, best, units, runner.output_units)
+            history, units = in_units(result.result, history, units, runner.output_units)
             outputs.painter.draw(
                 "optimum",
-                np.asarray(o.history),
-                np.asarray(plan.times),
+                history[col],
+                np.asarray(first["t"]),
                 np.asarray(first[col]),
                 np.asarray(best[col]),
                 folder / "optimize.png",
