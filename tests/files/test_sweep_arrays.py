@@ -223,3 +223,62 @@ def test_an_inverse_file_sweep_shares_the_motion_and_equals_the_single_runs(monk
                 _close(a[c], b[c], 1e-12, c)
             else:
                 assert list(a[c]) == list(b[c]), c
+
+
+KINEMATIC = (
+    (EXAMPLES / "slider_crank.yaml").read_text().split("\nruns:")[0]
+    + """
+runs:
+  - name: kinematics
+    kind: kinematic
+    time: {span: [0, 1], n: 11}
+  - name: sweep
+    kind: sweep
+    run: kinematics
+    vary:
+      l: {values: [250 mm, 300 mm, 420 mm]}
+      omega: {values: [2 rad/s, 3.5 rad/s]}
+    summaries:
+      - {name: reach, column: slider.x, reduce: max}
+      - {name: swing, column: rod.B.vx, reduce: absmax}
+    outputs: [slider.x, rod.phi, rod.B.vx]
+"""
+)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_kinematic_file_sweep_held_as_arrays_equals_the_single_runs(monkeypatch):
+    """A kinematic sweep over the rod's length (its points: each member built from its file,
+    its own start) and the crank speed, held as arrays (two members a call here): its tables
+    are those of each member's single run of the file with its numbers written in, and of
+    the sweep run member by member."""
+    from mixdyn.analysis import _kinematic_members
+
+    monkeypatch.setattr(file_sweep, "CHUNK", 2)
+    monkeypatch.setattr(_kinematic_members, "CHUNK", 2)
+    swept = execute(mio.reads(KINEMATIC), ["sweep"])["sweep"]
+    assert isinstance(swept.sweep.stacked, _kinematic_members.KinematicStack)
+    assert not swept.sweep.errors
+    members, table = swept.members(), swept.table()
+    assert len(swept.sweep.results._built) <= 1  # the first member's, for the names
+    for i, (l, w) in enumerate(zip(members["l"], members["omega"], strict=True)):
+        text = KINEMATIC.replace("  l: 300 mm ", f"  l: {l!r} m ")
+        text = text.replace("  omega: 2 rad/s ", f"  omega: {w!r} rad/s ")
+        single = execute(mio.reads(text), ["kinematics"])["kinematics"]
+        cols = single.table(points=["rod.B"])
+        rows = table[table["member"] == i]
+        for c in ("slider.x", "rod.phi", "rod.B.vx"):
+            _close(rows[c], cols[c], 1e-12, (i, c))
+        _close(members["reach"][i], np.max(cols["slider.x"]), 1e-12, i)
+        _close(members["swing"][i], np.max(np.abs(cols["rod.B.vx"])), 1e-12, i)
+    assert len(set(members["reach"].round(9))) == 3  # the rod's length did change the reach
+    monkeypatch.setattr(file_sweep, "_kinematic_arrays", lambda *a, **k: None)
+    one_by_one = execute(mio.reads(KINEMATIC), ["sweep"])["sweep"]
+    assert one_by_one.sweep.stacked is None
+    for a, b in ((members, one_by_one.members()), (table, one_by_one.table())):
+        assert list(a.columns) == list(b.columns) and len(a) == len(b)
+        for c in a.columns:
+            if a[c].dtype.kind == "f":
+                _close(a[c], b[c], 1e-12, c)
+            else:
+                assert list(a[c]) == list(b[c]), c

@@ -50,7 +50,8 @@ class KinematicStack:
     """The members of a kinematic sweep, each set up, as arrays.
 
     Attributes:
-        value: the analysis value.
+        values: per member its analysis value (the same object for every member of a
+            sweep of one value).
         setups: per member its set-up (:class:`~._setup.Setup`), None where it failed.
         ts: (N,) the output times [time].
         tol: (M,) each member's Newton tolerance [length].
@@ -58,7 +59,7 @@ class KinematicStack:
             (member, time); a failed member's rows are its copy of another member's.
     """
 
-    value: Kinematic
+    values: Sequence[Kinematic]
     setups: list
     ts: np.ndarray
     tol: np.ndarray
@@ -80,7 +81,7 @@ class KinematicStack:
         setup = self.setups[i]
         c = setup.start.constraints()
         scan = tuple(np.asarray(a[i]) for a in self.scans)
-        v = self.value
+        v = self.values[i]
         return kinematic_result(
             setup.start, c, self.ts, scan, float(self.tol[i]), v.max_iter, v.singular_tol
         )
@@ -88,9 +89,8 @@ class KinematicStack:
     def flagged(self) -> np.ndarray:
         """(M,) the members whose scan fails a check of :func:`~.kinematic.check_run`."""
         _, _, _, _, res, ratio = self.scans
-        bad = ~(np.asarray(res) <= self.tol[:, None]) | (
-            np.asarray(ratio) < self.value.singular_tol
-        )
+        singular = np.array([v.singular_tol for v in self.values])
+        bad = ~(np.asarray(res) <= self.tol[:, None]) | (np.asarray(ratio) < singular[:, None])
         return bad.any(axis=1)
 
     def columns(
@@ -125,25 +125,29 @@ class KinematicStack:
 
 def run(
     members: Sequence[Model],
-    value: Kinematic,
+    value: Kinematic | Sequence[Kinematic],
     t,
     threads: int,
     on_member: Callable[[int], None] | None,
     describe: Callable[[int], str],
 ) -> tuple[KinematicStack, LazyResults, dict[int, MixdynError]] | None:
     """The members of a kinematic sweep set up, run by one vectorized program and screened:
-    ``(stack, results, errors)``; None where their constraint sets differ in structure
-    (then member by member).
+    ``(stack, results, errors)``; None where their constraint sets differ in structure or
+    their values in ``max_iter`` (then member by member). ``value``: the analysis value, or
+    one per member (the model-file layer's members, whose settings may differ).
 
     Raises:
         ModelError: a member's input error (with its index in a note).
     """
     ts = output_times(t, minimum=1)
     t0 = float(ts[0])
+    values = [value] * len(members) if isinstance(value, Kinematic) else list(value)
+    if len({v.max_iter for v in values}) > 1:
+        return None
 
     def setup_of(i: int):
         try:
-            setup = _setup.prepare(members[i], value, t0=t0)
+            setup = _setup.prepare(members[i], values[i], t0=t0)
             _setup.check_start(setup, ts)
             return setup, setup.start.constraints().for_batch()
         except ModelError as err:
@@ -160,15 +164,15 @@ def run(
         for i in range(len(members)) if on_member is not None else ():
             on_member(i)
         return (
-            KinematicStack(value, setups, ts, np.zeros(0), ()),
+            KinematicStack(values, setups, ts, np.zeros(0), ()),
             LazyResults(len(members), lambda i: None, {i: (None, e) for i, e in errors.items()}),
             errors,
         )
     tree = jax.tree_util.tree_structure(made[ok[0]][1])
     if any(jax.tree_util.tree_structure(made[i][1]) != tree for i in ok):
         return None
-    tol = np.array([tolerance(setups[i].model, value.tol) if i in ok else 1.0
-                    for i in range(len(members))])  # fmt: skip
+    tol = np.array([tolerance(s.model, v.tol) if s is not None else 1.0
+                    for s, v in zip(setups, values, strict=True)])  # fmt: skip
     # a failed member takes the first member's place in the program (its rows dropped)
     fill = [i if setups[i] is not None else ok[0] for i in range(len(members))]
     parts = []
@@ -179,12 +183,12 @@ def run(
                          *(made[i][1] for i in idx))  # fmt: skip
         q0 = np.stack([np.asarray(setups[i].start.q) for i in idx])
         scan = _scan_batch_jit(
-            CHUNK, c, q0, jnp.asarray(ts), jnp.asarray(tol[idx]), jnp.asarray(value.max_iter)
+            CHUNK, c, q0, jnp.asarray(ts), jnp.asarray(tol[idx]), jnp.asarray(values[0].max_iter)
         )
         n = min(CHUNK, len(members) - first)
         parts.append(tuple(np.asarray(a)[:n] for a in scan))
     scans = tuple(np.concatenate(cols) for cols in zip(*parts, strict=True))
-    stack = KinematicStack(value, setups, ts, tol, scans)
+    stack = KinematicStack(values, setups, ts, tol, scans)
     outcomes = {i: (None, e) for i, e in errors.items()}
     for i in np.flatnonzero(stack.flagged()):
         i = int(i)

@@ -39,6 +39,7 @@ summaries and table columns in the file's ``output_units`` where it gives them.
 from __future__ import annotations
 
 import dataclasses
+import os
 import pathlib
 import re
 import time
@@ -47,6 +48,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .. import paths
+from ..analysis import _kinematic_members
 from ..analysis._keywords import from_keywords, member_values
 from ..analysis._members import run_members
 from ..analysis._schedule import CHUNK, _default_batch_size
@@ -531,6 +533,12 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
             outcomes = _at_own_times(plan, models, analysis, kwargs, describe, progress)
         else:
             values, recorded = member_values(analysis, plan.times, kwargs, describe)
+            sweep = _kinematic_arrays(plan, models, values, describe, progress)
+            if sweep is not None:
+                sweep.seconds["total"] = time.perf_counter() - built
+                summaries, units = _summaries(runner, plan, sweep)
+                seconds = {"build": built - started, "run": sweep.seconds["total"]}
+                return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
 
             def run(idx: list[int], first: int = 0, batch_size=r.batch_size) -> list:
                 def done(k: int) -> None:  # a chunk's filling (copies of idx[0]) not shown
@@ -609,6 +617,23 @@ def _as_arrays(
         driven=driven,
         named=dict(plan.values),
     )
+
+
+def _kinematic_arrays(plan: SweepPlan, models, values, describe, progress) -> Sweep | None:
+    """A kinematic sweep held as arrays (:mod:`mixdyn.analysis._kinematic_members`: each
+    member prepared like its single run, one vectorized program running the scan) where it
+    has at least :data:`CHUNK` members (or runs on an accelerator) and no ``batch_size``, as
+    :func:`mixdyn.sweep` takes that path; None otherwise (then member by member)."""
+    many = plan.members >= CHUNK or _default_batch_size() is not None
+    if values[0].name != "kinematic" or plan.spec.batch_size is not None or not many:
+        return None
+    made = _kinematic_members.run(
+        models, values, plan.times, os.cpu_count() or 1, progress, describe
+    )
+    if made is None:
+        return None
+    stack, results, errors = made
+    return Sweep(results, errors, _params(plan), {}, stack, None, dict(plan.values))
 
 
 def _at_own_times(plan: SweepPlan, models, analysis: str, kwargs, describe, progress) -> list:
