@@ -13,7 +13,9 @@ again (:mod:`.sweep_members`: the same numbers) and the members share one start;
 also run as one vectorized program (the file's ``batch_size``, or at least
 :data:`~mixdyn.analysis._schedule.CHUNK` members) the sweep is held as arrays, as
 :func:`mixdyn.sweep` holds it (:func:`_as_arrays`: one set-up, one stacked problem), and its
-tables, summaries and bands are read from the arrays, no member's result built.
+tables, summaries and bands are read from the arrays, no member's result built. A kinematic
+sweep of at least that many members is held as arrays too (:func:`_kinematic_arrays`: each
+member prepared like its single run, one vectorized program running the scan).
 
 Example (``examples/antonya_sweep.yaml``)::
 
@@ -498,7 +500,9 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     The members' models are made from the swept run's model where the varied numbers reach
     only forces and bodies' masses and inertias (:func:`.sweep_members.quick_members`), and
     then share its start (:func:`mixdyn.analysis.sweep.shares_start`); else each is built
-    from its file."""
+    from its file. The sweep is held as arrays where its members run as one vectorized
+    program (:func:`_as_arrays`, :func:`_kinematic_arrays`); else the members run by
+    :func:`~mixdyn.analysis._members.run_members`."""
     r: s.SweepRunSpec = plan.spec
     started = time.perf_counter()
     analysis, model, kw = setup.call(runner, plan.base, {}, checked=False)
