@@ -4,7 +4,7 @@ A member is the swept run of the file with the member's numbers (:mod:`.sweep`).
 the whole model from the file again for every member costs as much as running it (~10-20
 ms on the paper's model), so where the varied numbers reach only force elements and the
 bodies' masses and inertias, :func:`quick_members` builds just those again (once for each
-value of the parameters they name) and holds their numbers as columns of the run's model's
+value of the varied parameters they reach) and holds their numbers as columns of the run's model's
 leaves, a row per member (:class:`Members`; a member's model is one unflatten): the same
 numbers as a model built from the file, and a start the members share
 (:func:`mixdyn.analysis.sweep.shares_start`), hence one stacked problem
@@ -126,19 +126,17 @@ def quick_members(runner, plan, model: Model) -> Members | None:
     """The members of sweep ``plan`` as ``model`` (the swept run's model) and the columns
     of its leaves that change, made by building again only the forces and the bodies'
     masses and inertias that the varied numbers reach (a part once for each value of the
-    parameters it names: a grid's axes are built, not its combinations); None where they
+    varied parameters it reaches: a grid's axes are built, not its combinations, and a
+    builder made for those members alone); None where they
     reach anything else, or a member's part cannot be built or differs in structure (then
     each member is built from its file, which reports it).
     """
     spec = runner.spec
     values = plan.values
     named = [k for k in values if "." in k]
-    builders = [_parameters(spec, values, i) for i in range(plan.members)]
-    nominal = runner.b.parameters
-    changed = set()
-    for _, b in builders:
-        if b is not None:
-            changed |= {k for k, v in b.parameters.items() if v != nominal.get(k)}
+    reach = _reach(spec.parameters)
+    varied = {k for k in values if "." not in k}
+    changed = {p for p in spec.parameters if reach({p}) & varied}
     outside = _names([spec.ground, spec.gravity, spec.joints, spec.drivers, plan.base.spec])
     outside |= _names([b.model_dump(exclude={"mass", "inertia"}) for b in spec.bodies])
     if changed & outside:
@@ -161,23 +159,26 @@ def quick_members(runner, plan, model: Model) -> Members | None:
         parts.append(_Part(at, tree.num_leaves, force=k, tree=tree))
     for path in named:
         parts.append(_Part(_position(model, paths.getter(model, path)[0]), 1, path=path))
-    parameters = set(nominal)
-    keys = [sorted(_names(_entry(spec, p)) & parameters) for p in parts]
+    # a part is built once for each value of the varied parameters it reaches
+    keys = [sorted(reach(_names(_entry(spec, p))) & varied) for p in parts]
     built: list[dict] = [{} for _ in parts]  # per part: its parameters' values -> its leaves
     rows: list[list] = [[] for _ in parts]  # per part: each member's leaves
-    for i, (member, b) in enumerate(builders):
+    for i in range(plan.members):
         for n, part in enumerate(parts):
-            key = None if part.path is not None else tuple(b.parameters[k] for k in keys[n])
+            if part.path is not None:
+                rows[n].append([values[part.path][i]])
+                continue
+            key = tuple(float(values[k][i]) for k in keys[n])
             new = built[n].get(key)
             if new is None:
+                member, b = _parameters(spec, values, i)
                 try:
                     new = _leaves(part, model, member, b, values, i)
                 except (FileError, ModelError):
                     return None
                 if new is None:
                     return None
-                if key is not None:
-                    built[n][key] = new
+                new = built[n][key] = [np.asarray(x) for x in new]
             rows[n].append(new)
     return _columns(model, parts, rows, plan.members, spec)
 
@@ -215,6 +216,23 @@ def _columns(
     )
 
 
+def _reach(parameters: dict):
+    """A function: names -> the file parameters among them and those their values are
+    written with, directly or through other parameters."""
+    uses = {name: _names(text) & set(parameters) for name, text in parameters.items()}
+
+    def reach(names: set[str]) -> set[str]:
+        found, todo = set(), [n for n in names if n in uses]
+        while todo:
+            name = todo.pop()
+            if name not in found:
+                found.add(name)
+                todo.extend(uses[name])
+        return found
+
+    return reach
+
+
 def _entry(spec, part: _Part):
     """The file's entry that ``part`` is built from (a number named by its path: none)."""
     if part.body is not None:
@@ -230,9 +248,8 @@ def _reached(spec, part: _Part) -> str:
 
 
 def _leaves(part: _Part, model: Model, member, b: Builder | None, values, i: int):
-    """Member ``i``'s leaves of ``part`` (None: a force of another structure)."""
-    if part.path is not None:
-        return [jnp.asarray(float(values[part.path][i]))]
+    """Member ``i``'s leaves of a body's or force's ``part`` (None: a force of another
+    structure)."""
     if part.body is not None:
         body = b._body(part.body, member.bodies[part.body])  # its checks (a negative mass)
         return [jnp.asarray(getattr(body, part.field))]
