@@ -95,8 +95,9 @@ class ContactLostError(NumericalError):
 
 
 class ImpactAccumulationError(NumericalError):
-    """Rigid impacts accumulate (Zeno): two bodies bounce ever faster and smaller as they come
-    to rest against each other, which instantaneous impacts do not follow."""
+    """Rigid impacts accumulate without coming to rest: more impacts in one run than the
+    run takes (:data:`mixdyn.analysis._impacts.MAX_IMPACTS`), none slowing to the rest
+    speed at which a contact point is held at rest (chattering contacts)."""
 
 
 class NonFiniteError(NumericalError):

@@ -29,11 +29,23 @@ resolved one after the other (sequential impacts): the point approaching fastest
 then again while any point within the gap tolerance approaches; each pairwise impact keeps
 momentum and, at ``e = 1``, energy.
 
-Zeno: a ball coming to rest bounces infinitely often in a finite time. An impact whose
-approach speed is below :data:`REST_SPEED` times the model's length over the run's span,
-or a run past :data:`MAX_IMPACTS` impacts, ends the run as an
-:class:`~mixdyn.errors.ImpactAccumulationError` (the pair comes to rest: a resting contact
-needs a compliant contact model), carrying the states computed up to its time.
+Zeno: a ball coming to rest bounces infinitely often in a finite time (for a ball dropped
+with ``e < 1``, at the sum of the geometric series ``t_inf = t_1 + 2 e v0 / (g (1 - e))``).
+A contact point touching with a normal velocity below :data:`REST_SPEED` times the model's
+length over the run's span (approaching, or leaving) comes to rest: a last perfectly
+plastic impulse (``e = 0``, the same system) stops it, and it is held on its contact, its
+penetration a constraint row appended to the joints and drivers (:mod:`._resting`: one
+problem per set of resting points) whose multiplier is the normal force ``N`` [force]. The
+next segments integrate that problem and end, besides at impacts, by an event when a
+resting point's ``N`` falls to zero (the motion pulls it away: lift-off); the point is then
+released and its gap watched again. A resting point whose ``N`` is tensile at a segment's
+start, or whose row takes a pulling impulse in an impact elsewhere, is released at once. A
+resting contact does no work (its row's velocity is zero): the energy balance holds with
+the impacts' losses alone.
+
+A run past :data:`MAX_IMPACTS` impacts (contacts chattering without slowing to the rest
+speed) ends as an :class:`~mixdyn.errors.ImpactAccumulationError`, carrying the states
+computed up to its time.
 """
 
 from __future__ import annotations
@@ -55,6 +67,7 @@ from ..model._compliant import rigid_contacts
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
 from ._problem import Problem
+from ._resting import hold, holding, n_holds, normal_forces
 from .methods import Projection
 from .result import Partial, Result
 
@@ -86,6 +99,24 @@ def _nearest_gap(contacts, watched, t, y, args, **kwargs):
     return jnp.min(jnp.where(watched, _gaps(contacts, y[0]), jnp.inf))
 
 
+def _least_normal(problem, t, y):
+    """The smallest normal force [force] of the contact points ``problem`` holds at rest
+    in the state ``y`` (infinite where none is held)."""
+    forces = normal_forces(problem, y[0], y[1], t)
+    return jnp.min(forces, initial=jnp.inf)
+
+
+def _contact_event(problem, contacts, watched, length, force, t, y, args, **kwargs):
+    """The event's condition: the smaller of the watched contact points' smallest gap
+    relative to ``length`` [length] and the held points' smallest normal force relative to
+    ``force`` [force] (the one at the segment's start); it falls to zero at an impact or at
+    a lift-off."""
+    gap = _nearest_gap(contacts, watched, t, y, args) / length
+    if n_holds(problem) == 0:
+        return gap
+    return jnp.minimum(gap, _least_normal(problem, t, y) / force)
+
+
 def _gaps(contacts, q):
     """The gaps ``g = -delta`` (k,) [length] of every rigid contact point, in order."""
     return jnp.concatenate([-jnp.atleast_1d(c.penetration(q)) for c in contacts])
@@ -96,6 +127,7 @@ def _segment(
     problem: Problem,
     contacts,
     watched,
+    length,
     t0,
     t1,
     y0,
@@ -107,11 +139,13 @@ def _segment(
     solver: str,
     steps: int,
 ):
-    """One segment from ``t0`` to the first impact or ``t1``: the states at ``ts`` (N,)
-    clipped to the segment (``dt0``: the first step, ``dtmax`` the longest [time]; the
-    ``watched`` contact points (k,): those apart or separating at ``t0``), the end time and
-    state, whether an impact ended it, whether the
-    solve failed (but for running out of its ``steps``) and its step count."""
+    """One segment from ``t0`` to the first impact, lift-off or ``t1``: the states at
+    ``ts`` (N,) clipped to the segment (``dt0``: the first step, ``dtmax`` the longest
+    [time]; the ``watched`` contact points (k,): those apart or separating at ``t0``; the
+    points ``problem`` holds at rest, :mod:`._resting`), the end time and state, which
+    event ended it (2,): an impact (a watched gap falls to zero), a lift-off (a held
+    point's normal force falls to zero), whether the solve failed (but for running out of
+    its ``steps``) and its step count."""
     import diffrax
     import optimistix as optx
 
@@ -119,8 +153,10 @@ def _segment(
 
     f = cs.equations_of_motion(problem)
     span = t1 - t0
+    force = jnp.maximum(_least_normal(problem, t0, y0), jnp.finfo(y0[0].dtype).tiny)
+    condition = functools.partial(_contact_event, problem, contacts, watched, length, force)
     event = diffrax.Event(
-        functools.partial(_nearest_gap, contacts, watched),
+        condition,
         root_finder=optx.Bisection(rtol=0.0, atol=TIME_TOL * jnp.maximum(span, 1.0)),
         direction=False,
     )
@@ -141,7 +177,9 @@ def _segment(
     y_end = jax.tree.map(lambda a: a[-1], sol.ys)
     inside = jnp.clip(ts, t0, t_end)
     ys = jax.vmap(sol.evaluate)(inside)
-    hit = jnp.asarray(sol.event_mask)
+    gap_end = _nearest_gap(contacts, watched, t_end, y_end, None) / length
+    lift = (_least_normal(problem, t_end, y_end) / force) < gap_end
+    hit = jnp.asarray(sol.event_mask) & jnp.stack([~lift, lift])
     ran_out = sol.result == diffrax.RESULTS.max_steps_reached
     ended = (sol.result == diffrax.RESULTS.successful) | (
         sol.result == diffrax.RESULTS.event_occurred
@@ -163,6 +201,12 @@ def _impact_state(problem: Problem, contacts, q, qd, t, tol):
     g = _gaps(contacts, q)
     G = jax.jacfwd(lambda x: _gaps(contacts, x))(q)
     return q, qd, J, phit, g, G
+
+
+@cached_jit(optimize=False)  # a few times per run
+def _normals(problem: Problem, q, qd, t):
+    """The normal forces (k,) [force] of the contact points ``problem`` holds at rest."""
+    return normal_forces(problem, q, qd, t)
 
 
 @cached_jit(optimize=False)  # a few times per run
@@ -260,18 +304,37 @@ def refuse_rigid_method(model, options) -> None:
 def simulate_impacts(case, progress=None) -> Result:
     """Integrate a forward ``case`` (:class:`~._simulate.Case`) whose model has rigid
     contacts, impact by impact, and build its result: the forward columns, ``work.impacts``
-    (the kinetic energy the impacts took, accumulated [energy]) and ``{contact}.impulse``
-    (the contact's normal impulses accumulated [force * time]); ``stats["impacts"]``: each
-    impact's ``t``, ``contact``, ``impulse``, ``normal_velocity_before`` and ``_after``,
-    the constraints' impulses ``reactions`` (by constraint row), the positions ``q`` and the
-    velocities ``qd_before`` and ``qd_after`` (model units). ``progress``: an optional
-    ``f(t)`` called at each output time once the run is done."""
-    from ._simulate import _post, check_energy_balance, energy_tolerance, post_kinds
+    (the kinetic energy the impacts took, accumulated [energy]), ``{contact}.impulse``
+    (the contact's normal impulses accumulated [force * time]) and ``{contact}.normal``
+    (its normal force while it rests [force], summed over its contact points; 0 while
+    apart); ``stats["impacts"]``: each impact's ``t``, ``contact``, ``impulse``,
+    ``normal_velocity_before`` and ``_after``, the constraints' impulses ``reactions`` (by
+    constraint row), the positions ``q`` and the velocities ``qd_before`` and ``qd_after``
+    (model units); ``stats["rests"]``: each rest's ``contact``, ``start`` and ``end``
+    (its lift-off, or the run's end) [time]. ``progress``: an optional ``f(t)`` called at
+    each output time once the run is done."""
+    from ._simulate import (
+        _post,
+        _post_arrays,
+        check_energy_balance,
+        energy_tolerance,
+        post_columns,
+        post_kinds,
+    )
 
     problem, ts, options = case.problem, np.asarray(case.ts, float), case.options
     model = problem.model
     contacts = rigid_contacts(model)
-    owner = [c for c in contacts for _ in range(np.size(np.asarray(c.penetration(case.q0))))]
+    sizes = [int(np.size(np.asarray(c.penetration(case.q0)))) for c in contacts]
+    owner = [c for c, n in zip(contacts, sizes, strict=True) for _ in range(n)]
+    holds = [hold(c, k, n) for c, n in zip(contacts, sizes, strict=True) for k in range(n)]
+    problems = {(): problem}
+
+    def held_problem(resting):
+        if resting not in problems:
+            problems[resting] = holding(problem, tuple(holds[i] for i in resting))
+        return problems[resting]
+
     e_point = np.array([float(c.restitution) for c in owner])
     Minv = np.asarray(problem.Minv, float)
     span = float(ts[-1] - ts[0])
@@ -285,43 +348,79 @@ def simulate_impacts(case, progress=None) -> Result:
     impacts = {"t": [], "contact": [], "impulse": [], "normal_velocity_before": [],
                "normal_velocity_after": [], "reactions": [], "q": [], "qd_before": [],
                "qd_after": []}  # fmt: skip
-    labels = problem.c.active_labels
+    rests = {"contact": [], "start": [], "end": []}
     t0 = float(ts[0])
     y = (jnp.asarray(case.q0), jnp.asarray(case.qd0), jnp.zeros(2))
     lost, steps, segments = 0.0, 0, 1
     totals = {c.name: 0.0 for c in contacts}
     filled = np.zeros(N, bool)
+    held_at: dict[tuple, list] = {}  # the output times of each set of resting points
     dt_out = float(np.min(np.diff(ts))) if N > 1 else span
+    resting: tuple[int, ...] = ()  # the contact points at rest, held on their contacts
+    started: dict[int, float] = {}
+    released = np.zeros(len(owner), bool)  # points lifted off at t0 (separating from rest)
 
     def fail(err):
         err.partial = Partial.before(model, ts[filled], Q[filled], QD[filled], err.time)
         raise err
 
+    def release(i, t, watch=True):
+        """Point ``i`` no longer rests at ``t``; ``watch``: its gap opens (it lifts off)."""
+        nonlocal resting
+        resting = tuple(j for j in resting if j != i)
+        released[i] = watch
+        start = started.pop(i)
+        if t > start:  # a rest of no duration is none
+            rests["contact"].append(owner[i].name)
+            rests["start"].append(start)
+            rests["end"].append(t)
+
     _refuse_penetration(owner, np.asarray(_gaps(contacts, jnp.asarray(case.q0))), scale)
     while True:
-        # the impacts at t0: sequential, the fastest approach first
-        q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
-            problem, contacts, y[0], y[1], jnp.asarray(t0), tol_pos))  # fmt: skip
-        while True:  # ends: no approach left, or an accumulation (rest speed, count)
+        # the impacts at t0: sequential, the fastest approach first; a point approaching
+        # slower than the rest speed comes to rest (a plastic impulse, then held)
+        state = _impact_state(held_problem(resting), contacts, y[0], y[1], jnp.asarray(t0),
+                              tol_pos)  # fmt: skip
+        q, qd, J, phit, g, G = (np.asarray(a) for a in state)
+        while True:  # ends: no approach left, or too many impacts
             v = G @ qd
-            near = (g <= GAP_TOL * scale) & (v < 0.0)
+            free = ~released & ~np.isin(np.arange(len(owner)), resting)
+            near = (g <= GAP_TOL * scale) & (v < rest) & free  # approaching, or at rest
             if not near.any():
                 break
             i = int(np.argmin(np.where(near, v, np.inf)))
-            if -v[i] < rest or len(impacts["t"]) >= MAX_IMPACTS:
+            if v[i] >= 0.0:  # touching, leaving slower than the rest speed: held as it is
+                qd_new = impulse(Minv, J, phit, G[i], qd, 0.0)[0]
+                lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv))
+                resting = tuple(sorted((*resting, i)))
+                started[i] = t0
+                q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
+                    held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd_new),
+                    jnp.asarray(t0), tol_pos))  # fmt: skip
+                continue
+            if len(impacts["t"]) >= MAX_IMPACTS:
                 fail(
                     ImpactAccumulationError(
-                        f"impacts accumulate at {owner[i].name} (approach speed {-v[i]:.3g}, "
-                        f"{len(impacts['t'])} impacts): the bodies come to rest against each "
-                        f"other, which rigid impacts do not follow (the run stops below "
-                        f"{rest:.3g} [velocity] = {REST_SPEED:g} model lengths per span); "
-                        "use a compliant contact_model for a resting contact",
+                        f"impacts accumulate at {owner[i].name} ({len(impacts['t'])} "
+                        f"impacts, approach speed {-v[i]:.3g} still above the rest speed "
+                        f"{rest:.3g} [velocity] = {REST_SPEED:g} model lengths per span): "
+                        "the contacts chatter without coming to rest; use a compliant "
+                        "contact_model",
                         t0,
                         (owner[i].name,),
                     )
                 )
-            qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_point[i])
-            if abs(G[i] @ qd_new + e_point[i] * v[i]) > IMPULSE_TOL * abs(v[i]):
+            comes_to_rest = -v[i] < rest
+            e_i = 0.0 if comes_to_rest else e_point[i]
+            qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i)
+            pulled = [j for k, j in enumerate(resting) if lam[len(lam) - len(resting) + k] < 0.0]
+            if pulled:  # a resting point the impact pulls away lifts off: again without it
+                release(pulled[0], t0)
+                q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
+                    held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd),
+                    jnp.asarray(t0), tol_pos))  # fmt: skip
+                continue
+            if abs(G[i] @ qd_new + e_i * v[i]) > IMPULSE_TOL * abs(v[i]):
                 fail(
                     SingularityError(
                         f"the impact at {owner[i].name} cannot reverse its normal velocity: "
@@ -340,29 +439,50 @@ def simulate_impacts(case, progress=None) -> Result:
             impacts["impulse"].append(P)
             impacts["normal_velocity_before"].append(float(v[i]))
             impacts["normal_velocity_after"].append(float(G[i] @ qd_new))
+            labels = held_problem(resting).c.active_labels
             impacts["reactions"].append(dict(zip(labels, lam.tolist(), strict=False)))
             impacts["q"].append(q)
             impacts["qd_before"].append(qd)
             impacts["qd_after"].append(qd_new)
             qd = qd_new
+            if comes_to_rest:
+                resting = tuple(sorted((*resting, i)))
+                started[i] = t0
+                q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
+                    held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd),
+                    jnp.asarray(t0), tol_pos))  # fmt: skip
+        # a resting point that the motion pulls away (a tensile normal force) lifts off; one
+        # touching without a normal force (nothing presses it on) is apart
+        while resting:
+            forces = np.asarray(_normals(held_problem(resting), jnp.asarray(q),
+                                         jnp.asarray(qd), jnp.asarray(t0)))  # fmt: skip
+            if forces.min() > 0.0:
+                break
+            k = int(np.argmin(forces))  # pulled away (N < 0), or touching without a force
+            release(resting[k], t0, watch=bool(forces[k] < 0.0))
+        current = held_problem(resting)
         y = (jnp.asarray(q), jnp.asarray(qd), y[2])
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
-        dt0 = _first_step(problem, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
+        dt0 = _first_step(current, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
         dtmax = _longest_step(model, contacts, qd, dt_out, scale)
-        watched = (g > GAP_TOL * scale) | (G @ qd > 0.0)
+        apart = (g > GAP_TOL * scale) | (G @ qd > 0.0) | released
+        watched = apart & ~np.isin(np.arange(len(owner)), resting)
         ys, t_end, y_end, hit, failed, n, code = _segment(
-            problem, contacts, jnp.asarray(watched), jnp.asarray(t0), jnp.asarray(ts[-1]), y,
-            jnp.asarray(ts), dt0, jnp.asarray(dtmax), jnp.asarray(options.rtol, float),
+            current, contacts, jnp.asarray(watched), jnp.asarray(scale), jnp.asarray(t0),
+            jnp.asarray(ts[-1]), y, jnp.asarray(ts), dt0, jnp.asarray(dtmax),
+            jnp.asarray(options.rtol, float),
             jnp.asarray(options.atol, float), options.solver,
             min(SEGMENT_STEPS, int(options.max_steps)),
         )  # fmt: skip
-        t_end, steps = float(t_end), steps + int(n)
+        t_end, steps, hit = float(t_end), steps + int(n), np.asarray(hit)
         last = t_end >= ts[-1]
         take = (ts >= t0) & ((ts <= t_end) if last else (ts < t_end)) & ~filled
         Q[take], QD[take], W[take] = (np.asarray(a)[take] for a in ys)
         W_imp[take] = lost
         for name in P_acc:
             P_acc[name][take] = totals[name]
+        if resting:
+            held_at.setdefault(resting, []).extend(np.flatnonzero(take).tolist())
         filled |= take
         if bool(failed):
             fail(NumericalError(f"the integration between impacts failed: {_message(code)}", t_end))
@@ -372,26 +492,48 @@ def simulate_impacts(case, progress=None) -> Result:
             fail(NumericalError("the velocities are not finite", t_end))
         if last:
             break
-        if t_end <= t0 and not bool(hit):
+        if t_end <= t0 and not hit.any():
             fail(StepSizeError("the integration did not advance", t0))
         segments += 1
+        released[:] = False
+        if hit[1] and resting:  # lift-off: the point whose normal force fell to zero
+            forces = np.asarray(_normals(current, y_end[0], y_end[1], jnp.asarray(t_end)))
+            release(resting[int(np.argmin(forces))], t_end)
         t0, y = t_end, y_end
+    for i in list(resting):
+        release(i, float(ts[-1]))
 
     if progress is not None:
         for t in ts:
             progress(float(t))
     qdd, _, ratio, cols = _post(problem, ts, Q, QD, case.n_drivers)
-    extra = {k: np.asarray(v) for k, v in cols.items()}
+    qdd, ratio = np.array(qdd), np.array(ratio)
+    extra = {k: np.array(v) for k, v in cols.items()}
+    normals = {c.name: np.zeros(N) for c in contacts}
+    for held, rows in held_at.items():  # the resting times: their own constrained problem
+        rows = np.asarray(rows, int)
+        hp = held_problem(held)
+        arrays = _post_arrays(hp, ts[rows], Q[rows], QD[rows])
+        qdd_h, mu_h, ratio_h, cols_h = post_columns(hp, arrays, case.n_drivers)
+        qdd[rows], ratio[rows] = np.asarray(qdd_h), np.asarray(ratio_h)
+        for key, col in extra.items():
+            if key in cols_h:
+                col[rows] = np.asarray(cols_h[key])
+        m, k = hp.c.m, len(held)
+        for pos, i in enumerate(held):
+            normals[owner[i].name][rows] += np.asarray(mu_h)[:, m - k + pos]
     extra["work.nonconservative"], extra["work.constraints"] = W[:, 0], W[:, 1]
     extra["work.impacts"] = W_imp
     for name, p in P_acc.items():
         extra[f"{name}.impulse"] = p
+        extra[f"{name}.normal"] = normals[name]
     balance_cols = dict(extra, **{"work.nonconservative": W[:, 0] + W_imp})
     tol = energy_tolerance(case.energy_tol, options)
-    balance = check_energy_balance(problem, ts, Q, balance_cols, np.asarray(ratio), options, tol)
+    balance = check_energy_balance(problem, ts, Q, balance_cols, ratio, options, tol)
     kinds = post_kinds(problem, case.n_drivers)
     kinds["work.impacts"] = "energy"
     kinds.update({f"{c.name}.impulse": "impulse" for c in contacts})
+    kinds.update({f"{c.name}.normal": "force" for c in contacts})
     stats = {
         "method": options.method,
         "options": dict(options.recorded() if case.recorded is None else case.recorded),
@@ -400,8 +542,9 @@ def simulate_impacts(case, progress=None) -> Result:
         "impacts": {
             k: (v if k in ("reactions", "contact") else np.asarray(v)) for k, v in impacts.items()
         },
+        "rests": {k: (v if k == "contact" else np.asarray(v)) for k, v in rests.items()},
         "max_violation": float(np.max(extra["constraint.violation"])),
-        "min_pivot_ratio": float(np.min(np.asarray(ratio))),
+        "min_pivot_ratio": float(np.min(ratio)),
         "energy_balance_error": balance,
         "constraint_rows": problem.c.active_labels,
         "unknown_forces": problem.unknown,
@@ -414,7 +557,7 @@ def simulate_impacts(case, progress=None) -> Result:
         t=ts,
         q=Q,
         qd=QD,
-        qdd=np.asarray(qdd),
+        qdd=qdd,
         extra=extra,
         kinds=kinds,
         stats=stats,

@@ -149,8 +149,9 @@ def forward(
         work (``work.nonconservative``, ``work.constraints``), and counters in ``stats``.
         A model with rigid contacts (``contact_model="rigid"``) is integrated from impact to
         impact (:mod:`mixdyn.analysis._impacts`, with ``method="projection"``): columns
-        ``{contact}.impulse`` and ``work.impacts``, each impact in ``stats["impacts"]``; a
-        body coming to rest on one ends as :class:`~mixdyn.errors.ImpactAccumulationError`.
+        ``{contact}.impulse``, ``{contact}.normal`` (the normal force of a resting
+        contact) and ``work.impacts``, each impact in ``stats["impacts"]`` and each rest in
+        ``stats["rests"]``; a body coming to rest on one rests on it until it lifts off.
     """
     ts = output_times(t)
     analysis, recorded = Forward._from_keywords(

@@ -19,8 +19,9 @@ a pure JAX function of ``(q, qd)`` and the numbers of the element (derivatives b
 differentiation).
 
 A pair whose ``contact_model`` is ``rigid`` exerts no force: its bodies collide with
-Newton's restitution at the instants its penetration reaches zero (forward dynamics with
-impacts, :mod:`mixdyn.analysis._impacts`), and it needs no material.
+Newton's restitution at the instants its penetration reaches zero, and rest on each other
+once the impacts accumulate, the penetration held at zero (forward dynamics with impacts,
+:mod:`mixdyn.analysis._impacts`); it needs no material.
 
 The stiffness of a compliant pair is Hertz's, from one material's Young's modulus and
 Poisson's ratio and the pair's radii (:func:`~mixdyn.model._contact_law.hertz_stiffness`).

@@ -1,0 +1,99 @@
+"""Resting rigid contacts: a contact point whose impacts accumulate is held on its contact.
+
+A rigid contact point at rest on its pair (:mod:`._impacts`) keeps its gap at zero: its
+penetration ``delta(q) = 0`` [length] is one more constraint row (a :class:`Hold`, built like
+a driver with the law 0), appended after the joints and drivers of the forward problem, so
+that the constrained equations of motion of the projection method are integrated as they
+are::
+
+    M qdd + Phi_q^T lambda + delta_q^T N = Q,     delta_q qdd = gamma_delta,
+
+with ``delta_q = d delta / dq`` (1, nq) and its multiplier ``N`` the contact's normal force
+[force]: the row's force on the bodies, ``-delta_q^T N``, pushes them apart along the
+gap's gradient (as a compliant contact's ``-F grad(delta)``) while ``N >= 0``. The row's
+velocity ``delta_q qd = 0`` makes its power zero: a resting contact does no work. One
+problem per set of held points (:func:`holding`), each compiled once.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+from ..equations import Constraints
+from ..linalg import DenseSolver
+from ..model import Polynomial
+from ..model._drivers import Driver
+from ._problem import Problem
+
+
+class Hold(Driver):
+    """The penetration of one contact point held at zero (a resting rigid contact).
+
+    Attributes:
+        contact: the rigid contact pair (a bound compliant-contact element).
+        point: which of the pair's contact points (0 for a pair with one).
+    """
+
+    contact: eqx.Module
+    point: int = eqx.field(static=True)
+
+    def measure(self, q):
+        """The point's penetration ``delta(q)`` [length] (0 while it rests)."""
+        return jnp.atleast_1d(self.contact.penetration(q))[self.point]
+
+    def body_indices(self):
+        return self.contact.body_indices()
+
+
+def hold(contact, point: int, count: int) -> Hold:
+    """The :class:`Hold` of ``contact``'s contact point ``point`` (of ``count``), named
+    ``{contact}.rest`` (``{contact}.rest{point}`` for a pair with several points)."""
+    name = f"{contact.name}.rest" + (str(point) if count > 1 else "")
+    return Hold(name, contact, int(point), law=Polynomial([0.0]))
+
+
+def holding(problem: Problem, holds: tuple[Hold, ...]) -> Problem:
+    """``problem`` with the rows of ``holds`` appended after its constraints' kept rows (the
+    last ``len(holds)`` multipliers are the held points' normal forces [force]), solved
+    densely."""
+    if not holds:
+        return problem
+    c = problem.c
+    n = c.n_full
+    held = Constraints(
+        c.joints,
+        (*c.drivers, *holds),
+        c.nq,
+        (*c.active, *range(n, n + len(holds))),
+        None if c.rank is None else c.rank + len(holds),
+        linear_solver=DenseSolver(),
+    )
+    return Problem(
+        problem.model,
+        held,
+        problem.unknown,
+        problem.solver,
+        problem.j_index,
+        problem.i_index,
+        problem.collocated,
+    )
+
+
+def n_holds(problem: Problem) -> int:
+    """How many held contact points ``problem`` has (static)."""
+    return sum(isinstance(d, Hold) for d in problem.c.drivers)
+
+
+def normal_forces(problem: Problem, q, qd, t) -> jax.Array:
+    """The held points' normal forces (k,) [force] at ``(q, qd, t)``: the last ``k``
+    multipliers of the accelerations' solve (positive: the contact pushes)."""
+    k, m = n_holds(problem), problem.c.m
+    if k == 0:
+        return jnp.zeros(0, dtype=q.dtype)
+    mu = problem.accelerations(q, qd, t)[1]
+    return mu[m - k : m]
+
+
+__all__ = ["Hold", "hold", "holding", "n_holds", "normal_forces"]

@@ -1,0 +1,160 @@
+"""Resting rigid contacts (``contact_model: rigid``): a contact point whose impacts
+accumulate is held on its contact, its normal force the multiplier of the held gap.
+
+- Statics, a second method: a rod pinned at one end and lying horizontal on a stop under
+  its other end is held with ``m g / 2`` (the moment balance about the pin), the pin
+  carrying the other half (fast); a ball resting on a frictionless slope of angle
+  ``theta`` is held with the normal force ``m g cos(theta)`` and slides down at
+  ``g sin(theta)`` (slow).
+- A ball dropped on the ground with ``e < 1`` (slow): impacts at the closed-form times
+  ``t_1 = v0 / g``, ``t_{n+1} = t_n + 2 e^n v0 / g``; it comes to rest at the sum of the
+  series ``t_inf = t_1 + 2 e v0 / (g (1 - e))`` (to the run's rest speed) and stays at
+  height ``R`` with the normal force ``m g`` (1e-9); the energy the impacts took is all the
+  energy lost (the resting contact does no work).
+- Lift-off (slow): a ball resting on the ground pulled up by ``F = k t`` leaves it at
+  ``t = m g / k`` (1e-9), pressing on it with ``m g - k t`` until then, and rises as
+  ``k (t - m g / k)^3 / (6 m)`` after.
+- The ball on the slope in a run (slow): held from the start, it slides as
+  ``g sin(theta) t^2 / 2`` along the slope with the normal force ``m g cos(theta)``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+from mixdyn.analysis._problem import Problem
+from mixdyn.analysis._resting import hold, holding, normal_forces
+from mixdyn.equations import Constraints
+
+G_ = 9.81
+
+
+def _ball_on_slope(theta, m=2.0, R=0.05, e=0.5):
+    """A ball touching a frictionless slope that falls to the right at ``theta``."""
+    n = np.array([math.sin(theta), math.cos(theta)])  # the slope's outward normal
+    ball = md.Body("ball", m, 0.4 * m * R**2, q0=(R * n[0], R * n[1], 0.0))
+    slope = md.CircleLineContact(
+        "slope", "ball", R, ("ground", (0.0, 0.0)), axis=(math.cos(theta), -math.sin(theta)),
+        contact_model="rigid", restitution=e,
+    )  # fmt: skip
+    return md.Model([ball], forces=[slope], gravity=(0, -G_))
+
+
+def _held(model, name):
+    problem = Problem(model, Constraints.of(model))
+    return holding(problem, (hold(model.element(name), 0, 1),))
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_ball_resting_on_a_slope_presses_with_m_g_cos_theta():
+    theta, m = 0.3, 2.0
+    model = _ball_on_slope(theta, m)
+    held = _held(model, "slope")
+    q, qd, t = jnp.asarray(model.q0), jnp.zeros(3), jnp.zeros(())
+    np.testing.assert_allclose(normal_forces(held, q, qd, t), [m * G_ * math.cos(theta)],
+                               rtol=1e-12)  # fmt: skip
+    qdd = np.asarray(held.accelerations(q, qd, t)[0])
+    down = np.array([math.cos(theta), -math.sin(theta)])
+    np.testing.assert_allclose(qdd[:2], G_ * math.sin(theta) * down, rtol=1e-12)
+
+
+def test_a_rod_lying_on_a_stop_presses_with_half_its_weight():
+    L, m, R = 0.4, 1.5, 0.01
+    rod = md.Body("rod", m, m * L**2 / 12, q0=(L / 2, 0.0, 0.0),
+                  points={"O": (-L / 2, 0.0), "tip": (L / 2, 0.0)})  # fmt: skip
+    stop = md.CircleLineContact("stop", "rod.tip", R, ("ground", (L, -R)), contact_model="rigid",
+                                restitution=0.5)  # fmt: skip
+    model = md.Model([rod], [md.Revolute("O", "ground", "rod.O")], forces=[stop],
+                     gravity=(0, -G_))  # fmt: skip
+    held = _held(model, "stop")
+    q, qd, t = jnp.asarray(model.q0), jnp.zeros(3), jnp.zeros(())
+    np.testing.assert_allclose(normal_forces(held, q, qd, t), [m * G_ / 2], rtol=1e-12)
+    qdd, mu, _ = held.accelerations(q, qd, t)
+    np.testing.assert_allclose(qdd, 0.0, atol=1e-12)
+    pin_y = -np.asarray(held.c.phi_q(q, t)).T[:, :2] @ np.asarray(mu)[:2]
+    np.testing.assert_allclose(pin_y[1], m * G_ / 2, rtol=1e-12)  # the pin's share
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_dropped_ball_comes_to_rest_at_the_zeno_time_and_stays():
+    e, h0, R, m = 0.5, 0.1, 0.05, 1.0
+    ball = md.Body("ball", m, 0.4 * m * R**2, q0=(0.0, h0 + R, 0.0))
+    floor = md.CircleLineContact(
+        "floor", "ball", R, ("ground", (0.0, 0.0)), contact_model="rigid", restitution=e
+    )
+    model = md.Model([ball], forces=[floor], gravity=(0, -G_))
+    v0 = math.sqrt(2 * G_ * h0)
+    t_inf = v0 / G_ + 2 * e * v0 / (G_ * (1 - e))
+    r = md.forward(model, np.linspace(0.0, 1.0, 21), rtol=1e-11, atol=1e-13)
+    imp, rests = r.stats["impacts"], r.stats["rests"]
+    t_hit = [v0 / G_]
+    for n in range(1, 6):
+        t_hit.append(t_hit[-1] + 2 * e**n * v0 / G_)
+    np.testing.assert_allclose(imp["t"][:6], t_hit, rtol=0, atol=1e-9)
+    assert rests["contact"] == ["floor"]
+    assert 0.0 <= t_inf - rests["start"][0] < 1e-6  # the series' sum, to the rest speed
+    assert rests["end"][0] == 1.0  # it stays
+    after = r.t > t_inf
+    np.testing.assert_allclose(r["ball.vy"][after], 0.0, atol=1e-12)
+    np.testing.assert_allclose(r["ball.y"][after], R, rtol=1e-9)
+    np.testing.assert_allclose(r["floor.normal"][after], m * G_, rtol=1e-9)
+    np.testing.assert_allclose(r["ball.ay"][after], 0.0, atol=1e-9)
+    assert np.all(r["floor.normal"][~after] == 0.0)
+    # all the energy lost went into the impacts: the resting contact does no work
+    E = r["energy.kinetic"] + r["energy.potential"]
+    np.testing.assert_allclose(r["work.impacts"][-1], -m * G_ * h0, rtol=1e-9)
+    np.testing.assert_allclose(E - E[0], r["work.impacts"], atol=1e-9 * m * G_ * h0)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_ball_pulled_up_by_a_ramp_lifts_off_at_m_g_over_k():
+    g, R, m, k = G_, 0.05, 2.0, 40.0
+    ball = md.Body("ball", m, 0.4 * m * R**2, q0=(0.0, R, 0.0))
+    floor = md.CircleLineContact(
+        "floor", "ball", R, ("ground", (0.0, 0.0)), contact_model="rigid", restitution=0.5
+    )
+    lift = md.PointForce("lift", "ball", along=(0, 1), law=md.Polynomial([0.0, k]))
+    model = md.Model([ball], forces=[floor, lift], gravity=(0, -g))
+    r = md.forward(model, np.linspace(0.0, 1.0, 21), rtol=1e-11, atol=1e-13)
+    t_lift = m * g / k
+    rests = r.stats["rests"]
+    assert rests["start"][0] == 0.0 and len(r.stats["impacts"]["t"]) == 0
+    assert abs(rests["end"][0] - t_lift) < 1e-9
+    before, after = r.t < t_lift, r.t > t_lift
+    np.testing.assert_allclose(r["floor.normal"][before], m * g - k * r.t[before], rtol=1e-9)
+    np.testing.assert_allclose(r["ball.y"][before], R, rtol=1e-12)
+    rise = k * (r.t[after] - t_lift) ** 3 / (6 * m)
+    np.testing.assert_allclose(r["ball.y"][after] - R, rise, rtol=1e-8, atol=1e-12)
+    assert np.all(r["floor.normal"][after] == 0.0)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_ball_held_on_a_slope_slides_at_g_sin_theta():
+    theta, m = 0.3, 2.0
+    model = _ball_on_slope(theta, m)
+    r = md.forward(model, np.linspace(0.0, 0.5, 11), rtol=1e-11, atol=1e-13)
+    assert r.stats["rests"]["start"][0] == 0.0 and r.stats["rests"]["end"][0] == 0.5
+    s = 0.5 * G_ * math.sin(theta) * r.t**2
+    x0 = model.q0[0]
+    np.testing.assert_allclose(r["ball.x"] - x0, s * math.cos(theta), rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(r["slope.normal"], m * G_ * math.cos(theta), rtol=1e-9)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_the_resting_ball_example_rests_then_lifts_off(tmp_path):
+    """``examples/resting_ball.yaml``: at rest by ``t_inf``, lifted off at ``m g / k``."""
+    from fixtures import EXAMPLES
+
+    (r,) = md.run_file(EXAMPLES / "resting_ball.yaml", tmp_path).values()
+    m, e, h0, k = 0.1, 0.5, 0.1, 0.654
+    v0 = math.sqrt(2 * G_ * h0)
+    rests = r.stats["rests"]
+    assert 0.0 <= v0 / G_ + 2 * e * v0 / (G_ * (1 - e)) - rests["start"][0] < 1e-6
+    assert abs(rests["end"][0] - m * G_ / k) < 1e-9
+    resting = (r.t > rests["start"][0]) & (r.t < rests["end"][0])
+    np.testing.assert_allclose(r["floor.normal"][resting], m * G_ - k * r.t[resting], rtol=1e-9)
