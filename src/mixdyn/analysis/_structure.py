@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import reverse_cuthill_mckee
-from scipy.sparse.linalg import splu
 
 from .._hints import count, listed
 from ..equations import Constraints
@@ -17,6 +15,9 @@ from ..linalg import AutoSolver, independent_rows
 from ..model import Model
 from ..runtime._programs import cached_jit
 from ._assembly import start_q
+
+if TYPE_CHECKING:  # SciPy is imported where a sparse matrix is made: a small model needs none
+    import scipy.sparse as sp
 
 
 @dataclasses.dataclass(frozen=True)
@@ -122,6 +123,8 @@ def require_checkable(n_bodies: int, where: str = "the model") -> None:
 
 def _unit_rows(A: sp.csr_matrix) -> sp.csr_matrix:
     """``A`` (m, n) with its rows scaled to unit norm (zero rows left zero)."""
+    import scipy.sparse as sp
+
     norms = np.sqrt(np.asarray(A.multiply(A).sum(axis=1)).ravel())
     return sp.diags(1.0 / np.where(norms == 0, 1.0, norms)) @ A
 
@@ -129,6 +132,10 @@ def _unit_rows(A: sp.csr_matrix) -> sp.csr_matrix:
 def _gram_lu(An: sp.csr_matrix, shift: float):
     """``(lu, perm)``: sparse LU without pivoting (a Cholesky in effect) of ``An An^T + shift
     I`` (m, m) in reverse Cuthill–McKee order ``perm``; ``lu`` None if exactly singular."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+    from scipy.sparse.linalg import splu
+
     m = An.shape[0]
     S = (An @ An.T).tocsr()
     if shift:
@@ -142,12 +149,37 @@ def _gram_lu(An: sp.csr_matrix, shift: float):
     return lu, perm
 
 
+def _full_row_rank_dense(A: np.ndarray) -> bool:
+    """:func:`_full_row_rank` of a dense ``A`` (m, n), by NumPy: the pivots of the Cholesky
+    factorization of ``A_n A_n^T`` (rows at unit norm, their own order), their ratio
+    ``sqrt(min / max)`` above :data:`FULL_RANK_RATIO`; False means "not certain"."""
+    m = A.shape[0]
+    if m == 0:
+        return True
+    norms = np.linalg.norm(A, axis=1)
+    if not np.all(np.isfinite(norms)) or np.any(norms == 0):
+        return False
+    An = A / norms[:, None]
+    try:
+        d = np.diag(np.linalg.cholesky(An @ An.T)) ** 2
+    except np.linalg.LinAlgError:  # not positive definite: dependent rows
+        return False
+    if not (np.all(np.isfinite(d)) and np.all(d > 0)):
+        return False
+    return bool(np.sqrt(d.min() / d.max()) > FULL_RANK_RATIO)
+
+
 def _full_row_rank(A) -> bool:
     """Whether the rows of ``A`` (m, n), dense or sparse, are clearly independent, in O(m)
     work for a sparse, banded ``A``: the pivots of the Cholesky factorization of ``A_n A_n^T``
     (rows scaled to unit norm, bandwidth-reducing order, sparse LU without pivoting), their
     ratio ``sqrt(min / max)`` above :data:`FULL_RANK_RATIO`. False means "not certain": the
-    caller then takes the rank-revealing QR."""
+    caller then takes the rank-revealing QR. A dense ``A`` (a NumPy array):
+    :func:`_full_row_rank_dense`."""
+    if isinstance(A, np.ndarray):
+        return _full_row_rank_dense(A)
+    import scipy.sparse as sp
+
     A = sp.csr_matrix(A)
     m = A.shape[0]
     if m == 0:
@@ -167,6 +199,7 @@ def _full_row_rank(A) -> bool:
 def _neighbours(P: sp.csr_matrix, rows: np.ndarray, layers: int) -> np.ndarray:
     """``rows`` and the rows sharing a column with them, ``layers`` times over (pattern
     ``P`` (m, n)); sorted."""
+
     sel = np.zeros(P.shape[0], dtype=bool)
     sel[rows] = True
     PT = P.T.tocsr()
@@ -196,6 +229,8 @@ def dependent_neighbourhood(A) -> np.ndarray | None:
         The sorted row indices of the neighbourhood, or None when the rows are certainly
         independent (:func:`_full_row_rank`).
     """
+    import scipy.sparse as sp
+
     A = sp.csr_matrix(A)
     m = A.shape[0]
     if _full_row_rank(A):
@@ -232,6 +267,7 @@ def dependent_neighbourhood(A) -> np.ndarray | None:
 def _dense_block(A: sp.csr_matrix, rows: np.ndarray) -> np.ndarray:
     """``A[rows]`` (k, c) dense, on the columns where it has entries; refused (an input error)
     beyond :data:`LOCAL_MAX_ENTRIES` entries."""
+
     sub = A[rows]
     cols = np.unique(sub.indices)
     if rows.size * max(cols.size, 1) > LOCAL_MAX_ENTRIES:
@@ -251,6 +287,8 @@ def independent_rows_sparse(A, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarr
     Returns:
         ``(independent, redundant, rank)`` as :func:`~mixdyn.linalg.independent_rows`.
     """
+    import scipy.sparse as sp
+
     A = sp.csr_matrix(A)
     m = A.shape[0]
     local = dependent_neighbourhood(A)
@@ -294,9 +332,23 @@ def _driver_rows(J, n_keep: int, rtol: float, rank: int | None = None) -> list[i
     return out
 
 
+def _dense_jacobian(c: Constraints, q, t) -> np.ndarray:
+    """``Phi_q`` (n_full, nq) of every row of ``c`` as a NumPy array, from the per-element
+    Jacobians (the entries of :func:`_sparse_jacobian`, placed densely)."""
+    if c.m != c.n_full:
+        c = c.with_active(range(c.n_full))
+    v = np.asarray(_values(c.packed(), q, t))
+    rows, cols = c.coo()
+    J = np.zeros((c.n_full, c.nq))
+    np.add.at(J, (np.asarray(rows), np.asarray(cols)), v)
+    return J
+
+
 def _sparse_jacobian(c: Constraints, q, t) -> sp.csr_matrix:
     """``Phi_q`` (n_full, nq) of every row of ``c`` as a SciPy sparse matrix, from the
     per-element Jacobians (one compiled program per structure; no dense matrix)."""
+    import scipy.sparse as sp
+
     if c.m != c.n_full:
         c = c.with_active(range(c.n_full))
     v = np.asarray(_values(c.packed(), q, t))
@@ -339,7 +391,7 @@ def analyse(
     # the per-element Jacobians (a small program, compiled once per structure) when every
     # element has that form, else ``jax.jacfwd`` of the whole set
     if c._local_ok():
-        J = _sparse_jacobian(c, q, t).toarray()
+        J = _dense_jacobian(c, q, t)
     else:
         J = np.asarray(_jac(c.with_linear_solver(AutoSolver()), q, t))
     nk = c.n_joint_rows
@@ -371,6 +423,7 @@ def _report(model, c: Constraints, red_k, rank_k: int, keep) -> tuple[DofReport,
 
 def _analyse_sparse(model, c: Constraints, J: sp.csr_matrix, rtol: float):
     """:func:`analyse` on the sparse Jacobian ``J`` (n_full, nq)."""
+
     nk = c.n_joint_rows
     keep_k, red_k, rank_k = independent_rows_sparse(J[:nk], rtol)
     drivers_rows = np.arange(nk, c.n_full)

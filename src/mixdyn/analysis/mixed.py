@@ -24,7 +24,6 @@ from typing import ClassVar
 
 import equinox as eqx
 import numpy as np
-import scipy.linalg as sl
 
 from .._arrays import as_f64
 from .._hints import count, listed
@@ -95,7 +94,14 @@ def bind_prescribed(model: Model, prescribed) -> tuple[Driver, ...]:
 
 
 def _null_space(A):
-    return sl.null_space(A) if A.size else np.eye(A.shape[1])
+    """An orthonormal basis (n, n - rank) of the null space of ``A`` (m, n): the right
+    singular vectors of the singular values at most ``eps * max(m, n) * s_max`` (the rule of
+    ``scipy.linalg.null_space``, by NumPy's SVD)."""
+    if not A.size:
+        return np.eye(A.shape[1])
+    _, s, vh = np.linalg.svd(A, full_matrices=True)
+    tol = np.amax(s, initial=0.0) * np.finfo(s.dtype).eps * max(A.shape)
+    return vh[int(np.sum(s > tol)) :, :].T.conj()
 
 
 def _mobility(problem_c: Constraints, model: Model, q, qd, t, mk: int, names):

@@ -16,7 +16,6 @@ import jax
 import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
-import scipy.linalg as sl
 
 
 class Factor(NamedTuple):
@@ -273,6 +272,8 @@ def independent_rows(A, rtol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, int
         ``(independent, redundant, rank)``: sorted row indices of a maximal independent set,
         the other rows, and the numerical rank.
     """
+    import scipy.linalg as sl  # here, not at import: only a redundancy needs the pivoted QR
+
     A = np.asarray(A, dtype=float)
     m = A.shape[0]
     if m == 0:

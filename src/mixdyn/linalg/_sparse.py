@@ -31,8 +31,6 @@ import jax
 import jax.numpy as jnp
 import jax.scipy.linalg as jsl
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 #: Smallest block size: fewer, larger blocks amortize the scan's per-step overhead.
 MIN_BLOCK = 16
@@ -65,6 +63,9 @@ class SchurStructure:
         if m == 0:  # nothing to factorize: solve and factor return at once
             self.bandwidth, self.block, self.nblk = 0, 1, 0
             return
+        import scipy.sparse as sp  # here, not at import: a small model never needs SciPy
+        from scipy.sparse.csgraph import reverse_cuthill_mckee
+
         rows = np.asarray(rows, dtype=np.int64)
         cols = np.asarray(cols, dtype=np.int64)
         C = sp.coo_matrix((np.ones(rows.size), (rows, cols)), shape=(m, n)).tocsc()
