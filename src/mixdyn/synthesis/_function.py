@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ._fourbar import FourBar, link_angles, transmission_cosine
-from ._search import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, _solve_all
+from ._search import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, _levenberg_marquardt, _solve_all
 from ._task import FunctionTask
 
 
@@ -218,7 +218,8 @@ def synthesize_function(
     branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b))
     residuals = _residuals(task, int(samples))
-    u_all, _ = _solve_all(residuals, u0, branches, min(int(chunk), starts), max_steps, report)
+    solve = jax.jit(_levenberg_marquardt(residuals, int(max_steps)))
+    u_all, _ = _solve_all(solve, u0, branches, min(int(chunk), starts), report)
     error, worst = (np.asarray(a) for a in _figures(task)(u_all, branches))
     slack = 1e-9 * hi
     ok = np.isfinite(error) & (worst <= np.cos(task.min_transmission))

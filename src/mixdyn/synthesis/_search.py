@@ -18,8 +18,11 @@ The branch (which side of ``A O4`` the pin ``B`` lies on) is fixed per start, ha
 on each, so that no candidate changes branch between points. Every start is solved by
 optimistix' Levenberg-Marquardt (a well-kept library; derivatives through the assembly's
 implicit rule), ``jax.vmap`` over a chunk of starts, chunk after chunk (progress reported
-after each). Infeasible starts cannot leak a NaN: the assembly returns the nearest
-configuration where the loop opens, and the penalty is finite.
+after each). The task's numbers are the programs' array arguments (:class:`_Program` is their
+static part), so a later search of the same form (as many targets, the same timing mode,
+masses and torque measure) in the process runs the programs already compiled. Infeasible
+starts cannot leak a NaN: the assembly returns the nearest configuration where the loop opens,
+and the penalty is finite.
 
 The outcomes are checked exactly (closure on a fine grid of the traversed motion, order,
 bounds), ranked by their score, and near-equal ones (the same linkage from two starts) kept
@@ -29,15 +32,18 @@ once.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import time
 from collections.abc import Callable
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError
-from ._dynamics import motor_torque
+from ..runtime._programs import cached_jit
+from ._dynamics import Masses, motor_torque
 from ._fourbar import NAMES, FourBar, coupler_point, transmission_cosine
 from ._task import FunctionTask, Objective, PathTask
 
@@ -74,20 +80,75 @@ class _Layout:
         return u[9] + jnp.concatenate([jnp.zeros(1), jnp.cumsum(u[10:])])
 
 
-def _residuals(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray):
-    """``r(u, branch)``: the residual vector of a candidate (see the module's documentation)."""
-    s = layout.scale
-    targets = jnp.asarray(task.points)
-    cmax = min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)
-    fractions = jnp.linspace(0.0, 1.0, objective.samples)
-    finite = np.isfinite(box)
-    lo, hi = (
-        jnp.asarray(np.where(finite[:, 0], box[:, 0], 0.0)),
-        jnp.asarray(np.where(finite[:, 1], box[:, 1], 0.0)),
+@dataclasses.dataclass(frozen=True)
+class _Program:
+    """What decides a path search's programs (their static part and the key of their
+    persistent cache: :func:`mixdyn.runtime._programs.cached_jit`); the task's numbers are
+    arrays (:func:`_data`), so that another task of the same form reuses the programs.
+
+    Attributes:
+        n: the targets.
+        timed: the timing is prescribed.
+        samples: input angles of the closure and torque terms along the motion.
+        masses: how the links weigh (None: no torque term).
+        torque: the torque measure of the residuals (``"rms"``, ``"peak"``), None: none.
+        max_steps: Levenberg-Marquardt's steps at most per start.
+    """
+
+    n: int
+    timed: bool
+    samples: int
+    masses: Masses | None
+    torque: str | None
+    max_steps: int
+
+
+def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool) -> _Program:
+    """The program of a search of ``task`` (with the torque term where ``torque``)."""
+    weighed = torque and objective.torque_weight > 0
+    return _Program(
+        n=len(task.points),
+        timed=task.timing is not None,
+        samples=int(objective.samples),
+        masses=objective.masses if weighed else None,
+        torque=objective.torque if weighed else None,
+        max_steps=int(max_steps),
     )
-    lo_on, hi_on = jnp.asarray(finite[:, 0], float), jnp.asarray(finite[:, 1], float)
-    scale_of = jnp.asarray([s if n != "theta0" else 1.0 for n in NAMES])
-    weight = float(objective.torque_weight)
+
+
+def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray) -> dict:
+    """The task's numbers the programs take as arrays (NumPy float64)."""
+    finite = np.isfinite(box)
+    f64 = np.float64
+    return {
+        "targets": np.asarray(task.points, dtype=float),
+        "timing": np.zeros(layout.n) if task.timing is None else np.asarray(task.timing),
+        "scale": f64(layout.scale),
+        "centre": np.asarray(layout.centre, dtype=float),
+        "low": np.where(finite[:, 0], box[:, 0], 0.0),
+        "high": np.where(finite[:, 1], box[:, 1], 0.0),
+        "low_on": finite[:, 0].astype(float),
+        "high_on": finite[:, 1].astype(float),
+        "cmax": f64(min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)),
+        "weight": f64(objective.torque_weight),
+        "speed": f64(objective.speed),
+    }
+
+
+def _layout_of(program: _Program, data: dict) -> _Layout:
+    timing = data["timing"] if program.timed else None
+    return _Layout(program.n, data["scale"], data["centre"], timing)
+
+
+def _residuals(program: _Program, data: dict):
+    """``r(u, branch)``: the residual vector of a candidate (see the module's documentation)."""
+    layout = _layout_of(program, data)
+    s = data["scale"]
+    targets = jnp.asarray(data["targets"])
+    fractions = jnp.linspace(0.0, 1.0, program.samples)
+    lo, hi = jnp.asarray(data["low"]), jnp.asarray(data["high"])
+    lo_on, hi_on = jnp.asarray(data["low_on"]), jnp.asarray(data["high_on"])
+    scale_of = jnp.where(jnp.arange(len(NAMES)) == NAMES.index("theta0"), 1.0, s)
 
     def r(u, branch):
         fb = layout.fourbar(u, branch)
@@ -95,22 +156,54 @@ def _residuals(layout: _Layout, task: PathTask, objective: Objective, box: np.nd
         path = (jax.vmap(lambda t: coupler_point(fb, t))(theta) - targets).ravel() / s
         grid = theta[0] + (theta[-1] - theta[0]) * fractions
         cos_mu = jax.vmap(lambda t: transmission_cosine(fb, t))(grid)
-        closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - cmax)
+        closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - data["cmax"])
         v = fb.vector()
         bounds = PENALTY * jnp.concatenate(
             [lo_on * jax.nn.relu(lo - v) / scale_of, hi_on * jax.nn.relu(v - hi) / scale_of]
         )
         parts = [path, closure, bounds]
-        if layout.timing is None:
+        if not program.timed:
             inc = u[10:]
             parts.append(PENALTY * jax.nn.relu(-inc))
             parts.append(PENALTY * jax.nn.relu(jnp.sum(inc) - 2 * jnp.pi)[None])
-        if weight > 0:
-            tau = motor_torque(fb, objective.masses, grid, objective.speed)
-            parts.append(np.sqrt(weight) * _torque_measure(tau, objective.torque)[None] / s)
+        if program.torque is not None:
+            tau = motor_torque(fb, program.masses, grid, data["speed"])
+            measure = _torque_measure(tau, program.torque)
+            parts.append(jnp.sqrt(data["weight"]) * measure[None] / s)
         return jnp.concatenate(parts)
 
     return r
+
+
+def _levenberg_marquardt(residuals, max_steps: int):
+    """``(u (C, size), branches (C,)) -> (u, sum of squared residuals (C,))``: every start
+    solved by optimistix' Levenberg-Marquardt (to be vectorized and compiled by the caller)."""
+    import optimistix as optx
+
+    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
+
+    def one(u, branch):
+        sol = optx.least_squares(
+            residuals, solver, u, args=branch, max_steps=max_steps, throw=False
+        )
+        return sol.value, jnp.sum(residuals(sol.value, branch) ** 2)
+
+    return jax.vmap(one)
+
+
+@eqx.filter_jit
+def _solve_chunk(program: _Program, data: dict, u0, branches):
+    """A chunk of starts solved: one program per ``program`` and chunk size, reused by every
+    search of that form in the process (not kept between processes: optimistix' error
+    checks are host callbacks, which :mod:`jax.export` refuses)."""
+    return _levenberg_marquardt(_residuals(program, data), program.max_steps)(u0, branches)
+
+
+@eqx.filter_jit
+def _scores(program: _Program, data: dict, u, branches):
+    """(C,) the sums of squared residuals of outcomes ``u`` (C, size)."""
+    residuals = _residuals(program, data)
+    return jax.vmap(lambda x, b: jnp.sum(residuals(x, b) ** 2))(u, branches)
 
 
 def _torque_measure(tau, kind: str):
@@ -320,22 +413,25 @@ def synthesize(
     chunk = min(int(chunk), int(starts))
     box = task.box()
     layout = _Layout(len(task.points), task.size, task.points.mean(axis=0), task.timing)
-    residuals = _residuals(layout, task, objective, box)
+    data = _data(layout, task, objective, box)
+    weighed = _program(task, objective, max_steps, torque=True)
     rng = np.random.default_rng(seed)
     u0 = _starts(layout, task, box, starts, rng)
     branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
     s2 = layout.scale**2
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b * s2))
-    u_all, score_all = _solve_all(residuals, u0, branches, chunk, max_steps, report)
+    solve = functools.partial(_solve_chunk, weighed, data)
+    u_all, score_all = _solve_all(solve, u0, branches, chunk, report)
     if polish and objective.torque_weight > 0:
-        path_only = _residuals(layout, task, dataclasses.replace(objective, torque_weight=0.0), box)
+        path_only = _program(task, objective, max_steps, torque=False)
         report = None if progress is None else (lambda d, n, b: progress("polish", d, n, b * s2))
-        u_all, _ = _solve_all(path_only, u_all, branches, chunk, max_steps, report)
-        score_all = np.asarray(
-            jax.jit(jax.vmap(lambda u, b: jnp.sum(residuals(u, b) ** 2)))(u_all, branches)
-        )
+        solve = functools.partial(_solve_chunk, path_only, data)
+        u_all, _ = _solve_all(solve, u_all, branches, chunk, report)
+        score_all = np.asarray(_scores(weighed, data, u_all, branches))
     score_all = score_all * s2
-    candidates, feasible = _rank(layout, task, objective, box, u_all, branches, score_all, keep)
+    candidates, feasible = _rank(
+        layout, task, objective, box, u_all, branches, score_all, keep, (weighed, data)
+    )
     return Synthesis(
         task=task,
         objective=objective,
@@ -347,21 +443,11 @@ def synthesize(
     )
 
 
-def _solve_all(residuals, u0, branches, chunk, max_steps, progress):
-    """Every start ``u0`` (S, size) solved by Levenberg-Marquardt, ``chunk`` at a time in one
-    vectorized program; ``(u (S, size), sum of squared residuals (S,))``, ``progress(done,
-    total, best)`` after each chunk."""
-    import optimistix as optx
-
-    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
-
-    def one(u, branch):
-        sol = optx.least_squares(
-            residuals, solver, u, args=branch, max_steps=max_steps, throw=False
-        )
-        return sol.value, jnp.sum(residuals(sol.value, branch) ** 2)
-
-    solve_chunk = jax.jit(jax.vmap(one))
+def _solve_all(solve_chunk, u0, branches, chunk, progress):
+    """Every start ``u0`` (S, size) solved, ``chunk`` at a time by ``solve_chunk(u (chunk,
+    size), branches (chunk,)) -> (u, sums of squared residuals)`` (one vectorized program, the
+    last chunk padded); ``(u (S, size), sums (S,))``, ``progress(done, total, best)`` after
+    each chunk."""
     total = len(u0)
     us, scores, best = [], [], np.inf
     for lo in range(0, total, chunk):
@@ -369,7 +455,7 @@ def _solve_all(residuals, u0, branches, chunk, max_steps, progress):
         pad = chunk - (hi - lo)
         batch = np.concatenate([u0[lo:hi], np.repeat(u0[lo : lo + 1], pad, axis=0)])
         bb = np.concatenate([branches[lo:hi], np.repeat(branches[lo : lo + 1], pad)])
-        u, sc = solve_chunk(jnp.asarray(batch), jnp.asarray(bb))
+        u, sc = solve_chunk(batch, bb)
         us.append(np.asarray(u)[: hi - lo])
         scores.append(np.asarray(sc)[: hi - lo])
         if np.any(np.isfinite(scores[-1])):
@@ -379,11 +465,13 @@ def _solve_all(residuals, u0, branches, chunk, max_steps, progress):
     return np.concatenate(us), np.concatenate(scores)
 
 
-def _figures(layout: _Layout, task: PathTask):
-    """``(u, branch) -> (error, worst |cos mu|)`` of one outcome, exactly: the path error
-    ``sum |C - P|^2`` [length**2] and the largest ``|cos mu|`` over the traversed motion on a
-    fine grid (above 1: the loop opens between two points)."""
-    targets = jnp.asarray(task.points)
+@cached_jit
+def _figures(program: _Program, data: dict, u, branches):
+    """``(error (C,), worst |cos mu| (C,))`` of outcomes ``u`` (C, size), exactly: the path
+    error ``sum |C - P|^2`` [length**2] and the largest ``|cos mu|`` over the traversed motion
+    on a fine grid (above 1: the loop opens between two points)."""
+    layout = _layout_of(program, data)
+    targets = jnp.asarray(data["targets"])
     fractions = jnp.linspace(0.0, 1.0, CHECK_SAMPLES)
 
     def one(u, branch):
@@ -394,13 +482,15 @@ def _figures(layout: _Layout, task: PathTask):
         cos_mu = jax.vmap(lambda t: transmission_cosine(fb, t))(grid)
         return jnp.sum((c - targets) ** 2), jnp.max(jnp.abs(cos_mu))
 
-    return jax.jit(jax.vmap(one))
+    return jax.vmap(one)(u, branches)
 
 
-def _rank(layout, task, objective, box, u_all, branches, scores, keep):
-    """The distinct feasible outcomes, best score first, and the count of feasible ones."""
+def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs):
+    """The distinct feasible outcomes, best score first, and the count of feasible ones;
+    ``programs``: the search's ``(program, data)``."""
     s = layout.scale
-    error, worst = (np.asarray(a) for a in _figures(layout, task)(u_all, branches))
+    program, data = programs
+    error, worst = (np.asarray(a) for a in _figures(program, data, u_all, branches))
     v_all = np.asarray(jax.vmap(lambda u: layout.fourbar(u, 1.0).vector())(u_all))
     theta_all = np.asarray(jax.vmap(layout.angles)(u_all))
     slack = np.array([1e-6 * s] * 8 + [1e-9])
