@@ -329,10 +329,12 @@ class _Compliant(ForceElement):
         """``normal``: the normal force [force] (>= 0); ``penetration`` [length] (negative:
         the gap); ``friction``: the friction force on body j along ``z x n`` [force], where
         ``mu`` is given. For several contact points: the sum of the forces and the deepest
-        penetration. A rigid contact: ``penetration`` only (its impulses are the run's
-        ``{name}.impulse`` events)."""
+        penetration. A rigid contact: ``penetration``, and ``normal`` 0 here (its impulses
+        are the run's ``{name}.impulse`` events; the run fills in the normal force while it
+        rests, :mod:`mixdyn.analysis._impacts`)."""
         if self.rigid:
-            return {"penetration": jnp.max(self._delta(q))}
+            delta = self._delta(q)
+            return {"normal": jnp.zeros((), delta.dtype), "penetration": jnp.max(delta)}
         delta, _, F, Ft = self._state(q, qd)
         out = {"normal": jnp.sum(F), "penetration": jnp.max(delta)}
         if Ft is not None:
@@ -368,7 +370,7 @@ class _Compliant(ForceElement):
     @property
     def output_kinds(self):
         if self.rigid:
-            return {"penetration": "length"}
+            return {"normal": "force", "penetration": "length"}
         kinds = {"normal": "force", "penetration": "length"}
         if self.mu is not None:
             kinds["friction"] = "force"
