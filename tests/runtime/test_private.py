@@ -4,6 +4,7 @@ for a user's own code after ``import mixdyn`` and after a run."""
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import subprocess
@@ -130,3 +131,45 @@ def test_a_users_jax_and_diffrax_are_left_as_they_were_and_both_paths_agree(tmp_
     assert hooked["phi"] == public["phi"]
     assert hooked["omega"] == public["omega"]
     assert abs(hooked["phi"][0] - 0.3) < 1e-12
+
+
+def test_a_gif_is_the_same_picture_with_the_shared_palette_and_pillow_is_given_back(tmp_path):
+    """The figure worker's GIFs are written with Pillow keeping their one palette: every
+    decoded frame equals the one Pillow writes on its own (public path), Pillow's function is
+    its own again afterwards, and outside the worker nothing is swapped."""
+    from PIL import GifImagePlugin, Image
+
+    from mixdyn.viz import _draw
+
+    assert _draw.GIF_CONTEXT is contextlib.nullcontext  # a user's process: Pillow as it is
+    own = GifImagePlugin._get_optimize
+    from mixdyn.viz.animate import movie_data
+
+    model = pendulum(theta0=0.3)
+    t = np.linspace(0.0, 1.0, 12)
+    q = np.repeat(np.asarray(model.q0, dtype=float)[None, :], t.size, axis=0)
+    q[:, 2] += 0.5 * t  # the bar turns
+    data = movie_data(model=model, t=t, q=q, frames=12)
+    frames = {}
+    for name, context in (("public", contextlib.nullcontext), ("hook", _private.shared_palette)):
+        _draw.GIF_CONTEXT = context
+        try:
+            path = _draw.movie(data, tmp_path / f"{name}.gif", fps=10)
+        finally:
+            _draw.GIF_CONTEXT = contextlib.nullcontext
+        with Image.open(path) as im:
+            frames[name] = [np.asarray(f.convert("RGB")) for f in _frames(im)]
+        assert GifImagePlugin._get_optimize is own
+    with _private.shared_palette():  # on this Pillow, swapped only within
+        swapped = GifImagePlugin._get_optimize
+    assert swapped is (_private._keep_palette if _private.allowed("pillow") else own)
+    assert GifImagePlugin._get_optimize is own
+    assert len(frames["hook"]) == len(frames["public"]) > 1
+    for a, b in zip(frames["hook"], frames["public"], strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def _frames(im):
+    from PIL import ImageSequence
+
+    return [f.copy() for f in ImageSequence.Iterator(im)]

@@ -20,6 +20,10 @@ roomy frames         CPython's frame-stack chunks (a code object's    a plain ca
                      ``mixdyn`` command's process only
 quick exit           ``atexit._run_exitfuncs`` then ``os._exit``      ``SystemExit``
                      (:func:`exit_now`), the command's process only
+shared palette       Pillow's ``GifImagePlugin._get_optimize``,       Pillow as it is
+                     swapped while a GIF of frames sharing one
+                     palette is written (:func:`shared_palette`),
+                     in the command's figure worker only
 test scheduling      pytest-xdist's ``_split_scope``                  xdist's own
                      (:func:`whole_module_scheduler`), mixdyn's       scheduling
                      test session only
@@ -51,6 +55,7 @@ KNOWN = {
     "diffrax": ((0, 6), (0, 8)),  # checked: 0.7.2
     "python": ((3, 11), (3, 14)),  # CPython 3.11-3.13: frames in chunks of 16 KiB
     "pytest-xdist": ((3, 5), (3, 9)),  # checked: 3.8.0 (mixdyn's test session only)
+    "pillow": ((13, 0), (13, 1)),  # checked: 13.0.0 (the command's figure worker only)
 }
 
 
@@ -67,7 +72,14 @@ def version(distribution: str) -> tuple[int, ...] | None:
 
 
 #: The hooks by name, as ``$MIXDYN_PUBLIC_ONLY`` may list them.
-HOOKS = ("short_locations", "chained_floor", "roomy", "exit_now", "whole_module_scheduler")
+HOOKS = (
+    "short_locations",
+    "chained_floor",
+    "roomy",
+    "exit_now",
+    "shared_palette",
+    "whole_module_scheduler",
+)
 
 
 def public_only(hook: str | None = None) -> bool:
@@ -227,6 +239,40 @@ def exit_now(code: int) -> None:
     os._exit(code)
 
 
+# --------------------------------------------------------------------------- Pillow
+def _keep_palette(im, info):
+    """Pillow's ``GifImagePlugin._get_optimize`` for frames that share one palette: keep it
+    (None: no entries to drop)."""
+    return None
+
+
+@contextlib.contextmanager
+def shared_palette():
+    """A context for writing a GIF whose frames share one palette (:mod:`mixdyn.viz._draw`)
+    in which Pillow keeps that palette instead of remapping each frame to the colours it
+    uses (``GifImagePlugin._get_optimize``): the same pictures, ~20% less time for the
+    paper example's animation, and unchanged pixels still transparent. Only the ``mixdyn``
+    command's figure worker, a process that draws nothing else, writes its GIFs in it
+    (``mixdyn.viz._draw.GIF_CONTEXT``). Public fallback: Pillow as it is."""
+    if not allowed("pillow", hook="shared_palette"):
+        yield
+        return
+    try:
+        from PIL import GifImagePlugin
+    except ImportError:  # pragma: no cover - no Pillow: no GIF either
+        yield
+        return
+    original = getattr(GifImagePlugin, "_get_optimize", None)
+    if original is None:  # pragma: no cover - a Pillow laid out otherwise
+        yield
+        return
+    GifImagePlugin._get_optimize = _keep_palette
+    try:
+        yield
+    finally:
+        GifImagePlugin._get_optimize = original
+
+
 # --------------------------------------------------------------------------- pytest-xdist
 def whole_module_scheduler(config, log, modules: tuple[str, ...]):
     """For mixdyn's test session: pytest-xdist's ``--dist load`` scheduler, but with the test
@@ -258,6 +304,7 @@ __all__ = [
     "exit_now",
     "public_only",
     "roomy",
+    "shared_palette",
     "short_locations",
     "use_roomy_frames",
     "version",

@@ -2,7 +2,8 @@
 
 Run as a script (``python .../mixdyn/runtime/_worker.py``): it imports neither mixdyn nor JAX,
 only NumPy, matplotlib and Pillow, and loads :mod:`mixdyn.viz.plots` and
-:mod:`mixdyn.viz._draw` by their paths. Each line on standard input names a file holding a
+:mod:`mixdyn.viz._draw` by their paths (and :mod:`mixdyn.runtime._private`, whose
+:func:`~mixdyn.runtime._private.shared_palette` its GIFs are written in). Each line on standard input names a file holding a
 pickled task ``(kind, args, kwargs)`` (``kind``: ``"plot"``, ``"movie"``, ``"against"`` or
 ``"band"``); for each it
 writes one line on standard output, the hex of a pickled ``("ok", path)`` or
@@ -25,8 +26,8 @@ import pickle
 import sys
 
 
-def _load(name: str):
-    path = pathlib.Path(__file__).parent.parent / "viz" / f"{name}.py"
+def _load(name: str, room: str = "viz"):
+    path = pathlib.Path(__file__).parent.parent / room / f"{name}.py"
     spec = importlib.util.spec_from_file_location(f"_mixdyn_worker_{name}", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
@@ -36,6 +37,7 @@ def _load(name: str):
 def main() -> None:
     plots, draw, sweeps = _load("plots"), _load("_draw"), _load("sweep_plots")
     synthesis = _load("synthesis_plots")
+    draw.GIF_CONTEXT = _load("_private", "runtime").shared_palette  # this process only
     from matplotlib.figure import Figure
 
     Figure()  # matplotlib reads its settings and fonts once, before the first task

@@ -8,9 +8,15 @@ data (:func:`mixdyn.viz.animate.movie_data`) and calls :func:`movie`.
 
 from __future__ import annotations
 
+import contextlib
 import pathlib
 
 import numpy as np
+
+#: The context a GIF whose frames share one palette is written in: none here; the figure
+#: worker of ``mixdyn run`` (:mod:`mixdyn.runtime._worker`) gives it
+#: :func:`mixdyn.runtime._private.shared_palette`.
+GIF_CONTEXT = contextlib.nullcontext
 
 COLORS = (
     "#1f77b4",
@@ -197,20 +203,12 @@ def _gif_writer(fps: int):
             return rgb.convert("RGB").quantize(colors=128, method=Image.Quantize.FASTOCTREE)
 
         def finish(self):
-            # Every frame has the one palette: Pillow's per-frame palette optimisation
-            # (remapping each frame to the colours it uses) would give each frame another
-            # palette and compare them in RGBA, a third of the time, for a file of the same
-            # size. Unchanged pixels still become transparent (its ``optimize`` stays on).
-            from PIL import GifImagePlugin
-
-            if self.palette is None or not hasattr(GifImagePlugin, "_get_optimize"):
+            # Every frame has the one palette: written in GIF_CONTEXT (in the command's
+            # figure worker, Pillow then keeps it rather than remapping each frame).
+            if self.palette is None:
                 return super().finish()
-            original = GifImagePlugin._get_optimize
-            GifImagePlugin._get_optimize = _no_palette_optimization
-            try:
+            with GIF_CONTEXT():
                 super().finish()
-            finally:
-                GifImagePlugin._get_optimize = original
 
         def grab_frame(self, **savefig_kwargs):
             canvas = self.fig.canvas
@@ -222,8 +220,3 @@ def _gif_writer(fps: int):
             self._frames.append(frame)
 
     return GifWriter(fps=fps)
-
-
-def _no_palette_optimization(im, info):
-    """Pillow's ``GifImagePlugin._get_optimize`` for frames sharing one palette: keep it."""
-    return None
