@@ -575,15 +575,19 @@ def test_imports_ahead_run_beside_the_caller_and_leave_failures_to_it():
     be imported raises nothing there (the tracing meets it and reports it)."""
     script = textwrap.dedent(
         """
-        import sys, threading
-        from mixdyn.runtime._command import import_ahead
+        import importlib.util, sys, threading
+        path = {path!r}  # by its path: the module imports neither mixdyn nor JAX
+        spec = importlib.util.spec_from_file_location("_command", path)
+        command = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(command)
+        import_ahead = command.import_ahead
         assert "xml.dom.minidom" not in sys.modules
         import_ahead(("no_such_module_for_mixdyn", "xml.dom.minidom"))
         (t,) = [t for t in threading.enumerate() if t.name == "mixdyn-imports"]
         t.join(60)
         print("xml.dom.minidom" in sys.modules, "no_such_module_for_mixdyn" in sys.modules)
         """
-    )
+    ).format(path=str(ROOT / "src" / "mixdyn" / "runtime" / "_command.py"))
     proc = subprocess.run(
         [sys.executable, "-c", script], capture_output=True, text=True, timeout=120
     )
