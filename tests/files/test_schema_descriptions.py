@@ -72,9 +72,10 @@ PROPERTIES = {
     "name outputs plots prescribed time tol velocities",
     "SplineSpec": "spline",
     # the synthesis run kind (issue 34)
+    "SynthesisFunctionSpec": "expr free_start input output pairs points ratios spacing x",
     "SynthesisMassesSpec": "density payload",
-    "SynthesisRunSpec": "bounds keep kind masses max_steps min_transmission name points seed "
-    "speed starts timing torque torque_weight",
+    "SynthesisRunSpec": "bounds function keep kind masses max_steps min_transmission name "
+    "points seed speed starts timing torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -93,8 +94,8 @@ PROPERTIES = {
 # and with a prescribed motion's continuity (issue 31: the same value without it); and with
 # the animation's plotted columns (issue 32); and with the column on the x axis of the
 # player's plot (issue 32); and with the synthesis run kind and bodies optional in a file of
-# synthesis runs alone (issue 34).
-STRIPPED_SHA256 = "2145c8f33af34f73272c0fd1d7b5acf31aeb8c451971a9bd5b9abaf10b9ded06"
+# synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34).
+STRIPPED_SHA256 = "9952b6b86b3362a18d9006f68b06f4e6a6a0592b70c0690aab4851e034189afb"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -147,7 +147,8 @@ def test_a_synthesis_is_written_as_its_files(tmp_path):
     a, p = (np.asarray(coupler.points[k], float) for k in ("A", "P"))
     np.testing.assert_allclose(p - a, V[4:6], atol=1e-15)  # in the coupler's frame
     meta = json.loads((tmp_path / "path" / "meta.json").read_text())
-    assert meta["synthesis"]["best"]["torque_rms"] is None  # no masses: no torque
+    assert "torque_rms" not in meta["synthesis"]["best"]  # no masses: no torque
+    np.testing.assert_array_equal(meta["synthesis"]["angles"], theta)
     run, rest = _curves(c)  # the figure's curves: the loop closes over the whole turn
     np.testing.assert_allclose(run[[0, -1]], points[[0, -1]], atol=1e-12)
     assert not np.isnan(rest).any()
@@ -238,3 +239,68 @@ def test_no_feasible_four_bar_is_a_named_numerical_failure(tmp_path):
     meta = json.loads((tmp_path / "out" / "path" / "meta.json").read_text())
     assert meta["status"] == "failed" and meta["failure"]["error"] == "NumericalError"
     assert (tmp_path / "out" / "path" / "report.html").is_file()
+
+
+FUNCTION = """mixdyn: 1
+parameters: {x1: 2}
+runs:
+  - name: log
+    kind: synthesis
+    function:
+      expr: log10(x)
+      x: [1, x1]
+      input: [0 deg, 60 deg]
+      output: [240 deg, 180 deg]
+    starts: 32
+"""
+
+
+def test_a_function_task_is_read_with_its_units():
+    """``function:`` with an expression of x and a parameter: Chebyshev's three points (by
+    hand), the angles in rad."""
+    task = Runner(mio.reads(FUNCTION)).plans["log"].task
+    x = 1.5 + 0.5 * np.array([-1.0, 0.0, 1.0]) * np.sqrt(3) / 2
+    np.testing.assert_allclose(task.inputs, np.deg2rad(60.0) * (x - 1.0), rtol=1e-14)
+    y = np.log10(x) / np.log10(2.0)
+    np.testing.assert_allclose(task.outputs, np.deg2rad(240.0 - 60.0 * y), rtol=1e-14)
+
+
+@pytest.mark.parametrize(
+    "old, new, marker, words",
+    [
+        ("    starts: 32", "    timing: free", "timing", "path generation"),
+        ("log10(x)", "log10(x) + y", "expr", "y"),
+        ("x: [1, x1]", "x: [-1, x1]", "expr", "not finite"),
+        ("      expr: log10(x)\n      x: [1, x1]\n      input: [0 deg, 60 deg]\n"
+         "      output: [240 deg, 180 deg]\n",
+         "      pairs: [[0 deg, 240 deg], [50 deg, 200 deg], [40 deg, 180 deg]]\n",
+         "pairs", "increase"),
+        ("input: [0 deg, 60 deg]", "input: [0 mm, 60 mm]", "input", "mm"),
+    ],
+)  # fmt: skip
+def test_bad_function_input_is_refused_at_its_line(old, new, marker, words):
+    text = FUNCTION.replace(old, new)
+    with pytest.raises(FileError) as e:
+        Runner(mio.reads(text, "bad.yaml"))
+    assert e.value.line == _line(text, marker), str(e.value)
+    assert words in str(e.value)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search and best.yaml's run compile)
+def test_a_function_file_finds_freudensteins_linkage_and_its_best_yaml_runs(tmp_path):
+    """The file's run finds the four-bar of Freudenstein's 3x3 solve (ratios to 1e-9), and its
+    best.yaml, run by md.kinematic, turns the rocker through the asked angles."""
+    path = tmp_path / "log.yaml"
+    path.write_text(FUNCTION)
+    md.run_file(path, tmp_path / "out")
+    table = pd.read_csv(tmp_path / "out" / "log" / "candidates.csv")
+    task = Runner(mio.reads(FUNCTION)).plans["log"].task
+    th2, th4 = task.inputs, task.outputs
+    k = np.linalg.solve(np.column_stack([np.cos(th4), -np.cos(th2), np.ones(3)]), np.cos(th2 - th4))
+    a, c = 1 / k[0], 1 / k[1]
+    b = np.sqrt(a * a + c * c + 1 - 2 * a * c * k[2])
+    np.testing.assert_allclose(table[["r2", "r3", "r4"]].iloc[0], [a, b, c], rtol=1e-9)
+    best = md.load(tmp_path / "out" / "log" / "best.yaml")
+    run = md.kinematic(best.model, th2 - th2[0])  # the crank from the first input at 1 rad/s
+    gap = np.angle(np.exp(1j * (run["rocker.phi"] - th4)))
+    assert np.max(np.abs(gap)) < 1e-8

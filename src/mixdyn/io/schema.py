@@ -1063,18 +1063,58 @@ class SynthesisMassesSpec(Spec):
     """A point mass at the coupler point [mass], e.g. ``0.5 kg``. Default 0."""
 
 
+class SynthesisFunctionSpec(Spec):
+    """Function generation: the rocker's angle as a function of the crank's, as angle pairs
+    or as ``y = f(x)`` over a range mapped onto the crank's and the rocker's angles."""
+
+    pairs: list[tuple[Scalar, Scalar]] | None = Field(default=None, min_length=2)
+    """``[crank angle, rocker angle]`` pairs [rad] from the ground link, e.g. ``[[0 deg,
+    240 deg], ...]``."""
+    expr: Text | None = None
+    """``f`` as an expression of ``x`` (and the file's parameters), e.g. ``log10(x)``."""
+    x: tuple[Scalar, Scalar] | None = None
+    """The range ``[x0, x1]`` of ``x``."""
+    input: tuple[Scalar, Scalar] | None = None
+    """The crank's angles at ``x0`` and ``x1`` [rad], e.g. ``[0 deg, 60 deg]``."""
+    output: tuple[Scalar, Scalar] | None = None
+    """The rocker's angles at ``f(x0)`` and ``f(x1)`` [rad], e.g. ``[240 deg, 180 deg]``."""
+    points: int = Field(default=3, ge=2, le=1000)
+    """Precision points of ``f``. Default 3."""
+    spacing: Literal["chebyshev", "even"] = "chebyshev"
+    """The precision points' spacing: ``chebyshev`` (default) or ``even``."""
+    free_start: bool = False
+    """The angles count from start angles found too (only differences count). Default false."""
+    ratios: tuple[Scalar, Scalar] = (0.05, 20.0)
+    """Bounds of the crank, coupler and rocker as multiples of the ground link. Default
+    ``[0.05, 20]``."""
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        given = [self.x, self.input, self.output]
+        if (self.pairs is None) == (self.expr is None):
+            raise ValueError("give 'pairs', or 'expr' with 'x', 'input' and 'output'")
+        if self.expr is not None and any(v is None for v in given):
+            raise ValueError("'expr' needs 'x', 'input' and 'output'")
+        if self.pairs is not None and any(v is not None for v in given):
+            raise ValueError("'x', 'input' and 'output' go with 'expr', not with 'pairs'")
+        return self
+
+
 class SynthesisRunSpec(Spec):
-    """A four-bar synthesized to draw a path (``mixdyn.synthesize``): random starts refined
-    by Levenberg-Marquardt, the motor torque optionally in the objective. Needs no mechanism
-    in the file."""
+    """A four-bar synthesized to draw a path or generate a function (``mixdyn.synthesize``):
+    random starts refined by Levenberg-Marquardt, a path's motor torque optionally in the
+    objective. Needs no mechanism in the file."""
 
     kind: Literal["synthesis"]
     """Run kind: ``synthesis``."""
     name: Name
     """Unique name of the run (its output folder's name)."""
-    points: list[Vec2] = Field(min_length=2)
-    """The target points ``[x, y]`` [length], in the order the coupler point passes them as
-    the crank turns positively, e.g. ``[[500 mm, 300 mm], ...]``."""
+    points: list[Vec2] | None = Field(default=None, min_length=2)
+    """Path generation: the target points ``[x, y]`` [length], in the order the coupler
+    point passes them as the crank turns positively, e.g. ``[[500 mm, 300 mm], ...]``."""
+    function: SynthesisFunctionSpec | None = None
+    """Function generation instead of a path: ``{expr: log10(x), x: [1, 2], input: [0 deg,
+    60 deg], output: [240 deg, 180 deg]}`` or ``{pairs: [[crank, rocker], ...]}``."""
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
     turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only
@@ -1103,6 +1143,12 @@ class SynthesisRunSpec(Spec):
     """Distinct candidates kept and written at most. Default 10."""
     max_steps: int = Field(default=300, ge=1, le=100_000)
     """Levenberg-Marquardt steps per start at most. Default 300."""
+
+    @model_validator(mode="after")
+    def _one_task(self):
+        if (self.points is None) == (self.function is None):
+            raise ValueError("give 'points' (a path) or 'function' (function generation)")
+        return self
 
 
 RunSpec = Annotated[

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
+import functools
 import sys
 import time
 
@@ -37,6 +38,8 @@ from ..errors import ModelError, NumericalError
 from ..io import schema as s
 from ..synthesis import (
     NAMES,
+    FunctionSynthesis,
+    FunctionTask,
     Masses,
     Objective,
     PathTask,
@@ -71,17 +74,17 @@ class SynthesisPlan(Plan):
     """A checked synthesis run: the task and objective built (SI) and the search's settings.
 
     Attributes:
-        task: the path task.
-        objective: the objective.
+        task: the path task, or the function task.
+        objective: the path's objective (None for a function).
     """
 
-    task: PathTask | None = None
+    task: PathTask | FunctionTask | None = None
     objective: Objective | None = None
 
     @property
     def polished(self) -> bool:
         """Whether the search polishes its outcomes for the path (with a torque weight)."""
-        return self.objective.torque_weight > 0
+        return self.objective is not None and self.objective.torque_weight > 0
 
 
 @dataclasses.dataclass
@@ -112,6 +115,12 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
     """Check a synthesis run: its numbers read with their units, the task and objective built
     (every fault an input error at its line)."""
     path = ("runs", index)
+    if r.function is not None:
+        from .synthesis_function import function_task
+
+        si = functools.partial(_si, runner)
+        task = function_task(runner, path, r, si)
+        return SynthesisPlan(r, index, np.zeros(1), (), task=task, objective=None)
     points = np.array(
         [[_si(runner, v, "length", (*path, "points", i, k)) for k, v in enumerate(p)]
          for i, p in enumerate(r.points)]
@@ -272,16 +281,20 @@ class SynthesisKind(RunKind):
     def write(self, runner, plan: SynthesisPlan, result: FileSynthesis, seconds: float, outputs):
         from .._version import __version__
         from ..io.results import _write_csv, headers, jsonable, write_meta
+        from . import synthesis_function as fn
 
         out, r = result.synthesis, plan.spec
+        function = isinstance(out, FunctionSynthesis)
         folder = outputs.folder(plan)
         folder.mkdir(parents=True, exist_ok=True)
-        names, units, table = candidates_table(out)
+        names, units, table = (fn.function_table if function else candidates_table)(out)
         csv = folder / "candidates.csv"
         _write_csv(csv, headers(names, units), table)
         best = folder / "best.yaml"
-        out.write(best)
-        c = out.best
+        if function:
+            best.write_text(fn.model_file(out, plan.name), encoding="utf-8")
+        else:
+            out.write(best)
         figures = ["synthesis.png"] if outputs.painter is not None else []
         meta = {
             "mixdyn_version": __version__,
@@ -294,20 +307,14 @@ class SynthesisKind(RunKind):
             "unit_system": {"length": "m", "mass": "kg", "time": "s", "angle": "rad"},
             "settings": r.model_dump(mode="json"),
             "synthesis": {
+                "task": "function" if function else "path",
                 "starts": out.starts,
                 "feasible": out.feasible,
                 "candidates": len(out.candidates),
                 "seed": out.seed,
                 "seconds": out.seconds,
-                "best": {
-                    **c.numbers(),
-                    "angles": np.asarray(c.angles),
-                    "error": c.error,
-                    "score": c.score,
-                    "torque_rms": c.torque_rms if np.isfinite(c.torque_rms) else None,
-                    "torque_peak": c.torque_peak if np.isfinite(c.torque_peak) else None,
-                    "min_transmission": c.min_transmission,
-                },
+                "best": dict(zip(names, table[0], strict=True)),
+                **({} if function else {"angles": np.asarray(out.best.angles)}),
                 "units": units,
             },
             "figures": figures,
@@ -315,18 +322,27 @@ class SynthesisKind(RunKind):
         files = [csv, best, write_meta(folder, jsonable(meta))]
         if outputs.painter is not None:
             drawn = out.candidates[:DRAWN]
+            title = f"{plan.name}: {len(out.candidates)} four-bars, best first"
+            errors = [cand.error for cand in drawn]
+            if function:
+                asked = np.rad2deg(np.column_stack([out.task.inputs, out.task.outputs]))
+                curves, options = fn.curves(out, DRAWN), {"unit": "deg", "equal": False}
+                options.update(axes=("crank angle", "rocker angle"), error_unit="rad²")
+            else:
+                asked, curves, options = out.task.points, [_curves(c) for c in drawn], {}
             outputs.painter.draw(
-                "synthesis",
-                out.task.points,
-                [_curves(cand) for cand in drawn],
-                [cand.error for cand in drawn],
-                folder / "synthesis.png",
-                title=f"{plan.name}: {len(out.candidates)} four-bars, best first",
+                "synthesis", asked, curves, errors, folder / "synthesis.png", title=title, **options
             )
         return files
 
     def describe(self, plan: SynthesisPlan, report, model) -> str:
         r, o = plan.spec, plan.objective
+        if o is None:
+            start = ", start angles free" if plan.task.free_start else ""
+            return (
+                f"run [bold]{esc(r.name)}[/bold] (synthesis): a four-bar generating a function "
+                f"at {len(plan.task.inputs)} points{start}, {r.starts} starts, seed {r.seed}"
+            )
         timing = "timing free" if plan.task.timing is None else "timing given"
         what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
         return (
@@ -359,11 +375,15 @@ class SynthesisKind(RunKind):
     def done(self, plan: SynthesisPlan, result: FileSynthesis, seconds: float, folder) -> str:
         out = result.synthesis
         c = out.best
-        torque = f", motor torque RMS {c.torque_rms:.4g} N·m" if np.isfinite(c.torque_rms) else ""
+        if isinstance(out, FunctionSynthesis):
+            best = f"best angle error {c.error:.3g} rad²"
+        else:
+            best = f"best path error {c.error:.3g} m²"
+            if np.isfinite(c.torque_rms):
+                best += f", motor torque RMS {c.torque_rms:.4g} N·m"
         return (
             f"{plan.name}: synthesis, {len(out.candidates)} four-bars of {out.feasible} "
-            f"feasible from {out.starts} starts, best path error {c.error:.3g} m²{torque}, "
-            f"{seconds:.2f} s -> {folder}"
+            f"feasible from {out.starts} starts, {best}, {seconds:.2f} s -> {folder}"
         )
 
 

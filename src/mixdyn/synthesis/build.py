@@ -108,6 +108,7 @@ def model_file_text(
     targets=None,
     steps: int = 101,
     header: str = "",
+    run: tuple = ("path", ["coupler.P.x", "coupler.P.y"], "coupler_point.png", ["coupler.P"]),
 ) -> str:
     """YAML text of ``fb``'s model file: a kinematic run (the coupler point's path) and,
     with ``masses``, an inverse run (the motor torque) from ``start`` to ``end`` [rad].
@@ -115,11 +116,12 @@ def model_file_text(
     Args:
         fb: the four-bar.
         masses: how its links weigh (None: a kinematic run only).
-        start, end: the first and last input angle [rad] (``end > start``).
-        speed: the crank's speed [rad/s].
+        start, end: the first and last input angle [rad].
+        speed: the crank's speed [rad/s], of the sign of ``end - start``.
         targets: (N, 2) the target points, written in the header as a comment.
         steps: output times of each run.
         header: comment lines above the file (without ``#``).
+        run: the kinematic run's ``(name, plotted columns, figure file, output points)``.
     """
     import yaml
 
@@ -128,13 +130,14 @@ def model_file_text(
     model = four_bar_model(fb, masses, start=start, speed=speed)
     data = to_data(describe(model))
     span = [0.0, float(end - start) / speed]
+    name, columns, figure, points = run
     runs = [
         {
-            "name": "path",
+            "name": name,
             "kind": "kinematic",
             "time": {"span": list(span), "n": steps},
-            "plots": [{"file": "coupler_point.png", "columns": ["coupler.P.x", "coupler.P.y"]}],
-            "outputs": ["coupler.P"],
+            "plots": [{"file": figure, "columns": list(columns)}],
+            **({"outputs": list(points)} if points else {}),
         }
     ]
     if masses is not None:

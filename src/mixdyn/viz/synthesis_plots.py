@@ -1,5 +1,6 @@
-"""The figure of a synthesis: the target points and the candidates' coupler curves (PNG, SVG
-or PDF), without pyplot's global state.
+"""The figure of a synthesis: the target points and the candidates' coupler curves, or a
+function's asked angle pairs and the candidates' rocker angles (PNG, SVG or PDF), without
+pyplot's global state.
 
 Loaded by the figure worker by its path (:mod:`mixdyn.runtime._worker`): NumPy and matplotlib only.
 """
@@ -18,6 +19,9 @@ def plot_synthesis(
     path,
     *,
     unit: str = "m",
+    axes: tuple[str, str] = ("x", "y"),
+    error_unit: str | None = None,
+    equal: bool = True,
     title: str | None = None,
     dpi: int = 120,
 ) -> pathlib.Path:
@@ -31,7 +35,11 @@ def plot_synthesis(
             loop does not close).
         errors: each candidate's path error [``unit``**2], in the legend.
         path: the figure's file.
-        unit: the unit of length.
+        unit: the unit of the axes.
+        axes: the axes' names (a path: ``x``, ``y``; a function: the crank's and the
+            rocker's angle).
+        error_unit: the errors' unit (default ``unit``²).
+        equal: equal scales on both axes (a path).
         title: the figure's title.
         dpi: resolution of a PNG.
     """
@@ -42,6 +50,7 @@ def plot_synthesis(
     path = pathlib.Path(path)
     if path.suffix.lower() not in (".png", ".svg", ".pdf"):
         raise ValueError(f"cannot write a plot to {path.name!r}; use .png, .svg or .pdf")
+    error_unit = error_unit or f"{unit}²"
     fig = Figure(figsize=(6.4, 5.6), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.subplots()
@@ -50,14 +59,15 @@ def plot_synthesis(
         best = k == 0
         run, rest = (np.asarray(c) for c in curves[k])
         color = "tab:blue" if best else colors[k]
-        label = f"{'best' if best else f'#{k + 1}'}: error {errors[k]:.3g} {unit}²"
+        label = f"{'best' if best else f'#{k + 1}'}: error {errors[k]:.3g} {error_unit}"
         ax.plot(*run.T, "-", lw=2.2 if best else 1.0, alpha=1.0 if best else 0.7,
                 color=color, label=label)  # fmt: skip
         ax.plot(*rest.T, ":", lw=1.0, alpha=0.8 if best else 0.4, color=color)
-    ax.plot(*np.asarray(targets).T, "x", ms=9, mew=2, color="tab:red", label="targets")
-    ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(f"x [{unit}]")
-    ax.set_ylabel(f"y [{unit}]")
+    ax.plot(*np.asarray(targets).T, "x", ms=9, mew=2, color="tab:red", label="asked")
+    if equal:
+        ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel(f"{axes[0]} [{unit}]")
+    ax.set_ylabel(f"{axes[1]} [{unit}]")
     ax.grid(True, alpha=0.35)
     ax.legend(fontsize="small", loc="best")
     if title:
