@@ -63,14 +63,20 @@ def test_a_ball_resting_on_a_slope_presses_with_m_g_cos_theta():
     np.testing.assert_allclose(qdd[:2], G_ * math.sin(theta) * down, rtol=1e-12)
 
 
-def test_a_rod_lying_on_a_stop_presses_with_half_its_weight():
-    L, m, R = 0.4, 1.5, 0.01
-    rod = md.Body("rod", m, m * L**2 / 12, q0=(L / 2, 0.0, 0.0),
-                  points={"O": (-L / 2, 0.0), "tip": (L / 2, 0.0)})  # fmt: skip
+def _rod_on_a_stop(phi0, L=0.4, m=1.5, R=0.01, e=0.5):
+    """A rod pinned at its end O on the ground's origin at the angle ``phi0``, its other
+    end's rounded tip (radius ``R``) above a stop that it touches lying horizontal."""
+    c = (L / 2 * math.cos(phi0), L / 2 * math.sin(phi0), phi0)
+    rod = md.Body("rod", m, m * L**2 / 12, q0=c, points={"O": (-L / 2, 0.0), "tip": (L / 2, 0.0)})
     stop = md.CircleLineContact("stop", "rod.tip", R, ("ground", (L, -R)), contact_model="rigid",
-                                restitution=0.5)  # fmt: skip
-    model = md.Model([rod], [md.Revolute("O", "ground", "rod.O")], forces=[stop],
-                     gravity=(0, -G_))  # fmt: skip
+                                restitution=e)  # fmt: skip
+    return md.Model([rod], [md.Revolute("O", "ground", "rod.O")], forces=[stop],
+                    gravity=(0, -G_))  # fmt: skip
+
+
+def test_a_rod_lying_on_a_stop_presses_with_half_its_weight():
+    m = 1.5
+    model = _rod_on_a_stop(0.0, m=m)
     held = _held(model, "stop")
     q, qd, t = jnp.asarray(model.q0), jnp.zeros(3), jnp.zeros(())
     np.testing.assert_allclose(normal_forces(held, q, qd, t), [m * G_ / 2], rtol=1e-12)
@@ -160,3 +166,22 @@ def test_the_resting_ball_example_rests_then_lifts_off(tmp_path):
     resting = (r.t > rests["start"][0]) & (r.t < rests["end"][0])
     pull = k * np.maximum(r.t[resting] - 1.0, 0.0)
     np.testing.assert_allclose(r["floor.normal"][resting], m * G_ - pull, rtol=1e-9)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_rod_falling_on_a_stop_comes_to_rest_on_it_with_half_its_weight():
+    """The rod released 0.2 rad above its stop bounces (``e = 0.3``), comes to rest lying
+    on it, held with ``m g / 2`` (the moment balance about the pin); the impacts took all the
+    potential energy its centre lost, ``m g (L / 2) sin(0.2)``."""
+    L, m, phi0 = 0.4, 1.5, 0.2
+    model = _rod_on_a_stop(phi0, L=L, m=m, e=0.3)
+    r = md.forward(model, np.linspace(0.0, 1.0, 21), rtol=1e-11, atol=1e-13)
+    rests = r.stats["rests"]
+    assert rests["contact"] == ["stop"] and rests["end"][0] == 1.0
+    assert len(r.stats["impacts"]["t"]) > 3  # it bounced before resting
+    after = r.t > rests["start"][0]
+    np.testing.assert_allclose(r["rod.phi"][after], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["stop.normal"][after], m * G_ / 2, rtol=1e-9)
+    np.testing.assert_allclose(r["O.Fy"][after], m * G_ / 2, rtol=1e-9)  # the pin on the rod
+    lost = -m * G_ * (L / 2) * math.sin(phi0)
+    np.testing.assert_allclose(r["work.impacts"][-1], lost, rtol=1e-8)

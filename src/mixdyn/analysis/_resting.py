@@ -17,6 +17,8 @@ problem per set of held points (:func:`holding`), each compiled once.
 
 from __future__ import annotations
 
+import dataclasses
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -25,6 +27,7 @@ from ..equations import Constraints
 from ..linalg import DenseSolver
 from ..model import Polynomial
 from ..model._drivers import Driver
+from ..model._element import moving
 from ._problem import Problem
 
 
@@ -38,20 +41,35 @@ class Hold(Driver):
 
     contact: eqx.Module
     point: int = eqx.field(static=True)
+    bi: int = eqx.field(static=True, kw_only=True)
+    bj: int = eqx.field(static=True, kw_only=True)
 
     def measure(self, q):
         """The point's penetration ``delta(q)`` [length] (0 while it rests)."""
-        return jnp.atleast_1d(self.contact.penetration(q))[self.point]
+        return jnp.atleast_1d(_on_bodies(self.contact, self.bi, self.bj).penetration(q))[self.point]
 
     def body_indices(self):
-        return self.contact.body_indices()
+        return moving(self.bi, self.bj)
+
+
+def _on_bodies(contact, bi: int, bj: int):
+    """``contact`` reading its bodies ``bi``, ``bj`` (the hold's: the model's, or a local
+    vector's where the constraint set evaluates it per element), copied field by field (it
+    is bound and checked already)."""
+    if contact.bi == bi and contact.bj == bj:
+        return contact
+    out = object.__new__(type(contact))
+    for f in dataclasses.fields(contact):
+        value = {"bi": bi, "bj": bj}.get(f.name, getattr(contact, f.name))
+        object.__setattr__(out, f.name, value)
+    return out
 
 
 def hold(contact, point: int, count: int) -> Hold:
     """The :class:`Hold` of ``contact``'s contact point ``point`` (of ``count``), named
     ``{contact}.rest`` (``{contact}.rest{point}`` for a pair with several points)."""
     name = f"{contact.name}.rest" + (str(point) if count > 1 else "")
-    return Hold(name, contact, int(point), law=Polynomial([0.0]))
+    return Hold(name, contact, int(point), law=Polynomial([0.0]), bi=contact.bi, bj=contact.bj)
 
 
 def holding(problem: Problem, holds: tuple[Hold, ...]) -> Problem:
