@@ -257,7 +257,9 @@ runs:
 
 def test_a_function_task_is_read_with_its_units():
     """``function:`` with an expression of x and a parameter: Chebyshev's three points (by
-    hand), the angles in rad."""
+    hand), the angles in rad; the function example checked as mixdyn check does."""
+    lines = list(report(EXAMPLES / "synthesis_function.yaml"))
+    assert "no mechanism" in lines[0] and "generating a function at 3 points" in lines[1]
     task = Runner(mio.reads(FUNCTION)).plans["log"].task
     x = 1.5 + 0.5 * np.array([-1.0, 0.0, 1.0]) * np.sqrt(3) / 2
     np.testing.assert_allclose(task.inputs, np.deg2rad(60.0) * (x - 1.0), rtol=1e-14)

@@ -1,8 +1,10 @@
-"""Synthesis runs of a model file: a four-bar made to draw a path (:func:`mixdyn.synthesize`).
+"""Synthesis runs of a model file: a four-bar made to draw a path or to generate a function
+(:func:`mixdyn.synthesize`).
 
 A ``synthesis`` run describes the task (the target points, the timing, bounds of the
 four-bar's numbers, the least transmission angle), how the links weigh and how the motor
-torque counts, and the search (starts, seed). It needs no mechanism in the file: a file whose
+torque counts, and the search (starts, seed); or, with ``function:``, a function task
+(:mod:`.synthesis_function`). It needs no mechanism in the file: a file whose
 runs are all synthesis runs may have no bodies (``mixdyn check`` then reports no mechanism).
 Its numbers are read with their units and handed to the search in SI (m, kg, s), the unit
 system of the model file it writes.
