@@ -133,13 +133,15 @@ for _name in ("Plan", "Runner", "execute"):
 #: Names of the file layer reached from the top, by their module (loaded on first use, and
 #: left out of ``__all__`` so that ``import *`` does not load it): :func:`mixdyn.load` and
 #: :func:`mixdyn.run_file` (a model file from Python), :func:`mixdyn.read_table` (written
-#: results); :func:`mixdyn.synthesize` (linkage synthesis, :mod:`mixdyn.synthesis`), loaded
-#: on first use too.
+#: results), :func:`mixdyn.write_excel` (a result as an Excel workbook);
+#: :func:`mixdyn.synthesize` (linkage synthesis, :mod:`mixdyn.synthesis`), loaded on first
+#: use too.
 _FILE_NAMES = {
     "load": "runs.files",
     "run_file": "runs.files",
     "LoadedFile": "runs.files",
     "read_table": "io.results",
+    "write_excel": "io.results",
     "synthesize": "synthesis",
 }
 

@@ -1,5 +1,5 @@
 """Excel output (issue 32): ``mixdyn run --excel``, ``run_file(..., excel=True)`` and
-``Result.to_excel`` write a workbook whose sheet ``results`` is ``results.csv`` (the same
+``mixdyn.write_excel`` write a workbook whose sheet ``results`` is ``results.csv`` (the same
 ``name [unit]`` headers, the same numbers) and whose sheet ``meta`` holds the columns' units
 and the run's settings; without openpyxl the request is an input error naming the extra.
 
@@ -78,9 +78,9 @@ def test_the_workbook_is_the_csv_with_its_units(written):
     assert meta["unit_system.length"] == "mm"  # the model's, beside the output units
 
 
-def test_to_excel_writes_the_same_table_from_python(written, tmp_path):
+def test_write_excel_writes_the_same_table_from_python(written, tmp_path):
     _, run, result = written
-    path = result.to_excel(tmp_path / "turn.xlsx")
+    path = md.write_excel(result, tmp_path / "turn.xlsx")
     sheet = pd.read_excel(path, sheet_name="results")
     csv = pd.read_csv(run / "results.csv")
     assert list(sheet.columns) == list(csv.columns)
@@ -112,7 +112,7 @@ def test_without_openpyxl_excel_is_an_input_error_naming_the_extra(written, tmp_
     assert 'pip install "mixdyn[excel]"' in res.output and "--excel" in res.output
     assert not out.exists()  # refused before anything ran
     with pytest.raises(FileError, match=r"openpyxl, which is not installed.*mixdyn\[excel\]"):
-        result.to_excel(tmp_path / "x.xlsx")
+        md.write_excel(result, tmp_path / "x.xlsx")
     assert not (tmp_path / "x.xlsx").exists()
 
 

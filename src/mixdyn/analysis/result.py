@@ -203,28 +203,6 @@ class Result:
             save_figure(fig, path, kw.get("dpi", 120))
         return fig
 
-    def to_excel(self, path, points=(), output_units: dict | None = None):
-        """Write the result as an Excel workbook (``.xlsx``): a sheet ``results`` with the
-        columns of ``results.csv`` (``t`` first, headers ``name [unit]``, in the units of
-        :meth:`table`) and a sheet ``meta`` (the columns' units, the unit system, the
-        solver's counters). Needs openpyxl: ``pip install "mixdyn[excel]"``
-        (:func:`mixdyn.io.results.write_excel`).
-
-        Args:
-            path: the workbook to write.
-            points: point references whose columns (``coupler.P.x``...) are written too.
-            output_units: as for :meth:`table`.
-
-        Returns:
-            The workbook's path (a :class:`pathlib.Path`).
-
-        Raises:
-            FileError: openpyxl is not installed.
-        """
-        from ..io.results import write_excel
-
-        return write_excel(self, path, points=points, output_units=output_units)
-
     def point(self, ref) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Global position, velocity and acceleration of a point, each (N, 2) [model units]."""
         b, s = Resolver(self.model.ground, self.model.bodies).point(ref, "point")
