@@ -15,7 +15,6 @@ import os
 import re
 import shutil
 import subprocess
-import textwrap
 from html.parser import HTMLParser
 
 import numpy as np
@@ -24,36 +23,14 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn.io as mio
-from fixtures import EXAMPLES
+from fixtures import CRANK_FILE, EXAMPLES
 from mixdyn.cli import app
 from mixdyn.runs import execute
 
 #: A number as a page shows it (6 significant digits), against the file's.
 RTOL = 5e-6
 
-CRANK = textwrap.dedent(
-    """\
-    mixdyn: 1
-    name: crank
-    units: {length: mm, mass: kg, time: s}
-    gravity: [0, -9.81 m/s^2]
-    output_units: {preset: SI, angle: deg}
-    bodies:
-      - name: crank
-        mass: 2 kg
-        inertia: 2*250**2/12 kg*mm^2
-        q0: [125, 0, 0]
-        points: {O: [-125, 0], A: [125, 0]}
-    joints:
-      - {type: revolute, name: O, point_i: ground, point_j: crank.O}
-    drivers:
-      - {type: coordinate, name: motor, coordinate: crank.phi, law: 0.5*t}
-    runs:
-      - name: turn
-        kind: inverse
-        time: {span: [0, 2], n: 11}
-    """
-)
+CRANK = CRANK_FILE
 
 SWEEP = """\
   - name: masses

@@ -12,41 +12,19 @@ m L^2 w^2 / 6, its power the torque times w, its centre at L/2 (cos phi, sin phi
 from __future__ import annotations
 
 import importlib.util
-import textwrap
 
 import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 import mixdyn as md
+from fixtures import CRANK_FILE
 from mixdyn.cli import app
 from mixdyn.units import engineering, factor, plain
 
 M, L, W, G = 2.0, 0.25, 0.5, 9.81  # kg, m, rad/s, m/s^2
 
-CRANK = textwrap.dedent(
-    """\
-    mixdyn: 1
-    name: crank
-    units: {length: mm, mass: kg, time: s}
-    gravity: [0, -9.81 m/s^2]
-    output_units: {preset: SI, angle: deg}
-    bodies:
-      - name: crank
-        mass: 2 kg
-        inertia: 2*250**2/12 kg*mm^2
-        q0: [125, 0, 0]
-        points: {O: [-125, 0], A: [125, 0]}
-    joints:
-      - {type: revolute, name: O, point_i: ground, point_j: crank.O}
-    drivers:
-      - {type: coordinate, name: motor, coordinate: crank.phi, law: 0.5*t}
-    runs:
-      - name: turn
-        kind: inverse
-        time: {span: [0, 2], n: 11}
-    """
-)
+CRANK = CRANK_FILE
 
 
 @pytest.fixture(scope="module")

@@ -123,6 +123,22 @@ def read_parquet(path):
         ) from None
 
 
+def _optional(name: str, needs: str, install: str, file, option, instead: str | None):
+    """The module ``name``, or the :class:`~mixdyn.io.FileError` saying ``needs`` (``"reading
+    Parquet needs pyarrow"``) and how to get it: ``install``, or else ``instead`` (leaving
+    ``option`` out where the command line asked for it)."""
+    try:
+        return __import__(name, fromlist=["_"])  # the module itself, not its package
+    except ImportError:
+        instead = f"leave {option} out" if option else instead
+        raise FileError(
+            f"{needs}, which is not installed",
+            option,
+            file=str(file),
+            hint=install + (f" (or {instead})" if instead else ""),
+        ) from None
+
+
 def parquet_module(file, doing: str, option: str | None = None):
     """``pyarrow.parquet``, or the :class:`~mixdyn.io.FileError` saying it is missing.
 
@@ -131,17 +147,8 @@ def parquet_module(file, doing: str, option: str | None = None):
         doing: ``"reading"`` or ``"writing"``, for the message.
         option: the command-line option asking for Parquet (``"--parquet"``), if any.
     """
-    try:
-        import pyarrow.parquet as papq
-    except ImportError:
-        instead = f"leave {option} out" if option else "use the CSV"
-        raise FileError(
-            f"{doing} Parquet needs pyarrow, which is not installed",
-            option,
-            file=str(file),
-            hint=f"pip install pyarrow (or {instead})",
-        ) from None
-    return papq
+    needs = f"{doing} Parquet needs pyarrow"
+    return _optional("pyarrow.parquet", needs, "pip install pyarrow", file, option, "use the CSV")
 
 
 def excel_module(file, doing: str, option: str | None = None):
@@ -153,17 +160,8 @@ def excel_module(file, doing: str, option: str | None = None):
         doing: ``"writing"`` or ``"reading"``, for the message.
         option: the command-line option asking for Excel (``"--excel"``), if any.
     """
-    try:
-        import openpyxl
-    except ImportError:
-        instead = f" (or leave {option} out)" if option else ""
-        raise FileError(
-            f"{doing} Excel needs openpyxl, which is not installed",
-            option,
-            file=str(file),
-            hint=f'pip install "mixdyn[excel]"{instead}',
-        ) from None
-    return openpyxl
+    needs = f"{doing} Excel needs openpyxl"
+    return _optional("openpyxl", needs, 'pip install "mixdyn[excel]"', file, option, None)
 
 
 def require_numbers(table, columns, file, option: str) -> None:
