@@ -81,3 +81,18 @@ def test_synthesis_finds_freudensteins_linkage():
     np.testing.assert_allclose(found, [a, b, c], rtol=1e-9)
     np.testing.assert_allclose(best.output(task.inputs, task.outputs[0]), task.outputs, atol=1e-9)
     assert best.error < 1e-18
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search compiles its program)
+def test_free_start_angles_are_found():
+    """Five pairs of a known four-bar counted from its own start angles (only differences
+    given): the search finds its ratios and its start angles."""
+    fb = FourBar(*np.array([1.0, 0.45, 0.9, 0.7, 0, 0, 0, 0, 0]), np.float64(1.0))
+    theta = np.linspace(0.5, 2.0, 5)
+    rocker = FunctionCandidate(fb, 0.0, 0.0, 0.0, 0.0).output(theta)
+    task = FunctionTask(theta - theta[0], rocker - rocker[0], free_start=True)
+    best = md.synthesize(task, starts=256, seed=0).best
+    found = [float(best.fourbar.r2), float(best.fourbar.r3), float(best.fourbar.r4)]
+    np.testing.assert_allclose(found, [0.45, 0.9, 0.7], rtol=1e-8)
+    assert best.input_start == pytest.approx(theta[0], abs=1e-8)
+    assert np.angle(np.exp(1j * (best.output_start - rocker[0]))) == pytest.approx(0, abs=1e-8)
