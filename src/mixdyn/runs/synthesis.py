@@ -294,7 +294,7 @@ class SynthesisKind(RunKind):
         _write_csv(csv, headers(names, units), table)
         best = folder / "best.yaml"
         if function:
-            best.write_text(fn.model_file(out, plan.name), encoding="utf-8")
+            best.write_text(out.model_file(name=f"run {plan.name}"), encoding="utf-8")
         else:
             out.write(best)
         figures = ["synthesis.png"] if outputs.painter is not None else []

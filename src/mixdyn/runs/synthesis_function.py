@@ -105,30 +105,6 @@ def function_table(out: FunctionSynthesis):
     return names, units, np.array(rows, dtype=float)
 
 
-def model_file(out: FunctionSynthesis, name: str) -> str:
-    """YAML text of the best four-bar's model file: its ground link 1 m, a kinematic run of
-    the crank's and rocker's angles from the first input to the last."""
-    from ..synthesis import model_file_text
-
-    c, task = out.best, out.task
-    start, end = task.inputs[0] + c.input_start, task.inputs[-1] + c.input_start
-    head = (
-        f"A four-bar generating a function, synthesized by mixdyn (run {name}, seed "
-        f"{out.seed}):\nangle error sum (theta4 - asked)^2 = {c.error:.6g} rad^2; the angles "
-        f"count from the ground link, the task's from {c.input_start:.6g} rad (crank) and "
-        f"{c.output_start:.6g} rad (rocker)\n\n  mixdyn run FILE"
-    )
-    return model_file_text(
-        c.fourbar,
-        None,
-        start=float(start),
-        end=float(end),
-        speed=1.0 if end > start else -1.0,
-        header=head,
-        run=("angles", ["crank.phi", "rocker.phi"], "angles.png", []),
-    )
-
-
 def curves(out: FunctionSynthesis, drawn: int, samples: int = 241) -> list:
     """Per candidate ``(run, rest)``: the rocker's angle against the crank's (K, 2) [deg]
     over the task's inputs, and nothing beyond them (the figure's curves)."""
@@ -141,4 +117,4 @@ def curves(out: FunctionSynthesis, drawn: int, samples: int = 241) -> list:
     return shown
 
 
-__all__ = ["PATH_KEYS", "curves", "function_table", "function_task", "model_file"]
+__all__ = ["PATH_KEYS", "curves", "function_table", "function_task"]

@@ -108,6 +108,37 @@ class FunctionSynthesis:
         c = self.candidates[k]
         return four_bar_model(c.fourbar, None, start=float(self.task.inputs[0] + c.input_start))
 
+    def model_file(self, k: int = 0, name: str = "function") -> str:
+        """YAML text of candidate ``k``'s model file: its ground link 1 m, a kinematic run of
+        the crank's and rocker's angles (``crank.phi``, ``rocker.phi``) from the first input
+        to the last (``name``: named in the header)."""
+        from .build import model_file_text
+
+        c, task = self.candidates[k], self.task
+        start, end = task.inputs[0] + c.input_start, task.inputs[-1] + c.input_start
+        head = (
+            f"A four-bar generating a function, synthesized by mixdyn ({name}, candidate "
+            f"{k + 1} of {len(self.candidates)}, seed {self.seed}):\nangle error sum (theta4 - "
+            f"asked)^2 = {c.error:.6g} rad^2; the angles count from the ground link, the "
+            f"task's from {c.input_start:.6g} rad (crank) and {c.output_start:.6g} rad "
+            "(rocker)\n\n  mixdyn run FILE"
+        )
+        return model_file_text(
+            c.fourbar,
+            None,
+            start=float(start),
+            end=float(end),
+            speed=1.0 if end > start else -1.0,
+            header=head,
+            run=("angles", ["crank.phi", "rocker.phi"], "angles.png", []),
+        )
+
+    def write(self, path, k: int = 0) -> None:
+        """Write :meth:`model_file` of candidate ``k`` to ``path``."""
+        import pathlib
+
+        pathlib.Path(path).write_text(self.model_file(k), encoding="utf-8")
+
     def table(self):
         """A pandas DataFrame: a row per candidate, its ratios, start angles and error."""
         import pandas as pd
