@@ -150,6 +150,8 @@ def test_a_synthesis_is_written_as_its_files(tmp_path):
     np.testing.assert_allclose(p - a, V[4:6], atol=1e-15)  # in the coupler's frame
     meta = json.loads((tmp_path / "path" / "meta.json").read_text())
     assert "torque_rms" not in meta["synthesis"]["best"]  # no masses: no torque
+    page = (tmp_path / "path" / "report.html").read_text()
+    assert 'class="candidates"' in page and "r1 [m]" in page and "best.yaml" in page
     np.testing.assert_array_equal(meta["synthesis"]["angles"], theta)
     run, rest = _curves(c)  # the figure's curves: the loop closes over the whole turn
     np.testing.assert_allclose(run[[0, -1]], points[[0, -1]], atol=1e-12)

@@ -22,8 +22,8 @@ Example (``examples/synthesis_path.yaml``)::
 ``mixdyn run`` writes ``candidates.csv`` (a row per distinct four-bar, best first, headers
 ``name [unit]``), ``best.yaml`` (the best four-bar as a model file that ``mixdyn run`` runs:
 the coupler point's path and, with masses, the motor torque), ``meta.json`` (the search's
-figures and the best candidate) and ``synthesis.png`` (the targets and the candidates'
-coupler curves).
+figures and the best candidate), ``synthesis.png`` (the targets and the candidates'
+coupler curves) and ``report.html`` (the counts, the candidates, the figure).
 """
 
 from __future__ import annotations
@@ -240,6 +240,45 @@ def _curves(c, samples: int = 241) -> tuple[np.ndarray, np.ndarray]:
     return run, rest
 
 
+def _report(runner, plan, out, names, units, table, seconds, outputs):
+    """The run's page (``report.html``): the search's counts, the candidates with their
+    units (best first), the figure and the settings."""
+    from ..io.results import run_settings
+    from ..viz.report import Report, Table, number
+
+    task = "function" if isinstance(out, FunctionSynthesis) else "path"
+    facts = [
+        ("file", str(outputs.file)),
+        ("run", f"{plan.name} (synthesis, {task} generation)"),
+        ("status", "ok"),
+        ("starts", f"{out.starts} (seed {out.seed})"),
+        ("feasible", f"{out.feasible} ({len(out.candidates)} distinct kept)"),
+        ("wall time", f"{seconds:.3f} s"),
+        ("best four-bar", "best.yaml (mixdyn run best.yaml)"),
+    ]
+    rows = [[str(k + 1), *(number(v) for v in row)] for k, row in enumerate(table)]
+    head = ["#", *(f"{n} [{units[n]}]" if units.get(n) else n for n in names)]
+    candidates = Table(
+        "Candidates, best first (candidates.csv)",
+        head,
+        rows,
+        numeric=tuple(range(len(head))),
+        cls="candidates",
+    )
+    folder = outputs.folder(plan)
+    return Report(
+        path=folder / "report.html",
+        title=f"{runner.spec.name}: synthesis {plan.name}",
+        facts=facts,
+        drawing="",
+        figures=[folder / "synthesis.png"] if outputs.painter is not None else [],
+        columns={},
+        units={},
+        settings=run_settings(plan.spec),
+        tables=[candidates],
+    )
+
+
 def _log(plan: SynthesisPlan, every: float = PROGRESS_LOG_EVERY):
     """A progress callback writing a plain line on stderr at most every ``every`` seconds."""
     start = time.monotonic()
@@ -274,7 +313,7 @@ class SynthesisKind(RunKind):
         return execute(runner, plan, progress)
 
     def output_files(self, runner, plan: SynthesisPlan, figures: bool) -> list[str]:
-        names = ["candidates.csv", "best.yaml", "meta.json"]
+        names = ["candidates.csv", "best.yaml", "meta.json", "report.html"]
         return names + (["synthesis.png"] if figures else [])
 
     def draws(self, runner, plan: SynthesisPlan) -> bool:
@@ -335,7 +374,8 @@ class SynthesisKind(RunKind):
             outputs.painter.draw(
                 "synthesis", asked, curves, errors, folder / "synthesis.png", title=title, **options
             )
-        return files
+        page = _report(runner, plan, out, names, units, table, seconds, outputs)
+        return files + outputs.add_report(page)
 
     def describe(self, plan: SynthesisPlan, report, model) -> str:
         r, o = plan.spec, plan.objective
