@@ -24,6 +24,7 @@ from ..errors import ModelError
 from ..linalg import BandedSolver, DenseSolver, LinearSolver, UnrolledSolver, as_linear_solver
 from ..linalg._dense import solve_ranked
 from ..model import Driver, Joint, Model
+from ..model._geometry import vectorized_elements
 from ._jacobian import (  # noqa: F401  (REGULARIZATION, REFINE_REDUNDANT: re-exported)
     REFINE_REDUNDANT,
     REGULARIZATION,
@@ -523,7 +524,8 @@ def _local_eval(st: _Static, stacked: tuple, fn, q, t, qd, rows) -> jax.Array:
     for group, cols in zip(stacked, st.cols, strict=True):
         ql = q[cols]
         qdl = ql if qd is None else qd[cols]
-        y = jax.vmap(fn, in_axes=(0, 0, None, 0))(group, ql, t, qdl)
+        with vectorized_elements():
+            y = jax.vmap(fn, in_axes=(0, 0, None, 0))(group, ql, t, qdl)
         outs.append(y.reshape(-1, *y.shape[2:]))
     if not outs:
         return jnp.zeros((0,))
@@ -535,7 +537,8 @@ def _jacobian_eval(st: _Static, stacked: tuple, q, t, active: tuple) -> jax.Arra
     """The per-element Jacobian values (nnz,) of the rows ``active``, in :meth:`coo` order."""
     outs = []
     for group, cols in zip(stacked, st.cols, strict=True):
-        J = jax.vmap(_jac, in_axes=(0, 0, None))(group, q[cols], t)
+        with vectorized_elements():
+            J = jax.vmap(_jac, in_axes=(0, 0, None))(group, q[cols], t)
         outs.append(J.reshape(-1))
     if not outs:
         return jnp.zeros((0,))

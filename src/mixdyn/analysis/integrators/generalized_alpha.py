@@ -207,55 +207,65 @@ def generalized_alpha(
             _, _, res, it, _, done = s
             return ~done & (it < max_newton) & jnp.isfinite(res)
 
-        def body(s):
-            x, r, res, it, full, _ = s
-            if newton == "modified":
-                dx = modified_dx(x, r)
-            elif newton == "full":
-                dx = full_dx(x, r)
-            else:
-                dx = jax.lax.cond(full, full_dx, modified_dx, x, r)
-            x1 = x - dx
-            r1 = residual(x1)
-            f1, p1 = parts(r1)
-            res1 = jnp.maximum(f1, p1)
-            # Converged; or stalled at the noise floor of the solve: near a singular position
-            # the iteration matrix is ill-conditioned, the rounding of the positions (1 ulp
-            # of Phi) is amplified like 1/distance in the update and the force residual stops
-            # decreasing. Such an iterate is accepted if the positions meet their tolerance
-            # and the force residual is below STALL_TOL x ftol (1e-6 of the force scale by
-            # default: an acceleration error far below the method's own), once the exact
-            # (or the chosen modified) Newton matrix no longer reduces it, and only where the
-            # iteration matrix is near singular (STALL_RATIO).
-            stalled = (
-                (kratio < STALL_RATIO)
-                & (p1 <= 1.0)
-                & (f1 <= STALL_TOL)
-                & ~(res1 <= STALL_RATE * res)
-                & jnp.isfinite(res1)
-            )
-            if newton == "auto":
-                stalled = stalled & full
-            done = (res1 <= 1.0) | stalled
-            if newton == "auto":
-                # A modified iteration that contracts poorly, or would at its rate need more
-                # than half the budget, hands the step to full Newton, from the better of the
-                # last two iterates.
-                rate = res1 / res
-                need = jnp.log(res1) / -jnp.log(rate)  # iterations still needed at this rate
-                slow = ~(rate <= SWITCH_RATE) | ~(it + 1 + need <= max_newton // 2)
-                slow = slow & ~full & ~(res1 <= 1.0)
-                back = slow & ~(res1 < res)
-                x1, r1, res1 = jax.tree.map(
-                    lambda old, new: jnp.where(back, old, new), (x, r, res), (x1, r1, res1)
+        def iteration(full: bool):
+            """One Newton iteration with the modified (``full=False``) or the exact matrix."""
+
+            def body(s):
+                x, r, res, it, switched, _ = s
+                dx = full_dx(x, r) if full else modified_dx(x, r)
+                x1 = x - dx
+                r1 = residual(x1)
+                f1, p1 = parts(r1)
+                res1 = jnp.maximum(f1, p1)
+                # Converged; or stalled at the noise floor of the solve: near a singular
+                # position the iteration matrix is ill-conditioned, the rounding of the
+                # positions (1 ulp of Phi) is amplified like 1/distance in the update and the
+                # force residual stops decreasing. Such an iterate is accepted if the
+                # positions meet their tolerance and the force residual is below STALL_TOL x
+                # ftol (1e-6 of the force scale by default: an acceleration error far below
+                # the method's own), once the exact (or the chosen modified) Newton matrix no
+                # longer reduces it, and only where the iteration matrix is near singular
+                # (STALL_RATIO). With newton="auto", only the exact matrix's iterations stall.
+                stalled = (
+                    (kratio < STALL_RATIO)
+                    & (p1 <= 1.0)
+                    & (f1 <= STALL_TOL)
+                    & ~(res1 <= STALL_RATE * res)
+                    & jnp.isfinite(res1)
                 )
-                full = full | slow
-            return x1, r1, res1, it + 1, full, done
+                if newton == "auto" and not full:
+                    stalled = jnp.zeros_like(stalled)
+                done = (res1 <= 1.0) | stalled
+                if newton == "auto" and not full:
+                    # A modified iteration that contracts poorly, or would at its rate need
+                    # more than half the budget, hands the step to full Newton, from the
+                    # better of the last two iterates.
+                    rate = res1 / res
+                    need = jnp.log(res1) / -jnp.log(rate)  # iterations still needed
+                    slow = ~(rate <= SWITCH_RATE) | ~(it + 1 + need <= max_newton // 2)
+                    slow = slow & ~(res1 <= 1.0)
+                    back = slow & ~(res1 < res)
+                    x1, r1, res1 = jax.tree.map(
+                        lambda old, new: jnp.where(back, old, new), (x, r, res), (x1, r1, res1)
+                    )
+                    switched = slow
+                return x1, r1, res1, it + 1, switched, done
+
+            return body
 
         r0 = residual(x0)
         res0 = error(r0)
         init = (x0, r0, res0, 0, jnp.asarray(newton == "full"), res0 <= 1.0)
-        x, r, res, it, _, done = jax.lax.while_loop(cond, body, init)
+        # The modified iterations, then (newton="auto": once they contract poorly) the exact
+        # ones, each in a loop of its own: a loop whose program holds the exact matrix's
+        # (nq + m)^2 buffers runs its small kernels through XLA's concurrent executor, at
+        # several times their cost, and the modified iterations of every step would pay it.
+        state = init
+        if newton != "full":
+            state = jax.lax.while_loop(lambda s: cond(s) & ~s[4], iteration(False), state)
+        if newton != "modified":
+            state = jax.lax.while_loop(cond, iteration(True), state)
+        x, r, res, it, _, done = state
         q1, qd1, a1 = predict(x[:n])
         qdd1, mu1 = x[:n], x[n:]
         if options.project_velocities:
