@@ -3,9 +3,9 @@
 Run as a script (``python .../mixdyn/runtime/_worker.py``): it imports neither mixdyn nor JAX,
 only NumPy, matplotlib and Pillow, and loads :mod:`mixdyn.viz.plots` and
 :mod:`mixdyn.viz._draw` by their paths (and :mod:`mixdyn.runtime._private`, whose
-:func:`~mixdyn.runtime._private.shared_palette` its GIFs are written in). Each line on standard input names a file holding a
-pickled task ``(kind, args, kwargs)`` (``kind``: ``"plot"``, ``"movie"``, ``"against"`` or
-``"band"``); for each it
+:func:`~mixdyn.runtime._private.shared_palette` its GIFs are written in). Each line on
+standard input names a file holding a pickled task ``(kind, args, kwargs)`` (``kind``:
+``"plot"``, ``"movie"``, ``"against"`` or ``"band"``); for each it
 writes one line on standard output, the hex of a pickled ``("ok", path)`` or
 ``("error", exception)``. An empty line or the end of the input ends it.
 
