@@ -185,3 +185,25 @@ def test_a_rod_falling_on_a_stop_comes_to_rest_on_it_with_half_its_weight():
     np.testing.assert_allclose(r["O.Fy"][after], m * G_ / 2, rtol=1e-9)  # the pin on the rod
     lost = -m * G_ * (L / 2) * math.sin(phi0)
     np.testing.assert_allclose(r["work.impacts"][-1], lost, rtol=1e-8)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_tilted_box_dropped_on_the_ground_settles_flat_on_two_corners():
+    """A box dropped tilted rocks from corner to corner until both bottom corners touch
+    at one instant, settles on them together (a plastic impact with two non-negative
+    impulses) and lies flat at ``y = h / 2`` with the corners' normal forces summing to
+    ``m g``; the impacts took all the energy it lost."""
+    m, w, h, rc = 1.0, 0.2, 0.1, 0.005
+    box = md.Body("box", m, m * (w**2 + h**2) / 12, q0=(0.0, 0.15, 0.1))
+    floor = md.BoxLineContact("floor", "box", w, h, rc, ("ground", (0.0, 0.0)),
+                              contact_model="rigid", restitution=0.4)  # fmt: skip
+    model = md.Model([box], forces=[floor], gravity=(0, -G_))
+    r = md.forward(model, np.linspace(0.0, 1.0, 11), rtol=1e-10, atol=1e-12)
+    rests = r.stats["rests"]
+    assert sorted(rests["end"])[-2:] == [1.0, 1.0]  # two corners rest to the end
+    after = r.t > max(rests["start"])
+    np.testing.assert_allclose(r["box.y"][after], h / 2, rtol=1e-9)
+    np.testing.assert_allclose(r["box.phi"][after], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["floor.normal"][after], m * G_, rtol=1e-9)
+    E = r["energy.kinetic"] + r["energy.potential"]
+    np.testing.assert_allclose(E - E[0], r["work.impacts"], atol=1e-9 * m * G_ * 0.15)

@@ -4,12 +4,16 @@ restitution over the constrained system.
 
 A run is a sequence of segments, each one adaptive Runge–Kutta solve (the projection
 method's ``rtol``, ``atol``, ``solver`` and ``max_steps``; one compiled program for every
-segment) that ends at the first instant a rigid contact's gap ``g(q) = -delta(q)``
-[length] falls to zero (``diffrax.Event`` on the smallest gap of the contact points apart
-or separating at the segment's start, downcrossings only; the instant found by bisection on
-the step's dense output to 1e-14 of the span). Within a segment the index-1 equations of
-motion are integrated as they are; at its end the positions and velocities are projected
-onto the constraints, and a segment is at most 2048 steps.
+segment and set of resting points) that ends at the first instant a rigid contact's gap
+``g(q) = -delta(q)`` [length] falls to zero, or a resting point's normal force does (one
+``diffrax.Event`` on the smaller of the smallest gap of the contact points apart or
+separating at the segment's start, over the model's length, and the smallest normal force
+of the resting points, over its value at the start; downcrossings only; the instant found
+by bisection on the step's dense output to 1e-14 of the span). Within a segment the
+index-1 equations of motion are integrated as they are; at its end the positions and
+velocities are projected onto the constraints, and a segment is at most 2048 steps. A
+contact point found more than :data:`MISSED` model lengths inside its contact at a
+segment's end passed into it unseen: the run ends as a :class:`~mixdyn.errors.NumericalError`.
 
 At an impact the velocities jump from ``qd-`` to ``qd+`` with impulses: for a contact point
 whose normal velocity ``v- = G qd-`` approaches (``G = dg/dq`` (1, nq), ``v- < 0``)::
@@ -40,8 +44,11 @@ next segments integrate that problem and end, besides at impacts, by an event wh
 resting point's ``N`` falls to zero (the motion pulls it away: lift-off); the point is then
 released and its gap watched again. A resting point whose ``N`` is tensile at a segment's
 start, or whose row takes a pulling impulse in an impact elsewhere, is released at once. A
-resting contact does no work (its row's velocity is zero): the energy balance holds with
-the impacts' losses alone.
+point struck a second time at one instant (a box landing flat rocks from corner to corner
+in no time) settles with the other touching points together: one perfectly plastic impact
+over all of them (:func:`settle`), the set chosen so that every impulse pushes and every
+other touching point leaves; the set rests. A resting contact does no work (its row's
+velocity is zero): the energy balance holds with the impacts' losses alone.
 
 A run past :data:`MAX_IMPACTS` impacts (contacts chattering without slowing to the rest
 speed) ends as an :class:`~mixdyn.errors.ImpactAccumulationError`, carrying the states
@@ -78,6 +85,9 @@ REST_SPEED = 1e-6
 MAX_IMPACTS = 10_000
 #: Contact points within this many model lengths of touching take part in an impact.
 GAP_TOL = 1e-9
+#: A contact point found this many model lengths inside its contact at a segment's end
+#: passed into it unseen: the run ends as a numerical failure.
+MISSED = 1e-6
 #: The impact instant's tolerance, relative to the run's span.
 TIME_TOL = 1e-14
 #: An impact whose normal velocity after misses Newton's law by more than this part of the
@@ -88,15 +98,21 @@ IMPULSE_TOL = 1e-6
 FIRST_STEP = 1e-4
 #: The part of the smallest contact radius a body point may move within one step.
 PASS_FRACTION = 0.5
+#: A contact point touching at rest is held only where its normal force exceeds this
+#: many times the model's mass times its length over the run's span squared (a point that
+#: nothing presses on its contact, as two balls touching in Newton's cradle, is apart).
+FORCE_TOL = 1e-9
 #: The most steps of one segment's solve (its dense output's size); a segment that runs out
 #: goes on as the next.
 SEGMENT_STEPS = 2048
 
 
-def _nearest_gap(contacts, watched, t, y, args, **kwargs):
-    """The smallest gap [length] of the ``watched`` contact points (k,) in the state ``y``
-    (infinite where none is watched): the event's condition."""
-    return jnp.min(jnp.where(watched, _gaps(contacts, y[0]), jnp.inf))
+def _nearest_gap(contacts, watched, origin, t, y, args, **kwargs):
+    """The smallest gap [length] of the ``watched`` contact points (k,) in the state ``y``,
+    each measured from its ``origin`` (k,) [length] and raised by its ``lift`` (k,)
+    [length] (:func:`_origins`; infinite where none is watched)."""
+    origin, lift = origin
+    return jnp.min(jnp.where(watched, (_gaps(contacts, y[0]) - origin) + lift, jnp.inf))
 
 
 def _least_normal(problem, t, y):
@@ -106,15 +122,29 @@ def _least_normal(problem, t, y):
     return jnp.min(forces, initial=jnp.inf)
 
 
-def _contact_event(problem, contacts, watched, length, force, t, y, args, **kwargs):
+def _contact_event(problem, contacts, watched, origin, length, force, t, y, args, **kwargs):
     """The event's condition: the smaller of the watched contact points' smallest gap
-    relative to ``length`` [length] and the held points' smallest normal force relative to
-    ``force`` [force] (the one at the segment's start); it falls to zero at an impact or at
-    a lift-off."""
-    gap = _nearest_gap(contacts, watched, t, y, args) / length
+    (from ``origin``, :func:`_origins`) relative to ``length`` [length] and the held points'
+    smallest normal force relative to ``force`` [force] (the one at the segment's start); it
+    falls to zero at an impact or at a lift-off."""
+    gap = _nearest_gap(contacts, watched, origin, t, y, args) / length
     if n_holds(problem) == 0:
         return gap
     return jnp.minimum(gap, _least_normal(problem, t, y) / force)
+
+
+def _origins(contacts, q0, length):
+    """Where each contact point's gap is measured from in a segment starting at ``q0``, and
+    what it is raised by, ``(origin (k,), lift (k,))`` [length]: zero for a point apart; for
+    a point touching at the start (gap within :data:`GAP_TOL`), its gap there where it is a
+    rounding below zero, and the smallest positive number, so that its condition starts
+    positive and a point touching and leaving does not hide another point's gap falling to
+    zero in the first step (a downcrossing is a condition positive at one step's end and not
+    at the next). No point is met below where it started: a margin would give energy."""
+    g0 = _gaps(contacts, q0)
+    touching = g0 <= GAP_TOL * length
+    tiny = jnp.finfo(g0.dtype).tiny
+    return jnp.where(touching, jnp.minimum(g0, 0.0), 0.0), jnp.where(touching, tiny, 0.0)
 
 
 def _gaps(contacts, q):
@@ -154,7 +184,8 @@ def _segment(
     f = cs.equations_of_motion(problem)
     span = t1 - t0
     force = jnp.maximum(_least_normal(problem, t0, y0), jnp.finfo(y0[0].dtype).tiny)
-    condition = functools.partial(_contact_event, problem, contacts, watched, length, force)
+    origin = _origins(contacts, y0[0], length)
+    condition = functools.partial(_contact_event, problem, contacts, watched, origin, length, force)
     event = diffrax.Event(
         condition,
         root_finder=optx.Bisection(rtol=0.0, atol=TIME_TOL * jnp.maximum(span, 1.0)),
@@ -177,7 +208,7 @@ def _segment(
     y_end = jax.tree.map(lambda a: a[-1], sol.ys)
     inside = jnp.clip(ts, t0, t_end)
     ys = jax.vmap(sol.evaluate)(inside)
-    gap_end = _nearest_gap(contacts, watched, t_end, y_end, None) / length
+    gap_end = _nearest_gap(contacts, watched, origin, t_end, y_end, None) / length
     lift = (_least_normal(problem, t_end, y_end) / force) < gap_end
     hit = jnp.asarray(sol.event_mask) & jnp.stack([~lift, lift])
     ran_out = sol.result == diffrax.RESULTS.max_steps_reached
@@ -264,6 +295,41 @@ def impulse(Minv, J, phit, G, qd, e):
     return qd + dqd, x[:-1], float(x[-1])
 
 
+def settle(Minv, J, phit, G, qd, touching, tol):
+    """A perfectly plastic impact at several contact points at once: the set ``A`` of the
+    ``touching`` points (k,) whose normal velocities are all brought to zero with
+    non-negative impulses while every other touching point leaves (a linear
+    complementarity problem, solved by adding the most approaching point and dropping the
+    most pulling one, at most ``4 k`` times).
+
+    Args:
+        Minv: (nq,) inverse mass diagonal; J (m, nq), phit (m,): the constraints.
+        G: (k, nq) the gaps' gradients; qd: (nq,) velocities before.
+        touching: (k,) bool, the points that may take an impulse; tol: the normal velocity
+            [velocity] below which a point counts as approaching.
+
+    Returns:
+        ``(qd+ (nq,), A (indices), impulses (len(A),))``, or None where no set is found.
+    """
+    active: list[int] = []
+    after = qd
+    for _ in range(4 * len(touching) + 4):
+        if active:
+            rows = np.vstack([J, G[active[:-1]]])
+            rhs = np.concatenate([phit, np.zeros(len(active) - 1)])
+            after, lam, P = impulse(Minv, rows, rhs, G[active[-1]], qd, 0.0)
+            push = np.concatenate([lam[len(phit) :], [P]])
+            if push.min() < 0.0:  # pulling: that point leaves
+                active.pop(int(np.argmin(push)))
+                continue
+        v = np.where(touching, G @ after, np.inf)
+        v[active] = np.inf
+        if v.min() >= -tol:
+            return after, active, (push if active else np.zeros(0))
+        active.append(int(np.argmin(v)))
+    return None
+
+
 def _refuse_penetration(owner, gaps, scale) -> None:
     """A rigid contact that penetrates at the start (beyond :data:`GAP_TOL`) is an input
     error: its bodies would pass through each other unseen."""
@@ -340,6 +406,8 @@ def simulate_impacts(case, progress=None) -> Result:
     span = float(ts[-1] - ts[0])
     scale = length_scale(model)
     rest = REST_SPEED * scale / span
+    mass = float(sum(np.asarray(b.mass) for b in model.bodies))
+    pressed = FORCE_TOL * mass * scale / span**2
     tol_pos = 1e-12 * max(scale, 1.0)
     N, nq = len(ts), int(np.size(case.q0))
     Q, QD, W = np.full((N, nq), np.nan), np.full((N, nq), np.nan), np.zeros((N, 2))
@@ -382,9 +450,23 @@ def simulate_impacts(case, progress=None) -> Result:
         state = _impact_state(held_problem(resting), contacts, y[0], y[1], jnp.asarray(t0),
                               tol_pos)  # fmt: skip
         q, qd, J, phit, g, G = (np.asarray(a) for a in state)
+        struck: set[int] = set()  # the points struck at t0
+        deep = np.flatnonzero(g < -MISSED * scale)
+        if deep.size:
+            i = int(deep[np.argmin(g[deep])])
+            fail(
+                NumericalError(
+                    f"a contact point of {owner[i].name} passed into its contact unseen "
+                    f"(penetration {-g[i]:.3g} [length]): an impact was missed; lower rtol "
+                    "and atol",
+                    t0,
+                    (owner[i].name,),
+                )
+            )
         while True:  # ends: no approach left, or too many impacts
             v = G @ qd
-            free = ~released & ~np.isin(np.arange(len(owner)), resting)
+            # a point lifted off at t0 is not held again unless an impulse turned it back
+            free = ~(released & (v > -rest)) & ~np.isin(np.arange(len(owner)), resting)
             near = (g <= GAP_TOL * scale) & (v < rest) & free  # approaching, or at rest
             if not near.any():
                 break
@@ -410,6 +492,26 @@ def simulate_impacts(case, progress=None) -> Result:
                         (owner[i].name,),
                     )
                 )
+            if i in struck:  # struck again at t0: the touching points settle together
+                held = np.isin(np.arange(len(owner)), resting)
+                touching = (g <= GAP_TOL * scale) & ((v < rest) | held)
+                m = len(phit) - len(resting)  # the joints' and drivers' rows
+                found = settle(Minv, J[:m], phit[:m], G, qd, touching, rest)
+                if found is not None:
+                    qd_new, settled, pushes = found
+                    lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv))
+                    for j, p in zip(settled, pushes, strict=True):
+                        totals[owner[j].name] += p
+                        started.setdefault(j, t0)
+                    for j in set(resting) - set(settled):
+                        release(j, t0)
+                    resting = tuple(sorted(settled))
+                    q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
+                        held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd_new),
+                        jnp.asarray(t0), tol_pos))  # fmt: skip
+                    struck.clear()
+                    continue
+            struck.add(i)
             comes_to_rest = -v[i] < rest
             e_i = 0.0 if comes_to_rest else e_point[i]
             qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i)
@@ -456,10 +558,10 @@ def simulate_impacts(case, progress=None) -> Result:
         while resting:
             forces = np.asarray(_normals(held_problem(resting), jnp.asarray(q),
                                          jnp.asarray(qd), jnp.asarray(t0)))  # fmt: skip
-            if forces.min() > 0.0:
+            if forces.min() > pressed:
                 break
             k = int(np.argmin(forces))  # pulled away (N < 0), or touching without a force
-            release(resting[k], t0, watch=bool(forces[k] < 0.0))
+            release(resting[k], t0, watch=bool(forces[k] < -pressed))
         current = held_problem(resting)
         y = (jnp.asarray(q), jnp.asarray(qd), y[2])
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
