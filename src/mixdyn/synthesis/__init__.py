@@ -10,6 +10,8 @@ gradients, with dynamics in a path's objective.
 * :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
   Levenberg-Marquardt at once, checked, ranked and deduplicated;
 * :mod:`._function` — the same search for a function task (:class:`FunctionSynthesis`);
+* :mod:`._solve` — what both searches share: the batched Levenberg-Marquardt solve of many
+  starts, chunk by chunk with progress, and the best of a ranked result;
 * :mod:`.build` — a synthesized four-bar as a :class:`mixdyn.Model` and a model file.
 
 Example::

@@ -7,7 +7,7 @@ mapped linearly onto an input and an output span at precision points (Chebyshev 
 default: :meth:`FunctionTask.from_function`). Only the links' ratios matter: the ground link
 is ``r1 = 1``, the crank's pivot at the origin and the ground link along x.
 
-The search is the path search's (:mod:`._search`): random starts of the variables ``u = (r2,
+The search is the path search's (:mod:`._solve`): random starts of the variables ``u = (r2,
 r3, r4[, alpha, beta])`` (``alpha``, ``beta``: the start angles added to the inputs and
 outputs with ``free_start``), half on each assembly branch, each solved by optimistix'
 Levenberg-Marquardt through the assembly's implicit derivatives, ``jax.vmap`` over a chunk of
@@ -34,7 +34,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ._fourbar import FourBar, link_angles, transmission_cosine
-from ._search import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, _levenberg_marquardt, _solve_all
+from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask
 
 
@@ -69,7 +69,7 @@ class FunctionCandidate:
 
 
 @dataclasses.dataclass(frozen=True)
-class FunctionSynthesis:
+class FunctionSynthesis(Ranked):
     """The outcome of a function generation (:func:`mixdyn.synthesize` of a
     :class:`FunctionTask`).
 
@@ -89,16 +89,6 @@ class FunctionSynthesis:
     feasible: int
     seed: int
     seconds: float
-
-    @property
-    def best(self) -> FunctionCandidate:
-        if not self.candidates:
-            raise ModelError(
-                f"no feasible four-bar among {self.starts} starts: give more starts, wider "
-                "bounds or a smaller min_transmission",
-                "synthesize",
-            )
-        return self.candidates[0]
 
     def model(self, k: int = 0):
         """The :class:`mixdyn.Model` of candidate ``k`` (massless links, the ground link 1 m),
@@ -249,8 +239,8 @@ def synthesize_function(
     branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b))
     residuals = _residuals(task, int(samples))
-    solve = jax.jit(_levenberg_marquardt(residuals, int(max_steps)))
-    u_all, _ = _solve_all(solve, u0, branches, min(int(chunk), starts), report)
+    solve = jax.jit(levenberg_marquardt(residuals, int(max_steps)))
+    u_all, _ = solve_all(solve, u0, branches, min(int(chunk), starts), report)
     error, worst = (np.asarray(a) for a in _figures(task)(u_all, branches))
     slack = 1e-9 * hi
     ok = np.isfinite(error) & (worst <= np.cos(task.min_transmission))

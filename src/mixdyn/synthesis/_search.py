@@ -45,14 +45,8 @@ from ..errors import ModelError
 from ..runtime._programs import cached_jit
 from ._dynamics import Masses, motor_torque
 from ._fourbar import NAMES, FourBar, coupler_point, transmission_cosine
+from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask, Objective, PathTask
-
-#: The penalties' weight (residuals of infeasibility times this).
-PENALTY = 10.0
-#: The largest |cos mu| a search aims at (a margin inside the loop's closure).
-CLOSURE_MARGIN = 0.999
-#: Input angles of the exact check of closure along the traversed motion.
-CHECK_SAMPLES = 1024
 
 
 @dataclasses.dataclass(frozen=True)
@@ -175,28 +169,12 @@ def _residuals(program: _Program, data: dict):
     return r
 
 
-def _levenberg_marquardt(residuals, max_steps: int):
-    """``(u (C, size), branches (C,)) -> (u, sum of squared residuals (C,))``: every start
-    solved by optimistix' Levenberg-Marquardt (to be vectorized and compiled by the caller)."""
-    import optimistix as optx
-
-    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
-
-    def one(u, branch):
-        sol = optx.least_squares(
-            residuals, solver, u, args=branch, max_steps=max_steps, throw=False
-        )
-        return sol.value, jnp.sum(residuals(sol.value, branch) ** 2)
-
-    return jax.vmap(one)
-
-
 @eqx.filter_jit
 def _solve_chunk(program: _Program, data: dict, u0, branches):
     """A chunk of starts solved: one program per ``program`` and chunk size, reused by every
     search of that form in the process (not kept between processes: optimistix' error
     checks are host callbacks, which :mod:`jax.export` refuses)."""
-    return _levenberg_marquardt(_residuals(program, data), program.max_steps)(u0, branches)
+    return levenberg_marquardt(_residuals(program, data), program.max_steps)(u0, branches)
 
 
 @eqx.filter_jit
@@ -244,7 +222,7 @@ class Candidate:
 
 
 @dataclasses.dataclass(frozen=True)
-class Synthesis:
+class Synthesis(Ranked):
     """The outcome of :func:`synthesize`.
 
     Attributes:
@@ -265,16 +243,6 @@ class Synthesis:
     feasible: int
     seed: int
     seconds: float
-
-    @property
-    def best(self) -> Candidate:
-        if not self.candidates:
-            raise ModelError(
-                f"no feasible four-bar among {self.starts} starts: give more starts, wider "
-                "bounds or a smaller min_transmission",
-                "synthesize",
-            )
-        return self.candidates[0]
 
     def model(self, k: int = 0):
         """The :class:`mixdyn.Model` of candidate ``k``, its crank at the first target's input
@@ -421,12 +389,12 @@ def synthesize(
     s2 = layout.scale**2
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b * s2))
     solve = functools.partial(_solve_chunk, weighed, data)
-    u_all, score_all = _solve_all(solve, u0, branches, chunk, report)
+    u_all, score_all = solve_all(solve, u0, branches, chunk, report)
     if polish and objective.torque_weight > 0:
         path_only = _program(task, objective, max_steps, torque=False)
         report = None if progress is None else (lambda d, n, b: progress("polish", d, n, b * s2))
         solve = functools.partial(_solve_chunk, path_only, data)
-        u_all, _ = _solve_all(solve, u_all, branches, chunk, report)
+        u_all, _ = solve_all(solve, u_all, branches, chunk, report)
         score_all = np.asarray(_scores(weighed, data, u_all, branches))
     score_all = score_all * s2
     candidates, feasible = _rank(
@@ -441,28 +409,6 @@ def synthesize(
         seed=seed,
         seconds=time.perf_counter() - started,
     )
-
-
-def _solve_all(solve_chunk, u0, branches, chunk, progress):
-    """Every start ``u0`` (S, size) solved, ``chunk`` at a time by ``solve_chunk(u (chunk,
-    size), branches (chunk,)) -> (u, sums of squared residuals)`` (one vectorized program, the
-    last chunk padded); ``(u (S, size), sums (S,))``, ``progress(done, total, best)`` after
-    each chunk."""
-    total = len(u0)
-    us, scores, best = [], [], np.inf
-    for lo in range(0, total, chunk):
-        hi = min(lo + chunk, total)
-        pad = chunk - (hi - lo)
-        batch = np.concatenate([u0[lo:hi], np.repeat(u0[lo : lo + 1], pad, axis=0)])
-        bb = np.concatenate([branches[lo:hi], np.repeat(branches[lo : lo + 1], pad)])
-        u, sc = solve_chunk(batch, bb)
-        us.append(np.asarray(u)[: hi - lo])
-        scores.append(np.asarray(sc)[: hi - lo])
-        if np.any(np.isfinite(scores[-1])):
-            best = min(best, float(np.nanmin(scores[-1])))
-        if progress is not None:
-            progress(hi, total, best)
-    return np.concatenate(us), np.concatenate(scores)
 
 
 @cached_jit

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model import Body, CoordinateDriver, Model, Ramp, Revolute
+from ..units import SI
 from ._dynamics import Masses, link_inertia
 from ._fourbar import FourBar, link_angles
 
@@ -41,8 +43,6 @@ def four_bar_model(
         ``crank.O``, ``crank.A``, ``coupler.A``, ``coupler.B``, ``coupler.P`` (the coupler
         point), ``rocker.O``, ``rocker.B`` and the driver ``motor``.
     """
-    import mixdyn as md
-
     fb = _numbers(fb)
     o2, o4 = (np.asarray(p, dtype=float) for p in fb.pivots())
     phi2 = float(fb.theta0) + start
@@ -62,7 +62,7 @@ def four_bar_model(
         m, g, j = inertia[name]
         rot = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
         q0 = (*(origin + rot @ g), phi)
-        return md.Body(
+        return Body(
             name, m, j, q0=q0, points={k: tuple(np.asarray(p) - g) for k, p in points.items()}
         )
 
@@ -73,18 +73,18 @@ def four_bar_model(
         body("rocker", o4, phi4, {"O": 0 * ex, "B": r4 * ex}),
     ]
     gravity = (0.0, 0.0) if masses is None else tuple(float(x) for x in masses.gravity)
-    return md.Model(
+    return Model(
         bodies=bodies,
         ground={"O2": tuple(o2), "O4": tuple(o4)},
         joints=[
-            md.Revolute("O2", "ground.O2", "crank.O"),
-            md.Revolute("A", "crank.A", "coupler.A"),
-            md.Revolute("B", "coupler.B", "rocker.B"),
-            md.Revolute("O4", "ground.O4", "rocker.O"),
+            Revolute("O2", "ground.O2", "crank.O"),
+            Revolute("A", "crank.A", "coupler.A"),
+            Revolute("B", "coupler.B", "rocker.B"),
+            Revolute("O4", "ground.O4", "rocker.O"),
         ],
-        drivers=[md.CoordinateDriver("motor", "crank", "phi", law=md.Ramp(phi2, speed))],
+        drivers=[CoordinateDriver("motor", "crank", "phi", law=Ramp(phi2, speed))],
         gravity=gravity,
-        units=md.SI,
+        units=SI,
         name=name,
     )
 

@@ -1,0 +1,81 @@
+"""What the path and the function searches share: their penalties and margins, the batched
+Levenberg-Marquardt solve of many starts, the loop over chunks of starts with progress, and
+the ranked result's best candidate."""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..errors import ModelError
+
+#: The penalties' weight (residuals of infeasibility times this).
+PENALTY = 10.0
+#: The largest |cos mu| a search aims at (a margin inside the loop's closure).
+CLOSURE_MARGIN = 0.999
+#: Input angles of the exact check of closure along the traversed motion.
+CHECK_SAMPLES = 1024
+
+
+class Ranked:
+    """A search's result: ``candidates`` ranked best first, out of ``starts``."""
+
+    @property
+    def best(self):
+        """The best candidate; a :class:`~mixdyn.errors.ModelError` where none is feasible."""
+        if not self.candidates:
+            raise ModelError(
+                f"no feasible four-bar among {self.starts} starts: give more starts, wider "
+                "bounds or a smaller min_transmission",
+                "synthesize",
+            )
+        return self.candidates[0]
+
+
+def levenberg_marquardt(residuals, max_steps: int):
+    """``(u (C, size), branches (C,)) -> (u, sum of squared residuals (C,))``: every start
+    solved by optimistix' Levenberg-Marquardt (to be vectorized and compiled by the caller)."""
+    import optimistix as optx
+
+    solver = optx.LevenbergMarquardt(rtol=1e-10, atol=1e-12)
+
+    def one(u, branch):
+        sol = optx.least_squares(
+            residuals, solver, u, args=branch, max_steps=max_steps, throw=False
+        )
+        return sol.value, jnp.sum(residuals(sol.value, branch) ** 2)
+
+    return jax.vmap(one)
+
+
+def solve_all(solve_chunk, u0, branches, chunk, progress):
+    """Every start ``u0`` (S, size) solved, ``chunk`` at a time by ``solve_chunk(u (chunk,
+    size), branches (chunk,)) -> (u, sums of squared residuals)`` (one vectorized program, the
+    last chunk padded); ``(u (S, size), sums (S,))``, ``progress(done, total, best)`` after
+    each chunk."""
+    total = len(u0)
+    us, scores, best = [], [], np.inf
+    for lo in range(0, total, chunk):
+        hi = min(lo + chunk, total)
+        pad = chunk - (hi - lo)
+        batch = np.concatenate([u0[lo:hi], np.repeat(u0[lo : lo + 1], pad, axis=0)])
+        bb = np.concatenate([branches[lo:hi], np.repeat(branches[lo : lo + 1], pad)])
+        u, sc = solve_chunk(batch, bb)
+        us.append(np.asarray(u)[: hi - lo])
+        scores.append(np.asarray(sc)[: hi - lo])
+        if np.any(np.isfinite(scores[-1])):
+            best = min(best, float(np.nanmin(scores[-1])))
+        if progress is not None:
+            progress(hi, total, best)
+    return np.concatenate(us), np.concatenate(scores)
+
+
+__all__ = [
+    "CHECK_SAMPLES",
+    "CLOSURE_MARGIN",
+    "PENALTY",
+    "Ranked",
+    "levenberg_marquardt",
+    "solve_all",
+]
