@@ -6,6 +6,10 @@ accumulate is held on its contact, its normal force the multiplier of the held g
   carrying the other half (fast); a ball resting on a frictionless slope of angle
   ``theta`` is held with the normal force ``m g cos(theta)`` and slides down at
   ``g sin(theta)`` (slow).
+- Several points settling at once (fast, by hand): a box landing flat at ``v`` takes
+  ``m v / 2`` at each bottom corner and stops; landing while spinning so fast that one
+  corner leaves, only the other takes an impulse, ``v_1 / (1/m + x^2/J)`` (its effective
+  mass), and stops.
 - A ball dropped on the ground with ``e < 1`` (slow): impacts at the closed-form times
   ``t_1 = v0 / g``, ``t_{n+1} = t_n + 2 e^n v0 / g``; it comes to rest at the sum of the
   series ``t_inf = t_1 + 2 e v0 / (g (1 - e))`` (to the run's rest speed) and stays at
@@ -27,6 +31,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
+from mixdyn.analysis._impacts import settle
 from mixdyn.analysis._problem import Problem
 from mixdyn.analysis._resting import hold, holding, normal_forces
 from mixdyn.equations import Constraints
@@ -48,6 +53,26 @@ def _ball_on_slope(theta, m=2.0, R=0.05, e=0.5):
 def _held(model, name):
     problem = Problem(model, Constraints.of(model))
     return holding(problem, (hold(model.element(name), 0, 1),))
+
+
+def test_points_touching_at_once_settle_with_pushing_impulses():
+    m, J, w = 2.0, 0.01, 0.2
+    Minv = 1.0 / np.array([m, m, J])
+    x = np.array([-w / 2, w / 2])  # the bottom corners, about the centre
+    G = np.stack([np.zeros(2), np.ones(2), x], axis=1)  # d(gap)/d(x, y, phi) at phi = 0
+    none = np.zeros((0, 3)), np.zeros(0)
+    v = 1.5
+    after, points, P, _ = settle(Minv, *none, G, np.array([0.0, -v, 0.0]), np.ones(2, bool), 0.0)
+    assert sorted(points) == [0, 1]
+    np.testing.assert_allclose(P, [m * v / 2] * 2, rtol=1e-12)
+    np.testing.assert_allclose(after, 0.0, atol=1e-12)
+    spin = 40.0  # corner 1 leaves at -v + spin w / 2 > 0
+    qd = np.array([0.0, -v, spin])
+    after, points, P, _ = settle(Minv, *none, G, qd, np.ones(2, bool), 0.0)
+    v1 = G[0] @ qd
+    assert points == [0] and G[1] @ after > 0.0
+    np.testing.assert_allclose(P, [-v1 / (1 / m + x[0] ** 2 / J)], rtol=1e-12)
+    assert abs(G[0] @ after) < 1e-12
 
 
 @pytest.mark.slow  # long: run by CI's slow set

@@ -309,10 +309,11 @@ def settle(Minv, J, phit, G, qd, touching, tol):
             [velocity] below which a point counts as approaching.
 
     Returns:
-        ``(qd+ (nq,), A (indices), impulses (len(A),))``, or None where no set is found.
+        ``(qd+ (nq,), A (indices), impulses (len(A),), Lambda (m,))`` (``Lambda`` the
+        constraints' impulses), or None where no set is found.
     """
     active: list[int] = []
-    after = qd
+    after, lam = qd, np.zeros(len(phit))
     for _ in range(4 * len(touching) + 4):
         if active:
             rows = np.vstack([J, G[active[:-1]]])
@@ -325,7 +326,9 @@ def settle(Minv, J, phit, G, qd, touching, tol):
         v = np.where(touching, G @ after, np.inf)
         v[active] = np.inf
         if v.min() >= -tol:
-            return after, active, (push if active else np.zeros(0))
+            if not active:
+                return after, active, np.zeros(0), lam
+            return after, active, push, lam[: len(phit)]
         active.append(int(np.argmin(v)))
     return None
 
@@ -498,11 +501,21 @@ def simulate_impacts(case, progress=None) -> Result:
                 m = len(phit) - len(resting)  # the joints' and drivers' rows
                 found = settle(Minv, J[:m], phit[:m], G, qd, touching, rest)
                 if found is not None:
-                    qd_new, settled, pushes = found
+                    qd_new, settled, pushes, lam = found
                     lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv))
+                    labels = problem.c.active_labels
                     for j, p in zip(settled, pushes, strict=True):
                         totals[owner[j].name] += p
                         started.setdefault(j, t0)
+                        impacts["t"].append(t0)
+                        impacts["contact"].append(owner[j].name)
+                        impacts["impulse"].append(float(p))
+                        impacts["normal_velocity_before"].append(float(G[j] @ qd))
+                        impacts["normal_velocity_after"].append(float(G[j] @ qd_new))
+                        impacts["reactions"].append(dict(zip(labels, lam.tolist(), strict=False)))
+                        impacts["q"].append(q)
+                        impacts["qd_before"].append(qd)
+                        impacts["qd_after"].append(qd_new)
                     for j in set(resting) - set(settled):
                         release(j, t0)
                     resting = tuple(sorted(settled))
