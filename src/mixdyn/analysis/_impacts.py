@@ -107,11 +107,12 @@ FORCE_TOL = 1e-9
 SEGMENT_STEPS = 2048
 
 
-def _nearest_gap(contacts, watched, origin, t, y, args, **kwargs):
+def _nearest_gap(contacts, watched, origins, t, y, args, **kwargs):
     """The smallest gap [length] of the ``watched`` contact points (k,) in the state ``y``,
-    each measured from its ``origin`` (k,) [length] and raised by its ``lift`` (k,)
-    [length] (:func:`_origins`; infinite where none is watched)."""
-    origin, lift = origin
+    each measured from its origin and raised by its lift (``origins``: the pair
+    ``(origin (k,), lift (k,))`` [length] of :func:`_origins`; infinite where none is
+    watched)."""
+    origin, lift = origins
     return jnp.min(jnp.where(watched, (_gaps(contacts, y[0]) - origin) + lift, jnp.inf))
 
 
