@@ -17,9 +17,14 @@ accumulate is held on its contact, its normal force the multiplier of the held g
   energy lost (the resting contact does no work).
 - Lift-off (slow): a ball resting on the ground pulled up by ``F = k t`` leaves it at
   ``t = m g / k`` (1e-9), pressing on it with ``m g - k t`` until then, and rises as
-  ``k (t - m g / k)^3 / (6 m)`` after.
+  ``k (t - m g / k)^3 / (6 m)`` after; a block resting on two corners, pulled at its
+  centre, leaves with both at once and rises level.
 - The ball on the slope in a run (slow): held from the start, it slides as
   ``g sin(theta) t^2 / 2`` along the slope with the normal force ``m g cos(theta)``.
+- Runs that come to rest (slow): a pinned rod falling on a stop rests on it with
+  ``m g / 2`` (the pin the other half); a tilted box dropped settles flat on two corners
+  with ``m g`` in all; ``examples/resting_ball.yaml`` rests at ``t_inf`` and lifts off at
+  ``1 + m g / k``.
 """
 
 from __future__ import annotations
@@ -232,3 +237,26 @@ def test_a_tilted_box_dropped_on_the_ground_settles_flat_on_two_corners():
     np.testing.assert_allclose(r["floor.normal"][after], m * G_, rtol=1e-9)
     E = r["energy.kinetic"] + r["energy.potential"]
     np.testing.assert_allclose(E - E[0], r["work.impacts"], atol=1e-9 * m * G_ * 0.15)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_block_pulled_up_by_a_ramp_lifts_off_both_corners_at_m_g_over_k():
+    """A block resting flat on two corners, pulled up at its centre by ``F = k t``: each
+    corner presses with ``(m g - k t) / 2``, both leave at ``t = m g / k`` (1e-9) and the
+    block rises level as ``k (t - m g / k)^3 / (6 m)``."""
+    m, w, h, rc, k = 2.0, 0.2, 0.1, 0.005, 40.0
+    block = md.Body("block", m, m * (w**2 + h**2) / 12, q0=(0.0, h / 2, 0.0))
+    floor = md.BoxLineContact("floor", "block", w, h, rc, ("ground", (0.0, 0.0)),
+                              contact_model="rigid", restitution=0.4)  # fmt: skip
+    lift = md.PointForce("lift", "block", along=(0, 1), law=md.Polynomial([0.0, k]))
+    model = md.Model([block], forces=[floor, lift], gravity=(0, -G_))
+    r = md.forward(model, np.linspace(0.0, 1.0, 21), rtol=1e-11, atol=1e-13)
+    t_lift = m * G_ / k
+    rests = r.stats["rests"]
+    assert rests["contact"] == ["floor", "floor"] and list(rests["start"]) == [0.0, 0.0]
+    np.testing.assert_allclose(rests["end"], t_lift, rtol=0, atol=1e-9)
+    before, after = r.t < t_lift, r.t > t_lift
+    np.testing.assert_allclose(r["floor.normal"][before], m * G_ - k * r.t[before], rtol=1e-9)
+    rise = k * (r.t[after] - t_lift) ** 3 / (6 * m)
+    np.testing.assert_allclose(r["block.y"][after] - h / 2, rise, rtol=1e-8, atol=1e-12)
+    np.testing.assert_allclose(r["block.phi"], 0.0, atol=1e-12)

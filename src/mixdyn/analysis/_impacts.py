@@ -102,6 +102,9 @@ PASS_FRACTION = 0.5
 #: many times the model's mass times its length over the run's span squared (a point that
 #: nothing presses on its contact, as two balls touching in Newton's cradle, is apart).
 FORCE_TOL = 1e-9
+#: At a lift-off, the resting points whose normal forces are within this part of the
+#: largest at the segment's start lift off together (a block pulled up at its centre).
+LIFT_TOL = 1e-9
 #: The most steps of one segment's solve (its dense output's size); a segment that runs out
 #: goes on as the next.
 SEGMENT_STEPS = 2048
@@ -569,6 +572,7 @@ def simulate_impacts(case, progress=None) -> Result:
                     jnp.asarray(t0), tol_pos))  # fmt: skip
         # a resting point that the motion pulls away (a tensile normal force) lifts off; one
         # touching without a normal force (nothing presses it on) is apart
+        forces = np.zeros(0)
         while resting:
             forces = np.asarray(_normals(held_problem(resting), jnp.asarray(q),
                                          jnp.asarray(qd), jnp.asarray(t0)))  # fmt: skip
@@ -576,7 +580,7 @@ def simulate_impacts(case, progress=None) -> Result:
                 break
             k = int(np.argmin(forces))  # pulled away (N < 0), or touching without a force
             release(resting[k], t0, watch=bool(forces[k] < -pressed))
-        current = held_problem(resting)
+        current, pressing = held_problem(resting), float(np.max(forces, initial=0.0))
         y = (jnp.asarray(q), jnp.asarray(qd), y[2])
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
         dt0 = _first_step(current, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
@@ -612,9 +616,12 @@ def simulate_impacts(case, progress=None) -> Result:
             fail(StepSizeError("the integration did not advance", t0))
         segments += 1
         released[:] = False
-        if hit[1] and resting:  # lift-off: the point whose normal force fell to zero
+        if hit[1] and resting:  # lift-off: the points whose normal forces fell to zero
             forces = np.asarray(_normals(current, y_end[0], y_end[1], jnp.asarray(t_end)))
-            release(resting[int(np.argmin(forces))], t_end)
+            lifted = forces <= LIFT_TOL * pressing
+            lifted[int(np.argmin(forces))] = True  # together, within the event's tolerance
+            for i in [j for j, up in zip(resting, lifted, strict=True) if up]:
+                release(i, t_end)
         t0, y = t_end, y_end
     for i in list(resting):
         release(i, float(ts[-1]))
