@@ -141,6 +141,13 @@ def test_a_dropped_ball_comes_to_rest_at_the_zeno_time_and_stays():
     np.testing.assert_allclose(r["floor.normal"][after], m * G_, rtol=1e-9)
     np.testing.assert_allclose(r["ball.ay"][after], 0.0, atol=1e-9)
     assert np.all(r["floor.normal"][~after] == 0.0)
+    # its arrow: m g upwards at the contact point under the ball while it rests, none before
+    from mixdyn.viz.arrows import force_arrows
+
+    (arrow,) = force_arrows(r, ["floor"])
+    np.testing.assert_allclose(arrow["F"][after], [[0.0, m * G_]] * int(after.sum()), rtol=1e-9)
+    np.testing.assert_allclose(arrow["at"][after], 0.0, atol=1e-9)
+    assert np.all(arrow["F"][~after] == 0.0)
     # all the energy lost went into the impacts: the resting contact does no work
     E = r["energy.kinetic"] + r["energy.potential"]
     np.testing.assert_allclose(r["work.impacts"][-1], -m * G_ * h0, rtol=1e-9)

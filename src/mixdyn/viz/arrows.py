@@ -85,7 +85,7 @@ def force_arrows(result, names=True) -> list[dict]:
             )
             continue
         if name in touching:  # a compliant contact's force on body j, at its contact point
-            at, F = touching[name].arrow(q, np.asarray(result.qd))
+            at, F = touching[name].arrow(q, np.asarray(result.qd), cols.get(f"{name}.normal"))
             out.append(
                 {
                     "name": name,
