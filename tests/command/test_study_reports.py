@@ -23,7 +23,7 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn.io as mio
-from fixtures import CRANK_FILE, EXAMPLES
+from fixtures import CRANK_FILE, EXAMPLES, IDENTIFY_MODEL, IDENTIFY_RUNS
 from mixdyn.cli import app
 from mixdyn.runs import execute
 
@@ -202,23 +202,7 @@ def test_an_optimizations_report_holds_its_optimum_and_constraints(tmp_path):
 
 @pytest.mark.slow  # long: run by CI's slow set (a fit's forward runs, 17 s here)
 def test_a_fits_report_holds_its_estimate_and_residual(tmp_path):
-    text = (EXAMPLES / "identify_slider_crank.yaml").read_text().split("\nruns:")[0]
-    runs = """
-runs:
-  - name: forward
-    kind: forward
-    time: {span: [0, 1], n: 41}
-    rtol: 1.0e-10
-    atol: 1.0e-12
-  - name: identify
-    kind: identify
-    run: forward
-    data: rec.csv
-    measured:
-      - {column: slider.vx, data: v, noise: 1 mm/s}
-    fit:
-      damper.damping: {bounds: [0, 10]}
-"""
+    text, runs = IDENTIFY_MODEL, IDENTIFY_RUNS
     true = mio.reads(text.replace("damping: 1.2", "damping: 2.0") + runs.split("  - name: id")[0])
     v = execute(true, ["forward"])["forward"]["slider.vx"]
     rng = np.random.default_rng(0)

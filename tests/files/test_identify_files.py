@@ -15,28 +15,13 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn.io as mio
-from fixtures import EXAMPLES
+from fixtures import EXAMPLES, IDENTIFY_RUNS
 from mixdyn.cli import app
 
 TEXT = (EXAMPLES / "identify_slider_crank.yaml").read_text()
 MODEL = TEXT.split("\nruns:")[0]
 
-IDENTIFY = """
-runs:
-  - name: forward
-    kind: forward
-    time: {span: [0, 1], n: 41}
-    rtol: 1.0e-10
-    atol: 1.0e-12
-  - name: identify
-    kind: identify
-    run: forward
-    data: rec.csv
-    measured:
-      - {column: slider.vx, data: v, noise: 1 mm/s}
-    fit:
-      damper.damping: {bounds: [0, 10]}
-"""
+IDENTIFY = IDENTIFY_RUNS
 
 
 def _example():

@@ -14,21 +14,14 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn.io as mio
-from fixtures import EXAMPLES
+from fixtures import EXAMPLES, FORWARD_RUN, SWEEP_MODEL
 from mixdyn.cli import app
 from mixdyn.runs import Runner, execute
 
 EXAMPLE = EXAMPLES / "antonya_sweep.yaml"
-MODEL = EXAMPLE.read_text().split("\nruns:")[0]
+MODEL = SWEEP_MODEL
 
-BASE = """
-runs:
-  - name: forward
-    kind: forward
-    time: {span: [0, 1], n: 21}
-    rtol: 1.0e-8
-    atol: 1.0e-10
-"""
+BASE = FORWARD_RUN
 
 SWEEP = """
   - name: sweep

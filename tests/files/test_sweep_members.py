@@ -13,21 +13,14 @@ import numpy as np
 import pytest
 
 import mixdyn.io as mio
-from fixtures import EXAMPLES
+from fixtures import FORWARD_RUN, SWEEP_MODEL
 from mixdyn.runs import Runner, execute, setup, sweep_members
 from mixdyn.runs import sweep as file_sweep
 from mixdyn.runs.sweep_members import quick_members
 
-MODEL = (EXAMPLES / "antonya_sweep.yaml").read_text().split("\nruns:")[0]
+MODEL = SWEEP_MODEL
 
-BASE = """
-runs:
-  - name: forward
-    kind: forward
-    time: {span: [0, 1], n: 21}
-    rtol: 1.0e-8
-    atol: 1.0e-10
-"""
+BASE = FORWARD_RUN
 
 COLUMNS = ("slider.x", "crank.phi", "D.Fx", "work.nonconservative")
 
