@@ -74,7 +74,10 @@ def test_jacobian_gamma_and_accelerations_agree(name):
     rows, cols = cs.coo()
     P = np.zeros((c.m, c.nq))
     np.add.at(P, (rows, cols), np.asarray(s["jacobian"]))
-    assert np.array_equal(P, np.asarray(d["jacobian"]))
+    # The dense path writes the rotations element by element (fused), the sparse path as a
+    # batched product: the same entries to a few units of rounding.
+    D = np.asarray(d["jacobian"])
+    np.testing.assert_allclose(P, D, rtol=0, atol=4 * np.finfo(float).eps * np.max(np.abs(D)))
     assert _rel(s["phi"], d["phi"]) <= 1e-14
     assert _rel(s["gamma"], d["gamma"]) <= 1e-14
     assert _rel(s["phi_t"], d["phi_t"]) <= 1e-14
