@@ -75,6 +75,11 @@ def _values(p: Packed, q, t):
 #: :func:`_full_row_rank` certifies full row rank above this ratio (the rank decision's own
 #: tolerance is ``rtol = 1e-9``; the margin covers the unpivoted factorization).
 FULL_RANK_RATIO = 1e-6
+#: A dense Jacobian of at most this many rows has its full row rank checked by NumPy
+#: (:func:`_full_row_rank_dense`, no SciPy imported); larger ones by SciPy's sparse LU, on one
+#: thread: NumPy's BLAS runs its threads for a 128-row Gram matrix (a 64-link chain: 23 ms of
+#: wall and 90 ms of CPU more per analysis).
+DENSE_RANK_ROWS = 32
 #: A model whose Jacobian has at most this many entries (rows x coordinates, about 130
 #: bodies on revolute joints) is analysed densely: rank-revealing QR of the whole Jacobian
 #: (the reference). Larger ones by :func:`independent_rows_sparse`, in time and memory linear
@@ -174,9 +179,9 @@ def _full_row_rank(A) -> bool:
     work for a sparse, banded ``A``: the pivots of the Cholesky factorization of ``A_n A_n^T``
     (rows scaled to unit norm, bandwidth-reducing order, sparse LU without pivoting), their
     ratio ``sqrt(min / max)`` above :data:`FULL_RANK_RATIO`. False means "not certain": the
-    caller then takes the rank-revealing QR. A dense ``A`` (a NumPy array):
-    :func:`_full_row_rank_dense`."""
-    if isinstance(A, np.ndarray):
+    caller then takes the rank-revealing QR. A dense ``A`` (a NumPy array) of at most
+    :data:`DENSE_RANK_ROWS` rows: :func:`_full_row_rank_dense`."""
+    if isinstance(A, np.ndarray) and A.shape[0] <= DENSE_RANK_ROWS:
         return _full_row_rank_dense(A)
     import scipy.sparse as sp
 
