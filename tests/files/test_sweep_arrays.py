@@ -164,6 +164,18 @@ def test_the_summaries_reduce_every_member_at_once_as_one_by_one():
             assert rows[i] == reduce(y[i]), name
 
 
+def _same_tables(ours, theirs):
+    """The sweep's members and table equal another way's: the same columns and rows, numbers
+    to 1e-12, the rest exactly."""
+    for a, b in zip(ours, theirs, strict=True):
+        assert list(a.columns) == list(b.columns) and len(a) == len(b)
+        for c in a.columns:
+            if a[c].dtype.kind == "f":
+                _close(a[c], b[c], 1e-12, c)
+            else:
+                assert list(a[c]) == list(b[c]), c
+
+
 INVERSE = (
     (EXAMPLES / "slider_crank.yaml").read_text().split("\nruns:")[0]
     + """
@@ -209,13 +221,7 @@ def test_an_inverse_file_sweep_shares_the_motion_and_equals_the_single_runs(monk
     assert len(set(members["peak"].round(9))) == 6  # the numbers did change the torque
     monkeypatch.setattr(file_sweep, "_as_arrays", lambda *a, **k: None)
     one_by_one = execute(mio.reads(INVERSE), ["sweep"])["sweep"]
-    for a, b in ((members, one_by_one.members()), (table, one_by_one.table())):
-        assert list(a.columns) == list(b.columns) and len(a) == len(b)
-        for c in a.columns:
-            if a[c].dtype.kind == "f":
-                _close(a[c], b[c], 1e-12, c)
-            else:
-                assert list(a[c]) == list(b[c]), c
+    _same_tables((members, table), (one_by_one.members(), one_by_one.table()))
 
 
 KINEMATIC = (
@@ -268,10 +274,4 @@ def test_a_kinematic_file_sweep_held_as_arrays_equals_the_single_runs(monkeypatc
     monkeypatch.setattr(file_sweep, "_kinematic_arrays", lambda *a, **k: None)
     one_by_one = execute(mio.reads(KINEMATIC), ["sweep"])["sweep"]
     assert one_by_one.sweep.stacked is None
-    for a, b in ((members, one_by_one.members()), (table, one_by_one.table())):
-        assert list(a.columns) == list(b.columns) and len(a) == len(b)
-        for c in a.columns:
-            if a[c].dtype.kind == "f":
-                _close(a[c], b[c], 1e-12, c)
-            else:
-                assert list(a[c]) == list(b[c]), c
+    _same_tables((members, table), (one_by_one.members(), one_by_one.table()))
