@@ -28,6 +28,7 @@ def four_bar_model(
     start: float = 0.0,
     speed: float = 1.0,
     name="synthesized four-bar",
+    coupler_angle: float = 0.0,
 ):
     """The mixdyn model of ``fb``, its crank at ``start`` at t = 0 turning at ``speed``.
 
@@ -37,6 +38,9 @@ def four_bar_model(
         start: the input angle ``theta2`` at t = 0 [rad].
         speed: the crank's constant speed [rad / time].
         name: the model's name.
+        coupler_angle: the angle [rad] of the coupler body's frame (its ``phi``) from the
+            coupler's line ``A -> B`` (a motion task's carried body:
+            :attr:`~._search.Candidate.coupler_angle`); 0: along it.
 
     Returns:
         A :class:`mixdyn.Model` in SI units (the numbers read as m, kg, s), with the points
@@ -58,18 +62,26 @@ def four_bar_model(
             for k, (m, g, j) in link_inertia(fb, masses).items()
         }
 
-    def body(name, origin, phi, points):
+    def rot(a):
+        return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+    def body(name, origin, phi, points, turn=0.0):
+        """The body of a link at angle ``phi`` whose frame is turned by ``turn`` from it."""
         m, g, j = inertia[name]
-        rot = np.array([[np.cos(phi), -np.sin(phi)], [np.sin(phi), np.cos(phi)]])
-        q0 = (*(origin + rot @ g), phi)
+        q0 = (*(origin + rot(phi) @ g), phi + turn)
+        back = rot(-turn)
         return Body(
-            name, m, j, q0=q0, points={k: tuple(np.asarray(p) - g) for k, p in points.items()}
+            name,
+            m,
+            j,
+            q0=q0,
+            points={k: tuple(back @ (np.asarray(p) - g)) for k, p in points.items()},
         )
 
     ex = np.array([1.0, 0.0])
     bodies = [
         body("crank", o2, phi2, {"O": 0 * ex, "A": r2 * ex}),
-        body("coupler", a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}),
+        body("coupler", a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}, float(coupler_angle)),
         body("rocker", o4, phi4, {"O": 0 * ex, "B": r4 * ex}),
     ]
     gravity = (0.0, 0.0) if masses is None else tuple(float(x) for x in masses.gravity)
@@ -109,6 +121,7 @@ def model_file_text(
     steps: int = 101,
     header: str = "",
     run: tuple = ("path", ["coupler.P.x", "coupler.P.y"], "coupler_point.png", ["coupler.P"]),
+    coupler_angle: float = 0.0,
 ) -> str:
     """YAML text of ``fb``'s model file: a kinematic run (the coupler point's path) and,
     with ``masses``, an inverse run (the motor torque) from ``start`` to ``end`` [rad].
@@ -122,12 +135,14 @@ def model_file_text(
         steps: output times of each run.
         header: comment lines above the file (without ``#``).
         run: the kinematic run's ``(name, plotted columns, figure file, output points)``.
+        coupler_angle: the coupler body's frame from its line ``A -> B`` [rad]
+            (:func:`four_bar_model`).
     """
     import yaml
 
     from ..io.dump import _Dumper, describe, to_data
 
-    model = four_bar_model(fb, masses, start=start, speed=speed)
+    model = four_bar_model(fb, masses, start=start, speed=speed, coupler_angle=coupler_angle)
     data = to_data(describe(model))
     span = [0.0, float(end - start) / speed]
     name, columns, figure, points = run
