@@ -18,19 +18,32 @@ and finite everywhere (the solve is guarded at the toggle positions).
 Where the loop does not close (the two circles do not meet) the closed form returns the
 nearest configuration (``B`` on the line ``A O4``); :func:`transmission_cosine` says by how
 much it failed (``|cos mu| > 1``), so that a search adds a finite penalty instead of a NaN.
+
+What four-bars share with the other linkages (the crank, the coupler point, the curve) is
+:class:`~._linkage.Linkage`'s.
 """
 
 from __future__ import annotations
 
-import equinox as eqx
+from typing import ClassVar
+
 import jax
 import jax.numpy as jnp
+
+from ._linkage import (
+    TOGGLE_GUARD,
+    Linkage,
+    coupler_curve,
+    coupler_point,
+    guarded,
+    transmission_cosine,
+)
 
 #: Names of the numbers of a four-bar, in the order of :meth:`FourBar.vector`.
 NAMES = ("r1", "r2", "r3", "r4", "rcx", "rcy", "x0", "y0", "theta0")
 
 
-class FourBar(eqx.Module):
+class FourBar(Linkage):
     """A four-bar's dimensions and placement [length, rad]; every field may carry a batch.
 
     Attributes:
@@ -40,6 +53,11 @@ class FourBar(eqx.Module):
         theta0: the ground link's angle ``O2 -> O4`` [rad].
         branch: +1 or -1, the assembly branch (the side of ``A O4`` where ``B`` lies).
     """
+
+    NAMES: ClassVar[tuple[str, ...]] = NAMES
+    LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4")
+    KIND: ClassVar[str] = "four_bar"
+    TITLE: ClassVar[str] = "four-bar"
 
     r1: jax.Array
     r2: jax.Array
@@ -52,42 +70,23 @@ class FourBar(eqx.Module):
     theta0: jax.Array
     branch: jax.Array
 
-    @classmethod
-    def from_vector(cls, v, branch) -> FourBar:
-        """A four-bar from ``v`` (..., 9) in the order of :data:`NAMES` and ``branch`` (...)."""
-        v = jnp.asarray(v, dtype=jnp.float64)
-        return cls(*(v[..., k] for k in range(len(NAMES))), jnp.asarray(branch, jnp.float64))
-
-    def vector(self) -> jax.Array:
-        """(..., 9) the numbers in the order of :data:`NAMES`."""
-        return jnp.stack([getattr(self, n) for n in NAMES], axis=-1)
-
     def pivots(self) -> tuple[jax.Array, jax.Array]:
         """The ground pivots ``O2`` and ``O4``, each (2,) [length]."""
-        o2 = jnp.stack([self.x0, self.y0])
+        o2 = self.crank_pivot()
         o4 = o2 + self.r1 * jnp.stack([jnp.cos(self.theta0), jnp.sin(self.theta0)])
         return o2, o4
 
-    def crank_pin(self, theta2) -> jax.Array:
-        """``A`` (2,) at the input angle ``theta2`` [rad] (from the ground link) [length]."""
-        o2, _ = self.pivots()
-        phi2 = self.theta0 + theta2
-        return o2 + self.r2 * jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
+    def coupler_angle(self, theta2) -> jax.Array:
+        """The coupler's angle ``phi3`` [rad] at ``theta2`` (:func:`link_angles`)."""
+        return link_angles(self, theta2)[0]
 
-
-def transmission_cosine(fb: FourBar, theta2) -> jax.Array:
-    """``cos mu`` of the transmission angle ``mu`` (between coupler and rocker) at ``theta2``.
-
-    The law of cosines in the triangle ``A B O4``: ``(r3^2 + r4^2 - |A O4|^2) / (2 r3 r4)``.
-    The loop closes where ``|cos mu| <= 1``; a bound ``mu >= mu_min`` is
-    ``|cos mu| <= cos mu_min``. Smooth in every number, defined where the loop does not close.
-
-    Returns:
-        () the cosine (dimensionless; beyond ±1 where the loop does not close).
-    """
-    _, o4 = fb.pivots()
-    d = o4 - fb.crank_pin(theta2)
-    return (fb.r3**2 + fb.r4**2 - jnp.sum(d**2)) / (2.0 * fb.r3 * fb.r4)
+    def transmission_cosine(self, theta2) -> jax.Array:
+        """``cos mu`` of the transmission angle ``mu`` (between coupler and rocker) at
+        ``theta2`` [rad]: the law of cosines in the triangle ``A B O4``, ``(r3^2 + r4^2 -
+        |A O4|^2) / (2 r3 r4)`` (beyond ±1 where the loop does not close)."""
+        _, o4 = self.pivots()
+        d = o4 - self.crank_pin(theta2)
+        return (self.r3**2 + self.r4**2 - jnp.sum(d**2)) / (2.0 * self.r3 * self.r4)
 
 
 @jax.custom_jvp
@@ -109,10 +108,6 @@ def _dyad(a, o4, r3, r4, branch):
     return phi3, phi4
 
 
-#: The least ``|sin(phi3 - phi4)|`` the implicit solve divides by (at a toggle position).
-_TOGGLE_GUARD = 1e-9
-
-
 @_dyad.defjvp
 def _dyad_jvp(primals, tangents):
     a, o4, r3, r4, branch = primals
@@ -122,8 +117,7 @@ def _dyad_jvp(primals, tangents):
     e4 = jnp.stack([jnp.cos(phi4), jnp.sin(phi4)])
     # Phi = a + r3 e3 - o4 - r4 e4 = 0;  Phi_phi = [r3 e3', -r4 e4'],  e' = (-sin, cos).
     rhs = -(da - do4 + dr3 * e3 - dr4 * e4)
-    s = jnp.sin(phi3 - phi4)
-    s = jnp.where(jnp.abs(s) < _TOGGLE_GUARD, jnp.where(s < 0, -_TOGGLE_GUARD, _TOGGLE_GUARD), s)
+    s = guarded(jnp.sin(phi3 - phi4), TOGGLE_GUARD)
     # Cramer's rule for [[-r3 sin3, r4 sin4], [r3 cos3, -r4 cos4]] (dphi3, dphi4) = rhs.
     det = r3 * r4 * s
     dphi3 = -r4 * (e4[0] * rhs[0] + e4[1] * rhs[1]) / det
@@ -136,21 +130,6 @@ def link_angles(fb: FourBar, theta2) -> tuple[jax.Array, jax.Array]:
     (scalars; ``jax.vmap`` for many), on the four-bar's branch; differentiable implicitly."""
     _, o4 = fb.pivots()
     return _dyad(fb.crank_pin(theta2), o4, fb.r3, fb.r4, fb.branch)
-
-
-def coupler_point(fb: FourBar, theta2) -> jax.Array:
-    """The coupler point ``C`` (2,) [length] at the input angle ``theta2`` [rad]."""
-    a = fb.crank_pin(theta2)
-    phi3, _ = link_angles(fb, theta2)
-    c, s = jnp.cos(phi3), jnp.sin(phi3)
-    return a + jnp.stack([c * fb.rcx - s * fb.rcy, s * fb.rcx + c * fb.rcy])
-
-
-@jax.jit
-def coupler_curve(fb: FourBar, theta2) -> jax.Array:
-    """``C`` at each input angle: (K, 2) [length] for ``theta2`` (K,) [rad] (compiled once
-    per shape)."""
-    return jax.vmap(lambda t: coupler_point(fb, t))(jnp.asarray(theta2, dtype=jnp.float64))
 
 
 __all__ = [

@@ -1,8 +1,9 @@
 """The search: thousands of random starts at once, each refined by Levenberg-Marquardt.
 
-A candidate's variables ``u`` are dimensionless: the four-bar's lengths and placement divided by
-the targets' size ``s`` (the pivots from the targets' centre), ``theta0``, the crank's angle at
-the first point ``theta_1`` and, where the timing is free, the increments
+The linkage is the task's (:attr:`PathTask.linkage`: a four-bar or a slider-crank). A
+candidate's variables ``u`` are dimensionless: the linkage's lengths and placement divided by
+the targets' size ``s`` (the crank's pivot from the targets' centre), ``theta0``, the crank's
+angle at the first point ``theta_1`` and, where the timing is free, the increments
 ``theta_{i+1} - theta_i``. Its residuals (all divided by ``s``):
 
 * the path: ``C(theta_i) - P_i`` for each target (2N);
@@ -14,7 +15,8 @@ the first point ``theta_1`` and, where the timing is free, the increments
 * the order (timing-free): ``10 relu(-increment)`` and ``10 relu(sum - 2 pi)``;
 * the torque (with a torque weight): ``sqrt(weight) T / s``.
 
-The branch (which side of ``A O4`` the pin ``B`` lies on) is fixed per start, half the starts
+The branch (which side of ``A O4`` the pin ``B`` lies on; for a slider-crank, ahead of ``A``
+along the slide or behind it) is fixed per start, half the starts
 on each, so that no candidate changes branch between points. Every start is solved by
 optimistix' Levenberg-Marquardt (a well-kept library; derivatives through the assembly's
 implicit rule), ``jax.vmap`` over a chunk of starts, chunk after chunk (progress reported
@@ -44,34 +46,50 @@ import numpy as np
 from ..errors import ModelError
 from ..runtime._programs import cached_jit
 from ._dynamics import Masses, motor_torque
-from ._fourbar import NAMES, FourBar, coupler_point, transmission_cosine
+from ._fourbar import FourBar
+from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask, Objective, PathTask
 
 
 @dataclasses.dataclass(frozen=True)
 class _Layout:
-    """How a candidate's variables ``u`` map to a four-bar and its input angles."""
+    """How a candidate's variables ``u`` map to a linkage and its input angles: the
+    linkage's ``m`` numbers (lengths, ``x0``, ``y0``, ``theta0``), then ``theta_1`` at
+    ``u[m]``, then the free timing's increments."""
 
     n: int
     scale: float
     centre: np.ndarray
     timing: np.ndarray | None
+    linkage: type[Linkage] = FourBar
+
+    @property
+    def m(self) -> int:
+        """The linkage's numbers."""
+        return len(self.linkage.NAMES)
 
     @property
     def size(self) -> int:
-        return 10 + (0 if self.timing is not None else self.n - 1)
+        return self.m + 1 + (0 if self.timing is not None else self.n - 1)
 
-    def fourbar(self, u, branch) -> FourBar:
-        s, c = self.scale, self.centre
-        v = jnp.concatenate([u[:6] * s, jnp.stack([c[0] + s * u[6], c[1] + s * u[7]]), u[8:9]])
-        return FourBar.from_vector(v, branch)
+    def make(self, u, branch) -> Linkage:
+        """The linkage of variables ``u`` on ``branch``."""
+        s, c, m = self.scale, self.centre, self.m
+        pivot = jnp.stack([c[0] + s * u[m - 3], c[1] + s * u[m - 2]])
+        v = jnp.concatenate([u[: m - 3] * s, pivot, u[m - 1 : m]])
+        return self.linkage.from_vector(v, branch)
 
     def angles(self, u) -> jax.Array:
         """(N,) the input angles at the targets [rad]."""
+        m = self.m
         if self.timing is not None:
-            return u[9] + jnp.asarray(self.timing - self.timing[0])
-        return u[9] + jnp.concatenate([jnp.zeros(1), jnp.cumsum(u[10:])])
+            return u[m] + jnp.asarray(self.timing - self.timing[0])
+        return u[m] + jnp.concatenate([jnp.zeros(1), jnp.cumsum(u[m + 1 :])])
+
+    def increments(self, u):
+        """The free timing's increments of ``u`` (..., size)."""
+        return u[..., self.m + 1 :]
 
 
 @dataclasses.dataclass(frozen=True)
@@ -83,6 +101,7 @@ class _Program:
     Attributes:
         n: the targets.
         timed: the timing is prescribed.
+        linkage: the linkage type.
         samples: input angles of the closure and torque terms along the motion.
         masses: how the links weigh (None: no torque term).
         torque: the torque measure of the residuals (``"rms"``, ``"peak"``), None: none.
@@ -91,6 +110,7 @@ class _Program:
 
     n: int
     timed: bool
+    linkage: type[Linkage]
     samples: int
     masses: Masses | None
     torque: str | None
@@ -103,6 +123,7 @@ def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool)
     return _Program(
         n=len(task.points),
         timed=task.timing is not None,
+        linkage=task.linkage,
         samples=int(objective.samples),
         masses=objective.masses if weighed else None,
         torque=objective.torque if weighed else None,
@@ -131,7 +152,7 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
 
 def _layout_of(program: _Program, data: dict) -> _Layout:
     timing = data["timing"] if program.timed else None
-    return _Layout(program.n, data["scale"], data["centre"], timing)
+    return _Layout(program.n, data["scale"], data["centre"], timing, program.linkage)
 
 
 def _residuals(program: _Program, data: dict):
@@ -142,10 +163,10 @@ def _residuals(program: _Program, data: dict):
     fractions = jnp.linspace(0.0, 1.0, program.samples)
     lo, hi = jnp.asarray(data["low"]), jnp.asarray(data["high"])
     lo_on, hi_on = jnp.asarray(data["low_on"]), jnp.asarray(data["high_on"])
-    scale_of = jnp.where(jnp.arange(len(NAMES)) == NAMES.index("theta0"), 1.0, s)
+    scale_of = jnp.where(jnp.arange(layout.m) == layout.m - 1, 1.0, s)  # theta0 last
 
     def r(u, branch):
-        fb = layout.fourbar(u, branch)
+        fb = layout.make(u, branch)
         theta = layout.angles(u)
         path = (jax.vmap(lambda t: coupler_point(fb, t))(theta) - targets).ravel() / s
         grid = theta[0] + (theta[-1] - theta[0]) * fractions
@@ -157,7 +178,7 @@ def _residuals(program: _Program, data: dict):
         )
         parts = [path, closure, bounds]
         if not program.timed:
-            inc = u[10:]
+            inc = layout.increments(u)
             parts.append(PENALTY * jax.nn.relu(-inc))
             parts.append(PENALTY * jax.nn.relu(jnp.sum(inc) - 2 * jnp.pi)[None])
         if program.torque is not None:
@@ -194,10 +215,12 @@ def _torque_measure(tau, kind: str):
 
 @dataclasses.dataclass(frozen=True)
 class Candidate:
-    """One synthesized four-bar.
+    """One synthesized linkage.
 
     Attributes:
-        fourbar: its numbers (NumPy scalars), model units.
+        fourbar: the linkage's numbers (NumPy scalars), model units: a
+            :class:`~._fourbar.FourBar`, or the task's other linkage type
+            (:class:`~._slidercrank.SliderCrank`); also :attr:`linkage`.
         angles: (N,) its input angles at the targets [rad].
         error: ``sum_i |C(theta_i) - P_i|^2`` [length**2].
         score: the objective (error plus the weighted torque term) [length**2].
@@ -206,7 +229,7 @@ class Candidate:
         min_transmission: the least transmission angle over the traversed motion [rad].
     """
 
-    fourbar: FourBar
+    fourbar: Linkage
     angles: np.ndarray
     error: float
     score: float
@@ -214,9 +237,14 @@ class Candidate:
     torque_peak: float
     min_transmission: float
 
+    @property
+    def linkage(self) -> Linkage:
+        """The synthesized linkage (a four-bar or a slider-crank: the task's type)."""
+        return self.fourbar
+
     def numbers(self) -> dict[str, float]:
-        """The four-bar's numbers by name (:data:`~._fourbar.NAMES`) and its branch."""
-        out = {n: float(getattr(self.fourbar, n)) for n in NAMES}
+        """The linkage's numbers by name (its ``NAMES``) and its branch."""
+        out = {n: float(getattr(self.fourbar, n)) for n in self.fourbar.NAMES}
         out["branch"] = float(self.fourbar.branch)
         return out
 
@@ -228,7 +256,7 @@ class Synthesis(Ranked):
     Attributes:
         task: the path task.
         objective: the objective.
-        candidates: the distinct feasible four-bars, best score first.
+        candidates: the distinct feasible linkages, best score first.
         starts: random starts solved.
         feasible: starts that ended feasible (closed loop along the motion, in order, within
             bounds).
@@ -305,10 +333,13 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
     the input angles spread over up to a turn."""
     s, c = layout.scale, layout.centre
     lo, hi = box[:, 0].copy(), box[:, 1].copy()
-    lo[8], hi[8] = (lo[8], hi[8]) if np.isfinite(lo[8]) and np.isfinite(hi[8]) else (-np.pi, np.pi)
-    v = lo + (hi - lo) * rng.random((count, 9))
+    m = layout.m  # theta0 last, after the pivot (m - 3, m - 2)
+    if not (np.isfinite(lo[m - 1]) and np.isfinite(hi[m - 1])):
+        lo[m - 1], hi[m - 1] = -np.pi, np.pi
+    v = lo + (hi - lo) * rng.random((count, m))
+    first = 2 * np.pi * rng.random((count, 1))
     u = np.concatenate(
-        [v[:, :6] / s, (v[:, 6:8] - c) / s, v[:, 8:9], 2 * np.pi * rng.random((count, 1))], axis=1
+        [v[:, : m - 3] / s, (v[:, m - 3 : m - 1] - c) / s, v[:, m - 1 :], first], axis=1
     )
     if layout.timing is None:
         n = layout.n
@@ -380,7 +411,9 @@ def synthesize(
     started = time.perf_counter()
     chunk = min(int(chunk), int(starts))
     box = task.box()
-    layout = _Layout(len(task.points), task.size, task.points.mean(axis=0), task.timing)
+    layout = _Layout(
+        len(task.points), task.size, task.points.mean(axis=0), task.timing, task.linkage
+    )
     data = _data(layout, task, objective, box)
     weighed = _program(task, objective, max_steps, torque=True)
     rng = np.random.default_rng(seed)
@@ -421,7 +454,7 @@ def _figures(program: _Program, data: dict, u, branches):
     fractions = jnp.linspace(0.0, 1.0, CHECK_SAMPLES)
 
     def one(u, branch):
-        fb = layout.fourbar(u, branch)
+        fb = layout.make(u, branch)
         theta = layout.angles(u)
         c = jax.vmap(lambda t: coupler_point(fb, t))(theta)
         grid = theta[0] + (theta[-1] - theta[0]) * fractions
@@ -437,24 +470,25 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
     s = layout.scale
     program, data = programs
     error, worst = (np.asarray(a) for a in _figures(program, data, u_all, branches))
-    v_all = np.asarray(jax.vmap(lambda u: layout.fourbar(u, 1.0).vector())(u_all))
+    m = layout.m
+    v_all = np.asarray(jax.vmap(lambda u: layout.make(u, 1.0).vector())(u_all))
     theta_all = np.asarray(jax.vmap(layout.angles)(u_all))
-    slack = np.array([1e-6 * s] * 8 + [1e-9])
+    slack = np.array([1e-6 * s] * (m - 1) + [1e-9])
     ok = np.isfinite(scores) & np.isfinite(error) & (worst <= np.cos(task.min_transmission))
     ok &= np.all(v_all >= box[:, 0] - slack, axis=1) & np.all(v_all <= box[:, 1] + slack, axis=1)
     if layout.timing is None:  # order defect: the points not passed in order within a turn
-        inc = u_all[:, 10:]
+        inc = layout.increments(u_all)
         ok &= np.all(inc >= -1e-9, axis=1) & (np.sum(inc, axis=1) <= 2 * np.pi + 1e-9)
-    scale_of = np.array([s] * 8 + [1.0])
+    scale_of = np.array([s] * (m - 1) + [1.0])
     kept, keys = [], []
     for i in np.argsort(np.where(ok, scores, np.inf))[: int(ok.sum())]:
         v, theta = v_all[i], theta_all[i]
         key = np.concatenate([v / scale_of, [theta[0]]])
-        key[8:] = np.angle(np.exp(1j * key[8:]))
+        key[m - 1 :] = np.angle(np.exp(1j * key[m - 1 :]))
         if any(np.max(np.abs(key - k)) < 1e-4 and b == branches[i] for k, b in keys):
             continue  # the same linkage from another start
         keys.append((key, branches[i]))
-        fb = FourBar(*(np.float64(x) for x in v), np.float64(branches[i]))
+        fb = layout.linkage(*(np.float64(x) for x in v), np.float64(branches[i]))
         rms = peak = float("nan")
         if objective.masses is not None:
             grid = np.linspace(theta[0], theta[-1], 256)

@@ -17,15 +17,17 @@ import numpy as np
 
 from ..errors import ModelError
 from ._dynamics import Masses
-from ._fourbar import NAMES
+from ._fourbar import FourBar
+from ._linkage import Linkage
+from ._slidercrank import SliderCrank
 
-#: The numbers of a four-bar that are lengths (bounded by default), by their index in NAMES.
-LENGTHS = ("r1", "r2", "r3", "r4")
+#: The linkage types of a path task by name (``PathTask(linkage=...)``, ``linkage:`` in files).
+LINKAGES: dict[str, type[Linkage]] = {"four_bar": FourBar, "slider_crank": SliderCrank}
 
 
 @dataclasses.dataclass(frozen=True)
 class PathTask:
-    """Path generation: a four-bar's coupler point through target points, in their order.
+    """Path generation: a linkage's coupler point through target points, in their order.
 
     Numbers are in one consistent unit system; the model and model file of a result
     (:meth:`~._search.Synthesis.model`, :meth:`~._search.Synthesis.write`) read them as SI
@@ -37,20 +39,33 @@ class PathTask:
         timing: None (timing-free: the input angles are found too, increasing, within one
             turn) or (N,) prescribed input angles [rad], increasing; only their differences
             count (the crank's angle at the first point is found).
-        bounds: ``name -> (low, high)`` for numbers of :data:`~._fourbar.NAMES` (lengths in
+        bounds: ``name -> (low, high)`` for numbers of the linkage's ``NAMES`` (lengths in
             [length], ``theta0`` in [rad]); by default the link lengths lie within
-            ``[0.05, 5]`` times the targets' size and the pivots within three sizes of the
-            targets' centre.
+            ``[0.05, 5]`` times the targets' size, the other lengths (coupler point, a
+            slider-crank's offset) within five sizes of zero and the crank's pivot within
+            three sizes of the targets' centre.
         min_transmission: the least transmission angle along the traversed motion [rad]
             (0: the loop only has to close).
+        linkage: the linkage type: ``"four_bar"`` (:class:`~._fourbar.FourBar`, the
+            default) or ``"slider_crank"`` (:class:`~._slidercrank.SliderCrank`), or the
+            class itself; held as the class (:data:`LINKAGES`).
     """
 
     points: np.ndarray
     timing: np.ndarray | None = None
     bounds: dict = dataclasses.field(default_factory=dict)
     min_transmission: float = 0.0
+    linkage: str | type[Linkage] = "four_bar"
 
     def __post_init__(self):
+        kind = self.linkage
+        if isinstance(kind, str):
+            if kind not in LINKAGES:
+                raise ModelError(f"no linkage {kind!r}; one of {', '.join(LINKAGES)}", "linkage")
+            object.__setattr__(self, "linkage", LINKAGES[kind])
+        elif kind not in LINKAGES.values():
+            raise ModelError(f"no linkage {kind!r}; one of {', '.join(LINKAGES)}", "linkage")
+        names = self.linkage.NAMES
         pts = np.asarray(self.points, dtype=float)
         if pts.ndim != 2 or pts.shape[1] != 2 or len(pts) < 2 or not np.all(np.isfinite(pts)):
             raise ModelError(
@@ -65,14 +80,15 @@ class PathTask:
                 raise ModelError("timing must increase, within one turn (2*pi rad)", "timing")
             object.__setattr__(self, "timing", tim)
         for name, ends in self.bounds.items():
-            if name not in NAMES:
+            if name not in names:
                 raise ModelError(
-                    f"no number {name!r} of a four-bar; one of {', '.join(NAMES)}", "bounds"
+                    f"no number {name!r} of a {self.linkage.TITLE}; one of {', '.join(names)}",
+                    "bounds",
                 )
             lo, hi = (float(x) for x in ends)
             if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
                 raise ModelError(f"bounds (low, high) with low < high, got {ends!r}", name)
-            if name in LENGTHS and lo <= 0:
+            if name in self.linkage.LENGTHS and lo <= 0:
                 raise ModelError(f"a length's low bound must be > 0, got {lo!r}", name)
         if not 0.0 <= self.min_transmission < np.pi / 2:
             raise ModelError("min_transmission must lie in [0, pi/2) rad", "min_transmission")
@@ -84,15 +100,15 @@ class PathTask:
         return float(max(np.max(np.linalg.norm(self.points - c, axis=1)), 1e-12))
 
     def box(self) -> np.ndarray:
-        """(9, 2) the bounds of every number (:data:`NAMES`' order); ``theta0`` unbounded
-        (``-inf, inf``) unless given."""
+        """(len(NAMES), 2) the bounds of every number (the linkage's ``NAMES``' order);
+        ``theta0`` unbounded (``-inf, inf``) unless given."""
         s, c = self.size, self.points.mean(axis=0)
-        out = {n: (0.05 * s, 5.0 * s) for n in LENGTHS}
-        out.update({"rcx": (-5 * s, 5 * s), "rcy": (-5 * s, 5 * s)})
+        out = {n: (-5 * s, 5 * s) for n in self.linkage.NAMES[:-3]}
+        out.update({n: (0.05 * s, 5.0 * s) for n in self.linkage.LENGTHS})
         out.update({"x0": (c[0] - 3 * s, c[0] + 3 * s), "y0": (c[1] - 3 * s, c[1] + 3 * s)})
         out["theta0"] = (-np.inf, np.inf)
         out.update({k: tuple(float(x) for x in v) for k, v in self.bounds.items()})
-        return np.array([out[n] for n in NAMES], dtype=float)
+        return np.array([out[n] for n in self.linkage.NAMES], dtype=float)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -231,4 +247,4 @@ class FunctionTask:
         return cls(inputs, outputs, **options)
 
 
-__all__ = ["RATIO_BOUNDS", "FunctionTask", "Objective", "PathTask", "chebyshev"]
+__all__ = ["LINKAGES", "RATIO_BOUNDS", "FunctionTask", "Objective", "PathTask", "chebyshev"]
