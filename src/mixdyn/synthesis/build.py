@@ -1,24 +1,46 @@
-"""A synthesized four-bar as a mixdyn model, and as a model file that ``mixdyn run`` runs.
+"""A synthesized linkage as a mixdyn model, and as a model file that ``mixdyn run`` runs.
 
 :func:`four_bar_model` builds the :class:`mixdyn.Model` of a :class:`~._fourbar.FourBar`: three
 bodies (crank, coupler, rocker) with the masses of :class:`~._dynamics.Masses`, four revolute
 joints, the coupler point ``coupler.P``, and the crank driven at a constant speed from the
-first input angle. :func:`model_file_text` writes it with a kinematic run (the achieved path)
-and an inverse run (the motor torque) over the traversed input angles.
+first input angle. :func:`slider_crank_model` builds a :class:`~._slidercrank.SliderCrank`'s:
+crank, rod and slider, three revolute joints and a translational one along the slide, the
+coupler point ``rod.P``. :func:`linkage_model` picks the builder by the linkage's type;
+:func:`model_file_text` writes the model with a kinematic run (the achieved path) and an
+inverse run (the motor torque) over the traversed input angles.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..model import Body, CoordinateDriver, Model, Ramp, Revolute
+from ..errors import ModelError
+from ..model import Body, CoordinateDriver, Model, Ramp, Revolute, Translational
 from ..units import SI
 from ._dynamics import Masses, link_inertia
 from ._fourbar import FourBar, link_angles
+from ._linkage import Linkage
+from ._slidercrank import SliderCrank, rod_and_slider
 
 
-def _numbers(fb: FourBar) -> FourBar:
-    return FourBar(*(np.asarray(x, dtype=float) for x in fb.vector()), np.asarray(fb.branch))
+def _numbers(lk: Linkage) -> Linkage:
+    return type(lk)(*(np.asarray(x, dtype=float) for x in lk.vector()), np.asarray(lk.branch))
+
+
+def _rot(a):
+    return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+
+def _body(name, inertia, origin, phi, points, turn=0.0) -> Body:
+    """The body of a link whose frame origin ``origin`` (2,) [length] and angle ``phi``
+    [rad] are given, with ``inertia`` ``(mass, centre of mass in that frame, inertia about
+    it)`` and ``points`` in that frame; the body's own frame is at the centre of mass,
+    turned by ``turn`` [rad] from the link's."""
+    m, g, j = inertia
+    q0 = (*(origin + _rot(phi) @ g), phi + turn)
+    back = _rot(-turn)
+    points = {k: tuple(back @ (np.asarray(p) - g)) for k, p in points.items()}
+    return Body(name, m, j, q0=q0, points=points)
 
 
 def four_bar_model(
@@ -61,28 +83,12 @@ def four_bar_model(
             k: (float(m), np.asarray(g, float), float(j))
             for k, (m, g, j) in link_inertia(fb, masses).items()
         }
-
-    def rot(a):
-        return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-
-    def body(name, origin, phi, points, turn=0.0):
-        """The body of a link at angle ``phi`` whose frame is turned by ``turn`` from it."""
-        m, g, j = inertia[name]
-        q0 = (*(origin + rot(phi) @ g), phi + turn)
-        back = rot(-turn)
-        return Body(
-            name,
-            m,
-            j,
-            q0=q0,
-            points={k: tuple(back @ (np.asarray(p) - g)) for k, p in points.items()},
-        )
-
     ex = np.array([1.0, 0.0])
+    turn = float(coupler_angle)
     bodies = [
-        body("crank", o2, phi2, {"O": 0 * ex, "A": r2 * ex}),
-        body("coupler", a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}, float(coupler_angle)),
-        body("rocker", o4, phi4, {"O": 0 * ex, "B": r4 * ex}),
+        _body("crank", inertia["crank"], o2, phi2, {"O": 0 * ex, "A": r2 * ex}),
+        _body("coupler", inertia["coupler"], a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}, turn),
+        _body("rocker", inertia["rocker"], o4, phi4, {"O": 0 * ex, "B": r4 * ex}),
     ]
     gravity = (0.0, 0.0) if masses is None else tuple(float(x) for x in masses.gravity)
     return Model(
@@ -101,17 +107,102 @@ def four_bar_model(
     )
 
 
-def _centroids(fb: FourBar) -> dict:
-    """The links' frame origins used for massless links: their midpoints."""
+def _centroids(lk: Linkage) -> dict:
+    """The links' frame origins used for massless links: their midpoints (a slider's pin)."""
+    if isinstance(lk, SliderCrank):
+        return {
+            "crank": np.array([float(lk.r2) / 2, 0.0]),
+            "rod": np.array([float(lk.r3) / 2, 0.0]),
+            "slider": np.zeros(2),
+        }
     return {
-        "crank": np.array([float(fb.r2) / 2, 0.0]),
-        "coupler": np.array([float(fb.r3) / 2, 0.0]),
-        "rocker": np.array([float(fb.r4) / 2, 0.0]),
+        "crank": np.array([float(lk.r2) / 2, 0.0]),
+        "coupler": np.array([float(lk.r3) / 2, 0.0]),
+        "rocker": np.array([float(lk.r4) / 2, 0.0]),
     }
 
 
+def slider_crank_model(
+    sc: SliderCrank,
+    masses: Masses | None = None,
+    *,
+    start: float = 0.0,
+    speed: float = 1.0,
+    name="synthesized slider-crank",
+    coupler_angle: float = 0.0,
+):
+    """The mixdyn model of ``sc``, its crank at ``start`` at t = 0 turning at ``speed``.
+
+    Args:
+        sc: the slider-crank (unbatched), model units.
+        masses: None (massless links, for kinematics: a synthesized slider-crank's links
+            are not weighed).
+        start: the input angle ``theta2`` at t = 0 [rad] (from the slide's direction).
+        speed: the crank's constant speed [rad / time].
+        name: the model's name.
+        coupler_angle: the rod body's frame from the rod's line ``A -> B`` [rad]
+            (:func:`four_bar_model`'s); 0: along it.
+
+    Returns:
+        A :class:`mixdyn.Model` in SI units (the numbers read as m, kg, s), with the points
+        ``crank.O``, ``crank.A``, ``rod.A``, ``rod.B``, ``rod.P`` (the coupler point),
+        ``slider.B``, the ground's ``O2`` and ``S`` (the slide's point nearest ``O2``), the
+        joints ``O2``, ``A``, ``B`` and ``slide`` (translational along the slide, the
+        slider's frame along it) and the driver ``motor``.
+
+    Raises:
+        ModelError: masses given.
+    """
+    if masses is not None:
+        raise ModelError(
+            "a synthesized slider-crank's links are massless: give no masses", "masses"
+        )
+    sc = _numbers(sc)
+    o2 = np.array([float(sc.x0), float(sc.y0)])
+    p0, d = (np.asarray(v, dtype=float) for v in sc.slide())
+    theta0 = float(sc.theta0)
+    phi2 = theta0 + start
+    phi3, s = (float(x) for x in rod_and_slider(sc, start))
+    a = np.asarray(sc.crank_pin(start), dtype=float)
+    r2, r3 = float(sc.r2), float(sc.r3)
+    c = np.array([float(sc.rcx), float(sc.rcy)])
+    ex = np.array([1.0, 0.0])
+    massless = {k: (0.0, g, 0.0) for k, g in _centroids(sc).items()}
+    turn = float(coupler_angle)
+    bodies = [
+        _body("crank", massless["crank"], o2, phi2, {"O": 0 * ex, "A": r2 * ex}),
+        _body("rod", massless["rod"], a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}, turn),
+        _body("slider", massless["slider"], p0 + s * d, theta0, {"B": 0 * ex}),
+    ]
+    return Model(
+        bodies=bodies,
+        ground={"O2": tuple(o2), "S": tuple(p0)},
+        joints=[
+            Revolute("O2", "ground.O2", "crank.O"),
+            Revolute("A", "crank.A", "rod.A"),
+            Revolute("B", "rod.B", "slider.B"),
+            Translational("slide", "ground.S", "slider.B", axis=tuple(d), angle=theta0),
+        ],
+        drivers=[CoordinateDriver("motor", "crank", "phi", law=Ramp(phi2, speed))],
+        gravity=(0.0, 0.0),
+        units=SI,
+        name=name,
+    )
+
+
+#: Each linkage type's model builder and the body that carries its coupler point ``P``.
+BUILDERS = {FourBar: (four_bar_model, "coupler"), SliderCrank: (slider_crank_model, "rod")}
+
+
+def linkage_model(lk: Linkage, masses: Masses | None = None, **options):
+    """The mixdyn model of ``lk`` by its type (:func:`four_bar_model` or
+    :func:`slider_crank_model`, which take the ``options``: ``start``, ``speed``...)."""
+    build, _ = BUILDERS[type(lk)]
+    return build(lk, masses, **options)
+
+
 def model_file_text(
-    fb: FourBar,
+    fb: Linkage,
     masses: Masses | None,
     *,
     start: float,
@@ -120,21 +211,22 @@ def model_file_text(
     targets=None,
     steps: int = 101,
     header: str = "",
-    run: tuple = ("path", ["coupler.P.x", "coupler.P.y"], "coupler_point.png", ["coupler.P"]),
+    run: tuple | None = None,
     coupler_angle: float = 0.0,
 ) -> str:
     """YAML text of ``fb``'s model file: a kinematic run (the coupler point's path) and,
     with ``masses``, an inverse run (the motor torque) from ``start`` to ``end`` [rad].
 
     Args:
-        fb: the four-bar.
+        fb: the linkage (a four-bar or a slider-crank: :func:`linkage_model`).
         masses: how its links weigh (None: a kinematic run only).
         start, end: the first and last input angle [rad].
         speed: the crank's speed [rad/s], of the sign of ``end - start``.
         targets: (N, 2) the target points, written in the header as a comment.
         steps: output times of each run.
         header: comment lines above the file (without ``#``).
-        run: the kinematic run's ``(name, plotted columns, figure file, output points)``.
+        run: the kinematic run's ``(name, plotted columns, figure file, output points)``
+            (default: ``path``, the coupler point ``P``'s x and y, ``coupler_point.png``).
         coupler_angle: the coupler body's frame from its line ``A -> B`` [rad]
             (:func:`four_bar_model`).
     """
@@ -142,7 +234,10 @@ def model_file_text(
 
     from ..io.dump import _Dumper, describe, to_data
 
-    model = four_bar_model(fb, masses, start=start, speed=speed, coupler_angle=coupler_angle)
+    if run is None:
+        p = f"{BUILDERS[type(fb)][1]}.P"
+        run = ("path", [f"{p}.x", f"{p}.y"], "coupler_point.png", [p])
+    model = linkage_model(fb, masses, start=start, speed=speed, coupler_angle=coupler_angle)
     data = to_data(describe(model))
     span = [0.0, float(end - start) / speed]
     name, columns, figure, points = run
@@ -173,4 +268,10 @@ def model_file_text(
     return "\n".join(lines) + ("\n" if lines else "") + text
 
 
-__all__ = ["four_bar_model", "model_file_text"]
+__all__ = [
+    "BUILDERS",
+    "four_bar_model",
+    "linkage_model",
+    "model_file_text",
+    "slider_crank_model",
+]
