@@ -1,18 +1,24 @@
-"""Linkage synthesis: four-bars that draw a given path or generate a function, searched by
-gradients, with dynamics in a path's objective.
+"""Linkage synthesis: four-bars and slider-cranks that draw a given path, four-bars that
+generate a function, searched by gradients, with dynamics in a path's objective.
 
+* :mod:`._linkage` — what the linkages share (:class:`Linkage`): the crank, the coupler
+  point and curve, the transmission angle's contract;
 * :mod:`._fourbar` — a four-bar's numbers, its closed-form assembly on a fixed branch with
-  implicit derivatives, its coupler curve and transmission angle;
+  implicit derivatives, its transmission angle;
+* :mod:`._slidercrank` — the same for an offset slider-crank (:class:`SliderCrank`; the
+  path task's ``linkage="slider_crank"``);
 * :mod:`._dynamics` — the links' inertia from the dimensions and the motor torque;
 * :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
   angle), :class:`FunctionTask` (input-output angle pairs, or a function over a range) and
   :class:`Objective` (path error, motor torque by weight);
 * :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
   Levenberg-Marquardt at once, checked, ranked and deduplicated;
+* :mod:`._motion` — motion generation: :class:`MotionTask` (precision poses of the coupler)
+  and its pose error, searched as a timing-free path whose coupler angles count too;
 * :mod:`._function` — the same search for a function task (:class:`FunctionSynthesis`);
 * :mod:`._solve` — what both searches share: the batched Levenberg-Marquardt solve of many
   starts, chunk by chunk with progress, and the best of a ranked result;
-* :mod:`.build` — a synthesized four-bar as a :class:`mixdyn.Model` and a model file.
+* :mod:`.build` — a synthesized linkage as a :class:`mixdyn.Model` and a model file.
 
 Example::
 
@@ -28,20 +34,28 @@ Example::
 from ._dynamics import Masses, link_inertia, motor_torque
 from ._fourbar import NAMES, FourBar, coupler_curve, coupler_point, link_angles, transmission_cosine
 from ._function import FunctionCandidate, FunctionSynthesis
+from ._linkage import Linkage
+from ._motion import MotionTask
 from ._search import Candidate, Synthesis, synthesize
-from ._task import FunctionTask, Objective, PathTask, chebyshev
-from .build import four_bar_model, model_file_text
+from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
+from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
+from .build import four_bar_model, linkage_model, model_file_text, slider_crank_model
 
 __all__ = [
+    "LINKAGES",
     "NAMES",
+    "SLIDER_NAMES",
     "Candidate",
     "FourBar",
     "FunctionCandidate",
     "FunctionSynthesis",
     "FunctionTask",
+    "Linkage",
     "Masses",
+    "MotionTask",
     "Objective",
     "PathTask",
+    "SliderCrank",
     "Synthesis",
     "chebyshev",
     "coupler_curve",
@@ -49,8 +63,11 @@ __all__ = [
     "four_bar_model",
     "link_angles",
     "link_inertia",
+    "linkage_model",
     "model_file_text",
     "motor_torque",
+    "rod_and_slider",
+    "slider_crank_model",
     "synthesize",
     "transmission_cosine",
 ]

@@ -13,7 +13,9 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
   ``c = cos(min_transmission)`` (at most 0.999);
 * the bounds: ``10 relu(low - x)``, ``10 relu(x - high)``;
 * the order (timing-free): ``10 relu(-increment)`` and ``10 relu(sum - 2 pi)``;
-* the torque (with a torque weight): ``sqrt(weight) T / s``.
+* the torque (with a torque weight): ``sqrt(weight) T / s``;
+* a motion task's coupler angles (:mod:`._motion`): ``(L / s) (e^{i phi_i} - e^{i alpha_i})``
+  (2N), the task a timing-free path task of the poses' points besides.
 
 The branch (which side of ``A O4`` the pin ``B`` lies on; for a slider-crank, ahead of ``A``
 along the slide or behind it) is fixed per start, half the starts
@@ -48,6 +50,7 @@ from ..runtime._programs import cached_jit
 from ._dynamics import Masses, motor_torque
 from ._fourbar import FourBar
 from ._linkage import Linkage, coupler_point, transmission_cosine
+from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask, Objective, PathTask
 
@@ -106,6 +109,7 @@ class _Program:
         masses: how the links weigh (None: no torque term).
         torque: the torque measure of the residuals (``"rms"``, ``"peak"``), None: none.
         max_steps: Levenberg-Marquardt's steps at most per start.
+        motion: a motion task (the coupler's angles at the points count too).
     """
 
     n: int
@@ -115,6 +119,7 @@ class _Program:
     masses: Masses | None
     torque: str | None
     max_steps: int
+    motion: bool = False
 
 
 def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool) -> _Program:
@@ -128,11 +133,13 @@ def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool)
         masses=objective.masses if weighed else None,
         torque=objective.torque if weighed else None,
         max_steps=int(max_steps),
+        motion=isinstance(task, MotionTask),
     )
 
 
 def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray) -> dict:
     """The task's numbers the programs take as arrays (NumPy float64)."""
+    motion = isinstance(task, MotionTask)
     finite = np.isfinite(box)
     f64 = np.float64
     return {
@@ -147,6 +154,8 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
         "cmax": f64(min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)),
         "weight": f64(objective.torque_weight),
         "speed": f64(objective.speed),
+        "angles": task.angles if motion else np.zeros(layout.n),  # a motion's poses [rad]
+        "length": f64(task.weight_length / layout.scale if motion else 0.0),  # L / s
     }
 
 
@@ -181,6 +190,8 @@ def _residuals(program: _Program, data: dict):
             inc = layout.increments(u)
             parts.append(PENALTY * jax.nn.relu(-inc))
             parts.append(PENALTY * jax.nn.relu(jnp.sum(inc) - 2 * jnp.pi)[None])
+        if program.motion:
+            parts.append(data["length"] * angle_residuals(fb, theta, jnp.asarray(data["angles"])))
         if program.torque is not None:
             tau = motor_torque(fb, program.masses, grid, data["speed"])
             measure = _torque_measure(tau, program.torque)
@@ -222,11 +233,15 @@ class Candidate:
             :class:`~._fourbar.FourBar`, or the task's other linkage type
             (:class:`~._slidercrank.SliderCrank`); also :attr:`linkage`.
         angles: (N,) its input angles at the targets [rad].
-        error: ``sum_i |C(theta_i) - P_i|^2`` [length**2].
+        error: ``sum_i |C(theta_i) - P_i|^2`` [length**2] (a motion task's plus its angle
+            term, :meth:`MotionTask.error`).
         score: the objective (error plus the weighted torque term) [length**2].
         torque_rms, torque_peak: the motor torque over the traversed motion [torque] (NaN
             without masses).
         min_transmission: the least transmission angle over the traversed motion [rad].
+        coupler_angle: a motion task's ``gamma`` [rad]: the angle of the carried body's line
+            from the coupler's line ``A -> B`` (the poses' angles are the coupler's plus it);
+            0 for a path.
     """
 
     fourbar: Linkage
@@ -236,6 +251,7 @@ class Candidate:
     torque_rms: float
     torque_peak: float
     min_transmission: float
+    coupler_angle: float = 0.0
 
     @property
     def linkage(self) -> Linkage:
@@ -254,7 +270,7 @@ class Synthesis(Ranked):
     """The outcome of :func:`synthesize`.
 
     Attributes:
-        task: the path task.
+        task: the path task, or the motion task.
         objective: the objective.
         candidates: the distinct feasible linkages, best score first.
         starts: random starts solved.
@@ -264,7 +280,7 @@ class Synthesis(Ranked):
         seconds: wall time [s] (compilation included).
     """
 
-    task: PathTask
+    task: PathTask | MotionTask
     objective: Objective
     candidates: tuple[Candidate, ...]
     starts: int
@@ -275,33 +291,51 @@ class Synthesis(Ranked):
     def model(self, k: int = 0):
         """The :class:`mixdyn.Model` of candidate ``k``, its crank at the first target's input
         angle at t = 0, turning at the objective's speed."""
-        from .build import four_bar_model
+        from .build import linkage_model
 
         c = self.candidates[k]
-        return four_bar_model(
-            c.fourbar, self.objective.masses, start=float(c.angles[0]), speed=self.objective.speed
+        return linkage_model(
+            c.fourbar,
+            self.objective.masses,
+            start=float(c.angles[0]),
+            speed=self.objective.speed,
+            coupler_angle=c.coupler_angle,
         )
 
     def model_file(self, k: int = 0) -> str:
         """YAML text of candidate ``k``'s model file (a kinematic and, with masses, an inverse
-        run over the traversed motion)."""
-        from .build import model_file_text
+        run over the traversed motion; a motion task's coupler body turned so that its angle
+        ``coupler.phi`` is the poses')."""
+        from .build import BUILDERS, model_file_text
 
         c = self.candidates[k]
+        motion = isinstance(self.task, MotionTask)
+        error = (
+            f"pose error sum |C - P|^2 + L^2 sum (phi - alpha)^2 = {c.error:.6g} m^2 (L = "
+            f"{self.task.weight_length:.6g} m)"
+            if motion
+            else f"path error sum |C - P|^2 = {c.error:.6g} m^2"
+        )
         head = (
-            f"A four-bar synthesized by mixdyn (candidate {k + 1} of {len(self.candidates)}, "
-            f"seed {self.seed}):\npath error sum |C - P|^2 = {c.error:.6g} m^2"
+            f"A {c.fourbar.TITLE} synthesized by mixdyn (candidate {k + 1} of "
+            f"{len(self.candidates)}, seed {self.seed}):\n{error}"
         )
         if np.isfinite(c.torque_rms):
             head += f", motor torque RMS {c.torque_rms:.6g} N*m, peak {c.torque_peak:.6g} N*m"
+        options = {"targets": self.task.points}
+        if motion:
+            body = BUILDERS[type(c.fourbar)][1]
+            poses = [f"  [{x:.6g}, {y:.6g}, {a:.6g}]" for x, y, a in self.task.poses]
+            head += f"\nposes ({body}.P.x, {body}.P.y [m], {body}.phi [rad]):\n" + "\n".join(poses)
+            options = {"coupler_angle": c.coupler_angle}
         return model_file_text(
             c.fourbar,
             self.objective.masses,
             start=float(c.angles[0]),
             end=float(c.angles[-1]),
             speed=self.objective.speed,
-            targets=self.task.points,
             header=head + "\n\n  mixdyn run FILE",
+            **options,
         )
 
     def write(self, path, k: int = 0) -> None:
@@ -324,6 +358,8 @@ class Synthesis(Ranked):
                 torque_peak=c.torque_peak,
                 min_transmission_deg=np.rad2deg(c.min_transmission),
             )
+            if isinstance(self.task, MotionTask):
+                row["coupler_angle"] = c.coupler_angle
             rows.append(row)
         return pd.DataFrame(rows)
 
@@ -350,7 +386,7 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
 
 
 def synthesize(
-    task: PathTask | FunctionTask,
+    task: PathTask | MotionTask | FunctionTask,
     objective: Objective | None = None,
     *,
     starts: int = 2048,
@@ -361,13 +397,16 @@ def synthesize(
     polish: bool = True,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis:
-    """Four-bars whose coupler point passes ``task``'s targets (a :class:`PathTask`), or
-    whose rocker follows its crank as asked (a :class:`~._function.FunctionTask`), best first.
+    """Four-bars whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
+    coupler passes its poses (a :class:`~._motion.MotionTask`), or whose rocker follows its
+    crank as asked (a :class:`~._function.FunctionTask`), best first.
 
     Args:
-        task: the path task (targets, timing, bounds, transmission angle), or the function
-            task (input-output angle pairs; :func:`~._function.synthesize_function`, which
-            takes ``starts``, ``seed``, ``chunk``, ``max_steps``, ``keep`` and ``progress``).
+        task: the path task (targets, timing, bounds, transmission angle), the motion task
+            (poses, bounds, transmission angle: a timing-free path task whose coupler angles
+            count too, :mod:`._motion`), or the function task (input-output angle pairs;
+            :func:`~._function.synthesize_function`, which takes ``starts``, ``seed``,
+            ``chunk``, ``max_steps``, ``keep`` and ``progress``).
         objective: the objective (default: the path error alone; a function task's is its
             angle error, and it takes none).
         starts: random starts, half on each assembly branch.
@@ -375,14 +414,17 @@ def synthesize(
         chunk: starts solved together (one vectorized program, compiled once).
         max_steps: Levenberg-Marquardt's steps at most per start.
         keep: distinct candidates returned at most.
-        polish: with a torque weight, each outcome solved once more for the path alone from
-            where the weighted search left it (the nearest linkage that draws the path as
-            well as it can, at nearly the same torque), then scored by the objective.
+        polish: with a torque weight, each outcome solved once more for the path (a motion
+            task's poses) alone from where the weighted search left it (the nearest linkage
+            that draws the path as well as it can, at nearly the same torque), then scored by
+            the objective.
         progress: called after each chunk with ``(stage, starts done, starts, best score so
             far)``, ``stage`` ``"search"`` or ``"polish"``.
 
     Returns:
-        A :class:`Synthesis` (a :class:`~._function.FunctionSynthesis` for a function task).
+        A :class:`Synthesis` (a :class:`~._function.FunctionSynthesis` for a function task):
+        for a motion task, its candidates' error is the pose error and their
+        ``coupler_angle`` the carried body's line in the coupler.
 
     Raises:
         ModelError: a bad number of starts, chunk or step count; an objective for a
@@ -447,11 +489,13 @@ def synthesize(
 @cached_jit
 def _figures(program: _Program, data: dict, u, branches):
     """``(error (C,), worst |cos mu| (C,))`` of outcomes ``u`` (C, size), exactly: the path
-    error ``sum |C - P|^2`` [length**2] and the largest ``|cos mu|`` over the traversed motion
-    on a fine grid (above 1: the loop opens between two points)."""
+    error ``sum |C - P|^2`` [length**2] (a motion's plus ``L^2 sum wrap(phi - alpha)^2``,
+    :mod:`._motion`) and the largest ``|cos mu|`` over the traversed motion on a fine grid
+    (above 1: the loop opens between two points)."""
     layout = _layout_of(program, data)
     targets = jnp.asarray(data["targets"])
     fractions = jnp.linspace(0.0, 1.0, CHECK_SAMPLES)
+    alpha, weight = jnp.asarray(data["angles"]), (data["length"] * data["scale"]) ** 2
 
     def one(u, branch):
         fb = layout.make(u, branch)
@@ -459,7 +503,10 @@ def _figures(program: _Program, data: dict, u, branches):
         c = jax.vmap(lambda t: coupler_point(fb, t))(theta)
         grid = theta[0] + (theta[-1] - theta[0]) * fractions
         cos_mu = jax.vmap(lambda t: transmission_cosine(fb, t))(grid)
-        return jnp.sum((c - targets) ** 2), jnp.max(jnp.abs(cos_mu))
+        error = jnp.sum((c - targets) ** 2)
+        if program.motion:
+            error = error + weight * jnp.sum(turn_gaps(fb, theta, alpha) ** 2)
+        return error, jnp.max(jnp.abs(cos_mu))
 
     return jax.vmap(one)(u, branches)
 
@@ -494,6 +541,9 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
             grid = np.linspace(theta[0], theta[-1], 256)
             tau = np.asarray(motor_torque(fb, objective.masses, grid, objective.speed))
             rms, peak = float(np.sqrt(np.mean(tau**2))), float(np.max(np.abs(tau)))
+        gamma = 0.0
+        if isinstance(task, MotionTask):
+            gamma = float(offset(body_angles(fb, jnp.asarray(theta)), jnp.asarray(task.angles)))
         kept.append(
             Candidate(
                 fourbar=fb,
@@ -503,6 +553,7 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
                 torque_rms=rms,
                 torque_peak=peak,
                 min_transmission=float(np.arccos(min(float(worst[i]), 1.0))),
+                coupler_angle=gamma,
             )
         )
         if len(kept) == keep:
