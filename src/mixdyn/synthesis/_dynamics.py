@@ -1,9 +1,10 @@
-"""The links' inertia of a synthesized four-bar and the motor torque that turns it.
+"""The links' inertia of a synthesized linkage and the motor torque that turns it.
 
 A candidate's links are bars of one linear density (kg per unit length): the crank ``O2 A``,
-the rocker ``O4 B`` and the coupler, a rigid triangle of bars ``A B``, ``A C``, ``B C``, with an
-optional payload (a point mass) at the coupler point ``C``. Their masses, centres of mass and
-inertias follow the candidate's dimensions, so that a search can trade length for torque.
+the rocker ``O4 B`` (a four-bar's) and the coupler (a slider-crank's rod), a rigid triangle of
+bars ``A B``, ``A C``, ``B C``, with an optional payload (a point mass) at the coupler point
+``C``; a slider-crank's slider is a point mass at its pin ``B``. Their masses, centres of mass
+and inertias follow the candidate's dimensions, so that a search can trade length for torque.
 
 The motor torque of a crank turned at a constant speed ``Omega`` without friction is the
 derivative of the mechanical energy by the input angle (power balance,
@@ -13,12 +14,13 @@ derivative of the mechanical energy by the input angle (power balance,
                 - sum_i m_i g . G_i,                       tau = dE/dtheta2,
 
 with ``G_i`` each link's centre of mass and ``phi_i`` its angle from the assembly of
-:mod:`._fourbar`; ``tau = Omega^2 sum_i (m_i G_i' . G_i'' + J_i phi_i' phi_i'') - sum_i m_i g .
-G_i'`` in closed form, the rates ``phi_i'``, ``phi_i''`` from the closure equations
-differentiated by the input angle (:func:`link_rates`), so that a search differentiates an
-explicit function once instead of the assembly three times. It is the driver effort of
-mixdyn's inverse dynamics of the same mechanism (checked in the tests against
-:func:`mixdyn.inverse` of :func:`~.build.four_bar_model`).
+:mod:`._fourbar` (:mod:`._slidercrank`); ``tau = Omega^2 sum_i (m_i G_i' . G_i'' + J_i phi_i'
+phi_i'') - sum_i m_i g . G_i'`` in closed form, the rates ``phi_i'``, ``phi_i''`` (a slider's
+``s'``, ``s''``) from the closure equations differentiated by the input angle
+(:func:`link_rates`, :func:`slider_rates`), so that a search differentiates an explicit
+function once instead of the assembly three times. It is the driver effort of mixdyn's
+inverse dynamics of the same mechanism (checked in the tests against :func:`mixdyn.inverse`
+of :func:`~.build.four_bar_model` and :func:`~.build.slider_crank_model`).
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ import jax
 import jax.numpy as jnp
 
 from ._fourbar import FourBar, link_angles
+from ._linkage import Linkage, guarded
+from ._slidercrank import SliderCrank, rod_and_slider
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,11 +44,14 @@ class Masses:
         density: the bars' linear density [mass / length].
         payload: a point mass at the coupler point [mass].
         gravity: (2,) the acceleration of gravity [length / time**2].
+        slider: a slider-crank's slider, a point mass at its pin [mass] (> 0 for the
+            slider-crank's model: :func:`~.build.slider_crank_model`).
     """
 
     density: float = 1.0
     payload: float = 0.0
     gravity: tuple[float, float] = (0.0, -9.81)
+    slider: float = 0.0
 
 
 def _bars(ends, density):
@@ -62,24 +69,36 @@ def _bars(ends, density):
     return m, c, j
 
 
-def link_inertia(fb: FourBar, masses: Masses) -> dict[str, tuple]:
+def link_inertia(fb: Linkage, masses: Masses) -> dict[str, tuple]:
     """Each link's ``(mass, centre of mass (2,) in the link's frame, inertia about it)``.
 
-    The frames: the crank's from ``O2`` along ``O2 -> A``, the coupler's from ``A`` along
-    ``A -> B``, the rocker's from ``O4`` along ``O4 -> B`` [mass, length, mass * length**2].
+    The frames: the crank's from ``O2`` along ``O2 -> A``, the coupler's (a slider-crank's
+    ``rod``) from ``A`` along ``A -> B``, a four-bar's rocker's from ``O4`` along
+    ``O4 -> B``, a slider-crank's slider's at ``B`` along the slide [mass, length,
+    mass * length**2]; the slider's inertia a nominal block's, :func:`~.build.slider_crank_model`).
     """
     z = jnp.zeros(2)
     ex = jnp.array([1.0, 0.0])
     crank = _bars([(z, fb.r2 * ex)], masses.density)
+    coupler = _coupler(fb, masses)
+    if isinstance(fb, SliderCrank):
+        m = jnp.asarray(masses.slider, dtype=jnp.float64)
+        return {"crank": crank, "rod": coupler, "slider": (m, z, m * (fb.r3 / 10) ** 2 / 6)}
     rocker = _bars([(z, fb.r4 * ex)], masses.density)
-    b, c = fb.r3 * ex, jnp.stack([fb.rcx, fb.rcy])
+    return {"crank": crank, "coupler": coupler, "rocker": rocker}
+
+
+def _coupler(fb: Linkage, masses: Masses):
+    """The coupler's triangle of bars and payload (:func:`link_inertia`)."""
+    z = jnp.zeros(2)
+    b, c = fb.r3 * jnp.array([1.0, 0.0]), jnp.stack([fb.rcx, fb.rcy])
     m3, g3, j3 = _bars([(z, b), (z, c), (b, c)], masses.density)
     if masses.payload:
         mp = masses.payload
         g = (m3 * g3 + mp * c) / (m3 + mp)
         j3 = j3 + m3 * jnp.sum((g3 - g) ** 2) + mp * jnp.sum((c - g) ** 2)
         m3, g3 = m3 + mp, g
-    return {"crank": crank, "coupler": (m3, g3, j3), "rocker": rocker}
+    return m3, g3, j3
 
 
 def _rot(phi, v):
@@ -109,39 +128,93 @@ def link_rates(fb: FourBar, theta2):
     n2, n3, n4 = _perp(e2), _perp(e3), _perp(e4)
     m = jnp.stack([fb.r3 * n3, -fb.r4 * n4], axis=1)
     det = m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0]
-    det = jnp.where(jnp.abs(det) < 1e-12, jnp.where(det < 0, -1e-12, 1e-12), det)
+    det = guarded(det, 1e-12)
     inv = jnp.array([[m[1, 1], -m[0, 1]], [-m[1, 0], m[0, 0]]]) / det
     d = inv @ (-fb.r2 * n2)
     dd = inv @ (fb.r2 * e2 + fb.r3 * e3 * d[0] ** 2 - fb.r4 * e4 * d[1] ** 2)
     return jnp.stack([phi3, phi4]), d, dd
 
 
-def _torque_one(fb: FourBar, inertia: dict, grav, theta2, speed):
+def slider_rates(sc: SliderCrank, theta2):
+    """The rod's angle and the slider's position along the slide, and their first and second
+    derivatives by the input angle, from the closure equations differentiated once and twice.
+
+    With ``d`` the slide's direction, the loop ``A + r3 e3 - P0 - s d = 0`` gives
+    ``M (phi3', s') = -r2 n2`` and ``M (phi3'', s'') = r2 e2 + r3 e3 phi3'^2`` with
+    ``M = [r3 n3, -d]``.
+
+    Returns:
+        ``(x, d, dd)``: each (2,) for (rod angle, slider position) [rad, length; per rad,
+        per rad**2].
+    """
+    phi3, s = rod_and_slider(sc, theta2)
+    phi2 = sc.theta0 + theta2
+    e2, e3, d = (jnp.stack([jnp.cos(p), jnp.sin(p)]) for p in (phi2, phi3, sc.theta0))
+    m = jnp.stack([sc.r3 * _perp(e3), -d], axis=1)
+    det = guarded(m[0, 0] * m[1, 1] - m[0, 1] * m[1, 0], 1e-12)
+    inv = jnp.array([[m[1, 1], -m[0, 1]], [-m[1, 0], m[0, 0]]]) / det
+    rate = inv @ (-sc.r2 * _perp(e2))
+    acc = inv @ (sc.r2 * e2 + sc.r3 * e3 * rate[0] ** 2)
+    return jnp.stack([phi3, s]), rate, acc
+
+
+def _crank_and_coupler(lk: Linkage, inertia: dict, theta2, phi3, w3, a3):
+    """The crank's and the coupler's centre velocities and accelerations by the input angle,
+    ``(d (2, 2), dd (2, 2))``: the crank pin ``A' = r2 n2``, ``A'' = -r2 e2``; a centre ``g``
+    in a link's frame turning with ``phi``: ``(R g)' = phi' perp(R g)``, ``(R g)'' = phi''
+    perp(R g) - phi'^2 R g``."""
+    phi2 = lk.theta0 + theta2
+    e2 = jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
+    crank, coupler = (inertia[k] for k in list(inertia)[:2])
+    g2 = _rot(phi2, crank[1])
+    g3 = _rot(phi3, coupler[1])
+    d = jnp.stack([_perp(g2), lk.r2 * _perp(e2) + w3 * _perp(g3)])
+    dd = jnp.stack([-g2, -lk.r2 * e2 + a3 * _perp(g3) - w3**2 * g3])
+    return d, dd
+
+
+def _four_bar_rates(fb: FourBar, inertia: dict, theta2):
+    """Each link's centre velocity and acceleration (3, 2) and angular rates (3,) by the
+    input angle: crank, coupler, rocker."""
+    (phi3, phi4), (w3, w4), (a3, a4) = link_rates(fb, theta2)
+    d, dd = _crank_and_coupler(fb, inertia, theta2, phi3, w3, a3)
+    g4 = _rot(phi4, inertia["rocker"][1])
+    d = jnp.concatenate([d, (w4 * _perp(g4))[None]])
+    dd = jnp.concatenate([dd, (a4 * _perp(g4) - w4**2 * g4)[None]])
+    return d, dd, jnp.stack([1.0, w3, w4]), jnp.stack([0.0, a3, a4])
+
+
+def _slider_crank_rates(sc: SliderCrank, inertia: dict, theta2):
+    """Each link's centre velocity and acceleration (3, 2) and angular rates (3,) by the
+    input angle: crank, rod, slider (translating along the slide)."""
+    (phi3, _), (w3, v), (a3, acc) = slider_rates(sc, theta2)
+    d, dd = _crank_and_coupler(sc, inertia, theta2, phi3, w3, a3)
+    along = jnp.stack([jnp.cos(sc.theta0), jnp.sin(sc.theta0)])
+    d = jnp.concatenate([d, (v * along)[None]])
+    dd = jnp.concatenate([dd, (acc * along)[None]])
+    return d, dd, jnp.stack([1.0, w3, 0.0]), jnp.stack([0.0, a3, 0.0])
+
+
+#: Each linkage type's link rates (:func:`_torque_one`).
+_RATES = {FourBar: _four_bar_rates, SliderCrank: _slider_crank_rates}
+
+
+def _torque_one(fb: Linkage, inertia: dict, grav, theta2, speed):
     """The motor torque at one input angle: ``dE/dtheta2`` in closed form (module docstring)
     from the links' angular rates and their centres' first and second derivatives."""
-    (phi3, phi4), (w3, w4), (a3, a4) = link_rates(fb, theta2)
-    phi2 = fb.theta0 + theta2
-    e2 = jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
-    # The crank pin A: A' = r2 n2, A'' = -r2 e2; a centre g in a link's frame turning with
-    # phi: (R g)' = phi' perp(R g), (R g)'' = phi'' perp(R g) - phi'^2 R g.
-    g2 = _rot(phi2, inertia["crank"][1])
-    g3 = _rot(phi3, inertia["coupler"][1])
-    g4 = _rot(phi4, inertia["rocker"][1])
-    d = jnp.stack([_perp(g2), fb.r2 * _perp(e2) + w3 * _perp(g3), w4 * _perp(g4)])
-    dd = jnp.stack([-g2, -fb.r2 * e2 + a3 * _perp(g3) - w3**2 * g3, a4 * _perp(g4) - w4**2 * g4])
-    m = jnp.stack([inertia[k][0] for k in ("crank", "coupler", "rocker")])
-    j = jnp.stack([inertia[k][2] for k in ("crank", "coupler", "rocker")])
-    w, a = jnp.stack([1.0, w3, w4]), jnp.stack([0.0, a3, a4])
+    d, dd, w, a = _RATES[type(fb)](fb, inertia, theta2)
+    m = jnp.stack([jnp.asarray(v[0], dtype=jnp.float64) for v in inertia.values()])
+    j = jnp.stack([jnp.asarray(v[2], dtype=jnp.float64) for v in inertia.values()])
     return speed**2 * jnp.sum(m * jnp.sum(d * dd, axis=1) + j * w * a) - jnp.sum(m * (d @ grav))
 
 
 @eqx.filter_jit
-def motor_torque(fb: FourBar, masses: Masses, theta2, speed) -> jax.Array:
+def motor_torque(fb: Linkage, masses: Masses, theta2, speed) -> jax.Array:
     """The torque on the crank that turns it at ``speed`` through ``theta2`` (compiled once
     per shape and ``masses``).
 
     Args:
-        fb: the four-bar (unbatched).
+        fb: the four-bar or slider-crank (unbatched).
         masses: how its links weigh.
         theta2: (K,) input angles [rad].
         speed: the crank's constant speed [rad / time].
@@ -155,4 +228,4 @@ def motor_torque(fb: FourBar, masses: Masses, theta2, speed) -> jax.Array:
     return jax.vmap(lambda t: _torque_one(fb, inertia, grav, t, speed))(theta2)
 
 
-__all__ = ["Masses", "link_inertia", "link_rates", "motor_torque"]
+__all__ = ["Masses", "link_inertia", "link_rates", "motor_torque", "slider_rates"]

@@ -76,13 +76,7 @@ def four_bar_model(
     a = np.asarray(fb.crank_pin(start), dtype=float)
     r2, r3, r4 = float(fb.r2), float(fb.r3), float(fb.r4)
     c = np.array([float(fb.rcx), float(fb.rcy)])
-    if masses is None:
-        inertia = {k: (0.0, v, 0.0) for k, v in _centroids(fb).items()}
-    else:
-        inertia = {
-            k: (float(m), np.asarray(g, float), float(j))
-            for k, (m, g, j) in link_inertia(fb, masses).items()
-        }
+    inertia = _inertia(fb, masses)
     ex = np.array([1.0, 0.0])
     turn = float(coupler_angle)
     bodies = [
@@ -105,6 +99,17 @@ def four_bar_model(
         units=SI,
         name=name,
     )
+
+
+def _inertia(lk: Linkage, masses: Masses | None) -> dict:
+    """Each link's ``(mass, centre of mass in its frame, inertia)`` as floats
+    (:func:`~._dynamics.link_inertia`; massless links at their midpoints without masses)."""
+    if masses is None:
+        return {k: (0.0, v, 0.0) for k, v in _centroids(lk).items()}
+    return {
+        k: (float(m), np.asarray(g, float), float(j))
+        for k, (m, g, j) in link_inertia(lk, masses).items()
+    }
 
 
 def _centroids(lk: Linkage) -> dict:
@@ -135,8 +140,8 @@ def slider_crank_model(
 
     Args:
         sc: the slider-crank (unbatched), model units.
-        masses: None (massless links, for kinematics: a synthesized slider-crank's links
-            are not weighed).
+        masses: how its links weigh (None: massless links, for kinematics only); the
+            slider's mass ``masses.slider`` > 0 (a dynamic analysis needs every body's).
         start: the input angle ``theta2`` at t = 0 [rad] (from the slide's direction).
         speed: the crank's constant speed [rad / time].
         name: the model's name.
@@ -148,14 +153,18 @@ def slider_crank_model(
         ``crank.O``, ``crank.A``, ``rod.A``, ``rod.B``, ``rod.P`` (the coupler point),
         ``slider.B``, the ground's ``O2`` and ``S`` (the slide's point nearest ``O2``), the
         joints ``O2``, ``A``, ``B`` and ``slide`` (translational along the slide, the
-        slider's frame along it) and the driver ``motor``.
+        slider's frame along it) and the driver ``motor``. The slider's moment of inertia,
+        which its held angle keeps out of every result, is a square block's a tenth of the
+        rod's length wide: ``m (r3 / 10)^2 / 6``.
 
     Raises:
-        ModelError: masses given.
+        ModelError: masses whose slider weighs nothing.
     """
-    if masses is not None:
+    if masses is not None and not masses.slider > 0:
         raise ModelError(
-            "a synthesized slider-crank's links are massless: give no masses", "masses"
+            "a slider-crank's slider needs a mass > 0 with the links' masses: give "
+            "Masses(slider=...)",
+            "masses",
         )
     sc = _numbers(sc)
     o2 = np.array([float(sc.x0), float(sc.y0)])
@@ -167,13 +176,14 @@ def slider_crank_model(
     r2, r3 = float(sc.r2), float(sc.r3)
     c = np.array([float(sc.rcx), float(sc.rcy)])
     ex = np.array([1.0, 0.0])
-    massless = {k: (0.0, g, 0.0) for k, g in _centroids(sc).items()}
+    inertia = _inertia(sc, masses)
     turn = float(coupler_angle)
     bodies = [
-        _body("crank", massless["crank"], o2, phi2, {"O": 0 * ex, "A": r2 * ex}),
-        _body("rod", massless["rod"], a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}, turn),
-        _body("slider", massless["slider"], p0 + s * d, theta0, {"B": 0 * ex}),
+        _body("crank", inertia["crank"], o2, phi2, {"O": 0 * ex, "A": r2 * ex}),
+        _body("rod", inertia["rod"], a, phi3, {"A": 0 * ex, "B": r3 * ex, "P": c}, turn),
+        _body("slider", inertia["slider"], p0 + s * d, theta0, {"B": 0 * ex}),
     ]
+    gravity = (0.0, 0.0) if masses is None else tuple(float(x) for x in masses.gravity)
     return Model(
         bodies=bodies,
         ground={"O2": tuple(o2), "S": tuple(p0)},
@@ -184,7 +194,7 @@ def slider_crank_model(
             Translational("slide", "ground.S", "slider.B", axis=tuple(d), angle=theta0),
         ],
         drivers=[CoordinateDriver("motor", "crank", "phi", law=Ramp(phi2, speed))],
-        gravity=(0.0, 0.0),
+        gravity=gravity,
         units=SI,
         name=name,
     )
