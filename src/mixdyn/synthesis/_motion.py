@@ -141,7 +141,7 @@ class MotionTask:
         """The error of ``linkage`` (a :class:`~._fourbar.FourBar`, unbatched) with the crank
         at ``angles`` (N,) [rad] at the poses [length**2] (the module's formula, ``gamma``
         the least-squares offset)."""
-        gaps, turns = pose_gaps(linkage, jnp.asarray(angles, dtype=float), self.poses)
+        gaps, turns = _pose_gaps(linkage, jnp.asarray(angles, dtype=float), self.poses)
         return float(jnp.sum(gaps**2) + self.weight_length**2 * jnp.sum(turns**2))
 
 
@@ -180,6 +180,10 @@ def pose_gaps(lk, theta, poses) -> tuple[jax.Array, jax.Array]:
     poses = jnp.asarray(poses)
     c = jax.vmap(lk.coupler_point)(theta)
     return c - poses[:, :2], turn_gaps(lk, theta, poses[:, 2])
+
+
+#: :func:`pose_gaps` compiled (once per linkage type and number of poses).
+_pose_gaps = jax.jit(pose_gaps)
 
 
 def angle_residuals(lk, theta, alpha) -> jax.Array:
