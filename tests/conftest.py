@@ -16,6 +16,9 @@ import tempfile
 # them on in the session's own folder, unless MIXDYN_NO_CACHE was set by whoever runs the tests.
 USER_NO_CACHE = os.environ.get("MIXDYN_NO_CACHE", "").strip() not in ("", "0")
 os.environ.setdefault("MIXDYN_NO_CACHE", "1")
+# The commands the tests run run in their own processes, not in a command server the user
+# may have running (mixdyn.runtime._server); its own tests ask for one.
+os.environ["MIXDYN_SERVER"] = "0"
 
 
 def _one_core_per_worker() -> None:

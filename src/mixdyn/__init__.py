@@ -19,6 +19,7 @@ import sys as _sys
 
 from .runtime import _command
 
+_command.hand_over()  # `mixdyn check`, `show`, `plot`, `schema`: a command server's answer
 _command.pace_collector()  # the `mixdyn` command: cycles collected less often
 _command.start_for_command_line()  # `mixdyn run` with figures: its drawing worker, before JAX
 

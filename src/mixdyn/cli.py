@@ -325,6 +325,52 @@ def dump(
             say(f"wrote {esc(output)}")
 
 
+@app.command()
+def server(
+    action: Annotated[
+        str,
+        typer.Argument(help="start, stop or status.", show_default=False),
+    ] = "status",
+):
+    """The command server: a process with mixdyn imported that answers check, show, plot and
+    schema at once (MIXDYN_SERVER=1 starts it when none runs, 0 never uses it; unset, a
+    command from a terminal starts it). It stops after 10 minutes unused."""
+    from .runs.console import esc, say
+    from .runtime import _server
+
+    if action not in ("start", "stop", "status"):
+        _fail(2, f"mixdyn server: unknown action {action!r}; use start, stop or status")
+    path = _server.address()
+    if action == "stop":
+        say("stopped the command server" if _server.stop() else "no command server runs")
+    elif _server.running():
+        say(f"the command server runs at {esc(path)}")
+    elif action == "status":
+        say(f"no command server runs (MIXDYN_SERVER={_server.policy()})")
+    else:
+        if len(os.fsencode(path)) > _server.MAX_PATH_BYTES:
+            _fail(
+                2,
+                f"mixdyn server: the socket path {path} is longer than "
+                f"{_server.MAX_PATH_BYTES} bytes; set MIXDYN_SERVER_DIR to a shorter folder",
+            )
+        if not _server._own_folder(path.parent) or not _server.start(path):
+            _fail(
+                1,
+                f"mixdyn server: could not start a command server at {path} (its folder must "
+                "be this user's alone: mode 0700)",
+            )
+        deadline = time.monotonic() + _server.STARTING_SECONDS
+        while not _server.running() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        if not _server.running():
+            _fail(
+                1,
+                f"mixdyn server: the command server did not start; see {path.with_suffix('.log')}",
+            )
+        say(f"started the command server at {esc(path)}")
+
+
 one_line_summaries(app)  # `mixdyn --help` lists each command on one line
 
 
@@ -336,32 +382,52 @@ def main() -> None:
     run, a tenth of a warm run). An exception that escapes (a bug; with ``MIXDYN_DEBUG=1``)
     ends the usual way, with its traceback.
     """
-    configure_cache()
-    use_roomy_frames()
+    prepare_command()
     t0 = time.perf_counter()
     try:
-        roomy(app)  # tracing outside the exports (the cache off) on a roomy frame stack
-    except SystemExit as exc:
-        code = exc.code
-    else:
-        code = 0
+        code = command(None)
     finally:
         if os.environ.get("MIXDYN_TIMING"):
             sys.stderr.write(f"mixdyn: {time.perf_counter() - t0:.2f} s\n")
     _leave(code)
 
 
+def prepare_command() -> None:
+    """What a process does once before running command lines: the program cache as the
+    environment sets it, and roomy frames for tracing."""
+    configure_cache()
+    use_roomy_frames()
+
+
+def command(args: list[str] | None) -> int:
+    """Run one command line (``args``: the words after ``mixdyn``; None: this process's)
+    in this process: its exit code. An error of mixdyn's ends as its exit code and one
+    line; an unexpected exception (a bug) propagates."""
+    try:
+        roomy(app, args=args, prog_name="mixdyn")  # tracing on a roomy frame stack
+    except SystemExit as exc:
+        return _exit_code(exc.code)
+    return 0
+
+
+def _exit_code(code) -> int:
+    """The exit code :class:`SystemExit` gives for ``code``: ``None`` is 0, a text is printed
+    on stderr and gives 1."""
+    if code is None:
+        return 0
+    if not isinstance(code, int):
+        sys.stderr.write(f"{code}\n")
+        return 1  # what Python gives for a message
+    return code
+
+
 def _leave(code) -> None:
-    """End the process with ``code`` (as :class:`SystemExit` reads it: ``None`` is 0, a
-    text is printed on stderr and gives 1), without the interpreter's teardown where
-    :func:`mixdyn.runtime._private.exit_now` may skip it."""
+    """End the process with ``code`` (as :class:`SystemExit` reads it: :func:`_exit_code`),
+    without the interpreter's teardown where :func:`mixdyn.runtime._private.exit_now` may
+    skip it."""
     from .runtime import _programs
 
-    if code is None:
-        code = 0
-    elif not isinstance(code, int):
-        sys.stderr.write(f"{code}\n")
-        code = 1  # what Python gives for a message
+    code = _exit_code(code)
     _programs.stop_prefetch()  # programs still being read ahead: not awaited to the last
     exit_now(code)
 

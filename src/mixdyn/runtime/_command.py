@@ -190,6 +190,27 @@ def import_ahead(modules=TRACING_IMPORTS) -> None:
     threading.Thread(target=run, name="mixdyn-imports", daemon=True).start()
 
 
+def hand_over() -> None:
+    """If this process is ``mixdyn check``, ``show``, ``plot`` or ``schema`` and a command
+    server answers it (:mod:`mixdyn.runtime._server`), end with the server's exit code;
+    otherwise return (and the command runs here)."""
+    if not is_command(sys.argv) or len(sys.argv) < 2:
+        return
+    from . import _server
+
+    if sys.argv[1] not in _server.SERVED:
+        return
+    try:
+        code = _server.forward(sys.argv)
+    except Exception:  # the server's side is a shortcut, never a failure: run here
+        code = None
+    if code is not None:
+        for stream in (sys.stdout, sys.stderr):
+            with contextlib.suppress(Exception):
+                stream.flush()
+        os._exit(code)
+
+
 def start_for_command_line() -> None:
     """Start the worker now if this process is ``mixdyn run`` with figures (see above)."""
     if _started or not draws(sys.argv):
