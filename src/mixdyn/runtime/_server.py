@@ -195,9 +195,11 @@ def _ask(sock: socket.socket, argv: list[str], environ, fds=(0, 1, 2), cwd=None)
     except KeyboardInterrupt:
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGINT)  # the command stops as it would at Ctrl-C
+        end = b""
         with contextlib.suppress(OSError, KeyboardInterrupt):
             end = _read(sock, 5)
-        return 130
+        if len(end) < 5 or end[:1] != _EXITED:
+            return 130  # what a shell gives for a command stopped by Ctrl-C
     except OSError:
         end = b""
     if len(end) < 5 or end[:1] != _EXITED:
@@ -315,8 +317,11 @@ def serve(path: pathlib.Path, idle: float = IDLE_SECONDS) -> None:
             except KeyboardInterrupt:  # a client's Ctrl-C that came late
                 continue
             with conn:
-                if not _answer(conn, cli):
-                    break
+                try:
+                    if not _answer(conn, cli):
+                        break
+                except KeyboardInterrupt:  # a client's Ctrl-C after its command ended
+                    continue
     finally:
         listener.close()
         with contextlib.suppress(OSError):
