@@ -73,9 +73,9 @@ PROPERTIES = {
     "SplineSpec": "spline",
     # the synthesis run kind (issue 34)
     "SynthesisFunctionSpec": "expr free_start input output pairs points ratios spacing x",
-    "SynthesisMassesSpec": "density payload",
-    "SynthesisRunSpec": "bounds function keep kind masses max_steps min_transmission name "
-    "points seed speed starts timing torque torque_weight",
+    "SynthesisMassesSpec": "density payload slider",
+    "SynthesisRunSpec": "bounds function keep kind linkage masses max_steps min_transmission "
+    "name points seed speed starts timing torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -94,8 +94,9 @@ PROPERTIES = {
 # and with a prescribed motion's continuity (issue 31: the same value without it); and with
 # the animation's plotted columns (issue 32); and with the column on the x axis of the
 # player's plot (issue 32); and with the synthesis run kind and bodies optional in a file of
-# synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34).
-STRIPPED_SHA256 = "9952b6b86b3362a18d9006f68b06f4e6a6a0592b70c0690aab4851e034189afb"
+# synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34);
+# and with a synthesis run's linkage and a slider's mass (issue 34).
+STRIPPED_SHA256 = "a715517f9c1ac806cf49fb408e53ef11e7f655345e4c5dfc0a9f06245e5f61c3"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

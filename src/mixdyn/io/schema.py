@@ -1053,14 +1053,17 @@ class OptimizeRunSpec(Spec):
 
 
 class SynthesisMassesSpec(Spec):
-    """How a synthesized four-bar's links weigh: bars of one linear density (the coupler a
-    triangle of bars through its pins and the coupler point) and a payload at the coupler
-    point."""
+    """How a synthesized linkage's links weigh: bars of one linear density (the coupler a
+    triangle of bars through its pins and the coupler point), a payload at the coupler point
+    and a slider-crank's slider."""
 
     density: Scalar
     """The bars' linear density [mass/length], e.g. ``2 kg/m``."""
     payload: Scalar = 0.0
     """A point mass at the coupler point [mass], e.g. ``0.5 kg``. Default 0."""
+    slider: Scalar = 0.0
+    """A slider-crank's slider, a point mass at its pin [mass], e.g. ``0.5 kg``; needed
+    (> 0) with a slider-crank's masses."""
 
 
 class SynthesisFunctionSpec(Spec):
@@ -1115,14 +1118,17 @@ class SynthesisRunSpec(Spec):
     function: SynthesisFunctionSpec | None = None
     """Function generation instead of a path: ``{expr: log10(x), x: [1, 2], input: [0 deg,
     60 deg], output: [240 deg, 180 deg]}`` or ``{pairs: [[crank, rocker], ...]}``."""
+    linkage: Literal["four_bar", "slider_crank"] = "four_bar"
+    """The linkage of a path: ``four_bar`` (default) or ``slider_crank`` (an offset
+    slider-crank; its coupler point on the connecting rod)."""
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
     turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only
     their differences count)."""
     bounds: dict[str, tuple[Scalar, Scalar]] = Field(default_factory=dict)
-    """``[low, high]`` of four-bar numbers ``r1``-``r4`` (ground, crank, coupler, rocker),
-    ``rcx``, ``rcy`` (coupler point), ``x0``, ``y0`` (crank pivot) [length] and ``theta0``
-    [rad]. Default: lengths 0.05-5 target sizes."""
+    """``[low, high]`` of the linkage's numbers: a four-bar's ``r1``-``r4``, a slider-crank's
+    ``r2``, ``r3``, ``e`` (offset); ``rcx``, ``rcy`` (coupler point), ``x0``, ``y0`` (crank
+    pivot) [length], ``theta0`` [rad]. Default: lengths 0.05-5 target sizes."""
     min_transmission: Scalar = 0.0
     """The least transmission angle along the motion [rad], e.g. ``40 deg``. Default 0."""
     masses: SynthesisMassesSpec | None = None

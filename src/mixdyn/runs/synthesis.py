@@ -1,11 +1,12 @@
-"""Synthesis runs of a model file: a four-bar made to draw a path or to generate a function
-(:func:`mixdyn.synthesize`).
+"""Synthesis runs of a model file: a four-bar or a slider-crank made to draw a path, or a
+four-bar to generate a function (:func:`mixdyn.synthesize`).
 
-A ``synthesis`` run describes the task (the target points, the timing, bounds of the
-four-bar's numbers, the least transmission angle), how the links weigh and how the motor
-torque counts, and the search (starts, seed); or, with ``function:``, a function task
-(:mod:`.synthesis_function`). It needs no mechanism in the file: a file whose
-runs are all synthesis runs may have no bodies (``mixdyn check`` then reports no mechanism).
+A ``synthesis`` run describes the task (the linkage, ``four_bar`` or ``slider_crank``, the
+target points, the timing, bounds of the linkage's numbers, the least transmission angle),
+how the links weigh and how the motor torque counts, and the search (starts, seed); or, with
+``function:``, a function task (:mod:`.synthesis_function`). It needs no mechanism in the
+file: a file whose runs are all synthesis runs may have no bodies (``mixdyn check`` then
+reports no mechanism).
 Its numbers are read with their units and handed to the search in SI (m, kg, s), the unit
 system of the model file it writes.
 
@@ -19,8 +20,8 @@ Example (``examples/synthesis_path.yaml``)::
       torque_weight: 1e-4 m^2/(N*m)^2
       starts: 64
 
-``mixdyn run`` writes ``candidates.csv`` (a row per distinct four-bar, best first, headers
-``name [unit]``), ``best.yaml`` (the best four-bar as a model file that ``mixdyn run`` runs:
+``mixdyn run`` writes ``candidates.csv`` (a row per distinct linkage, best first, headers
+``name [unit]``), ``best.yaml`` (the best linkage as a model file that ``mixdyn run`` runs:
 the coupler point's path and, with masses, the motor torque), ``meta.json`` (the search's
 figures and the best candidate), ``synthesis.png`` (the targets and the candidates'
 coupler curves) and ``report.html`` (the counts, the candidates, the figure).
@@ -40,14 +41,18 @@ from ..errors import ModelError, NumericalError
 from ..io import schema as s
 from ..synthesis import (
     NAMES,
+    SLIDER_NAMES,
+    FourBar,
     FunctionSynthesis,
     FunctionTask,
     Masses,
     Objective,
     PathTask,
+    SliderCrank,
     Synthesis,
     coupler_curve,
 )
+from ..synthesis._task import LINKAGES
 from ..units import SI, dimension, factor
 from .console import PROGRESS_LOG_EVERY, clean, esc
 from .kinds import RunKind, register
@@ -58,7 +63,7 @@ DRAWN = 5
 
 #: The kind of quantity of each column of ``candidates.csv`` (SI units written beside).
 _COLUMN_KINDS = {
-    **{n: "length" for n in NAMES if n != "theta0"},
+    **{n: "length" for n in (*NAMES, *SLIDER_NAMES) if n != "theta0"},
     "theta0": "angle",
     "theta_first": "angle",
     "theta_last": "angle",
@@ -117,6 +122,12 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
     """Check a synthesis run: its numbers read with their units, the task and objective built
     (every fault an input error at its line)."""
     path = ("runs", index)
+    if r.function is not None and r.linkage != "four_bar":
+        runner.fail(
+            (*path, "linkage"),
+            f"function generation is a four-bar's, not a {LINKAGES[r.linkage].TITLE}'s",
+            "leave linkage out, or give points (a path)",
+        )
     if r.function is not None:
         from .synthesis_function import function_task
 
@@ -127,6 +138,7 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
         [[_si(runner, v, "length", (*path, "points", i, k)) for k, v in enumerate(p)]
          for i, p in enumerate(r.points)]
     )  # fmt: skip
+    linkage = LINKAGES[r.linkage]
     timing = None
     if r.timing != "free":
         timing = np.array(
@@ -134,11 +146,11 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
         )
     bounds = {}
     for name, ends in r.bounds.items():
-        if name not in NAMES:
+        if name not in linkage.NAMES:
             runner.fail(
                 (*path, "bounds", name),
-                f"no number {name!r} of a four-bar",
-                f"bound one of {', '.join(NAMES)}",
+                f"no number {name!r} of a {linkage.TITLE}",
+                f"bound one of {', '.join(linkage.NAMES)}",
             )
         kind = "angle" if name == "theta0" else "length"
         bounds[name] = tuple(
@@ -146,7 +158,9 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
         )
     min_mu = _si(runner, r.min_transmission, "angle", (*path, "min_transmission"))
     try:
-        task = PathTask(points, timing=timing, bounds=bounds, min_transmission=min_mu)
+        task = PathTask(
+            points, timing=timing, bounds=bounds, min_transmission=min_mu, linkage=linkage
+        )
     except ModelError as e:
         where = ("bounds", e.element) if e.element in bounds else (e.element,)
         runner.fail((*path, *where) if e.element else path, e.message, "")
@@ -159,9 +173,16 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             runner.fail((*mp, "density"), f"the density must be > 0, got {density:g}", "")
         if not payload >= 0:
             runner.fail((*mp, "payload"), f"the payload must be >= 0, got {payload:g}", "")
+        slider = _si(runner, r.masses.slider, "mass", (*mp, "slider"))
+        if linkage is SliderCrank and not slider > 0:
+            runner.fail(
+                mp,
+                f"a slider-crank's slider needs a mass > 0, got {slider:g}",
+                "give masses: {density: 2 kg/m, slider: 0.5 kg}",
+            )
         gravity = tuple(_si(runner, g, "acceleration", ("gravity", k)) for k, g in
                         enumerate(runner.spec.gravity))  # fmt: skip
-        masses = Masses(density=density, payload=payload, gravity=gravity)
+        masses = Masses(density=density, payload=payload, gravity=gravity, slider=slider)
     speed = _si(runner, r.speed, "angular_velocity", (*path, "speed"))
     weight = _si(runner, r.torque_weight, (-2, -2, 4), (*path, "torque_weight"))
     if weight > 0 and masses is None:
@@ -178,7 +199,7 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
 
 
 def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
-    """Search (:func:`mixdyn.synthesize`); no feasible four-bar is a numerical failure."""
+    """Search (:func:`mixdyn.synthesize`); no feasible linkage is a numerical failure."""
     from ..synthesis import synthesize
 
     r: s.SynthesisRunSpec = plan.spec
@@ -193,17 +214,22 @@ def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
     )
     if not out.candidates:
         raise NumericalError(
-            f"no feasible four-bar among {r.starts} starts (none closes its loop along the "
-            "motion, in order, within the bounds and the transmission angle): give more "
+            f"no feasible {_title(plan.task)} among {r.starts} starts (none closes its loop "
+            "along the motion, in order, within the bounds and the transmission angle): give more "
             "starts, wider bounds or a smaller min_transmission"
         )
     return FileSynthesis(plan, out)
 
 
+def _title(task) -> str:
+    """The task's linkage in words (a function task's: a four-bar)."""
+    return getattr(task, "linkage", FourBar).TITLE
+
+
 def candidates_table(out: Synthesis):
     """``(names, units, rows)``: a row per candidate, best first (SI); the motor torque's
     columns where the links weigh."""
-    names = [*NAMES, "branch", "theta_first", "theta_last", "error", "score"]
+    names = [*out.task.linkage.NAMES, "branch", "theta_first", "theta_last", "error", "score"]
     if out.objective.masses is not None:
         names += ["torque_rms", "torque_peak"]
     names.append("min_transmission")
@@ -226,13 +252,18 @@ def candidates_table(out: Synthesis):
 
 def _curves(c, samples: int = 241) -> tuple[np.ndarray, np.ndarray]:
     """A candidate's coupler curve (K, 2) [m] over its traversed motion (first target to
-    last), and over the rest of the turn (NaN where the loop does not close there: the
-    triangle ``A B O4`` impossible, ``|cos mu| > 1``, as :func:`transmission_cosine`)."""
+    last), and over the rest of the turn (NaN where the loop does not close there: a
+    four-bar's triangle ``A B O4`` impossible, a slider-crank's rod too short to reach the
+    slide; ``|cos mu| > 1``, as :func:`transmission_cosine`)."""
     fb = c.fourbar
     a0, a1 = float(c.angles[0]), float(c.angles[-1])
     run = np.asarray(coupler_curve(fb, np.linspace(a0, a1, samples)))
     rest_angles = np.linspace(a1, a0 + 2 * np.pi, samples)
     rest = np.array(coupler_curve(fb, rest_angles))
+    if isinstance(fb, SliderCrank):  # the crank pin's height above the slide against r3
+        r2, r3, e = (float(getattr(fb, n)) for n in ("r2", "r3", "e"))
+        rest[np.abs(r2 * np.sin(rest_angles) - e) > r3] = np.nan
+        return run, rest
     r1, r2, r3, r4, t0 = (float(getattr(fb, n)) for n in ("r1", "r2", "r3", "r4", "theta0"))
     crank = t0 + rest_angles  # |A O4|^2 in the ground link's frame, O2 at the origin
     gap = (r1 - r2 * np.cos(crank - t0)) ** 2 + (r2 * np.sin(crank - t0)) ** 2
@@ -254,7 +285,7 @@ def _report(runner, plan, out, names, units, table, seconds, outputs):
         ("starts", f"{out.starts} (seed {out.seed})"),
         ("feasible", f"{out.feasible} ({len(out.candidates)} distinct kept)"),
         ("wall time", f"{seconds:.3f} s"),
-        ("best four-bar", "best.yaml (mixdyn run best.yaml)"),
+        (f"best {_title(out.task)}", "best.yaml (mixdyn run best.yaml)"),
     ]
     rows = [[str(k + 1), *(number(v) for v in row)] for k, row in enumerate(table)]
     head = ["#", *(f"{n} [{units[n]}]" if units.get(n) else n for n in names)]
@@ -300,7 +331,8 @@ def _log(plan: SynthesisPlan, every: float = PROGRESS_LOG_EVERY):
 
 @register
 class SynthesisKind(RunKind):
-    """A synthesis: a four-bar searched to draw a path, with the motor torque by weight."""
+    """A synthesis: a four-bar or a slider-crank searched to draw a path, with the motor
+    torque by weight, or a four-bar to generate a function."""
 
     name = "synthesis"
     needs_mechanism = False
@@ -363,7 +395,7 @@ class SynthesisKind(RunKind):
         files = [csv, best, write_meta(folder, jsonable(meta))]
         if outputs.painter is not None:
             drawn = out.candidates[:DRAWN]
-            title = f"{plan.name}: {len(out.candidates)} four-bars, best first"
+            title = f"{plan.name}: {len(out.candidates)} {_title(out.task)}s, best first"
             errors = [cand.error for cand in drawn]
             if function:
                 asked = np.rad2deg(np.column_stack([out.task.inputs, out.task.outputs]))
@@ -388,7 +420,7 @@ class SynthesisKind(RunKind):
         timing = "timing free" if plan.task.timing is None else "timing given"
         what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
         return (
-            f"run [bold]{esc(r.name)}[/bold] (synthesis): a four-bar through "
+            f"run [bold]{esc(r.name)}[/bold] (synthesis): a {_title(plan.task)} through "
             f"{len(plan.task.points)} points, {timing}{what}, {r.starts} starts, seed {r.seed}"
         )
 
@@ -410,7 +442,7 @@ class SynthesisKind(RunKind):
 
     def animation_refusal(self, plan: SynthesisPlan) -> tuple[str, str] | None:
         return (
-            f"run {plan.name!r} is a synthesis run: it makes a four-bar, not a motion",
+            f"run {plan.name!r} is a synthesis run: it makes a linkage, not a motion",
             "mixdyn run it, then animate a run of the best.yaml it writes",
         )
 
@@ -424,7 +456,7 @@ class SynthesisKind(RunKind):
             if np.isfinite(c.torque_rms):
                 best += f", motor torque RMS {c.torque_rms:.4g} N·m"
         return (
-            f"{plan.name}: synthesis, {len(out.candidates)} four-bars of {out.feasible} "
+            f"{plan.name}: synthesis, {len(out.candidates)} {_title(out.task)}s of {out.feasible} "
             f"feasible from {out.starts} starts, {best}, {seconds:.2f} s -> {folder}"
         )
 
