@@ -271,7 +271,66 @@ def test_a_kinematic_file_sweep_held_as_arrays_equals_the_single_runs(monkeypatc
         _close(members["reach"][i], np.max(cols["slider.x"]), 1e-12, i)
         _close(members["swing"][i], np.max(np.abs(cols["rod.B.vx"])), 1e-12, i)
     assert len(set(members["reach"].round(9))) == 3  # the rod's length did change the reach
-    monkeypatch.setattr(file_sweep, "_kinematic_arrays", lambda *a, **k: None)
+    monkeypatch.setattr(file_sweep, "_prepared_arrays", lambda *a, **k: None)
     one_by_one = execute(mio.reads(KINEMATIC), ["sweep"])["sweep"]
+    assert one_by_one.sweep.stacked is None
+    _same_tables((members, table), (one_by_one.members(), one_by_one.table()))
+
+
+#: The slider-crank's gas force as a parameter ``F`` (a force: each member shares the
+#: start where only it varies), its statics swept over the rod's length and the force.
+STATICS = (
+    (EXAMPLES / "slider_crank.yaml")
+    .read_text()
+    .split("\nruns:")[0]
+    .replace("law: 50 N}", "law: F}")
+    .replace("  omega: 2 rad/s", "  F: 50 N\n  omega: 2 rad/s")
+    + """
+runs:
+  - name: statics
+    kind: statics
+    time: {span: [0, 1], n: 6}
+  - name: sweep
+    kind: sweep
+    run: statics
+    vary:
+      l: {values: [250 mm, 420 mm]}
+      F: {values: [20 N, 50 N]}
+    summaries:
+      - {name: peak, column: motor, reduce: absmax}
+    outputs: [motor, slider.x, B.Fx]
+"""
+)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_statics_file_sweep_held_as_arrays_equals_member_by_member_and_virtual_work(
+    monkeypatch,
+):
+    """A quasi-static sweep over the rod's length (each member prepared from its file) and
+    the gas force, held as arrays (two members a call here): its tables are those of the
+    sweep run member by member, no member's result built but the first, and each member's
+    motor torque is the static one by virtual work, ``F dx/dth`` with the slider's
+    ``x = r cos th + sqrt(l^2 - r^2 sin^2 th)``, ``th = omega t`` (written out here)."""
+    from mixdyn.analysis import _static_members
+
+    monkeypatch.setattr(file_sweep, "CHUNK", 2)
+    monkeypatch.setattr(_static_members, "CHUNK", 2)
+    swept = execute(mio.reads(STATICS), ["sweep"])["sweep"]
+    assert isinstance(swept.sweep.stacked, _static_members.StaticStack)
+    assert not swept.sweep.errors
+    members, table = swept.members(), swept.table()
+    assert len(swept.sweep.results._built) <= 1  # the first member's, for the names
+    r, omega = 0.1, 2.0
+    for i, (l, f) in enumerate(zip(members["l"], members["F"], strict=True)):
+        rows = table[table["member"] == i]
+        th = omega * np.asarray(rows["t"])
+        s = np.sin(th)
+        root = np.sqrt(l**2 - r**2 * s**2)
+        _close(rows["slider.x"], r * np.cos(th) + root, 1e-10, (i, "x"))
+        _close(rows["motor"], f * (-r * s - r**2 * s * np.cos(th) / root), 1e-10, (i, "motor"))
+        _close(rows["B.Fx"], np.full(len(th), f), 1e-10, (i, "B.Fx"))
+    monkeypatch.setattr(file_sweep, "_prepared_arrays", lambda *a, **k: None)
+    one_by_one = execute(mio.reads(STATICS), ["sweep"])["sweep"]
     assert one_by_one.sweep.stacked is None
     _same_tables((members, table), (one_by_one.members(), one_by_one.table()))

@@ -21,11 +21,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..errors import MixdynError, ModelError
+from ..errors import MixdynError
 from ..model import Model
 from ..runtime._programs import cached_jit
 from . import _setup
-from ._schedule import CHUNK, _in_threads
+from ._prepared_members import finished, in_chunks, one_structure, prepare_each
+from ._prepared_members import stack as stack_trees
+from ._schedule import CHUNK
 from ._stacked import LazyResults, add_points, body_columns
 from .kinematic import Kinematic, _kinematic_scan, kinematic_result, output_times, tolerance
 from .result import Result, in_units
@@ -146,63 +148,29 @@ def run(
         return None
 
     def setup_of(i: int):
-        try:
-            setup = _setup.prepare(members[i], values[i], t0=t0)
-            _setup.check_start(setup, ts)
-            return setup, setup.start.constraints().for_batch()
-        except ModelError as err:
-            err.add_note(f"in member {i} of the sweep{describe(i)}")
-            raise
-        except MixdynError as err:  # a start that cannot be assembled: this member fails
-            return None, err
+        setup = _setup.prepare(members[i], values[i], t0=t0)
+        _setup.check_start(setup, ts)
+        return setup
 
-    made = _in_threads(setup_of, list(range(len(members))), threads, None)
-    setups = [s for s, _ in made]
-    errors = {i: e for i, (s, e) in enumerate(made) if s is None}
-    ok = [i for i, s in enumerate(setups) if s is not None]
-    if not ok:
-        for i in range(len(members)) if on_member is not None else ():
-            on_member(i)
-        return (
-            KinematicStack(values, setups, ts, np.zeros(0), ()),
-            LazyResults(len(members), lambda i: None, {i: (None, e) for i, e in errors.items()}),
-            errors,
-        )
-    tree = jax.tree_util.tree_structure(made[ok[0]][1])
-    if any(jax.tree_util.tree_structure(made[i][1]) != tree for i in ok):
+    setups, errors = prepare_each(len(members), setup_of, threads, describe)
+    if len(errors) == len(members):
+        stack = KinematicStack(values, setups, ts, np.zeros(0), ())
+        return (stack, *finished(len(members), np.zeros(0), stack.result, errors, on_member))
+    made = [None if s is None else s.start.constraints().for_batch() for s in setups]
+    if not one_structure(made):
         return None
     tol = np.array([tolerance(s.model, v.tol) if s is not None else 1.0
                     for s, v in zip(setups, values, strict=True)])  # fmt: skip
-    # a failed member takes the first member's place in the program (its rows dropped)
-    fill = [i if setups[i] is not None else ok[0] for i in range(len(members))]
-    parts = []
-    for first in range(0, len(members), CHUNK):
-        idx = fill[first : first + CHUNK]
-        idx = idx + [idx[0]] * (CHUNK - len(idx))
-        c = jax.tree.map(lambda *xs: np.stack([np.asarray(x) for x in xs]),
-                         *(made[i][1] for i in idx))  # fmt: skip
+
+    def program(idx: list[int]) -> tuple:
         q0 = np.stack([np.asarray(setups[i].start.q) for i in idx])
-        scan = _scan_batch_jit(
+        c = stack_trees([made[i] for i in idx])
+        return _scan_batch_jit(
             CHUNK, c, q0, jnp.asarray(ts), jnp.asarray(tol[idx]), jnp.asarray(values[0].max_iter)
         )
-        n = min(CHUNK, len(members) - first)
-        parts.append(tuple(np.asarray(a)[:n] for a in scan))
-    scans = tuple(np.concatenate(cols) for cols in zip(*parts, strict=True))
-    stack = KinematicStack(values, setups, ts, tol, scans)
-    outcomes = {i: (None, e) for i, e in errors.items()}
-    for i in np.flatnonzero(stack.flagged()):
-        i = int(i)
-        if i in outcomes:
-            continue
-        try:
-            outcomes[i] = stack.result(i), None
-        except MixdynError as err:
-            outcomes[i] = None, err
-            errors[i] = err
-    if on_member is not None:
-        for i in range(len(members)):
-            on_member(i)
-    return stack, LazyResults(len(members), stack.result, outcomes), errors
+
+    stack = KinematicStack(values, setups, ts, tol, in_chunks(program, made, CHUNK))
+    return (stack, *finished(len(members), stack.flagged(), stack.result, errors, on_member))
 
 
 __all__ = ["KinematicStack", "run"]

@@ -21,10 +21,14 @@ at once, each member's :class:`~.result.Result` built when it is read.
 A kinematic sweep of at least :data:`~._schedule.CHUNK` members (or on an accelerator) is
 held as arrays too (:mod:`._kinematic_members`): each member prepared like a single run (its
 own start), their constraint sets stacked, one vectorized program running the single run's
-scan. An inverse sweep of members sharing the drivers' motion is held as arrays (member 0
-run, every member post-processed along its motion). Other inverse, kinematic and
-quasi-static sweeps prepare and run the single analysis member by member (its programs are
-compiled for the first member and reused), from a thread per core.
+scan. A quasi-static sweep of as many members is held as arrays (:mod:`._static_members`:
+each member prepared like a single run, or, where only masses, inertias and forces vary,
+every member from member 0's start; one vectorized program running the single run's
+Newton iterations at every output time). An inverse sweep of members sharing the drivers'
+motion is held as arrays (member 0 run, every member post-processed along its motion).
+Other inverse, kinematic and quasi-static sweeps prepare and run the single analysis member
+by member (its programs are compiled for the first member and reused), from a thread per
+core.
 
 Members differ in numbers only: masses, inertias, law and force parameters, start guesses
 (any float leaf of the model, named by a parameter path such as ``"slider.mass"`` or
@@ -35,6 +39,7 @@ structure.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import itertools
 import os
 import time
@@ -49,7 +54,7 @@ import numpy as np
 from .. import paths
 from ..errors import MixdynError, ModelError
 from ..model import Model
-from . import _kinematic_members, _members, _stacked
+from . import _kinematic_members, _members, _stacked, _static_members
 from ._cluster import _on_cluster
 from ._keywords import member_values, study_analysis
 from ._members import model_swapper as model_swapper
@@ -224,8 +229,8 @@ class Sweep:
     """The members of a sweep, in order.
 
     Where the members share one start (only masses, inertias and forces vary) and are
-    integrated by one vectorized program, or a kinematic sweep's members are run by one
-    vectorized program, the sweep is held as arrays (member × time): a
+    integrated by one vectorized program, or a kinematic or quasi-static sweep's members
+    are run by one vectorized program, the sweep is held as arrays (member × time): a
     member's :class:`~mixdyn.Result` is built when it is first read (``sweep[i]``,
     ``sweep.results[i]``, iteration), and :meth:`columns` and :meth:`dataset` read every
     member at once.
@@ -240,10 +245,11 @@ class Sweep:
             vectorized path, ``integration`` (the one program) and ``finishing``.
         stacked: on the array path, the members as one problem with a member axis
             (:class:`~._stacked.Stacked`; a kinematic sweep's:
-            :class:`~._kinematic_members.KinematicStack`); else None.
+            :class:`~._kinematic_members.KinematicStack`; a quasi-static sweep's:
+            :class:`~._static_members.StaticStack`); else None.
         arrays: on the array path, every member's trajectory and post-processing's arrays
-            (:class:`~._stacked.Arrays`, leading axis: the member; a kinematic sweep's
-            scans are its ``stacked``'s); else None.
+            (:class:`~._stacked.Arrays`, leading axis: the member; a kinematic or
+            quasi-static sweep's arrays are its ``stacked``'s); else None.
         values: on the array path, the varied values (path -> (M,) or (M, ...) [model
             units]), the coordinates of :meth:`dataset`.
     """
@@ -252,9 +258,9 @@ class Sweep:
     errors: dict[int, MixdynError]
     parameters: list[dict[str, float | list]]
     seconds: dict[str, float]
-    stacked: _stacked.Stacked | _kinematic_members.KinematicStack | None = dataclasses.field(
-        default=None, repr=False
-    )
+    stacked: (
+        _stacked.Stacked | _kinematic_members.KinematicStack | _static_members.StaticStack | None
+    ) = dataclasses.field(default=None, repr=False)
     arrays: _stacked.Arrays | None = dataclasses.field(default=None, repr=False)
     values: dict[str, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
 
@@ -517,12 +523,17 @@ def sweep(
     if models is None:
         members = vary_models(model, vary)
     if (
-        value.name == "kinematic"
+        value.name in ("kinematic", "quasi-static")
         and client is None
         and batch_size is None
         and (len(members) >= CHUNK or _default_batch_size() is not None)
     ):
-        made = _kinematic_members.run(
+        if value.name == "kinematic":
+            held = _kinematic_members.run
+        else:  # the start of an equilibrium does not see masses, inertias or forces
+            shared = models is None and shares_start(model, vary)
+            held = functools.partial(_static_members.run, shared=shared)
+        made = held(
             members, value, t, threads or os.cpu_count() or 1, on_member,
             lambda i: _describe(params, i),
         )  # fmt: skip

@@ -14,8 +14,10 @@ also run as one vectorized program (the file's ``batch_size``, or at least
 :data:`~mixdyn.analysis._schedule.CHUNK` members) the sweep is held as arrays, as
 :func:`mixdyn.sweep` holds it (:func:`_as_arrays`: one set-up, one stacked problem), and its
 tables, summaries and bands are read from the arrays, no member's result built. A kinematic
-sweep of at least that many members is held as arrays too (:func:`_kinematic_arrays`: each
-member prepared like its single run, one vectorized program running the scan).
+or quasi-static (``statics``) sweep of at least that many members is held as arrays too
+(:func:`_prepared_arrays`: each member prepared like its single run, or a quasi-static
+sweep's members from one start where its varied numbers reach only forces, masses and
+inertias; one vectorized program running the scan or the equilibria).
 
 Example (``examples/antonya_sweep.yaml``)::
 
@@ -50,7 +52,7 @@ from collections.abc import Callable
 import numpy as np
 
 from .. import paths
-from ..analysis import _kinematic_members
+from ..analysis import _kinematic_members, _static_members
 from ..analysis._keywords import from_keywords, member_values
 from ..analysis._members import run_members
 from ..analysis._schedule import CHUNK, _default_batch_size
@@ -501,7 +503,7 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
     only forces and bodies' masses and inertias (:func:`.sweep_members.quick_members`), and
     then share its start (:func:`mixdyn.analysis.sweep.shares_start`); else each is built
     from its file. The sweep is held as arrays where its members run as one vectorized
-    program (:func:`_as_arrays`, :func:`_kinematic_arrays`); else the members run by
+    program (:func:`_as_arrays`, :func:`_prepared_arrays`); else the members run by
     :func:`~mixdyn.analysis._members.run_members`."""
     r: s.SweepRunSpec = plan.spec
     started = time.perf_counter()
@@ -537,7 +539,8 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
             outcomes = _at_own_times(plan, models, analysis, kwargs, describe, progress)
         else:
             values, recorded = member_values(analysis, plan.times, kwargs, describe)
-            sweep = _kinematic_arrays(plan, models, values, describe, progress)
+            shared = quick is not None
+            sweep = _prepared_arrays(plan, models, values, describe, progress, shared)
             if sweep is not None:
                 sweep.seconds["total"] = time.perf_counter() - built
                 summaries, units = _summaries(runner, plan, sweep)
@@ -623,17 +626,23 @@ def _as_arrays(
     )
 
 
-def _kinematic_arrays(plan: SweepPlan, models, values, describe, progress) -> Sweep | None:
-    """A kinematic sweep held as arrays (:mod:`mixdyn.analysis._kinematic_members`: each
-    member prepared like its single run, one vectorized program running the scan) where it
-    has at least :data:`CHUNK` members (or runs on an accelerator) and no ``batch_size``, as
-    :func:`mixdyn.sweep` takes that path; None otherwise (then member by member)."""
+def _prepared_arrays(
+    plan: SweepPlan, models, values, describe, progress, shared: bool
+) -> Sweep | None:
+    """A kinematic or quasi-static sweep held as arrays, each member prepared like its
+    single run (:mod:`mixdyn.analysis._kinematic_members`,
+    :mod:`mixdyn.analysis._static_members`: a quasi-static sweep's members from one start
+    where ``shared``, its varied numbers reaching only masses, inertias and forces), one
+    vectorized program running them, where it has at least :data:`CHUNK` members (or runs
+    on an accelerator) and no ``batch_size``, as :func:`mixdyn.sweep` takes that path; None
+    otherwise (then member by member)."""
     many = plan.members >= CHUNK or _default_batch_size() is not None
-    if values[0].name != "kinematic" or plan.spec.batch_size is not None or not many:
+    held = {"kinematic": _kinematic_members.run, "quasi-static": _static_members.run}
+    name = values[0].name
+    if name not in held or plan.spec.batch_size is not None or not many:
         return None
-    made = _kinematic_members.run(
-        models, values, plan.times, os.cpu_count() or 1, progress, describe
-    )
+    extra = {"shared": shared} if name == "quasi-static" else {}
+    made = held[name](models, values, plan.times, os.cpu_count() or 1, progress, describe, **extra)
     if made is None:
         return None
     stack, results, errors = made

@@ -1,0 +1,412 @@
+"""A quasi-static sweep held as arrays.
+
+Each member is prepared like its single run (:meth:`~.statics.QuasiStatic._prepare`: the
+first equilibrium's start assembled from its rough pose), from a thread per core, or, where
+the varied numbers reach only masses, inertias and forces (which do not enter the start),
+member 0 is prepared and every member takes its start with its own model. One vectorized
+program then runs the single run's time loop for :data:`~._schedule.CHUNK` members a call
+(:func:`_equilibria`): at each later output time the joints closed again from the
+equilibrium before (:func:`~._assembly.assemble`'s damped Gauss-Newton steps), then Newton's
+method on ``R(q, lambda) = 0`` with the single run's scales, steps and step halving
+(:func:`~.statics._equilibrium`), then the joints' reactions and contact forces.
+
+The program flags a member where the single run would act otherwise: the joints not closed
+again, the constraint rows at a later start not clearly independent (the single run's rank
+analysis there, :data:`~._structure.FULL_RANK_RATIO`), or Newton's method not converged. A
+flagged member is run like a single run (its error, a
+:class:`~mixdyn.errors.ConvergenceError` with its time, kept as its outcome); every other
+member's :class:`~.result.Result` is built when it is read (:class:`~._stacked.LazyResults`:
+its stiffness' smallest eigenvalues by :func:`~.statics._reduced_stiffness` then).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ..equations import Constraints, applied_forces
+from ..errors import MixdynError
+from ..linalg import min_norm_step
+from ..model import Model
+from ..runtime._programs import cached_jit
+from . import _setup
+from ._assembly import length_scale
+from ._prepared_members import finished, in_chunks, one_structure, prepare_each
+from ._prepared_members import stack as stack_trees
+from ._reactions import (
+    contact_columns,
+    driver_efforts,
+    joint_reactions,
+    reaction_columns,
+    reaction_kinds,
+)
+from ._schedule import CHUNK
+from ._stacked import LazyResults, add_points, body_columns
+from ._structure import FULL_RANK_RATIO
+from .kinematic import output_times
+from .result import Result, in_units
+from .statics import QuasiStatic, _reduced_stiffness, _residual_of
+
+#: The assembly's tolerance, relative to the model's size (:func:`~._assembly.assemble`).
+ASSEMBLY_TOL = 1e-12
+#: Most iterations of the assembly (:func:`~._assembly.assemble`'s default).
+ASSEMBLY_MAX_ITER = 100
+#: Most halvings of a Newton step (the single run's stop at a step below 1e-6 after 20).
+MAX_HALVINGS = 60
+
+
+def _equilibria(model, c, q_start, L, ts, tol, max_iter):
+    """One member's equilibria at the times ``ts`` (N,), each from the one before, as
+    :class:`~.statics.QuasiStatic` finds them: per time ``(q, lam, iterations, reactions,
+    contacts, ok)``; ``ok`` False where the single run would act otherwise (module
+    docstring)."""
+    nq, m = model.nq, c.m
+    D = jnp.tile(jnp.stack([L, L, jnp.ones_like(L)]), len(model.bodies))
+
+    def R(x, t):
+        return _residual_of(model, c, t, x)
+
+    def rank_certain(q, t):
+        """The full set's rows clearly independent (:func:`~._structure._full_row_rank`)."""
+        if c.n_full == 0:
+            return jnp.array(True)
+        J = c.jacobian(q, t).dense()
+        norms = jnp.linalg.norm(J, axis=1)
+        An = J / norms[:, None]
+        d = jnp.diag(jnp.linalg.cholesky(An @ An.T)) ** 2
+        fine = jnp.all(jnp.isfinite(d)) & jnp.all(d > 0) & jnp.all(norms > 0)
+        return fine & (jnp.sqrt(jnp.min(d) / jnp.max(d)) > FULL_RANK_RATIO)
+
+    joints = Constraints(c.joints, (), nq)  # the assembly's: the joints alone, at t = 0
+    t_joints = jnp.zeros(())
+
+    def assembled(q):
+        """The joints closed from ``q`` as :func:`~._assembly.assemble` closes them
+        (damped Gauss-Newton, its step halved while the residual grows), and whether they
+        closed."""
+        tol_a = ASSEMBLY_TOL * L
+
+        def residual(q):
+            r = joints.full(q, t_joints)
+            return r, jnp.max(jnp.abs(r), initial=0.0)
+
+        def gauss_newton(s):
+            q, r, err, it, _ = s
+            damping = jnp.minimum(err / L, 1.0) * 1e-3
+            step = min_norm_step(joints.phi_q(q, t_joints), r, damping=damping)
+            r_new, err_new = residual(q + step)
+
+            def halve(h):
+                alpha = 0.5 * h[0]
+                return (alpha, *residual(q + alpha * step))
+
+            alpha, r_new, err_new = jax.lax.while_loop(
+                lambda h: (h[2] > err) & (h[0] > 1e-3), halve, (1.0, r_new, err_new)
+            )
+            finite = jnp.isfinite(err_new)
+            q_new = jnp.where(finite, q + alpha * step, q)
+            return (
+                q_new,
+                jnp.where(finite, r_new, r),
+                jnp.where(finite, err_new, err),
+                it + 1,
+                ~finite,
+            )
+
+        q, _, err, _, _ = jax.lax.while_loop(
+            lambda s: (s[2] > tol_a) & (s[3] < ASSEMBLY_MAX_ITER) & ~s[4],
+            gauss_newton,
+            (q, *residual(q), 0, jnp.array(False)),
+        )
+        return q, err <= tol_a
+
+    def at(q, t):
+        """The equilibrium at ``t`` from the assembled start ``q``
+        (:func:`~.statics._equilibrium`)."""
+        Q0 = applied_forces(model, q, jnp.zeros_like(q), t)
+        F0 = jnp.max(jnp.abs(Q0) * D, initial=0.0) / L
+        if m:
+            J0 = c.jacobian(q, t).dense()
+            rows = jnp.max(jnp.abs(J0) * D, axis=1)
+            rows = jnp.where(rows > 0.0, rows, 1.0)
+            lam = jnp.linalg.lstsq(D[:, None] * J0.T, D * Q0)[0]
+        else:
+            rows, lam = jnp.ones(0), jnp.zeros(0)
+
+        def scaled(r):
+            work = jnp.abs(r[:nq]) * D / L
+            most = jnp.max(work, initial=0.0)
+            force = jnp.maximum(jnp.maximum(F0, most), 1e-300)
+            return jnp.maximum(most / force, jnp.max(jnp.abs(r[nq:]) / rows, initial=0.0))
+
+        energy = jnp.maximum(F0, 1e-300) * L
+        row_w = jnp.concatenate([D / energy, 1.0 / rows])
+        col_w = jnp.concatenate([D, energy / rows])
+        x = jnp.concatenate([q, lam])
+        r = R(x, t)
+
+        def newton(s):
+            x, r, err, it = s
+            K = jax.jacfwd(lambda y: R(y, t))(x)
+            step = col_w * jnp.linalg.lstsq(row_w[:, None] * K * col_w[None, :], -row_w * r)[0]
+
+            def halved(s):  # the step at 1, 1/2, 1/4...: the first accepted taken
+                a = 0.5 * s[0]
+                rt = R(x + a * step, t)
+                et = scaled(rt)
+                accepted = jnp.all(jnp.isfinite(rt)) & ((et < err) | (a < 1e-6))
+                return a, x + a * step, rt, et, s[4] + 1, accepted
+
+            _, x, r, err, _, _ = jax.lax.while_loop(
+                lambda s: ~s[5] & (s[4] < MAX_HALVINGS),
+                halved,
+                (2.0, x, r, err, 0, jnp.array(False)),
+            )
+            return x, r, err, it + 1
+
+        x, r, err, it = jax.lax.while_loop(
+            lambda s: (s[2] > tol) & (s[3] < max_iter), newton, (x, r, scaled(r), 0)
+        )
+        ok = (err <= tol) & jnp.all(jnp.isfinite(x)) & jnp.all(jnp.isfinite(r))
+        return x[:nq], x[nq:], it, ok
+
+    def one(carry, k):
+        t = ts[k]
+        start, closed = assembled(carry)
+        start = jnp.where(k == 0, carry, start)  # the set-up's start at the first time
+        q, lam, it, ok = at(start, t)
+        reactions = joint_reactions(c, q, t, lam)
+        contacts = contact_columns(c, q, lam[:m])
+        ok = ok & ((k == 0) | (closed & rank_certain(start, t)))
+        return q, (q, lam, it, reactions, contacts, ok)
+
+    return jax.lax.scan(one, q_start, jnp.arange(len(ts)))[1]
+
+
+def _equilibria_batch(width: int, model, c, q_start, L, ts, tol, max_iter):
+    """:func:`_equilibria` of a batch of members (leading axis: the member), ``width`` at a
+    time vectorized."""
+
+    def one(x):
+        mm, cc, q, length, tl = x
+        return _equilibria(mm, cc, q, length, ts, tl, max_iter)
+
+    return jax.lax.map(one, (model, c, q_start, L, tol), batch_size=width)
+
+
+_equilibria_batch_jit = cached_jit(_equilibria_batch)
+
+
+@dataclasses.dataclass(frozen=True)
+class StaticStack:
+    """The members of a quasi-static sweep, each set up, as arrays.
+
+    Attributes:
+        setup: member ``i`` -> its set-up (:class:`~._setup.Setup`), None where it failed.
+        count: M, the number of members.
+        ts: (N,) the output times [time].
+        arrays: each member's ``(q, lam, iterations, reactions, contacts, ok)`` at each
+            time, leading axes (member, time) (:func:`_equilibria`);
+            a failed member's rows are its copy of another member's.
+        models: each member's model (M,), or the one model whose points every member
+            shares.
+    """
+
+    setup: Callable[[int], _setup.Setup | None]
+    count: int
+    ts: np.ndarray
+    arrays: tuple
+    models: Model | Sequence[Model]
+
+    kind = "statics"
+
+    @property
+    def model(self) -> Model:
+        """A member's model (the names, units and structure every member shares)."""
+        return self.models if isinstance(self.models, Model) else self.models[0]
+
+    def flagged(self) -> np.ndarray:
+        """(M,) the members to run like a single run (module docstring)."""
+        return ~np.asarray(self.arrays[-1]).all(axis=1)
+
+    def run(self, i: int) -> Result:
+        """Member ``i`` run like its single run (its named error raised)."""
+        return _setup.run(self.setup(i), self.ts)
+
+    def result(self, i: int) -> Result:
+        """Member ``i``'s result from the arrays, as :meth:`~.statics.QuasiStatic._run`
+        makes it."""
+        setup = self.setup(i)
+        model, prep = setup.model, setup.start
+        c = prep.constraints(independent_rows_only=True)
+        q, lam, it = (np.asarray(a[i]) for a in self.arrays[:3])
+        extra, kinds = _extra(c, prep.drivers, lam, self.arrays[3][i], self.arrays[4], i)
+        eig = [_smallest(model, c, float(t), q[k], lam[k]) for k, t in enumerate(self.ts)]
+        zeros = np.zeros_like(q)
+        stable = [bool(np.isnan(e) or e > 0) for e in eig]
+        return Result(
+            kind="statics",
+            model=model,
+            t=np.asarray(self.ts),
+            q=q,
+            qd=zeros,
+            qdd=zeros,
+            extra=extra,
+            kinds=kinds,
+            stats={
+                "newton_iterations": int(np.sum(it)),
+                "min_eigenvalue": [float(e) for e in eig],
+                "min_eigenvalue_unit": model.units.unit("energy"),
+                "stable": all(stable),
+                "unstable_at": [float(t) for t, s in zip(self.ts, stable, strict=True) if not s],
+            },
+        )
+
+    def columns(
+        self,
+        arrays,
+        results: LazyResults,
+        errors: dict,
+        output_units=None,
+        points: Sequence[str] = (),
+    ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """Every result column of every member, (M, N) each (``t``: (N,)), with the points'
+        columns, in ``output_units``, and their units; a failed member's rows NaN (as
+        :func:`~._stacked.columns`)."""
+        first = next((i for i in range(self.count) if i not in errors), None)
+        if first is None:
+            raise ValueError("no member of the sweep succeeded: there is nothing to label")
+        result: Result = results[first]
+        setup = self.setup(first)
+        c = setup.start.constraints(independent_rows_only=True)
+        q, lam = (np.asarray(a) for a in self.arrays[:2])
+        zeros = np.zeros_like(q)
+        cols, units = body_columns(result.model, self.ts, q, zeros, zeros), result.units()
+        extra, _ = _extra(c, setup.start.drivers, lam, np.asarray(self.arrays[3]), self.arrays[4])
+        cols.update(extra)
+        if set(cols) != set(result.columns()):  # pragma: no cover - a column made elsewhere
+            raise RuntimeError("the stacked columns differ from a member's result's")
+        if points:
+            add_points(cols, units, self.models, points, q, zeros, zeros)
+        if errors:
+            bad = np.asarray(sorted(errors))
+            for k, v in cols.items():
+                if k != "t":
+                    v = np.array(v, dtype=float)
+                    v[bad] = np.nan
+                    cols[k] = v
+        return in_units(result, cols, units, output_units)
+
+
+def _smallest(model, c, t, q, lam) -> float:
+    """The reduced stiffness' smallest eigenvalue at one equilibrium, NaN without free
+    degrees of freedom (:func:`~.statics._reduced_stiffness`)."""
+    eig = _reduced_stiffness(model, c, t, q, lam)
+    return float(eig[0]) if eig.size else float("nan")
+
+
+def _extra(c, drivers, lam, reactions, contacts, i=None) -> tuple[dict, dict]:
+    """The reactions', contacts' and drivers' columns (:func:`~.statics._result`) and their
+    kinds, from the multipliers ``lam`` (..., m), the reactions (..., n_joints, 3) and the
+    contact columns (each (M, N); member ``i``'s where given)."""
+    extra = {k: np.asarray(v) for k, v in reaction_columns(c, reactions).items()}
+    extra.update({k: np.asarray(v if i is None else v[i]) for k, v in contacts.items()})
+    efforts = driver_efforts(c, lam, np.zeros_like(lam), len(drivers))
+    kinds = reaction_kinds(c)
+    for d in drivers:
+        extra[d.name] = np.asarray(efforts[d.name])
+        kinds[d.name] = d.effort_kind
+    return extra, kinds
+
+
+def run(
+    members: Sequence[Model],
+    value: QuasiStatic | Sequence[QuasiStatic],
+    t,
+    threads: int,
+    on_member: Callable[[int], None] | None,
+    describe: Callable[[int], str],
+    shared: bool = False,
+) -> tuple[StaticStack, LazyResults, dict[int, MixdynError]] | None:
+    """The members of a quasi-static sweep set up, run by one vectorized program and
+    screened: ``(stack, results, errors)``; None where their constraint sets differ in
+    structure, their values in ``max_iter``, a member's start keeps fewer than every
+    constraint row, or a joint is a gear mesh (then member by member). ``value``: the
+    analysis value, or one per member; ``shared``: the members differ only in masses,
+    inertias and forces (and share one value), member 0's start is every member's.
+
+    Raises:
+        ModelError: a member's input error (with its index in a note).
+    """
+    ts = output_times(t, minimum=1)
+    t0, count = float(ts[0]), len(members)
+    values = [value] * count if isinstance(value, QuasiStatic) else list(value)
+    if len({v.max_iter for v in values}) > 1:
+        return None
+    if any(hasattr(j, "separation") for j in members[0].joints):
+        return None  # a mesh's separation is checked at every start
+
+    def setup_of(i: int) -> _setup.Setup:
+        setup = _setup.prepare(members[i], values[i], t0=t0)
+        _setup.check_start(setup, ts, accelerations=False)
+        return setup
+
+    if shared:
+        setups, errors = prepare_each(1, setup_of, 1, describe)
+        first = setups[0]
+
+        def setup(i: int):
+            if first is None or i == 0:
+                return first
+            start = dataclasses.replace(first.start, model=members[i])
+            return dataclasses.replace(first, model=members[i], start=start)
+
+        setups = [first] * count
+        errors = dict.fromkeys(range(count), errors[0]) if errors else {}
+    else:
+        setups, errors = prepare_each(count, setup_of, threads, describe)
+
+        def setup(i: int):
+            return setups[i]
+
+    models = members[0] if shared else list(members)
+    if len(errors) == count:
+        stack = StaticStack(setup, count, ts, (), models)
+        return (stack, *finished(count, np.zeros(0), stack.run, errors, on_member))
+    made = [None if s is None else s.start.constraints(independent_rows_only=True) for s in setups]
+    if not one_structure(made) or any(
+        s is not None and len(s.start.keep) != s.start.constraints().n_full for s in setups
+    ):
+        return None
+    L = np.array([length_scale(s.model) if s is not None else 1.0 for s in setups])
+    tol = np.array([v.tol for v in values])
+
+    def program(idx: list[int]) -> tuple:
+        q0 = stack_trees([setups[i].start.q for i in idx])
+        model = stack_trees([members[i] for i in idx])
+        c = stack_trees([made[i] for i in idx])
+        return _equilibria_batch_jit(
+            CHUNK, model, c, q0, L[idx], jnp.asarray(ts), tol[idx], jnp.asarray(values[0].max_iter)
+        )
+
+    stack = StaticStack(setup, count, ts, in_chunks(program, made, CHUNK), models)
+    build = _built(stack)
+    return (stack, *finished(count, stack.flagged(), build, errors, on_member))
+
+
+def _built(stack: StaticStack) -> Callable[[int], Result]:
+    """Member ``i``'s result: run like its single run where the program flagged it, else
+    read from the arrays."""
+    flagged = stack.flagged()
+
+    def build(i: int) -> Result:
+        return stack.run(i) if flagged[i] else stack.result(i)
+
+    return build
+
+
+__all__ = ["StaticStack", "run"]
