@@ -74,8 +74,9 @@ PROPERTIES = {
     # the synthesis run kind (issue 34)
     "SynthesisFunctionSpec": "expr free_start input output pairs points ratios spacing x",
     "SynthesisMassesSpec": "density payload slider",
+    "SynthesisMotionSpec": "length poses",
     "SynthesisRunSpec": "bounds function keep kind linkage masses max_steps min_transmission "
-    "name points seed speed starts timing torque torque_weight",
+    "motion name points seed speed starts timing torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -95,8 +96,9 @@ PROPERTIES = {
 # the animation's plotted columns (issue 32); and with the column on the x axis of the
 # player's plot (issue 32); and with the synthesis run kind and bodies optional in a file of
 # synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34);
-# and with a synthesis run's linkage and a slider's mass (issue 34).
-STRIPPED_SHA256 = "a715517f9c1ac806cf49fb408e53ef11e7f655345e4c5dfc0a9f06245e5f61c3"
+# and with a synthesis run's linkage and a slider's mass (issue 34); and with a synthesis
+# run's motion generation (issue 34).
+STRIPPED_SHA256 = "2d0c4c01043aab853084998d778c2851c123defb975c38d1c873767059f8af5b"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

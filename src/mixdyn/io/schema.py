@@ -1103,10 +1103,23 @@ class SynthesisFunctionSpec(Spec):
         return self
 
 
+class SynthesisMotionSpec(Spec):
+    """Motion generation: the coupler carried through precision poses (its coupler point and
+    the angle of a line fixed in it), in their order as the crank turns."""
+
+    poses: list[tuple[Scalar, Scalar, Scalar]] = Field(min_length=3)
+    """Three or more poses ``[x, y, angle]``: the coupler point [length] and the coupler's
+    angle with its unit, e.g. ``[[0 mm, 0 mm, 0 deg], [300 mm, 250 mm, 40 deg], ...]``."""
+    length: Scalar | None = None
+    """The length that weighs the angle error (an angle error of 1/length rad counts as
+    a point missed by a unit of length) [length]. Default: the poses' size."""
+
+
 class SynthesisRunSpec(Spec):
-    """A four-bar synthesized to draw a path or generate a function (``mixdyn.synthesize``):
-    random starts refined by Levenberg-Marquardt, a path's motor torque optionally in the
-    objective. Needs no mechanism in the file."""
+    """A linkage synthesized to draw a path, carry its coupler through poses or generate a
+    function (``mixdyn.synthesize``): random starts refined by Levenberg-Marquardt, a path's
+    or a motion's motor torque optionally in the objective. Needs no mechanism in the
+    file."""
 
     kind: Literal["synthesis"]
     """Run kind: ``synthesis``."""
@@ -1118,8 +1131,11 @@ class SynthesisRunSpec(Spec):
     function: SynthesisFunctionSpec | None = None
     """Function generation instead of a path: ``{expr: log10(x), x: [1, 2], input: [0 deg,
     60 deg], output: [240 deg, 180 deg]}`` or ``{pairs: [[crank, rocker], ...]}``."""
+    motion: SynthesisMotionSpec | None = None
+    """Motion generation instead of a path: ``{poses: [[0 mm, 0 mm, 0 deg], [300 mm, 250 mm,
+    40 deg], ...]}`` (the coupler point and angle at each pose)."""
     linkage: Literal["four_bar", "slider_crank"] = "four_bar"
-    """The linkage of a path: ``four_bar`` (default) or ``slider_crank`` (an offset
+    """The linkage of a path or a motion: ``four_bar`` (default) or ``slider_crank`` (an offset
     slider-crank; its coupler point on the connecting rod)."""
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
@@ -1152,8 +1168,11 @@ class SynthesisRunSpec(Spec):
 
     @model_validator(mode="after")
     def _one_task(self):
-        if (self.points is None) == (self.function is None):
-            raise ValueError("give 'points' (a path) or 'function' (function generation)")
+        if sum(t is not None for t in (self.points, self.function, self.motion)) != 1:
+            raise ValueError(
+                "give one of 'points' (a path), 'motion' (poses) or 'function' (function "
+                "generation)"
+            )
         return self
 
 

@@ -1,9 +1,10 @@
-"""Synthesis runs of a model file: a four-bar or a slider-crank made to draw a path, or a
-four-bar to generate a function (:func:`mixdyn.synthesize`).
+"""Synthesis runs of a model file: a four-bar or a slider-crank made to draw a path or carry
+its coupler through poses, or a four-bar to generate a function (:func:`mixdyn.synthesize`).
 
 A ``synthesis`` run describes the task (the linkage, ``four_bar`` or ``slider_crank``, the
 target points, the timing, bounds of the linkage's numbers, the least transmission angle),
 how the links weigh and how the motor torque counts, and the search (starts, seed); or, with
+``motion:``, the coupler's poses instead of points (:mod:`.synthesis_motion`); or, with
 ``function:``, a function task (:mod:`.synthesis_function`). It needs no mechanism in the
 file: a file whose runs are all synthesis runs may have no bodies (``mixdyn check`` then
 reports no mechanism).
@@ -46,6 +47,7 @@ from ..synthesis import (
     FunctionSynthesis,
     FunctionTask,
     Masses,
+    MotionTask,
     Objective,
     PathTask,
     SliderCrank,
@@ -72,6 +74,7 @@ _COLUMN_KINDS = {
     "torque_rms": "torque",
     "torque_peak": "torque",
     "min_transmission": "angle",
+    "coupler_angle": "angle",
 }
 _SI_LABELS = {"length": "m", "angle": "rad", (2, 0, 0): "m²", "torque": "N·m"}
 
@@ -134,7 +137,7 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
         si = functools.partial(_si, runner)
         task = function_task(runner, path, r, si)
         return SynthesisPlan(r, index, np.zeros(1), (), task=task, objective=None)
-    points = np.array(
+    points = None if r.points is None else np.array(
         [[_si(runner, v, "length", (*path, "points", i, k)) for k, v in enumerate(p)]
          for i, p in enumerate(r.points)]
     )  # fmt: skip
@@ -157,13 +160,19 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             _si(runner, v, kind, (*path, "bounds", name, k)) for k, v in enumerate(ends)
         )
     min_mu = _si(runner, r.min_transmission, "angle", (*path, "min_transmission"))
-    try:
-        task = PathTask(
-            points, timing=timing, bounds=bounds, min_transmission=min_mu, linkage=linkage
-        )
-    except ModelError as e:
-        where = ("bounds", e.element) if e.element in bounds else (e.element,)
-        runner.fail((*path, *where) if e.element else path, e.message, "")
+    if r.motion is not None:
+        from .synthesis_motion import motion_task
+
+        options = {"bounds": bounds, "min_transmission": min_mu, "linkage": linkage}
+        task = motion_task(runner, path, r, functools.partial(_si, runner), options)
+    else:
+        try:
+            task = PathTask(
+                points, timing=timing, bounds=bounds, min_transmission=min_mu, linkage=linkage
+            )
+        except ModelError as e:
+            where = ("bounds", e.element) if e.element in bounds else (e.element,)
+            runner.fail((*path, *where) if e.element else path, e.message, "")
     masses = None
     if r.masses is not None:
         mp = (*path, "masses")
@@ -226,13 +235,22 @@ def _title(task) -> str:
     return getattr(task, "linkage", FourBar).TITLE
 
 
+def _task_name(task) -> str:
+    """``"path"``, ``"motion"`` or ``"function"``: what the task generates."""
+    if isinstance(task, FunctionTask):
+        return "function"
+    return "motion" if isinstance(task, MotionTask) else "path"
+
+
 def candidates_table(out: Synthesis):
     """``(names, units, rows)``: a row per candidate, best first (SI); the motor torque's
-    columns where the links weigh."""
+    columns where the links weigh, a motion's carried body's angle in the coupler."""
     names = [*out.task.linkage.NAMES, "branch", "theta_first", "theta_last", "error", "score"]
     if out.objective.masses is not None:
         names += ["torque_rms", "torque_peak"]
     names.append("min_transmission")
+    if isinstance(out.task, MotionTask):
+        names.append("coupler_angle")
     rows = []
     for c in out.candidates:
         row = c.numbers()
@@ -244,6 +262,7 @@ def candidates_table(out: Synthesis):
             torque_rms=c.torque_rms,
             torque_peak=c.torque_peak,
             min_transmission=c.min_transmission,
+            coupler_angle=c.coupler_angle,
         )
         rows.append([row[n] for n in names])
     units = {n: _SI_LABELS[k] for n, k in _COLUMN_KINDS.items() if n in names}
@@ -277,7 +296,7 @@ def _report(runner, plan, out, names, units, table, seconds, outputs):
     from ..io.results import run_settings
     from ..viz.report import Report, Table, number
 
-    task = "function" if isinstance(out, FunctionSynthesis) else "path"
+    task = _task_name(out.task)
     facts = [
         ("file", str(outputs.file)),
         ("run", f"{plan.name} (synthesis, {task} generation)"),
@@ -380,7 +399,7 @@ class SynthesisKind(RunKind):
             "unit_system": {"length": "m", "mass": "kg", "time": "s", "angle": "rad"},
             "settings": r.model_dump(mode="json"),
             "synthesis": {
-                "task": "function" if function else "path",
+                "task": _task_name(out.task),
                 "starts": out.starts,
                 "feasible": out.feasible,
                 "candidates": len(out.candidates),
@@ -419,9 +438,12 @@ class SynthesisKind(RunKind):
             )
         timing = "timing free" if plan.task.timing is None else "timing given"
         what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
+        through = f"{len(plan.task.points)} points, {timing}"
+        if isinstance(plan.task, MotionTask):
+            through = f"{len(plan.task.poses)} poses (L = {plan.task.weight_length:.4g} m)"
         return (
             f"run [bold]{esc(r.name)}[/bold] (synthesis): a {_title(plan.task)} through "
-            f"{len(plan.task.points)} points, {timing}{what}, {r.starts} starts, seed {r.seed}"
+            f"{through}{what}, {r.starts} starts, seed {r.seed}"
         )
 
     def task(self, plan: SynthesisPlan, mode: str) -> tuple[str, float | None]:
@@ -452,7 +474,7 @@ class SynthesisKind(RunKind):
         if isinstance(out, FunctionSynthesis):
             best = f"best angle error {c.error:.3g} rad²"
         else:
-            best = f"best path error {c.error:.3g} m²"
+            best = f"best {_task_name(out.task).replace('motion', 'pose')} error {c.error:.3g} m²"
             if np.isfinite(c.torque_rms):
                 best += f", motor torque RMS {c.torque_rms:.4g} N·m"
         return (
