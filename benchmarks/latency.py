@@ -14,7 +14,12 @@ Scenarios:
   value each time), the cache filled by a run of the file before the edit;
 - ``api-second``: a Python process building the paper's mechanism with the Python API
   (``tests/fixtures``, the paper's loads) and calling ``md.forward`` on it as the file's
-  forward run does, the cache filled by a first process.
+  forward run does, the cache filled by a first process;
+- ``check``: ``mixdyn check`` of the edited copy (a new number each time) in its own process
+  (``MIXDYN_SERVER=0``), the cache filled;
+- ``check-served``: the same answered by a command server started before
+  (``MIXDYN_SERVER=1``; a revision without one runs it in its own process);
+- ``show-served``: ``mixdyn show examples/antonya.yaml -o OUT.png``, answered likewise.
 
 Usage::
 
@@ -38,6 +43,9 @@ ROOT = pathlib.Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "antonya.yaml"
 #: Targets of issue 12 [s].
 TARGETS = {"cli-empty": 8.0, "cli-warm": 2.0, "cli-changed": 2.5, "api-second": 2.0}
+#: Targets of issue 32 ("check and show start in well under a second warm") [s].
+TARGETS.update({"check": 1.0, "check-served": 0.5, "show-served": 0.5})
+SERVED = ("check-served", "show-served")
 XLA_FLAGS = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
 
 API_SCRIPT = """
@@ -106,6 +114,10 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
     script = pathlib.Path(py).with_name("mixdyn")
     cli = [str(script), "run"] if script.exists() else [py, "-m", "mixdyn.cli", "run"]
     out = {v: {} for v in srcs}
+    # A command server's socket path must stay short (about 100 bytes): a folder in /tmp.
+    servers = pathlib.Path(
+        tempfile.mkdtemp(prefix="mxl", dir="/tmp" if os.name == "posix" else None)
+    )
     with tempfile.TemporaryDirectory(prefix="mixdyn-latency-") as tmp_:
         tmp = pathlib.Path(tmp_)
         result = tmp / "out"
@@ -121,6 +133,25 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
                 _time([*cli, str(_changed(tmp, None)), "--out", str(result)], env[v], tmp)
             if "api-second" in only:
                 _time([py, str(scripts[v])], api_env[v], tmp)
+        own = {v: dict(env[v], MIXDYN_SERVER="0") for v in srcs}
+        served = {v: dict(env[v], MIXDYN_SERVER="1", MIXDYN_SERVER_DIR=str(servers)) for v in srcs}
+        if set(SERVED) & set(only):
+            for v in srcs:
+                _time([*cli[:-1], "check", str(_changed(tmp, None))], own[v], tmp)  # its programs
+                _time([*cli[:-1], "show", str(EXAMPLE), "-o", str(tmp / "s.png")], own[v], tmp)
+                start = subprocess.run(
+                    [*cli[:-1], "server", "start"],
+                    env=served[v],
+                    cwd=tmp,
+                    capture_output=True,
+                    text=True,
+                    timeout=300,
+                )
+                if start.returncode == 0:  # a revision with a command server
+                    _time([*cli[:-1], "check", str(_changed(tmp, None))], served[v], tmp)
+                    _time(
+                        [*cli[:-1], "show", str(EXAMPLE), "-o", str(tmp / "s.png")], served[v], tmp
+                    )
         for k in range(repeat):
             changed = _changed(tmp, k)
             for v, src in srcs.items():
@@ -143,6 +174,25 @@ def measure(srcs: dict[str, pathlib.Path], repeat: int, only) -> dict[str, dict[
                     t.setdefault("api-second", []).append(
                         _time([py, str(scripts[v])], api_env[v], tmp)
                     )
+                for name, how in (("check", own), ("check-served", served)):
+                    if name in only:
+                        t.setdefault(name, []).append(
+                            _time([*cli[:-1], "check", str(changed)], how[v], tmp)
+                        )
+                if "show-served" in only:
+                    png = str(tmp / "shown.png")
+                    t.setdefault("show-served", []).append(
+                        _time([*cli[:-1], "show", str(EXAMPLE), "-o", png], served[v], tmp)
+                    )
+        for v in srcs:
+            subprocess.run(
+                [*cli[:-1], "server", "stop"],
+                env=served[v],
+                cwd=tmp,
+                capture_output=True,
+                timeout=120,
+            )
+    shutil.rmtree(servers, ignore_errors=True)
     return out
 
 
