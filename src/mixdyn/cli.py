@@ -410,6 +410,15 @@ def command(args: list[str] | None) -> int:
     return 0
 
 
+def serve(path: str) -> None:
+    """The command server's process (:mod:`mixdyn.runtime._server`): prepared as the
+    command's own, it answers command lines at the socket ``path`` with :func:`command`."""
+    from .runtime import _server
+
+    prepare_command()
+    _server.serve(pathlib.Path(path), command)
+
+
 def _exit_code(code) -> int:
     """The exit code :class:`SystemExit` gives for ``code``: ``None`` is 0, a text is printed
     on stderr and gives 1."""

@@ -46,7 +46,7 @@ def _served(args, cwd, env, tmp_path):
     names[0].write_text("")
     files = [open(names[0]), open(names[1], "w"), open(names[2], "w")]  # noqa: SIM115
     answered = []
-    thread = threading.Thread(target=lambda: answered.append(_server._answer(server, cli)))
+    thread = threading.Thread(target=lambda: answered.append(_server._answer(server, cli.command)))
     try:
         thread.start()
         code = _server._ask(
@@ -138,9 +138,14 @@ def test_the_command_starts_a_server_and_is_answered_by_it(tmp_path):
         assert shown[0] == 0
         assert _mixdyn(["show", str(model), "-o", str(tmp_path / "own.png")], own_env)[0] == 0
         assert (tmp_path / "served.png").read_bytes() == (tmp_path / "own.png").read_bytes()
-        answered = [line.split()[2:4] for line in log.read_text().splitlines()]
-        assert answered == [["check:", "exit"], ["check:", "exit"], ["show:", "exit"]]
-        assert [line.split()[4] for line in log.read_text().splitlines()] == ["0", "2", "0"]
+        lines = log.read_text().splitlines()
+        assert lines[0].split()[2:4] == ["ready", "in"]
+        answered = [line.split()[2:5] for line in lines[1:]]
+        assert answered == [
+            ["check:", "exit", "0"],
+            ["check:", "exit", "2"],
+            ["show:", "exit", "0"],
+        ]
         assert _mixdyn(["server", "stop"], env)[1].strip() == "stopped the command server"
         assert not sock.exists()
     finally:

@@ -243,7 +243,7 @@ def start(path: pathlib.Path, environ=os.environ) -> bool:
         env["MIXDYN_SERVER_DIR"] = environ["MIXDYN_SERVER_DIR"]
     try:
         subprocess.Popen(
-            [sys.executable, "-m", "mixdyn.runtime._server", str(path)],
+            [sys.executable, "-c", "import sys, mixdyn.cli as c; c.serve(sys.argv[1])", str(path)],
             stdin=subprocess.DEVNULL,
             stdout=log,
             stderr=log,
@@ -288,15 +288,13 @@ def running(environ=os.environ) -> bool:
 
 
 # --------------------------------------------------------------------------- the server
-def serve(path: pathlib.Path, idle: float = IDLE_SECONDS) -> None:
-    """Import what the served commands need, listen at ``path`` and answer commands one at
-    a time until ``idle`` seconds pass without one, :data:`MAX_COMMANDS` are answered or a
-    stop is asked for. Returns at once where another server listens at ``path``."""
+def serve(path: pathlib.Path, command, idle: float = IDLE_SECONDS) -> None:
+    """Listen at ``path`` and answer commands one at a time with ``command`` (a function of
+    the words after ``mixdyn``, giving the exit code: :func:`mixdyn.cli.command`) until
+    ``idle`` seconds pass without one, :data:`MAX_COMMANDS` are answered or a stop is asked
+    for. Returns at once where another server listens at ``path``."""
     t0 = time.perf_counter()
-    from .. import cli
-
-    cli.prepare_command()
-    _warm()
+    _warm(command)
     listener = _listen(path)
     print(
         f"{time.strftime('%Y-%m-%d %H:%M:%S')} ready in {time.perf_counter() - t0:.1f} s",
@@ -318,7 +316,7 @@ def serve(path: pathlib.Path, idle: float = IDLE_SECONDS) -> None:
                 continue
             with conn:
                 try:
-                    if not _answer(conn, cli):
+                    if not _answer(conn, command):
                         break
                 except KeyboardInterrupt:  # a client's Ctrl-C after its command ended
                     continue
@@ -353,7 +351,7 @@ def _listen(path: pathlib.Path) -> socket.socket | None:
     return None
 
 
-def _warm() -> None:
+def _warm(command) -> None:
     """Run ``check`` and ``show`` once on a small model, output discarded: the first command
     of a process pays for imports and first traces that every command needs."""
     import tempfile
@@ -365,8 +363,6 @@ def _warm() -> None:
         "joints:\n  - {type: revolute, name: pivot, point_i: ground, point_j: rod.pivot}\n"
         "runs:\n  - {name: swing, kind: forward, time: {span: [0, 1 s], n: 11}}\n"
     )
-    from .. import cli
-
     with tempfile.TemporaryDirectory() as tmp:
         model = pathlib.Path(tmp, "warm.yaml")
         model.write_text(text)
@@ -377,12 +373,12 @@ def _warm() -> None:
         ):
             for args in (["check", str(model)], ["show", str(model)]):
                 try:
-                    cli.command(args)
+                    command(args)
                 except Exception as e:  # the command meets it again, and reports it
                     print(f"warming up with {args[0]}: {e!r}", file=sys.__stdout__, flush=True)
 
 
-def _answer(conn: socket.socket, cli) -> bool:
+def _answer(conn: socket.socket, command) -> bool:
     """Answer one connection; False where the server should stop."""
     try:
         head, fds, _, _ = socket.recv_fds(conn, 8, 3)
@@ -401,7 +397,7 @@ def _answer(conn: socket.socket, cli) -> bool:
             return True
         conn.sendall(_ACCEPTED + struct.pack("!i", os.getpid()))
         t0 = time.perf_counter()
-        code = _run(request, fds, cli)
+        code = _run(request, fds, command)
         with contextlib.suppress(OSError):
             conn.sendall(_EXITED + struct.pack("!i", code))
         print(  # the server's log
@@ -417,7 +413,7 @@ def _answer(conn: socket.socket, cli) -> bool:
             os.close(fd)
 
 
-def _run(request: dict, fds: list[int], cli) -> int:
+def _run(request: dict, fds: list[int], command) -> int:
     """Run the request's command line on its streams, folder and environment; its exit
     code. Everything borrowed is given back, whatever the command does."""
     import traceback
@@ -437,7 +433,7 @@ def _run(request: dict, fds: list[int], cli) -> int:
         sys.stdin, sys.stdout, sys.stderr = _streams(request.get("streams"))
         with warnings.catch_warnings():
             try:
-                code = cli.command(sys.argv[1:])
+                code = command(sys.argv[1:])
             except KeyboardInterrupt:
                 sys.stderr.write("\nAborted!\n")
                 code = 130
@@ -477,7 +473,3 @@ def _streams(kinds) -> tuple:
             stream.reconfigure(line_buffering=os.isatty(fd) or fd == 2, write_through=write_through)
         out.append(stream)
     return tuple(out)
-
-
-if __name__ == "__main__":  # pragma: no cover (started by :func:`start`)
-    serve(pathlib.Path(sys.argv[1]))
