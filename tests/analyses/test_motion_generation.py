@@ -111,12 +111,14 @@ def test_bad_motion_tasks_are_named(poses, options, words):
 
 
 @pytest.mark.slow  # long: run by CI's slow set (the search and the written model compile)
-def test_a_search_reaches_the_poses_and_its_model_file_passes_them(tmp_path):
+@pytest.mark.parametrize("linkage, body", [("four_bar", "coupler"), ("slider_crank", "rod")])
+def test_a_search_reaches_the_poses_and_its_model_file_passes_them(linkage, body, tmp_path):
     """From random starts the batched Levenberg-Marquardt search reaches error <= 1e-8 on the
-    three poses, in order of the crank angle; its best four-bar, written as a model file and
+    three poses, in order of the crank angle; its best linkage, written as a model file and
     assembled by md.kinematic (Newton's assembly of the written model: a second method),
-    puts coupler.P on the poses' points and coupler.phi on their angles."""
-    out = md.synthesize(MotionTask(POSES), starts=64, seed=0, chunk=64)
+    puts the coupler's P on the poses' points and its angle on theirs (a slider-crank's
+    coupler: the connecting rod)."""
+    out = md.synthesize(MotionTask(POSES, linkage=linkage), starts=64, seed=0, chunk=64)
     best = out.best
     assert best.error <= 1e-8
     assert np.all(np.diff(best.angles) >= 0) and best.angles[-1] - best.angles[0] <= 2 * np.pi
@@ -126,7 +128,7 @@ def test_a_search_reaches_the_poses_and_its_model_file_passes_them(tmp_path):
     loaded = md.load(path)
     t = (best.angles - best.angles[0]) / out.objective.speed
     run = md.kinematic(loaded.model, t)
-    p, _, _ = run.point("coupler.P")
+    p, _, _ = run.point(f"{body}.P")
     np.testing.assert_allclose(p, POSES[:, :2], atol=1e-7)
-    turn = np.angle(np.exp(1j * (np.asarray(run["coupler.phi"]) - POSES[:, 2])))
+    turn = np.angle(np.exp(1j * (np.asarray(run[f"{body}.phi"]) - POSES[:, 2])))
     assert np.max(np.abs(turn)) < 1e-7

@@ -84,11 +84,11 @@ class SynthesisPlan(Plan):
     """A checked synthesis run: the task and objective built (SI) and the search's settings.
 
     Attributes:
-        task: the path task, or the function task.
+        task: the path task, the motion task or the function task.
         objective: the path's objective (None for a function).
     """
 
-    task: PathTask | FunctionTask | None = None
+    task: PathTask | MotionTask | FunctionTask | None = None
     objective: Objective | None = None
 
     @property

@@ -1,10 +1,11 @@
-"""Motion generation: a four-bar's coupler carried through precision poses, in their order.
+"""Motion generation: a linkage's coupler carried through precision poses, in their order.
 
 A pose is where the carried body is and how it is turned: its reference point ``P_i = (x_i,
 y_i)`` [length] (the coupler point) and the angle ``alpha_i`` [rad] of a line fixed in it. The
-body is the coupler, and that line makes an unknown but constant angle ``gamma`` (the coupler
+body is the coupler (a four-bar's, or a slider-crank's connecting rod with ``linkage=
+"slider_crank"``), and that line makes an unknown but constant angle ``gamma`` (the coupler
 angle of a result, :attr:`~._search.Candidate.coupler_angle`) with the coupler's own line from
-its crank pin ``A`` towards its rocker pin ``B``: at the crank's angle ``theta_i`` the body's
+its crank pin ``A`` towards its other pin ``B``: at the crank's angle ``theta_i`` the body's
 angle is ``phi_i = phi3(theta_i) + gamma``. The crank's angle at each pose is an unknown (one
 per pose), as in a timing-free path task; ``gamma`` is not a variable of the search but the
 least-squares offset of the poses' unit vectors (variable projection, :func:`offset`),
@@ -138,9 +139,9 @@ class MotionTask:
         return self.path.box()
 
     def error(self, linkage, angles) -> float:
-        """The error of ``linkage`` (a :class:`~._fourbar.FourBar`, unbatched) with the crank
-        at ``angles`` (N,) [rad] at the poses [length**2] (the module's formula, ``gamma``
-        the least-squares offset)."""
+        """The error of ``linkage`` (a :class:`~._fourbar.FourBar` or the task's other linkage
+        type, unbatched) with the crank at ``angles`` (N,) [rad] at the poses [length**2] (the
+        module's formula, ``gamma`` the least-squares offset)."""
         gaps, turns = _pose_gaps(linkage, jnp.asarray(angles, dtype=float), self.poses)
         return float(jnp.sum(gaps**2) + self.weight_length**2 * jnp.sum(turns**2))
 
