@@ -422,6 +422,8 @@ class SynthesisKind(RunKind):
                 options.update(axes=("crank angle", "rocker angle"), error_unit="rad²")
             else:
                 asked, curves, options = out.task.points, [_curves(c) for c in drawn], {}
+                if isinstance(out.task, MotionTask):
+                    options["angles"] = out.task.angles
             outputs.painter.draw(
                 "synthesis", asked, curves, errors, folder / "synthesis.png", title=title, **options
             )

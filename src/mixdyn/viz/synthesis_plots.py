@@ -1,6 +1,6 @@
-"""The figure of a synthesis: the target points and the candidates' coupler curves, or a
-function's asked angle pairs and the candidates' rocker angles (PNG, SVG or PDF), without
-pyplot's global state.
+"""The figure of a synthesis: the target points (a motion's poses with their angles) and the
+candidates' coupler curves, or a function's asked angle pairs and the candidates' rocker angles
+(PNG, SVG or PDF), without pyplot's global state.
 
 Loaded by the figure worker by its path (:mod:`mixdyn.runtime._worker`): NumPy and matplotlib only.
 """
@@ -24,6 +24,7 @@ def plot_synthesis(
     equal: bool = True,
     title: str | None = None,
     dpi: int = 120,
+    angles=None,
 ) -> pathlib.Path:
     """The targets and the candidates' coupler curves, the best (the first) bold, written to
     ``path`` (``.png``, ``.svg`` or ``.pdf``).
@@ -42,6 +43,8 @@ def plot_synthesis(
         equal: equal scales on both axes (a path).
         title: the figure's title.
         dpi: resolution of a PNG.
+        angles: (N,) the asked angle at each target [rad] (a motion's poses), drawn as a
+            short line from the target in that direction (None: points only).
     """
     from matplotlib import colormaps
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -64,6 +67,15 @@ def plot_synthesis(
                 color=color, label=label)  # fmt: skip
         ax.plot(*rest.T, ":", lw=1.0, alpha=0.8 if best else 0.4, color=color)
     ax.plot(*np.asarray(targets).T, "x", ms=9, mew=2, color="tab:red", label="asked")
+    if angles is not None:
+        pts = np.asarray(targets, dtype=float)
+        drawn = np.concatenate([pts, *(np.asarray(c[0]) for c in curves)])
+        span = np.nanmax(drawn, axis=0) - np.nanmin(drawn, axis=0)
+        reach = 0.12 * max(float(np.max(span)), 1e-12)
+        a = np.asarray(angles, dtype=float)
+        tips = pts + reach * np.column_stack([np.cos(a), np.sin(a)])
+        for p, q in zip(pts, tips, strict=True):
+            ax.plot(*np.column_stack([p, q]), "-", lw=2.0, color="tab:red")
     if equal:
         ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel(f"{axes[0]} [{unit}]")
