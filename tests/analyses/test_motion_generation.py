@@ -99,7 +99,7 @@ def test_the_size_is_the_poses_spread():
         (POSES[:2], {}, "three or more"),
         (POSES[:, :2], {}, "three or more"),
         (np.where(np.eye(3, dtype=bool), np.nan, POSES), {}, "finite"),
-        (np.tile([1.0, 2.0, 0.0], (3, 1)), {}, "coincide"),
+        (np.tile([1.0, 2.0, 0.0], (3, 1)) + [0, 0, 0.1] * np.arange(3)[:, None], {}, "coincide"),
         (POSES, {"length": -1.0}, "length"),
         (POSES, {"bounds": {"r9": (1, 2)}}, "r9"),
         (POSES, {"min_transmission": 2.0}, "pi/2"),

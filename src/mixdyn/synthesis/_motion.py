@@ -100,10 +100,11 @@ class MotionTask:
                 raise ModelError(f"length must be > 0, got {self.length!r}", "length")
             object.__setattr__(self, "length", float(self.length))
         spread = np.max(np.linalg.norm(poses[:, :2] - poses[:, :2].mean(axis=0), axis=1))
-        if self.length is None and not spread > 1e-9 * max(1.0, np.max(np.abs(poses[:, :2]))):
+        if not spread > 1e-9 * max(1.0, np.max(np.abs(poses[:, :2]))):
             raise ModelError(
-                "the poses' points coincide: give the characteristic length (length) of the "
-                "angle error and of the search",
+                "the poses' points coincide: the coupler would only turn about that point, "
+                "which no four-bar or slider-crank does (every centre point is that point); "
+                "give poses at distinct points",
                 "poses",
             )
 
@@ -129,9 +130,8 @@ class MotionTask:
 
     @property
     def size(self) -> float:
-        """The search's scale [length]: the poses' size, at least :attr:`length` where the
-        points coincide."""
-        return max(self.path.size, self.length or 0.0)
+        """The search's scale [length]: the poses' size (:attr:`PathTask.size`)."""
+        return self.path.size
 
     def box(self) -> np.ndarray:
         """(len(NAMES), 2) the bounds of every number (:meth:`PathTask.box` of the poses'
