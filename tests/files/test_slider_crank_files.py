@@ -11,12 +11,14 @@ from typer.testing import CliRunner
 
 import mixdyn as md
 import mixdyn.io as mio
+from fixtures import EXAMPLES
 from mixdyn.cli import app
 from mixdyn.io import FileError
 from mixdyn.runs import Runner
 from mixdyn.runs.report import report
 from mixdyn.synthesis import SliderCrank, coupler_curve
 
+EXAMPLE = EXAMPLES / "synthesis_slider.yaml"
 HEAD = "mixdyn: 1\nunits: {length: mm, mass: kg, time: s}\nruns:\n  - name: path\n"
 
 
@@ -45,6 +47,20 @@ def test_the_linkage_and_its_bounds_are_read_in_si(tmp_path):
     path = tmp_path / "sc.yaml"
     path.write_text(text)
     assert any("a slider-crank through 3 points" in line for line in report(path))
+
+
+def test_the_example_is_checked_without_a_mechanism():
+    """``examples/synthesis_slider.yaml``: no mechanism, a slider-crank's run described, its
+    points in SI (mm -> m by hand), the slider's mass and the speed read."""
+    lines = list(report(EXAMPLE))
+    assert "no mechanism" in lines[0] and lines[-1].endswith("ok[/green]")
+    assert any("a slider-crank through 5 points" in line for line in lines)
+    plan = Runner(mio.read(EXAMPLE)).plans["path"]
+    assert plan.task.linkage is SliderCrank
+    np.testing.assert_allclose(plan.task.points[0], [0.15, 0.08], rtol=1e-15)
+    assert plan.objective.masses.slider == 0.5
+    assert plan.objective.speed == pytest.approx(2 * np.pi)
+    assert plan.task.min_transmission == pytest.approx(np.pi / 6, rel=1e-15)
 
 
 @pytest.mark.parametrize(
