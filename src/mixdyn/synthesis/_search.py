@@ -397,12 +397,13 @@ def synthesize(
     polish: bool = True,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis:
-    """Four-bars whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
+    """Linkages whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
     coupler passes its poses (a :class:`~._motion.MotionTask`), or whose rocker follows its
-    crank as asked (a :class:`~._function.FunctionTask`), best first.
+    crank as asked (a :class:`~._function.FunctionTask`), best first: four-bars, or the
+    slider-cranks of a path or motion task made with ``linkage="slider_crank"``.
 
     Args:
-        task: the path task (targets, timing, bounds, transmission angle), the motion task
+        task: the path task (linkage, targets, timing, bounds, transmission angle), the motion task
             (poses, bounds, transmission angle: a timing-free path task whose coupler angles
             count too, :mod:`._motion`), or the function task (input-output angle pairs;
             :func:`~._function.synthesize_function`, which takes ``starts``, ``seed``,
