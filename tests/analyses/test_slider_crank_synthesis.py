@@ -9,7 +9,8 @@ independent truths.
   infeasible slider-crank finite and its infeasibility measured;
 * a search that recovers a known slider-crank from points sampled on its coupler curve, with
   prescribed and with free timing, and its written model file passing the points (slow);
-* the motor torque of the energy balance against md.inverse's multipliers (slow).
+* the motor torque of the energy balance against md.inverse's multipliers, its derivatives
+  against finite differences, and the torque objective (slow).
 """
 
 import jax
@@ -186,6 +187,26 @@ def test_motor_torque_is_mixdyns_inverse_dynamics():
         tau = np.asarray(motor_torque(sc, masses, start + speed * t, speed))
         assert np.max(np.abs(inv["motor"] - tau)) < 1e-9 * np.max(np.abs(tau))
         assert np.max(np.abs(tau)) > 1.0  # a real load
+
+
+@pytest.mark.slow  # long: run by CI's slow set (third derivatives through the assembly)
+def test_torque_derivatives_are_finite_differences():
+    """d tau / d(numbers, theta2): the torque is itself a second derivative of the assembly
+    (the slider's acceleration along the slide among its terms)."""
+    masses = Masses(density=1.5, payload=0.2, slider=0.4)
+
+    def f(x):
+        return motor_torque(slider_crank(-1.0, x[:8]), masses, x[8:], 3.0)
+
+    x = jnp.concatenate([jnp.asarray(V), jnp.array([0.4, 2.5, -1.0])])
+    jf = np.asarray(jax.jit(jax.jacfwd(f))(x))
+    jr = np.asarray(jax.jit(jax.jacrev(f))(x))
+    g = jax.jit(f)
+    h = 1e-6
+    fd = np.stack([(g(x.at[k].add(h)) - g(x.at[k].add(-h))) / (2 * h) for k in range(len(x))], -1)
+    scale = np.max(np.abs(fd))
+    assert np.max(np.abs(jf - fd)) < 1e-6 * scale
+    assert np.max(np.abs(jr - jf)) < 1e-12 * scale
 
 
 @pytest.mark.slow  # long: run by CI's slow set (the torque term compiles third derivatives)
