@@ -146,6 +146,9 @@ def test_a_slider_cranks_task_is_checked_by_its_numbers():
     assert box.shape == (8, 2) and tuple(box[2]) == (-0.01, 0.02)
     with pytest.raises(ModelError, match="slider"):
         slider_crank_model(slider_crank(), Masses(density=1.0))  # a slider of no mass
+    task = PathTask(points, linkage="slider_crank")
+    with pytest.raises(ModelError, match="slider"):  # before any search
+        synthesize(task, Objective(masses=Masses(density=1.0)), starts=1)
 
 
 @pytest.mark.slow  # long: run by CI's slow set (two searches compile their programs)

@@ -51,6 +51,7 @@ from ._dynamics import Masses, motor_torque
 from ._fourbar import FourBar
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
+from ._slidercrank import SliderCrank
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask, Objective, PathTask
 
@@ -429,7 +430,7 @@ def synthesize(
 
     Raises:
         ModelError: a bad number of starts, chunk or step count; an objective for a
-            function task.
+            function task; a slider-crank's masses without a slider's mass.
     """
     if isinstance(task, FunctionTask):
         if objective is not None:
@@ -451,6 +452,13 @@ def synthesize(
     for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
         if int(value) < 1:
             raise ModelError(f"{label} must be at least 1, got {value!r}", label)
+    masses = objective.masses
+    if masses is not None and task.linkage is SliderCrank and not masses.slider > 0:
+        raise ModelError(
+            "a slider-crank's slider needs a mass > 0 with the links' masses (its model's "
+            "inverse dynamics): give Masses(slider=...)",
+            "masses",
+        )
     started = time.perf_counter()
     chunk = min(int(chunk), int(starts))
     box = task.box()
