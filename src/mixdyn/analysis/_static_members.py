@@ -22,6 +22,7 @@ its stiffness' smallest eigenvalues by :func:`~.statics._reduced_stiffness` then
 from __future__ import annotations
 
 import dataclasses
+import time
 from collections.abc import Callable, Sequence
 
 import jax
@@ -60,10 +61,21 @@ MAX_HALVINGS = 60
 
 
 def _equilibria(model, c, q_start, L, ts, tol, max_iter):
-    """One member's equilibria at the times ``ts`` (N,), each from the one before, as
-    :class:`~.statics.QuasiStatic` finds them: per time ``(q, lam, iterations, reactions,
-    contacts, ok)``; ``ok`` False where the single run would act otherwise (module
-    docstring)."""
+    """One member's equilibria at the times ``ts``, each from the one before, as
+    :class:`~.statics.QuasiStatic` finds them.
+
+    Args:
+        model, c: the member's model and its constraint set of independent rows (every row).
+        q_start: (nq,) the set-up's assembled start [model units].
+        L: the model's length scale [length] (:func:`~._assembly.length_scale`).
+        ts: (N,) the output times [time].
+        tol, max_iter: the analysis' Newton tolerance [-] and iterations at most per time.
+
+    Returns:
+        Per time (leading axis N): ``q`` (nq,), ``lam`` (m,), the Newton iterations, the
+        joints' reactions (n_joints, 3), the joints' contact columns, and ``ok``: False
+        where the single run would act otherwise (module docstring).
+    """
     nq, m = model.nq, c.m
     D = jnp.tile(jnp.stack([L, L, jnp.ones_like(L)]), len(model.bodies))
 
@@ -88,6 +100,8 @@ def _equilibria(model, c, q_start, L, ts, tol, max_iter):
         """The joints closed from ``q`` as :func:`~._assembly.assemble` closes them
         (damped Gauss-Newton, its step halved while the residual grows), and whether they
         closed."""
+        if joints.n_full == 0:
+            return q, jnp.array(True)
         tol_a = ASSEMBLY_TOL * L
 
         def residual(q):
@@ -331,17 +345,22 @@ def run(
     on_member: Callable[[int], None] | None,
     describe: Callable[[int], str],
     shared: bool = False,
+    seconds: dict | None = None,
 ) -> tuple[StaticStack, LazyResults, dict[int, MixdynError]] | None:
     """The members of a quasi-static sweep set up, run by one vectorized program and
     screened: ``(stack, results, errors)``; None where their constraint sets differ in
     structure, their values in ``max_iter``, a member's start keeps fewer than every
     constraint row, or a joint is a gear mesh (then member by member). ``value``: the
     analysis value, or one per member; ``shared``: the members differ only in masses,
-    inertias and forces (and share one value), member 0's start is every member's.
+    inertias and forces (and share one value), member 0's start is every member's;
+    ``seconds``: if given, filled with the wall times of the set-up, the program
+    (``equilibria``) and the finishing [s].
 
     Raises:
         ModelError: a member's input error (with its index in a note).
     """
+    clock = time.perf_counter()
+    seconds = {} if seconds is None else seconds
     ts = output_times(t, minimum=1)
     t0, count = float(ts[0]), len(members)
     values = [value] * count if isinstance(value, QuasiStatic) else list(value)
@@ -377,12 +396,12 @@ def run(
     if len(errors) == count:
         stack = StaticStack(setup, count, ts, (), models)
         return (stack, *finished(count, np.zeros(0), stack.run, errors, on_member))
-    made = [None if s is None else s.start.constraints(independent_rows_only=True) for s in setups]
-    if not one_structure(made) or any(
-        s is not None and len(s.start.keep) != s.start.constraints().n_full for s in setups
-    ):
+    distinct = {id(s): s for s in setups if s is not None}
+    own = {k: _constants(s) for k, s in distinct.items()}  # once a set-up
+    made = [None if s is None else own[id(s)][0] for s in setups]
+    if not one_structure(made) or not all(every for _, _, every in own.values()):
         return None
-    L = np.array([length_scale(s.model) if s is not None else 1.0 for s in setups])
+    L = np.array([own[id(s)][1] if s is not None else 1.0 for s in setups])
     tol = np.array([v.tol for v in values])
 
     def program(idx: list[int]) -> tuple:
@@ -393,9 +412,19 @@ def run(
             CHUNK, model, c, q0, L[idx], jnp.asarray(ts), tol[idx], jnp.asarray(values[0].max_iter)
         )
 
+    seconds["setup"] = time.perf_counter() - clock
     stack = StaticStack(setup, count, ts, in_chunks(program, made, CHUNK), models)
-    build = _built(stack)
-    return (stack, *finished(count, stack.flagged(), build, errors, on_member))
+    seconds["equilibria"] = time.perf_counter() - clock - seconds["setup"]
+    done = finished(count, stack.flagged(), _built(stack), errors, on_member)
+    seconds["finishing"] = time.perf_counter() - clock - seconds["setup"] - seconds["equilibria"]
+    return (stack, *done)
+
+
+def _constants(setup: _setup.Setup) -> tuple:
+    """A set-up's constraint set of independent rows, its length scale [length] and whether
+    it keeps every row."""
+    c = setup.start.constraints(independent_rows_only=True)
+    return c, length_scale(setup.model), c.m == c.n_full
 
 
 def _built(stack: StaticStack) -> Callable[[int], Result]:

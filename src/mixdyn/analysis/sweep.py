@@ -242,7 +242,8 @@ class Sweep:
         parameters: member index -> the varied values (path -> value), empty for ``models=``.
         seconds: wall times [s]: ``total``; in process also ``setup`` (every member's start;
             one shared start when only masses, inertias and forces vary) and, on the
-            vectorized path, ``integration`` (the one program) and ``finishing``.
+            vectorized path, ``integration`` (the one program; a quasi-static sweep's:
+            ``equilibria``) and ``finishing``.
         stacked: on the array path, the members as one problem with a member axis
             (:class:`~._stacked.Stacked`; a kinematic sweep's:
             :class:`~._kinematic_members.KinematicStack`; a quasi-static sweep's:
@@ -528,11 +529,12 @@ def sweep(
         and batch_size is None
         and (len(members) >= CHUNK or _default_batch_size() is not None)
     ):
+        seconds = {}
         if value.name == "kinematic":
             held = _kinematic_members.run
         else:  # the start of an equilibrium does not see masses, inertias or forces
             shared = models is None and shares_start(model, vary)
-            held = functools.partial(_static_members.run, shared=shared)
+            held = functools.partial(_static_members.run, shared=shared, seconds=seconds)
         made = held(
             members, value, t, threads or os.cpu_count() or 1, on_member,
             lambda i: _describe(params, i),
@@ -540,7 +542,7 @@ def sweep(
         if made is not None:
             stack, results, errors = made
             named = {} if models is not None else dict(zip(vary, values, strict=True))
-            seconds = {"total": time.perf_counter() - started}
+            seconds["total"] = time.perf_counter() - started
             return Sweep(results, errors, params, seconds, stack, None, named)
     if client is not None:
         if not value.integrated:
