@@ -4,6 +4,8 @@ line (exit 2) before anything computes, the run's files from a known outcome; sl
 file's search recovers a slider-crank from points of its curve and its best.yaml, run by
 ``mixdyn run``'s kinematic analysis, passes them."""
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pandas as pd
 import pytest
@@ -16,7 +18,7 @@ from mixdyn.cli import app
 from mixdyn.io import FileError
 from mixdyn.runs import Runner
 from mixdyn.runs.report import report
-from mixdyn.synthesis import SliderCrank, coupler_curve
+from mixdyn.synthesis import SliderCrank, coupler_curve, transmission_cosine
 
 EXAMPLE = EXAMPLES / "synthesis_slider.yaml"
 HEAD = "mixdyn: 1\nunits: {length: mm, mass: kg, time: s}\nruns:\n  - name: path\n"
@@ -95,6 +97,25 @@ def test_a_bad_linkage_name_exits_2_from_the_command(tmp_path):
 
 # An offset slider-crank [m, rad] (as tests/analyses/test_slider_crank_synthesis.py's).
 V = np.array([0.1, 0.35, 0.04, 0.15, 0.08, 0.02, -0.01, 0.25])
+
+
+def test_the_figure_leaves_out_where_the_rod_cannot_reach_the_slide():
+    """The figure's rest of the turn (runs.synthesis._curves, in NumPy) is NaN exactly where
+    the closed form's |cos mu| > 1, for a slider-crank whose crank does not turn fully
+    (r2 + e > r3)."""
+    from mixdyn.runs.synthesis import _curves
+    from mixdyn.synthesis import Candidate
+
+    v = V.copy()
+    v[2] = 0.3  # offset 0.3: 0.1 + 0.3 > 0.35
+    sc = SliderCrank(*(np.float64(x) for x in v), np.float64(1.0))
+    c = Candidate(sc, np.array([-0.5, 0.5]), 0.0, 0.0, np.nan, np.nan, 0.5)
+    run, rest = _curves(c)
+    assert not np.isnan(run).any()
+    angles = jnp.linspace(0.5, 2 * np.pi - 0.5, 241)
+    cos_mu = np.asarray(jax.vmap(lambda a: transmission_cosine(sc, a))(angles))
+    assert np.any(np.abs(cos_mu) > 1) and np.any(np.abs(cos_mu[1:]) < 1)
+    np.testing.assert_array_equal(np.isnan(rest[:, 0]), np.abs(cos_mu) > 1)
 
 
 @pytest.mark.slow  # long: run by CI's slow set (the search compiles its programs)
