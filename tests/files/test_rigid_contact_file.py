@@ -1,5 +1,6 @@
-"""A rigid contact in a model file: a mixed run is refused before computing (exit 2, the run's
-line and the contact named, with the fix)."""
+"""A rigid contact in a model file: a mixed run by a fixed-step method is refused before
+computing (exit 2, the run's line and the contact named, with the fix; a mixed run by the
+projection method takes its impacts: ``tests/validation/test_mixed_impacts.py``)."""
 
 from __future__ import annotations
 
@@ -25,14 +26,16 @@ runs:
     kind: mixed
     prescribed: [{coordinate: ball.x, law: "0"}]
     unknown: [push]
+    method: baumgarte
+    dt: 1 ms
     time: {span: [0, 2], n: 201}
 """
 
 
-def test_a_mixed_run_with_a_rigid_contact_is_an_input_error(tmp_path):
+def test_a_mixed_run_with_a_rigid_contact_by_a_fixed_step_method_is_an_input_error(tmp_path):
     path = tmp_path / "ball.yaml"
     path.write_text(BALL)
-    res = CliRunner().invoke(app, ["check", str(path)])
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
     assert res.exit_code == 2, res.output
-    assert "ball.yaml:14: run 'drop': floor: is a rigid contact" in res.output
-    assert "mixed analysis does not take impacts; run a forward analysis" in res.output
+    assert "ball.yaml:14: run 'drop': floor: rigid contacts are integrated with the" in res.output
+    assert "projection method, not baumgarte: use method='projection'" in res.output

@@ -1,4 +1,4 @@
-"""Forward dynamics with rigid impacts: the motion integrated from impact to impact, each
+"""Forward and mixed dynamics with rigid impacts: the motion integrated from impact to impact, each
 impact's instant found by diffrax's events and its velocity jump solved with Newton's
 restitution over the constrained system.
 
@@ -27,6 +27,21 @@ constraint kept (``Phi_q qd+ + Phi_t = 0``) and the normal velocity reversed by 
 law (``G qd+ = -e v-``); ``P >= 0`` the contact's normal impulse [force * time] and
 ``Lambda`` the constraints' impulses (solved through the Schur complement
 ``A M^-1 A^T``, ``A = [Phi_q; G]``, in the least-squares sense where rows are redundant).
+
+In a mixed run (:mod:`.mixed`: ``p`` unknown forces of directions ``B`` (nq, p), ``p``
+prescribed motions ``Psi``) a prescribed motion's velocity cannot jump: its unknown force
+takes an impulse ``F`` [force * time] instead of a constraint's. The prescribed motions are
+the constraints' last ``p`` rows, their impulses acting along ``B`` rather than along
+``Psi_q^T``::
+
+    M (qd+ - qd-) = Phi_q^T Lambda + G^T P + B F,   Phi_q qd+ + Phi_t = 0,
+    Psi_q qd+ + Psi_t = 0,                           G qd+ = -e v-
+
+(the same system, its Schur complement ``A M^-1 D^T`` with ``A = [Phi_q; Psi_q; G]`` and
+``D = [Phi_q; B^T; G]``). An
+impulse's work is its value times the mean of its velocities before and after: the unknown
+forces' ``F . B^T (qd- + qd+) / 2`` counts with their work (``work.constraints``), the rest
+of the kinetic energy's jump with the impacts' (``work.impacts``).
 
 Several contact points touching at one instant (a row of balls, Newton's cradle) are
 resolved one after the other (sequential impacts): the point approaching fastest first,
@@ -63,6 +78,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..equations import force_directions
 from ..errors import (
     ImpactAccumulationError,
     ModelError,
@@ -74,7 +90,7 @@ from ..model._compliant import rigid_contacts
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
 from ._problem import Problem
-from ._resting import hold, holding, n_holds, normal_forces
+from ._resting import hold, hold_positions, holding, n_holds, normal_forces
 from .methods import Projection
 from .result import Partial, Result
 
@@ -226,16 +242,22 @@ def _segment(
 @cached_jit(optimize=False)  # a few times per run
 def _impact_state(problem: Problem, contacts, q, qd, t, tol):
     """At an impact: the positions and velocities projected on the constraints, the
-    constraint Jacobian (m, nq) and ``Phi_t`` (m,), the gaps (k,) and their gradients
-    (k, nq)."""
+    constraint Jacobian (m, nq), the rows along which the constraints' impulses act (m, nq:
+    the Jacobian's, but for a mixed problem's last ``p`` rows, the prescribed motions, whose
+    impulses act along the unknown forces' directions ``B^T``), ``Phi_t`` (m,), the gaps (k,)
+    and their gradients (k, nq)."""
     q, _ = problem.project_positions(q, t, tol)
     qd = problem.project_velocities(q, qd, t)
     c = problem.c
     J = c.phi_q(q, t) if c.m else jnp.zeros((0, q.shape[0]))
+    D = J
+    if problem.p:
+        B = force_directions(problem.model, problem.unknown, q, qd, t)
+        D = J.at[c.m - problem.p :].set(B.T)
     phit = c.phi_t(q, t) if c.m else jnp.zeros(0)
     g = _gaps(contacts, q)
     G = jax.jacfwd(lambda x: _gaps(contacts, x))(q)
-    return q, qd, J, phit, g, G
+    return q, qd, J, D, phit, g, G
 
 
 @cached_jit(optimize=False)  # a few times per run
@@ -278,28 +300,32 @@ def _longest_step(model, contacts, qd, dt_out, scale) -> float:
     return min(dt_out, PASS_FRACTION * size / speed)
 
 
-def impulse(Minv, J, phit, G, qd, e):
+def impulse(Minv, J, phit, G, qd, e, D=None):
     """The velocity jump of one impact at a contact point (see the module).
 
     Args:
         Minv: (nq,) inverse of the diagonal mass matrix.
         J: (m, nq) constraint Jacobian ``Phi_q``; phit: (m,) ``Phi_t``.
         G: (nq,) the gap's gradient; qd: (nq,) velocities before; e: restitution.
+        D: (m, nq) the rows along which the constraints' impulses act (default ``J``; a
+            mixed problem's prescribed motions: the unknown forces' directions ``B^T``).
 
     Returns:
         ``(qd+ (nq,), Lambda (m,), P)``: the velocities after, the constraints' impulses and
-        the normal impulse [force * time], with ``M (qd+ - qd-) = Phi_q^T Lambda + G^T P``.
+        the normal impulse [force * time], with ``M (qd+ - qd-) = D^T Lambda + G^T P`` and
+        ``J qd+ + Phi_t = 0``.
     """
     A = np.vstack([J, G[None, :]])
+    Dg = A if D is None else np.vstack([D, G[None, :]])
     v = float(G @ qd)
     b = np.concatenate([-(J @ qd + phit), [-(1.0 + e) * v]])
-    S = (A * Minv) @ A.T
+    S = (A * Minv) @ Dg.T
     x = np.linalg.lstsq(S, b, rcond=1e-13)[0]
-    dqd = Minv * (A.T @ x)
+    dqd = Minv * (Dg.T @ x)
     return qd + dqd, x[:-1], float(x[-1])
 
 
-def settle(Minv, J, phit, G, qd, touching, tol):
+def settle(Minv, J, phit, G, qd, touching, tol, D=None):
     """A perfectly plastic impact at several contact points at once: the set ``A`` of the
     ``touching`` points (k,) whose normal velocities are all brought to zero with
     non-negative impulses while every other touching point leaves (a linear
@@ -311,6 +337,7 @@ def settle(Minv, J, phit, G, qd, touching, tol):
         G: (k, nq) the gaps' gradients; qd: (nq,) velocities before.
         touching: (k,) bool, the points that may take an impulse; tol: the normal velocity
             [velocity] below which a point counts as approaching.
+        D: (m, nq) the rows along which the constraints' impulses act (:func:`impulse`).
 
     Returns:
         ``(qd+ (nq,), A (indices), impulses (len(A),), Lambda (m,))`` (``Lambda`` the
@@ -321,8 +348,9 @@ def settle(Minv, J, phit, G, qd, touching, tol):
     for _ in range(4 * len(touching) + 4):
         if active:
             rows = np.vstack([J, G[active[:-1]]])
+            along = None if D is None else np.vstack([D, G[active[:-1]]])
             rhs = np.concatenate([phit, np.zeros(len(active) - 1)])
-            after, lam, P = impulse(Minv, rows, rhs, G[active[-1]], qd, 0.0)
+            after, lam, P = impulse(Minv, rows, rhs, G[active[-1]], qd, 0.0, along)
             push = np.concatenate([lam[len(phit) :], [P]])
             if push.min() < 0.0:  # pulling: that point leaves
                 active.pop(int(np.argmin(push)))
@@ -375,7 +403,7 @@ def refuse_rigid_method(model, options) -> None:
 
 
 def simulate_impacts(case, progress=None) -> Result:
-    """Integrate a forward ``case`` (:class:`~._simulate.Case`) whose model has rigid
+    """Integrate a forward or mixed ``case`` (:class:`~._simulate.Case`) whose model has rigid
     contacts, impact by impact, and build its result: the forward columns, ``work.impacts``
     (the kinetic energy the impacts took, accumulated [energy]), ``{contact}.impulse``
     (the contact's normal impulses accumulated [force * time]) and ``{contact}.normal``
@@ -384,8 +412,11 @@ def simulate_impacts(case, progress=None) -> Result:
     ``normal_velocity_before`` and ``_after``, the constraints' impulses ``reactions`` (by
     constraint row), the positions ``q`` and the velocities ``qd_before`` and ``qd_after``
     (model units); ``stats["rests"]``: each rest's ``contact``, ``start`` and ``end``
-    (its lift-off, or the run's end) [time]. ``progress``: an optional ``f(t)`` called at
-    each output time once the run is done."""
+    (its lift-off, or the run's end) [time]. A mixed run adds ``{force}.impulse`` per
+    unknown force (its impulses accumulated [force * time], their work in
+    ``work.constraints``) and each impact's unknown forces' impulses ``unknown`` (by
+    name). ``progress``: an optional ``f(t)`` called at each output time once the run is
+    done."""
     from ._simulate import (
         _post,
         _post_arrays,
@@ -418,16 +449,22 @@ def simulate_impacts(case, progress=None) -> Result:
     tol_pos = 1e-12 * max(scale, 1.0)
     N, nq = len(ts), int(np.size(case.q0))
     Q, QD, W = np.full((N, nq), np.nan), np.full((N, nq), np.nan), np.zeros((N, 2))
-    W_imp = np.zeros(N)
+    W_imp, W_unk = np.zeros(N), np.zeros(N)
     P_acc = {c.name: np.zeros(N) for c in contacts}
+    unknown, p = problem.unknown, problem.p
+    first_hold = problem.c.m - p  # the held points' rows: the len(resting) from here
+    F_acc = {name: np.zeros(N) for name in unknown}
     impacts = {"t": [], "contact": [], "impulse": [], "normal_velocity_before": [],
                "normal_velocity_after": [], "reactions": [], "q": [], "qd_before": [],
                "qd_after": []}  # fmt: skip
+    if p:
+        impacts["unknown"] = []
     rests = {"contact": [], "start": [], "end": []}
     t0 = float(ts[0])
     y = (jnp.asarray(case.q0), jnp.asarray(case.qd0), jnp.zeros(2))
-    lost, steps, segments = 0.0, 0, 1
+    lost, worked, steps, segments = 0.0, 0.0, 0, 1
     totals = {c.name: 0.0 for c in contacts}
+    F_totals = dict.fromkeys(unknown, 0.0)
     filled = np.zeros(N, bool)
     held_at: dict[tuple, list] = {}  # the output times of each set of resting points
     dt_out = float(np.min(np.diff(ts))) if N > 1 else span
@@ -438,6 +475,43 @@ def simulate_impacts(case, progress=None) -> Result:
     def fail(err):
         err.partial = Partial.before(model, ts[filled], Q[filled], QD[filled], err.time)
         raise err
+
+    def state_at(q, qd):
+        """The impact state (:func:`_impact_state`) of the points resting now at ``t0``."""
+        found = _impact_state(held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd),
+                              jnp.asarray(t0), tol_pos)  # fmt: skip
+        return tuple(np.asarray(a) for a in found)
+
+    def jump(qd, qd_new, lam, D):
+        """Book a velocity jump ``qd -> qd_new`` with the constraints' impulses ``lam``
+        (along the rows ``D``): the unknown forces' impulses (the last ``p``) and their
+        work ``lam_F . B^T (qd- + qd+) / 2`` [energy] accumulated, the rest of the kinetic
+        energy's change to the impacts. Returns the unknown forces' impulses (p,)."""
+        nonlocal lost, worked
+        F = lam[len(lam) - p :] if p else np.zeros(0)
+        w = 0.5 * float(F @ (D[len(D) - p :] @ (qd + qd_new))) if p else 0.0
+        for name, f in zip(unknown, F, strict=True):
+            F_totals[name] += float(f)
+        worked += w
+        lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv)) - w
+        return F
+
+    def record(i, P, lam, labels, q, qd, qd_new, G_i, F):
+        """Record contact point ``i``'s impact: its impulse ``P``, normal velocities, the
+        constraints' impulses ``lam`` by row ``labels`` and the unknown forces' ``F``."""
+        totals[owner[i].name] += P
+        impacts["t"].append(t0)
+        impacts["contact"].append(owner[i].name)
+        impacts["impulse"].append(float(P))
+        impacts["normal_velocity_before"].append(float(G_i @ qd))
+        impacts["normal_velocity_after"].append(float(G_i @ qd_new))
+        n = len(lam) - p
+        impacts["reactions"].append(dict(zip(labels[:n], lam[:n].tolist(), strict=False)))
+        if p:
+            impacts["unknown"].append(dict(zip(unknown, F.tolist(), strict=True)))
+        impacts["q"].append(q)
+        impacts["qd_before"].append(qd)
+        impacts["qd_after"].append(qd_new)
 
     def release(i, t, watch=True):
         """Point ``i`` no longer rests at ``t``; ``watch``: its gap opens (it lifts off)."""
@@ -454,9 +528,7 @@ def simulate_impacts(case, progress=None) -> Result:
     while True:
         # the impacts at t0: sequential, the fastest approach first; a point approaching
         # slower than the rest speed comes to rest (a plastic impulse, then held)
-        state = _impact_state(held_problem(resting), contacts, y[0], y[1], jnp.asarray(t0),
-                              tol_pos)  # fmt: skip
-        q, qd, J, phit, g, G = (np.asarray(a) for a in state)
+        q, qd, J, D, phit, g, G = state_at(y[0], y[1])
         struck: set[int] = set()  # the points struck at t0
         deep = np.flatnonzero(g < -MISSED * scale)
         if deep.size:
@@ -479,13 +551,11 @@ def simulate_impacts(case, progress=None) -> Result:
                 break
             i = int(np.argmin(np.where(near, v, np.inf)))
             if v[i] >= 0.0:  # touching, leaving slower than the rest speed: held as it is
-                qd_new = impulse(Minv, J, phit, G[i], qd, 0.0)[0]
-                lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv))
+                qd_new, lam, _ = impulse(Minv, J, phit, G[i], qd, 0.0, D)
+                jump(qd, qd_new, lam, D)
                 resting = tuple(sorted((*resting, i)))
                 started[i] = t0
-                q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
-                    held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd_new),
-                    jnp.asarray(t0), tol_pos))  # fmt: skip
+                q, qd, J, D, phit, g, G = state_at(q, qd_new)
                 continue
             if len(impacts["t"]) >= MAX_IMPACTS:
                 fail(
@@ -502,74 +572,51 @@ def simulate_impacts(case, progress=None) -> Result:
             if i in struck:  # struck again at t0: the touching points settle together
                 held = np.isin(np.arange(len(owner)), resting)
                 touching = (g <= GAP_TOL * scale) & ((v < rest) | held)
-                m = len(phit) - len(resting)  # the joints' and drivers' rows
-                found = settle(Minv, J[:m], phit[:m], G, qd, touching, rest)
+                # the joints', drivers' and prescribed motions' rows (not the held points')
+                keep = np.r_[0:first_hold, first_hold + len(resting) : len(phit)]
+                found = settle(Minv, J[keep], phit[keep], G, qd, touching, rest, D[keep])
                 if found is not None:
                     qd_new, settled, pushes, lam = found
-                    lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv))
+                    F = jump(qd, qd_new, lam, D[keep])
                     labels = problem.c.active_labels
-                    for j, p in zip(settled, pushes, strict=True):
-                        totals[owner[j].name] += p
+                    for j, push in zip(settled, pushes, strict=True):
                         started.setdefault(j, t0)
-                        impacts["t"].append(t0)
-                        impacts["contact"].append(owner[j].name)
-                        impacts["impulse"].append(float(p))
-                        impacts["normal_velocity_before"].append(float(G[j] @ qd))
-                        impacts["normal_velocity_after"].append(float(G[j] @ qd_new))
-                        impacts["reactions"].append(dict(zip(labels, lam.tolist(), strict=False)))
-                        impacts["q"].append(q)
-                        impacts["qd_before"].append(qd)
-                        impacts["qd_after"].append(qd_new)
+                        record(j, push, lam, labels, q, qd, qd_new, G[j], F)
                     for j in set(resting) - set(settled):
                         release(j, t0)
                     resting = tuple(sorted(settled))
-                    q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
-                        held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd_new),
-                        jnp.asarray(t0), tol_pos))  # fmt: skip
+                    q, qd, J, D, phit, g, G = state_at(q, qd_new)
                     struck.clear()
                     continue
             struck.add(i)
             comes_to_rest = -v[i] < rest
             e_i = 0.0 if comes_to_rest else e_point[i]
-            qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i)
-            pulled = [j for k, j in enumerate(resting) if lam[len(lam) - len(resting) + k] < 0.0]
+            qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i, D)
+            pulled = [j for k, j in enumerate(resting) if lam[first_hold + k] < 0.0]
             if pulled:  # a resting point the impact pulls away lifts off: again without it
                 release(pulled[0], t0)
-                q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
-                    held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd),
-                    jnp.asarray(t0), tol_pos))  # fmt: skip
+                q, qd, J, D, phit, g, G = state_at(q, qd)
                 continue
             if abs(G[i] @ qd_new + e_i * v[i]) > IMPULSE_TOL * abs(v[i]):
                 fail(
                     SingularityError(
                         f"the impact at {owner[i].name} cannot reverse its normal velocity: "
-                        "the joints and drivers fix it (a driven mechanism against a rigid "
-                        "stop takes an infinite impulse); free the driven coordinate, or give "
-                        "the contact a compliant contact_model",
+                        "the joints, drivers and prescribed motions fix it (a driven "
+                        "mechanism against a rigid stop takes an infinite impulse); free the "
+                        "driven or prescribed coordinate, or give the contact a compliant "
+                        "contact_model",
                         t0,
                         (owner[i].name,),
                     )
                 )
-            m_old, m_new = qd @ (qd / Minv), qd_new @ (qd_new / Minv)
-            lost += 0.5 * (m_new - m_old)
-            totals[owner[i].name] += P
-            impacts["t"].append(t0)
-            impacts["contact"].append(owner[i].name)
-            impacts["impulse"].append(P)
-            impacts["normal_velocity_before"].append(float(v[i]))
-            impacts["normal_velocity_after"].append(float(G[i] @ qd_new))
+            F = jump(qd, qd_new, lam, D)
             labels = held_problem(resting).c.active_labels
-            impacts["reactions"].append(dict(zip(labels, lam.tolist(), strict=False)))
-            impacts["q"].append(q)
-            impacts["qd_before"].append(qd)
-            impacts["qd_after"].append(qd_new)
+            record(i, P, lam, labels, q, qd, qd_new, G[i], F)
             qd = qd_new
             if comes_to_rest:
                 resting = tuple(sorted((*resting, i)))
                 started[i] = t0
-                q, qd, J, phit, g, G = (np.asarray(a) for a in _impact_state(
-                    held_problem(resting), contacts, jnp.asarray(q), jnp.asarray(qd),
-                    jnp.asarray(t0), tol_pos))  # fmt: skip
+                q, qd, J, D, phit, g, G = state_at(q, qd)
         # a resting point that the motion pulls away (a tensile normal force) lifts off; one
         # touching without a normal force (nothing presses it on) is apart
         forces = np.zeros(0)
@@ -598,9 +645,11 @@ def simulate_impacts(case, progress=None) -> Result:
         last = t_end >= ts[-1]
         take = (ts >= t0) & ((ts <= t_end) if last else (ts < t_end)) & ~filled
         Q[take], QD[take], W[take] = (np.asarray(a)[take] for a in ys)
-        W_imp[take] = lost
+        W_imp[take], W_unk[take] = lost, worked
         for name in P_acc:
             P_acc[name][take] = totals[name]
+        for name in F_acc:
+            F_acc[name][take] = F_totals[name]
         if resting:
             held_at.setdefault(resting, []).extend(np.flatnonzero(take).tolist())
         filled |= take
@@ -642,20 +691,22 @@ def simulate_impacts(case, progress=None) -> Result:
         for key, col in extra.items():
             if key in cols_h:
                 col[rows] = np.asarray(cols_h[key])
-        m, k = hp.c.m, len(held)
-        for pos, i in enumerate(held):
-            normals[owner[i].name][rows] += np.asarray(mu_h)[:, m - k + pos]
-    extra["work.nonconservative"], extra["work.constraints"] = W[:, 0], W[:, 1]
+        for pos, i in zip(hold_positions(hp), held, strict=True):
+            normals[owner[i].name][rows] += np.asarray(mu_h)[:, pos]
+    extra["work.nonconservative"], extra["work.constraints"] = W[:, 0], W[:, 1] + W_unk
     extra["work.impacts"] = W_imp
-    for name, p in P_acc.items():
-        extra[f"{name}.impulse"] = p
+    for name, acc in P_acc.items():
+        extra[f"{name}.impulse"] = acc
         extra[f"{name}.normal"] = normals[name]
+    for name, acc in F_acc.items():
+        extra[f"{name}.impulse"] = acc
     balance_cols = dict(extra, **{"work.nonconservative": W[:, 0] + W_imp})
     tol = energy_tolerance(case.energy_tol, options)
     balance = check_energy_balance(problem, ts, Q, balance_cols, ratio, options, tol)
     kinds = post_kinds(problem, case.n_drivers)
     kinds["work.impacts"] = "energy"
     kinds.update({f"{c.name}.impulse": "impulse" for c in contacts})
+    kinds.update({f"{name}.impulse": "impulse" for name in unknown})
     kinds.update({f"{c.name}.normal": "force" for c in contacts})
     stats = {
         "method": options.method,
@@ -663,7 +714,8 @@ def simulate_impacts(case, progress=None) -> Result:
         "segments": segments,
         "steps": steps,
         "impacts": {
-            k: (v if k in ("reactions", "contact") else np.asarray(v)) for k, v in impacts.items()
+            k: (v if k in ("reactions", "contact", "unknown") else np.asarray(v))
+            for k, v in impacts.items()
         },
         "rests": {k: (v if k == "contact" else np.asarray(v)) for k, v in rests.items()},
         "max_violation": float(np.max(extra["constraint.violation"])),

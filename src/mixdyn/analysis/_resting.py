@@ -2,9 +2,9 @@
 
 A rigid contact point at rest on its pair (:mod:`._impacts`) keeps its gap at zero: its
 penetration ``delta(q) = 0`` [length] is one more constraint row (a :class:`Hold`, built like
-a driver with the law 0), appended after the joints and drivers of the forward problem, so
-that the constrained equations of motion of the projection method are integrated as they
-are::
+a driver with the law 0), placed after the joints and drivers (and before a mixed
+problem's prescribed motions, whose multipliers are its unknown forces), so that the
+constrained equations of motion of the projection method are integrated as they are::
 
     M qdd + Phi_q^T lambda + delta_q^T N = Q,     delta_q qdd = gamma_delta,
 
@@ -73,19 +73,21 @@ def hold(contact, point: int, count: int) -> Hold:
 
 
 def holding(problem: Problem, holds: tuple[Hold, ...]) -> Problem:
-    """``problem`` with the rows of ``holds`` appended after its constraints' kept rows (the
-    last ``len(holds)`` multipliers are the held points' normal forces [force]), solved
-    densely."""
+    """``problem`` with the rows of ``holds`` inserted after its joints' and drivers' kept
+    rows and before its ``p`` prescribed motions (a mixed problem's last rows, whose
+    multipliers are its unknown forces): the ``len(holds)`` multipliers before the last
+    ``p`` are the held points' normal forces [force]; solved densely."""
     if not holds:
         return problem
-    c = problem.c
-    n = c.n_full
+    c, p, k = problem.c, problem.p, len(holds)
+    first = c.n_full - p  # the first prescribed motion's row (one row per driver)
+    active = [a if a < first else a + k for a in c.active]
     held = Constraints(
         c.joints,
-        (*c.drivers, *holds),
+        (*c.drivers[: len(c.drivers) - p], *holds, *c.drivers[len(c.drivers) - p :]),
         c.nq,
-        (*c.active, *range(n, n + len(holds))),
-        None if c.rank is None else c.rank + len(holds),
+        sorted((*active, *range(first, first + k))),
+        None if c.rank is None else c.rank + k,
         linear_solver=DenseSolver(),
     )
     return Problem(
@@ -99,19 +101,26 @@ def holding(problem: Problem, holds: tuple[Hold, ...]) -> Problem:
     )
 
 
+def hold_positions(problem: Problem) -> range:
+    """The positions of the held points' rows among ``problem``'s kept rows (and of their
+    normal forces among its multipliers): the ``k`` before the last ``p``."""
+    k, m, p = n_holds(problem), problem.c.m, problem.p
+    return range(m - p - k, m - p)
+
+
 def n_holds(problem: Problem) -> int:
     """How many held contact points ``problem`` has (static)."""
     return sum(isinstance(d, Hold) for d in problem.c.drivers)
 
 
 def normal_forces(problem: Problem, q, qd, t) -> jax.Array:
-    """The held points' normal forces (k,) [force] at ``(q, qd, t)``: the last ``k``
-    multipliers of the accelerations' solve (positive: the contact pushes)."""
-    k, m = n_holds(problem), problem.c.m
-    if k == 0:
+    """The held points' normal forces (k,) [force] at ``(q, qd, t)``: the multipliers of
+    the accelerations' solve at :func:`hold_positions` (positive: the contact pushes)."""
+    rows = hold_positions(problem)
+    if not len(rows):
         return jnp.zeros(0, dtype=q.dtype)
     mu = problem.accelerations(q, qd, t)[1]
-    return mu[m - k : m]
+    return mu[rows.start : rows.stop]
 
 
-__all__ = ["Hold", "hold", "holding", "n_holds", "normal_forces"]
+__all__ = ["Hold", "hold", "hold_positions", "holding", "n_holds", "normal_forces"]

@@ -31,7 +31,7 @@ from ..equations import Constraints, force_directions
 from ..errors import ModelError, SolvabilityError
 from ..linalg import BandedSolver, DenseSolver, LinearSolver, as_linear_solver
 from ..model import CoordinateDriver, Driver, Model, PointDriver, QuinticHermite
-from ..model._compliant import refuse_rigid
+from ..model._compliant import rigid_contacts
 from ..model._element import Resolver
 from ..runtime._programs import cached_jit
 from . import _setup
@@ -284,7 +284,10 @@ class Mixed(Integrated):
 
     def _shares_setup(self, setup: Setup) -> bool:
         # collocated forces (the partition solver takes only those): the solvability is
-        # structural, not a matter of the masses
+        # structural, not a matter of the masses; members with rigid contacts run one by
+        # one (each impact by impact)
+        if rigid_contacts(setup.model):
+            return False
         return bool(setup.problem.collocated) or self.solver == "partition"
 
     def _initial(self, model: Model, t0: float, given: Prepared | None = None) -> Prepared:
@@ -299,7 +302,10 @@ class Mixed(Integrated):
         """Everything a mixed run does before integrating: checks, consistent start,
         problem (the start and its mobility analysis checked on ``given`` where given)."""
         solver, method = self.solver, self.method
-        refuse_rigid(model, "a mixed analysis")
+        if rigid_contacts(model):  # (the impacts' module is loaded where there are some)
+            from ._impacts import refuse_rigid_method
+
+            refuse_rigid_method(model, method)
         refuse_reaction_dependent_in(model, method)
         require_masses(model)
         unknown = self.unknown
@@ -395,6 +401,10 @@ class Mixed(Integrated):
         return Setup(self, model, t0, prep, problem, stats)
 
     def _run(self, setup: Setup, t, progress=None) -> Result:
+        if rigid_contacts(setup.model):  # integrated impact by impact
+            from ._impacts import simulate_impacts
+
+            return simulate_impacts(self._case(setup, t), progress)
         return simulate(self._case(setup, t), progress)
 
 
@@ -495,6 +505,12 @@ def mixed(
     Returns:
         A :class:`Result` with the motion, a column per unknown force (named after it, in force
         or torque units) and its power (``{name}.power``), joint reactions and energies.
+        A model with rigid contacts (``contact_model="rigid"``, ``method="projection"``) is
+        integrated from impact to impact as in :func:`~mixdyn.forward`
+        (:mod:`mixdyn.analysis._impacts`): at an impact the prescribed motions' velocities
+        are kept, the unknown forces taking impulses, accumulated in ``{name}.impulse``
+        [force * time] (each impact's in ``stats["impacts"]["unknown"]``) and their work in
+        ``work.constraints``; the contacts' columns as in a forward run.
 
     Raises:
         SolvabilityError: the counts differ, an unknown force cannot affect the prescribed

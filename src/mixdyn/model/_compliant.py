@@ -20,8 +20,8 @@ differentiation).
 
 A pair whose ``contact_model`` is ``rigid`` exerts no force: its bodies collide with
 Newton's restitution at the instants its penetration reaches zero, and rest on each other
-once the impacts accumulate, the penetration held at zero (forward dynamics with impacts,
-:mod:`mixdyn.analysis._impacts`); it needs no material.
+once the impacts accumulate, the penetration held at zero (forward and mixed dynamics with
+impacts, :mod:`mixdyn.analysis._impacts`); it needs no material.
 
 The stiffness of a compliant pair is Hertz's, from one material's Young's modulus and
 Poisson's ratio and the pair's radii (:func:`~mixdyn.model._contact_law.hertz_stiffness`).
@@ -140,7 +140,7 @@ def _contact_model(default):
     return option(
         "The contact model: compliant, damped as ``lankarani_nikravesh`` (1990, ``e`` near 1, "
         "default), ``flores`` (2011, any ``e``) or ``hunt_crossley`` (1975); or ``rigid`` "
-        "(contact pairs): impacts with Newton's restitution ``e`` (forward dynamics).",
+        "(contact pairs): impacts with Newton's restitution ``e`` (forward and mixed dynamics).",
         default,
         choices=CONTACT_MODELS if default is not None else (None, *DAMPING_FACTORS),
         kw_only=True,
@@ -411,13 +411,13 @@ def rigid_contacts(model) -> tuple[_Compliant, ...]:
 
 def refuse_rigid(model, analysis: str) -> None:
     """Raise a :class:`~mixdyn.errors.ModelError` naming the first rigid contact of
-    ``model``: its impacts are solved by forward dynamics only (``analysis``: what refuses
+    ``model``: its impacts are solved by forward and mixed dynamics only (``analysis``: what refuses
     them, e.g. ``"a mixed analysis"``)."""
     found = rigid_contacts(model)
     if found:
         raise ModelError(
             f"is a rigid contact (contact_model: rigid): {analysis} does not take impacts; run "
-            "a forward analysis, or give the contact a compliant contact_model (e.g. "
+            "a forward or mixed analysis, or give the contact a compliant contact_model (e.g. "
             "lankarani_nikravesh with young_modulus and impact_speed)",
             found[0].name,
             field="contact_model",
