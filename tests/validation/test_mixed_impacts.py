@@ -19,7 +19,8 @@ impact, the closed forms (``r``: pin to tip, ``c``: pin to centre of mass):
 
 Fast: the impulse solve at a hand-written state (the joints' Jacobian by hand). Slow: the
 mixed run (both solvers), a ball rolling under a prescribed x coming to rest on a rigid
-floor, and a model file's mixed run writing the impulse columns.
+floor, a model file's mixed run writing the impulse columns, and a prescribed motion driven
+into a rigid contact (a named failure at the impact).
 """
 
 from __future__ import annotations
@@ -234,3 +235,23 @@ def test_a_model_files_mixed_run_writes_the_impulse_columns(tmp_path):
     np.testing.assert_allclose(table["wall.impulse"].to_numpy()[after], P, rtol=1e-9)
     np.testing.assert_allclose(table["slider.vx"].to_numpy(), V, rtol=1e-12)
     assert table["rod.omega"].to_numpy()[after][0] < 0.5 * omega_after  # rebounded
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_prescribed_motion_into_a_rigid_contact_is_a_named_failure():
+    """A ball whose height is prescribed to fall at 1 m/s cannot rebound from the floor
+    (its normal velocity is the prescribed one): the run fails at the impact, ``h / v``,
+    naming the contact."""
+    rb, h = 0.05, 0.2
+    ball = md.Body("ball", 1.0, 0.4 * rb**2, q0=(0.0, h + rb, 0.0))
+    floor = md.CircleLineContact(
+        "floor", "ball", rb, ("ground", (0.0, 0.0)), contact_model="rigid", restitution=0.5
+    )
+    lift = md.PointForce("lift", "ball", along=(0, 1), law=md.Polynomial([0.0]))
+    model = md.Model([ball], forces=[floor, lift], gravity=(0, -9.81))
+    y = md.CoordinateDriver("y", "ball", "y", law=md.Polynomial([h + rb, -1.0]))
+    with pytest.raises(md.SingularityError, match="prescribed motions fix it") as err:
+        md.mixed(model, np.linspace(0.0, 0.5, 11), prescribed=[y], unknown=["lift"],
+                 rtol=1e-11, atol=1e-13)  # fmt: skip
+    assert abs(err.value.time - h / 1.0) < 1e-9
+    assert err.value.elements == ("floor",)

@@ -542,8 +542,8 @@ def simulate(case: Case, progress=None) -> Result:
 
     The post-processing's program is prepared beside the integration (read, or traced and
     compiled, in a second thread: :meth:`mixdyn.runtime._programs._CachedJit.ahead`).
-    A forward run of a model with rigid contacts is integrated impact by impact instead
-    (:func:`~._impacts.simulate_impacts`, which the forward analysis calls)."""
+    A forward or mixed run of a model with rigid contacts is integrated impact by impact
+    instead (:func:`~._impacts.simulate_impacts`, which those analyses call)."""
     _post_ahead(case)
     return finish(case, integrate(case, progress))
 
