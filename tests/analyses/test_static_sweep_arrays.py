@@ -115,3 +115,36 @@ def test_members_sharing_a_start_rest_where_the_spring_balances_the_push(two_a_c
         np.testing.assert_allclose(ours["min_eigenvalue"], theirs["min_eigenvalue"], rtol=1e-12)
         assert ours["newton_iterations"] == theirs["newton_iterations"]
         assert ours["stable"] and theirs["stable"]
+
+
+def _hanging(model: md.Model) -> md.Model:
+    """``model`` under gravity (-y, SI)."""
+    return md.Model(
+        bodies=model.bodies,
+        joints=model.joints,
+        drivers=model.drivers,
+        ground=model.ground,
+        gravity=(0.0, -9.81),
+        units=md.SI,
+    )
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_starts_made_by_the_program_equal_each_set_up(two_a_call):
+    """Four-bars of other cranks and start angles under gravity, each start assembled with
+    the crank's angle held: the program's starts and equilibria equal each member's single
+    run; the four-bar whose pivots lie beyond its links' reach fails with its single run's
+    AssemblyError."""
+    models = [
+        _hanging(four_bar(a=a, d=d, theta0=th))
+        for a, d, th in [(0.2, 0.6, 0.1), (0.22, 0.6, 0.5), (0.18, 2.0, 1.0), (0.25, 0.6, 2.0)]
+    ]
+    value = md.analyses.QuasiStatic(hold=("crank.phi",))
+    swept = md.sweep(models=models, t=T, analysis=value)
+    assert isinstance(swept.stacked, _static_members.StaticStack)
+    assert list(swept.errors) == [2]
+    truth = _members.run_members(models, T, value)
+    assert isinstance(truth[2][1], md.errors.AssemblyError)
+    assert type(swept.errors[2]) is type(truth[2][1]) and str(swept.errors[2]) == str(truth[2][1])
+    for i in (0, 1, 3):
+        _same_columns(swept[i], truth[i][0])

@@ -1,22 +1,24 @@
 """A quasi-static sweep held as arrays.
 
-Each member is prepared like its single run (:meth:`~.statics.QuasiStatic._prepare`: the
-first equilibrium's start assembled from its rough pose), from a thread per core, or, where
-the varied numbers reach only masses, inertias and forces (which do not enter the start),
-member 0 is prepared and every member takes its start with its own model. One vectorized
-program then runs the single run's time loop for :data:`~._schedule.CHUNK` members a call
-(:func:`_equilibria`): at each later output time the joints closed again from the
-equilibrium before (:func:`~._assembly.assemble`'s damped Gauss-Newton steps), then Newton's
-method on ``R(q, lambda) = 0`` with the single run's scales, steps and step halving
-(:func:`~.statics._equilibrium`), then the joints' reactions and contact forces.
+The first member whose start can be made is prepared like its single run
+(:meth:`~.statics.QuasiStatic._prepare`: the structure, the rows kept, the names). Every
+member's start is then made by one vectorized program, :data:`~._schedule.CHUNK` members a
+call, as its set-up makes it: its rough pose assembled (:func:`~._assembly.assemble`'s
+damped Gauss-Newton steps, the held coordinates kept) and its rank analysed; where the
+varied numbers reach only masses, inertias and forces (which do not enter the start) every
+member takes member 0's start instead. The same program runs the single run's time loop
+(:func:`_equilibria`): at each output time the joints closed again from the equilibrium
+before, Newton's method on ``R(q, lambda) = 0`` with the single run's scales, steps and step
+halving (:func:`~.statics._equilibrium`), then the joints' reactions and contact forces.
 
-The program flags a member where the single run would act otherwise: the joints not closed
-again, the constraint rows at a later start not clearly independent (the single run's rank
-analysis there, :data:`~._structure.FULL_RANK_RATIO`), or Newton's method not converged. A
-flagged member is run like a single run (its error, a
+The program flags a member where its single run would act otherwise: the joints not closed,
+the constraint rows at a start not clearly independent (the single run's rank analysis
+there, :data:`~._structure.FULL_RANK_RATIO`), or Newton's method not converged. A flagged
+member is run like a single run (its error, an :class:`~mixdyn.errors.AssemblyError` or a
 :class:`~mixdyn.errors.ConvergenceError` with its time, kept as its outcome); every other
-member's :class:`~.result.Result` is built when it is read (:class:`~._stacked.LazyResults`:
-its stiffness' smallest eigenvalues by :func:`~.statics._reduced_stiffness` then).
+member's set-up and :class:`~.result.Result` are made when it is read
+(:class:`~._stacked.LazyResults`: its stiffness' smallest eigenvalues by
+:func:`~.statics._reduced_stiffness` then).
 """
 
 from __future__ import annotations
@@ -30,12 +32,12 @@ import jax.numpy as jnp
 import numpy as np
 
 from ..equations import Constraints, applied_forces
-from ..errors import MixdynError
+from ..errors import MixdynError, ModelError
 from ..linalg import min_norm_step
 from ..model import Model
 from ..runtime._programs import cached_jit
 from . import _setup
-from ._assembly import length_scale
+from ._assembly import length_scale, start_q
 from ._prepared_members import finished, in_chunks, one_structure, prepare_each
 from ._prepared_members import stack as stack_trees
 from ._reactions import (
@@ -60,16 +62,20 @@ ASSEMBLY_MAX_ITER = 100
 MAX_HALVINGS = 60
 
 
-def _equilibria(model, c, q_start, L, ts, tol, max_iter):
+def _equilibria(model, c, q_start, L, ts, tol, max_iter, held=()):
     """One member's equilibria at the times ``ts``, each from the one before, as
     :class:`~.statics.QuasiStatic` finds them.
 
     Args:
         model, c: the member's model and its constraint set of independent rows (every row).
-        q_start: (nq,) the set-up's assembled start [model units].
+        q_start: (nq,) the rough start [model units], assembled here as the set-up
+            assembles it (:func:`~._prepare.kinematic_start`: the joints closed at t = 0
+            with the coordinates ``held`` kept, the rank analysed at ``ts[0]``), or the
+            set-up's assembled start (then kept).
         L: the model's length scale [length] (:func:`~._assembly.length_scale`).
         ts: (N,) the output times [time].
         tol, max_iter: the analysis' Newton tolerance [-] and iterations at most per time.
+        held: the indices of the coordinates the first assembly holds (static).
 
     Returns:
         Per time (leading axis N): ``q`` (nq,), ``lam`` (m,), the Newton iterations, the
@@ -96,22 +102,27 @@ def _equilibria(model, c, q_start, L, ts, tol, max_iter):
     joints = Constraints(c.joints, (), nq)  # the assembly's: the joints alone, at t = 0
     t_joints = jnp.zeros(())
 
-    def assembled(q):
+    def assembled(q, held=()):
         """The joints closed from ``q`` as :func:`~._assembly.assemble` closes them
-        (damped Gauss-Newton, its step halved while the residual grows), and whether they
-        closed."""
+        (damped Gauss-Newton, its step halved while the residual grows), the coordinates
+        ``held`` kept at their values in ``q``, and whether they closed."""
         if joints.n_full == 0:
             return q, jnp.array(True)
         tol_a = ASSEMBLY_TOL * L
+        idx = np.asarray(held, dtype=int)
+        kept, rows = q[idx], jnp.eye(nq)[idx]  # the held coordinates' rows
 
         def residual(q):
-            r = joints.full(q, t_joints)
+            r = jnp.concatenate([joints.full(q, t_joints), q[idx] - kept])
             return r, jnp.max(jnp.abs(r), initial=0.0)
+
+        def jacobian(q):
+            return jnp.concatenate([joints.phi_q(q, t_joints), rows])
 
         def gauss_newton(s):
             q, r, err, it, _ = s
             damping = jnp.minimum(err / L, 1.0) * 1e-3
-            step = min_norm_step(joints.phi_q(q, t_joints), r, damping=damping)
+            step = min_norm_step(jacobian(q), r, damping=damping)
             r_new, err_new = residual(q + step)
 
             def halve(h):
@@ -190,24 +201,27 @@ def _equilibria(model, c, q_start, L, ts, tol, max_iter):
 
     def one(carry, k):
         t = ts[k]
-        start, closed = assembled(carry)
-        start = jnp.where(k == 0, carry, start)  # the set-up's start at the first time
+        start, closed = assembled(carry)  # an assembled start is kept (no iteration)
         q, lam, it, ok = at(start, t)
         reactions = joint_reactions(c, q, t, lam)
         contacts = contact_columns(c, q, lam[:m])
-        ok = ok & ((k == 0) | (closed & rank_certain(start, t)))
+        ok = ok & closed & rank_certain(start, t)
         return q, (q, lam, it, reactions, contacts, ok)
 
-    return jax.lax.scan(one, q_start, jnp.arange(len(ts)))[1]
+    closed = jnp.array(True)
+    if held:  # the first start's holds (the later starts hold nothing)
+        q_start, closed = assembled(q_start, held)
+    out = jax.lax.scan(one, q_start, jnp.arange(len(ts)))[1]
+    return (*out[:-1], out[-1] & closed)
 
 
-def _equilibria_batch(width: int, model, c, q_start, L, ts, tol, max_iter):
+def _equilibria_batch(width: int, model, c, q_start, L, ts, tol, max_iter, held=()):
     """:func:`_equilibria` of a batch of members (leading axis: the member), ``width`` at a
     time vectorized."""
 
     def one(x):
         mm, cc, q, length, tl = x
-        return _equilibria(mm, cc, q, length, ts, tl, max_iter)
+        return _equilibria(mm, cc, q, length, ts, tl, max_iter, held)
 
     return jax.lax.map(one, (model, c, q_start, L, tol), batch_size=width)
 
@@ -220,7 +234,8 @@ class StaticStack:
     """The members of a quasi-static sweep, each set up, as arrays.
 
     Attributes:
-        setup: member ``i`` -> its set-up (:class:`~._setup.Setup`), None where it failed.
+        setup: member ``i`` -> its set-up (:class:`~._setup.Setup`, its single run's, made
+            when first asked for; a start that cannot be made raises its error).
         count: M, the number of members.
         ts: (N,) the output times [time].
         arrays: each member's ``(q, lam, iterations, reactions, contacts, ok)`` at each
@@ -347,14 +362,15 @@ def run(
     shared: bool = False,
     seconds: dict | None = None,
 ) -> tuple[StaticStack, LazyResults, dict[int, MixdynError]] | None:
-    """The members of a quasi-static sweep set up, run by one vectorized program and
-    screened: ``(stack, results, errors)``; None where their constraint sets differ in
-    structure, their values in ``max_iter``, a member's start keeps fewer than every
-    constraint row, or a joint is a gear mesh (then member by member). ``value``: the
-    analysis value, or one per member; ``shared``: the members differ only in masses,
-    inertias and forces (and share one value), member 0's start is every member's;
-    ``seconds``: if given, filled with the wall times of the set-up, the program
-    (``equilibria``) and the finishing [s].
+    """The members of a quasi-static sweep started, run by one vectorized program and
+    screened (module docstring): ``(stack, results, errors)``; None where their constraint
+    sets or models differ in structure, their values in ``max_iter`` or ``hold``, the first
+    start keeps fewer than every constraint row, or a joint is a gear mesh (then member by
+    member). ``value``: the analysis value, or one per member; ``threads``: unused (the
+    program makes the starts; the signature is :func:`._kinematic_members.run`'s);
+    ``shared``: the members differ only in masses, inertias and forces (and share one
+    value), member 0's start is every member's; ``seconds``: if given, filled with the wall
+    times of the set-up, the program (``equilibria``) and the finishing [s].
 
     Raises:
         ModelError: a member's input error (with its index in a note).
@@ -374,57 +390,99 @@ def run(
         _setup.check_start(setup, ts, accelerations=False)
         return setup
 
-    if shared:
-        setups, errors = prepare_each(1, setup_of, 1, describe)
-        first = setups[0]
+    # The first member whose start can be made is prepared now (the structure, the rows
+    # kept, the names); every other member's start is made by the program, its set-up
+    # when its result is read or its single run is needed.
+    made: dict[int, _setup.Setup] = {}
+    errors: dict[int, MixdynError] = {}
+    for i in range(1 if shared else count):
+        done, failed = prepare_each(1, lambda _, i=i: setup_of(i), 1, lambda _, i=i: describe(i))
+        if not failed:
+            made[i] = done[0]
+            break
+        errors[i] = failed[0]
+    first = next(iter(made.values()), None)
+    if shared and errors:
+        errors = dict.fromkeys(range(count), errors[0])
 
-        def setup(i: int):
-            if first is None or i == 0:
-                return first
-            start = dataclasses.replace(first.start, model=members[i])
-            return dataclasses.replace(first, model=members[i], start=start)
+    def setup(i: int) -> _setup.Setup:
+        """Member ``i``'s set-up (its single run's), made once.
 
-        setups = [first] * count
-        errors = dict.fromkeys(range(count), errors[0]) if errors else {}
-    else:
-        setups, errors = prepare_each(count, setup_of, threads, describe)
-
-        def setup(i: int):
-            return setups[i]
+        Raises:
+            MixdynError: its start cannot be made (a ModelError with its index in a note).
+        """
+        if i not in made:
+            if shared:
+                start = dataclasses.replace(first.start, model=members[i])
+                made[i] = dataclasses.replace(first, model=members[i], start=start)
+            else:  # a start that cannot be made raises its error
+                try:
+                    made[i] = setup_of(i)
+                except ModelError as err:
+                    err.add_note(f"in member {i} of the sweep{describe(i)}")
+                    raise
+        return made[i]
 
     models = members[0] if shared else list(members)
-    if len(errors) == count:
+    if first is None:
         stack = StaticStack(setup, count, ts, (), models)
         return (stack, *finished(count, np.zeros(0), stack.run, errors, on_member))
-    distinct = {id(s): s for s in setups if s is not None}
-    own = {k: _constants(s) for k, s in distinct.items()}  # once a set-up
-    made = [None if s is None else own[id(s)][0] for s in setups]
-    if not one_structure(made) or not all(every for _, _, every in own.values()):
+    c0 = first.start.constraints(independent_rows_only=True)
+    if c0.m != c0.n_full:
+        return None  # a redundant row: the members' rows kept may differ
+    if shared:
+        cs, rough, L = [c0] * count, [first.start.q] * count, [length_scale(first.model)] * count
+        held = ()
+    else:
+        for i in range(count):
+            if i not in made and i not in errors:
+                _checked(members[i], ts, lambda i=i: describe(i), i)
+        cs = [Constraints(m.joints, m.drivers, m.nq, linear_solver=c0.linear_solver)
+              for m in members]  # fmt: skip
+        rough = [_rough(m, v) for m, v in zip(members, values, strict=True)]
+        L = [length_scale(m) for m in members]
+        held = tuple(first.model.coordinate_index(ref) for ref in values[0].hold)
+        if len({v.hold for v in values}) > 1:
+            return None  # other coordinates held
+    alive = [None if i in errors else cs[i] for i in range(count)]
+    if not one_structure([c0, *alive]) or not (shared or one_structure(members)):
         return None
-    L = np.array([own[id(s)][1] if s is not None else 1.0 for s in setups])
-    tol = np.array([v.tol for v in values])
+    L, tol = np.asarray(L, dtype=float), np.array([v.tol for v in values])
 
     def program(idx: list[int]) -> tuple:
-        q0 = stack_trees([setups[i].start.q for i in idx])
+        q0 = stack_trees([rough[i] for i in idx])
         model = stack_trees([members[i] for i in idx])
-        c = stack_trees([made[i] for i in idx])
+        c = stack_trees([cs[i] for i in idx])
+        max_iter = jnp.asarray(values[0].max_iter)
         return _equilibria_batch_jit(
-            CHUNK, model, c, q0, L[idx], jnp.asarray(ts), tol[idx], jnp.asarray(values[0].max_iter)
+            CHUNK, model, c, q0, L[idx], jnp.asarray(ts), tol[idx], max_iter, held
         )
 
     seconds["setup"] = time.perf_counter() - clock
-    stack = StaticStack(setup, count, ts, in_chunks(program, made, CHUNK), models)
+    stack = StaticStack(setup, count, ts, in_chunks(program, alive, CHUNK), models)
     seconds["equilibria"] = time.perf_counter() - clock - seconds["setup"]
     done = finished(count, stack.flagged(), _built(stack), errors, on_member)
     seconds["finishing"] = time.perf_counter() - clock - seconds["setup"] - seconds["equilibria"]
     return (stack, *done)
 
 
-def _constants(setup: _setup.Setup) -> tuple:
-    """A set-up's constraint set of independent rows, its length scale [length] and whether
-    it keeps every row."""
-    c = setup.start.constraints(independent_rows_only=True)
-    return c, length_scale(setup.model), c.m == c.n_full
+def _rough(model: Model, value: QuasiStatic) -> np.ndarray:
+    """(nq,) the rough start the set-up assembles: the value's ``q0``, else the bodies'."""
+    return start_q(model) if value.q0 is None else np.asarray(value.q0, dtype=float)
+
+
+def _checked(model: Model, ts: np.ndarray, describe: Callable[[], str], i: int) -> None:
+    """A member's drivers' laws checked over ``ts`` (:func:`~._setup.check_start`).
+
+    Raises:
+        ModelError: a law that jumps, with the member's index in a note.
+    """
+    try:
+        for driver in model.drivers:
+            driver.check_law(float(ts[0]), float(ts[-1]), False)
+    except ModelError as err:
+        err.add_note(f"in member {i} of the sweep{describe()}")
+        raise
 
 
 def _built(stack: StaticStack) -> Callable[[int], Result]:

@@ -22,11 +22,11 @@ A kinematic sweep of at least :data:`~._schedule.CHUNK` members (or on an accele
 held as arrays too (:mod:`._kinematic_members`): each member prepared like a single run (its
 own start), their constraint sets stacked, one vectorized program running the single run's
 scan. A quasi-static sweep of as many members is held as arrays (:mod:`._static_members`:
-each member prepared like a single run, or, where only masses, inertias and forces vary,
-every member from member 0's start; one vectorized program running the single run's
-Newton iterations at every output time). An inverse sweep of members sharing the drivers'
-motion is held as arrays (member 0 run, every member post-processed along its motion).
-Other inverse, kinematic and quasi-static sweeps prepare and run the single analysis member
+one vectorized program making each member's start as its set-up makes it, or, where only
+masses, inertias and forces vary, every member from member 0's start, and running the
+single run's Newton iterations at every output time). An inverse sweep of members sharing
+the drivers' motion is held as arrays (member 0 run, every member post-processed along its
+motion). Other inverse, kinematic and quasi-static sweeps prepare and run the single analysis member
 by member (its programs are compiled for the first member and reused), from a thread per
 core.
 
