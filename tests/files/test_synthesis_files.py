@@ -61,6 +61,12 @@ def _line(text: str, marker: str) -> int:
         (["    bounds:", "      r2: [1 kg, 2 kg]"], "r2:", "kg"),
         (["    min_transmission: 95 deg"], "min_transmission", "pi/2"),
         (["    torque_weight: 1e-4 m^2/(N*m)^2"], "torque_weight", "masses"),
+        (["    shaking_force_weight: 1e-4 m^2/N^2"], "shaking_force_weight", "masses"),
+        (
+            ["    masses: {density: 2 kg/m}", "    shaking_moment_weight: 1e-4 m^2/N^2"],
+            "shaking_moment_weight",
+            "N^2",
+        ),
         (["    masses: {density: -2 kg/m}"], "masses", "density must be > 0"),
         (["    speed: 3 m/s"], "speed", "m/s"),
     ],
@@ -311,3 +317,18 @@ def test_a_function_file_finds_freudensteins_linkage_and_its_best_yaml_runs(tmp_
     run = md.kinematic(best.model, th2 - th2[0])  # the crank from the first input at 1 rad/s
     gap = np.angle(np.exp(1j * (run["rocker.phi"] - th4)))
     assert np.max(np.abs(gap)) < 1e-8
+
+
+def test_shaking_weights_are_read_in_si():
+    """``shaking_force_weight: 2 mm^2/N^2`` is 2e-6 m^2/N^2 (by hand), the moment's
+    ``3 mm^2/(N*mm)^2`` 3 m^2/(N m)^2; ``shaking: peak`` is the measure."""
+    text = _text(
+        "    masses: {density: 2 kg/m}",
+        "    shaking: peak",
+        "    shaking_force_weight: 2 mm^2/N^2",
+        "    shaking_moment_weight: 3 mm^2/(N*mm)^2",
+    )
+    o = Runner(mio.reads(text, "shaking.yaml")).plans["path"].objective
+    assert o.shaking_force_weight == pytest.approx(2e-6, rel=1e-14)
+    assert o.shaking_moment_weight == pytest.approx(3.0, rel=1e-14)
+    assert o.shaking == "peak" and o.torque_weight == 0 and o.dynamic

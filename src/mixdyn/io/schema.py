@@ -1157,6 +1157,15 @@ class SynthesisRunSpec(Spec):
     torque_weight: Scalar = 0.0
     """Weight of the torque measure squared beside the squared path error
     [length**2/torque**2], e.g. ``1e-4 m^2/(N*m)^2``. Default 0: the path alone."""
+    shaking: Literal["rms", "peak"] = "rms"
+    """The shaking force's and moment's measure in the objective: ``rms`` (default) or
+    ``peak``."""
+    shaking_force_weight: Scalar = 0.0
+    """Weight of the shaking force's measure squared (what the links' inertia passes to the
+    frame) [length**2/force**2], e.g. ``1e-4 m^2/N^2``. Default 0."""
+    shaking_moment_weight: Scalar = 0.0
+    """Weight of the shaking moment's measure squared (about the crank's pivot)
+    [length**2/torque**2], e.g. ``1e-4 m^2/(N*m)^2``. Default 0."""
     starts: int = Field(default=2048, ge=1, le=1_000_000)
     """Random starts, each refined by Levenberg-Marquardt. Default 2048."""
     seed: int = Field(default=0, ge=0)

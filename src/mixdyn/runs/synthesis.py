@@ -63,6 +63,14 @@ from .plan import Plan
 #: Candidates whose curves the figure draws at most (the best first).
 DRAWN = 5
 
+#: The shaking force's and moment's columns of ``candidates.csv`` (where the links weigh).
+SHAKING_COLUMNS = (
+    "shaking_force_rms",
+    "shaking_force_peak",
+    "shaking_moment_rms",
+    "shaking_moment_peak",
+)
+
 #: The kind of quantity of each column of ``candidates.csv`` (SI units written beside).
 _COLUMN_KINDS = {
     **{n: "length" for n in (*NAMES, *SLIDER_NAMES) if n != "theta0"},
@@ -73,10 +81,14 @@ _COLUMN_KINDS = {
     "score": (2, 0, 0),
     "torque_rms": "torque",
     "torque_peak": "torque",
+    "shaking_force_rms": "force",
+    "shaking_force_peak": "force",
+    "shaking_moment_rms": "torque",
+    "shaking_moment_peak": "torque",
     "min_transmission": "angle",
     "coupler_angle": "angle",
 }
-_SI_LABELS = {"length": "m", "angle": "rad", (2, 0, 0): "m²", "torque": "N·m"}
+_SI_LABELS = {"length": "m", "angle": "rad", (2, 0, 0): "m²", "torque": "N·m", "force": "N"}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -93,8 +105,8 @@ class SynthesisPlan(Plan):
 
     @property
     def polished(self) -> bool:
-        """Whether the search polishes its outcomes for the path (with a torque weight)."""
-        return self.objective is not None and self.objective.torque_weight > 0
+        """Whether the search polishes its outcomes for the path (with a dynamic weight)."""
+        return self.objective is not None and self.objective.dynamic
 
 
 @dataclasses.dataclass
@@ -193,15 +205,26 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
                         enumerate(runner.spec.gravity))  # fmt: skip
         masses = Masses(density=density, payload=payload, gravity=gravity, slider=slider)
     speed = _si(runner, r.speed, "angular_velocity", (*path, "speed"))
-    weight = _si(runner, r.torque_weight, (-2, -2, 4), (*path, "torque_weight"))
-    if weight > 0 and masses is None:
-        runner.fail(
-            (*path, "torque_weight"),
-            "a torque objective needs the links' masses",
-            "give masses: {density: 2 kg/m}, or leave torque_weight out",
+    weights = {
+        key: _si(runner, getattr(r, key), dims, (*path, key))
+        for key, dims in (
+            ("torque_weight", (-2, -2, 4)),  # length**2 / torque**2
+            ("shaking_force_weight", (0, -2, 4)),  # length**2 / force**2
+            ("shaking_moment_weight", (-2, -2, 4)),
         )
+    }
+    for key, weight in weights.items():
+        if weight > 0 and masses is None:
+            runner.fail(
+                (*path, key),
+                f"a {key.removesuffix('_weight').replace('_', ' ')} objective needs the links' "
+                "masses",
+                f"give masses: {{density: 2 kg/m}}, or leave {key} out",
+            )
     try:
-        objective = Objective(masses=masses, speed=speed, torque_weight=weight, torque=r.torque)
+        objective = Objective(
+            masses=masses, speed=speed, torque=r.torque, shaking=r.shaking, **weights
+        )
     except ModelError as e:
         runner.fail((*path, e.element) if e.element else path, e.message, "")
     return SynthesisPlan(r, index, np.zeros(1), (), task=task, objective=objective)
@@ -247,7 +270,7 @@ def candidates_table(out: Synthesis):
     columns where the links weigh, a motion's carried body's angle in the coupler."""
     names = [*out.task.linkage.NAMES, "branch", "theta_first", "theta_last", "error", "score"]
     if out.objective.masses is not None:
-        names += ["torque_rms", "torque_peak"]
+        names += ["torque_rms", "torque_peak", *SHAKING_COLUMNS]
     names.append("min_transmission")
     if isinstance(out.task, MotionTask):
         names.append("coupler_angle")
@@ -261,6 +284,7 @@ def candidates_table(out: Synthesis):
             score=c.score,
             torque_rms=c.torque_rms,
             torque_peak=c.torque_peak,
+            **{k: getattr(c, k) for k in SHAKING_COLUMNS},
             min_transmission=c.min_transmission,
             coupler_angle=c.coupler_angle,
         )
@@ -440,6 +464,10 @@ class SynthesisKind(RunKind):
             )
         timing = "timing free" if plan.task.timing is None else "timing given"
         what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
+        for key, label in (("shaking_force_weight", "shaking force"),
+                           ("shaking_moment_weight", "shaking moment")):  # fmt: skip
+            if getattr(o, key):
+                what += f", {label} ({r.shaking}) weight {getattr(o, key):.3g}"
         through = f"{len(plan.task.points)} points, {timing}"
         if isinstance(plan.task, MotionTask):
             through = f"{len(plan.task.poses)} poses (L = {plan.task.weight_length:.4g} m)"
@@ -479,6 +507,8 @@ class SynthesisKind(RunKind):
             best = f"best {_task_name(out.task).replace('motion', 'pose')} error {c.error:.3g} m²"
             if np.isfinite(c.torque_rms):
                 best += f", motor torque RMS {c.torque_rms:.4g} N·m"
+            if plan.objective is not None and plan.objective.shakes:
+                best += f", shaking force RMS {c.shaking_force_rms:.4g} N"
         return (
             f"{plan.name}: synthesis, {len(out.candidates)} {_title(out.task)}s of {out.feasible} "
             f"feasible from {out.starts} starts, {best}, {seconds:.2f} s -> {folder}"

@@ -22,7 +22,17 @@ from ..io._errors import FileError
 from ..synthesis import FunctionSynthesis, FunctionTask
 
 #: The path generation's keys, refused beside ``function``.
-PATH_KEYS = ("timing", "bounds", "masses", "speed", "torque", "torque_weight")
+PATH_KEYS = (
+    "timing",
+    "bounds",
+    "masses",
+    "speed",
+    "torque",
+    "torque_weight",
+    "shaking",
+    "shaking_force_weight",
+    "shaking_moment_weight",
+)
 
 
 def function_task(runner, path, r: s.SynthesisRunSpec, si) -> FunctionTask:

@@ -7,10 +7,11 @@ generate a function, searched by gradients, with dynamics in a path's objective.
   implicit derivatives, its transmission angle;
 * :mod:`._slidercrank` — the same for an offset slider-crank (:class:`SliderCrank`; the
   path task's ``linkage="slider_crank"``);
-* :mod:`._dynamics` — the links' inertia from the dimensions and the motor torque;
+* :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque and the
+  shaking force and moment;
 * :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
   angle), :class:`FunctionTask` (input-output angle pairs, or a function over a range) and
-  :class:`Objective` (path error, motor torque by weight);
+  :class:`Objective` (path error, motor torque, shaking force and moment by weight);
 * :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
   Levenberg-Marquardt at once, checked, ranked and deduplicated;
 * :mod:`._motion` — motion generation: :class:`MotionTask` (precision poses of the coupler)
@@ -31,7 +32,7 @@ Example::
     out.write("best.yaml")                               # mixdyn run best.yaml
 """
 
-from ._dynamics import Masses, link_inertia, motor_torque
+from ._dynamics import Masses, link_inertia, motor_torque, shaking
 from ._fourbar import NAMES, FourBar, coupler_curve, coupler_point, link_angles, transmission_cosine
 from ._function import FunctionCandidate, FunctionSynthesis
 from ._linkage import Linkage
@@ -67,6 +68,7 @@ __all__ = [
     "model_file_text",
     "motor_torque",
     "rod_and_slider",
+    "shaking",
     "slider_crank_model",
     "synthesize",
     "transmission_cosine",

@@ -21,6 +21,18 @@ phi_i'') - sum_i m_i g . G_i'`` in closed form, the rates ``phi_i'``, ``phi_i''`
 function once instead of the assembly three times. It is the driver effort of mixdyn's
 inverse dynamics of the same mechanism (checked in the tests against :func:`mixdyn.inverse`
 of :func:`~.build.four_bar_model` and :func:`~.build.slider_crank_model`).
+
+The shaking force and moment (Berkof and Lowen's, 1969) are what the moving links' inertia
+passes to the frame, gravity left out: with the crank at the constant speed ``Omega`` each
+centre's acceleration is ``Omega^2 G_i''`` and each link's angular acceleration
+``Omega^2 phi_i''``, and::
+
+    F_sh = -Omega^2 sum_i m_i G_i'',
+    M_sh = -Omega^2 sum_i (J_i phi_i'' + (G_i - O2) x m_i G_i''),
+
+the moment about the crank's pivot ``O2`` (the motor's reaction included): the ground
+pivots' reactions on the frame, and the motor's, summed (:func:`shaking`; checked in the
+tests against the reactions of :func:`mixdyn.inverse`).
 """
 
 from __future__ import annotations
@@ -199,6 +211,55 @@ def _slider_crank_rates(sc: SliderCrank, inertia: dict, theta2):
 _RATES = {FourBar: _four_bar_rates, SliderCrank: _slider_crank_rates}
 
 
+def _centres(lk: Linkage, inertia: dict, theta2) -> jax.Array:
+    """Each link's centre of mass from the crank's pivot ``O2`` (3, 2) [length]: crank,
+    coupler (rod), rocker (slider)."""
+    phi2 = lk.theta0 + theta2
+    e2 = jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
+    crank, coupler, third = (v[1] for v in inertia.values())
+    if isinstance(lk, SliderCrank):
+        (phi3, _), _, _ = slider_rates(lk, theta2)
+        e3 = jnp.stack([jnp.cos(phi3), jnp.sin(phi3)])
+        last = lk.r2 * e2 + lk.r3 * e3  # the slider's pin B
+    else:
+        (phi3, phi4), _, _ = link_rates(lk, theta2)
+        e1 = jnp.stack([jnp.cos(lk.theta0), jnp.sin(lk.theta0)])
+        last = lk.r1 * e1 + _rot(phi4, third)
+    return jnp.stack([_rot(phi2, crank), lk.r2 * e2 + _rot(phi3, coupler), last])
+
+
+def _shaking_one(lk: Linkage, inertia: dict, theta2, speed):
+    """The shaking force (2,) and moment about ``O2`` at one input angle (module docstring)."""
+    _, dd, _, a = _RATES[type(lk)](lk, inertia, theta2)
+    g = _centres(lk, inertia, theta2)
+    m = jnp.stack([jnp.asarray(v[0], dtype=jnp.float64) for v in inertia.values()])
+    j = jnp.stack([jnp.asarray(v[2], dtype=jnp.float64) for v in inertia.values()])
+    acc, alpha = speed**2 * dd, speed**2 * a
+    force = -jnp.sum(m[:, None] * acc, axis=0)
+    moment = -jnp.sum(j * alpha + m * (g[:, 0] * acc[:, 1] - g[:, 1] * acc[:, 0]))
+    return force, moment
+
+
+@eqx.filter_jit
+def shaking(lk: Linkage, masses: Masses, theta2, speed) -> tuple[jax.Array, jax.Array]:
+    """The shaking force and moment of a linkage whose crank turns at ``speed`` through
+    ``theta2`` (module docstring; gravity left out).
+
+    Args:
+        lk: the four-bar or slider-crank (unbatched).
+        masses: how its links weigh.
+        theta2: (K,) input angles [rad].
+        speed: the crank's constant speed [rad / time].
+
+    Returns:
+        ``(force (K, 2), moment (K,))``: on the frame [mass * length / time**2], and about the
+        crank's pivot ``O2`` [mass * length**2 / time**2].
+    """
+    inertia = link_inertia(lk, masses)
+    theta2 = jnp.asarray(theta2, dtype=jnp.float64)
+    return jax.vmap(lambda t: _shaking_one(lk, inertia, t, speed))(theta2)
+
+
 def _torque_one(fb: Linkage, inertia: dict, grav, theta2, speed):
     """The motor torque at one input angle: ``dE/dtheta2`` in closed form (module docstring)
     from the links' angular rates and their centres' first and second derivatives."""
@@ -228,4 +289,4 @@ def motor_torque(fb: Linkage, masses: Masses, theta2, speed) -> jax.Array:
     return jax.vmap(lambda t: _torque_one(fb, inertia, grav, t, speed))(theta2)
 
 
-__all__ = ["Masses", "link_inertia", "link_rates", "motor_torque", "slider_rates"]
+__all__ = ["Masses", "link_inertia", "link_rates", "motor_torque", "shaking", "slider_rates"]

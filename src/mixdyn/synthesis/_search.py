@@ -14,6 +14,8 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
 * the bounds: ``10 relu(low - x)``, ``10 relu(x - high)``;
 * the order (timing-free): ``10 relu(-increment)`` and ``10 relu(sum - 2 pi)``;
 * the torque (with a torque weight): ``sqrt(weight) T / s``;
+* the shaking force and moment (with their weights, :func:`~._dynamics.shaking`):
+  ``sqrt(weight) F / s`` and ``sqrt(weight) M / s``;
 * a motion task's coupler angles (:mod:`._motion`): ``(L / s) (e^{i phi_i} - e^{i alpha_i})``
   (2N), the task a timing-free path task of the poses' points besides.
 
@@ -47,7 +49,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..runtime._programs import cached_jit
-from ._dynamics import Masses, motor_torque
+from ._dynamics import Masses, motor_torque, shaking
 from ._fourbar import FourBar
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
@@ -109,6 +111,7 @@ class _Program:
         samples: input angles of the closure and torque terms along the motion.
         masses: how the links weigh (None: no torque term).
         torque: the torque measure of the residuals (``"rms"``, ``"peak"``), None: none.
+        shaking: the shaking force's and moment's measure, None: neither weighs.
         max_steps: Levenberg-Marquardt's steps at most per start.
         motion: a motion task (the coupler's angles at the points count too).
     """
@@ -121,20 +124,22 @@ class _Program:
     torque: str | None
     max_steps: int
     motion: bool = False
+    shaking: str | None = None
 
 
 def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool) -> _Program:
     """The program of a search of ``task`` (with the torque term where ``torque``)."""
-    weighed = torque and objective.torque_weight > 0
+    dynamic = torque and objective.dynamic
     return _Program(
         n=len(task.points),
         timed=task.timing is not None,
         linkage=task.linkage,
         samples=int(objective.samples),
-        masses=objective.masses if weighed else None,
-        torque=objective.torque if weighed else None,
+        masses=objective.masses if dynamic else None,
+        torque=objective.torque if dynamic and objective.torque_weight > 0 else None,
         max_steps=int(max_steps),
         motion=isinstance(task, MotionTask),
+        shaking=objective.shaking if dynamic and objective.shakes else None,
     )
 
 
@@ -154,6 +159,8 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
         "high_on": finite[:, 1].astype(float),
         "cmax": f64(min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)),
         "weight": f64(objective.torque_weight),
+        "force_weight": f64(objective.shaking_force_weight),
+        "moment_weight": f64(objective.shaking_moment_weight),
         "speed": f64(objective.speed),
         "angles": task.angles if motion else np.zeros(layout.n),  # a motion's poses [rad]
         "length": f64(task.weight_length / layout.scale if motion else 0.0),  # L / s
@@ -197,6 +204,12 @@ def _residuals(program: _Program, data: dict):
             tau = motor_torque(fb, program.masses, grid, data["speed"])
             measure = _torque_measure(tau, program.torque)
             parts.append(jnp.sqrt(data["weight"]) * measure[None] / s)
+        if program.shaking is not None:
+            force, moment = shaking(fb, program.masses, grid, data["speed"])
+            f = _force_measure(force, program.shaking)
+            m = _torque_measure(moment, program.shaking)
+            parts.append(jnp.stack([jnp.sqrt(data["force_weight"]) * f,
+                                    jnp.sqrt(data["moment_weight"]) * m]) / s)  # fmt: skip
         return jnp.concatenate(parts)
 
     return r
@@ -225,6 +238,16 @@ def _torque_measure(tau, kind: str):
     return big * jnp.mean((tau / big) ** 8) ** (1 / 8)
 
 
+def _force_measure(force, kind: str):
+    """The RMS of the magnitudes of ``force`` (K, 2), or their mean 8-norm (``"peak"``),
+    from the squared magnitudes (smooth where a force vanishes)."""
+    squared = jnp.sum(force**2, axis=1)
+    if kind == "rms":
+        return jnp.sqrt(jnp.mean(squared))
+    big = jnp.max(squared) + 1e-300
+    return jnp.sqrt(big) * jnp.mean((squared / big) ** 4) ** (1 / 8)
+
+
 @dataclasses.dataclass(frozen=True)
 class Candidate:
     """One synthesized linkage.
@@ -239,6 +262,10 @@ class Candidate:
         score: the objective (error plus the weighted torque term) [length**2].
         torque_rms, torque_peak: the motor torque over the traversed motion [torque] (NaN
             without masses).
+        shaking_force_rms, shaking_force_peak: the shaking force's magnitude over it [force]
+            (NaN without masses).
+        shaking_moment_rms, shaking_moment_peak: the shaking moment about the crank's pivot
+            over it [torque] (NaN without masses).
         min_transmission: the least transmission angle over the traversed motion [rad].
         coupler_angle: a motion task's ``gamma`` [rad]: the angle of the carried body's line
             from the coupler's line ``A -> B`` (the poses' angles are the coupler's plus it);
@@ -253,6 +280,10 @@ class Candidate:
     torque_peak: float
     min_transmission: float
     coupler_angle: float = 0.0
+    shaking_force_rms: float = float("nan")
+    shaking_force_peak: float = float("nan")
+    shaking_moment_rms: float = float("nan")
+    shaking_moment_peak: float = float("nan")
 
     @property
     def linkage(self) -> Linkage:
@@ -357,6 +388,10 @@ class Synthesis(Ranked):
                 score=c.score,
                 torque_rms=c.torque_rms,
                 torque_peak=c.torque_peak,
+                shaking_force_rms=c.shaking_force_rms,
+                shaking_force_peak=c.shaking_force_peak,
+                shaking_moment_rms=c.shaking_moment_rms,
+                shaking_moment_peak=c.shaking_moment_peak,
                 min_transmission_deg=np.rad2deg(c.min_transmission),
             )
             if isinstance(self.task, MotionTask):
@@ -474,7 +509,7 @@ def synthesize(
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b * s2))
     solve = functools.partial(_solve_chunk, weighed, data)
     u_all, score_all = solve_all(solve, u0, branches, chunk, report)
-    if polish and objective.torque_weight > 0:
+    if polish and objective.dynamic:
         path_only = _program(task, objective, max_steps, torque=False)
         report = None if progress is None else (lambda d, n, b: progress("polish", d, n, b * s2))
         solve = functools.partial(_solve_chunk, path_only, data)
@@ -546,10 +581,20 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
         keys.append((key, branches[i]))
         fb = layout.linkage(*(np.float64(x) for x in v), np.float64(branches[i]))
         rms = peak = float("nan")
+        shakes = {}
         if objective.masses is not None:
             grid = np.linspace(theta[0], theta[-1], 256)
             tau = np.asarray(motor_torque(fb, objective.masses, grid, objective.speed))
             rms, peak = float(np.sqrt(np.mean(tau**2))), float(np.max(np.abs(tau)))
+            force, moment = (np.asarray(a) for a in shaking(fb, objective.masses, grid,
+                                                               objective.speed))  # fmt: skip
+            size = np.hypot(force[:, 0], force[:, 1])
+            shakes = {
+                "shaking_force_rms": float(np.sqrt(np.mean(size**2))),
+                "shaking_force_peak": float(np.max(size)),
+                "shaking_moment_rms": float(np.sqrt(np.mean(moment**2))),
+                "shaking_moment_peak": float(np.max(np.abs(moment))),
+            }
         gamma = 0.0
         if isinstance(task, MotionTask):
             gamma = float(offset(body_angles(fb, jnp.asarray(theta)), jnp.asarray(task.angles)))
@@ -563,6 +608,7 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
                 torque_peak=peak,
                 min_transmission=float(np.arccos(min(float(worst[i]), 1.0))),
                 coupler_angle=gamma,
+                **shakes,
             )
         )
         if len(kept) == keep:

@@ -113,18 +113,25 @@ class PathTask:
 
 @dataclasses.dataclass(frozen=True)
 class Objective:
-    """How a candidate is scored: path error, plus the motor torque by weight.
+    """How a candidate is scored: path error, plus the motor torque and the shaking force and
+    moment by weight.
 
-    The score is ``sum_i |C(theta_i) - P_i|^2 + torque_weight * T^2`` with ``T`` the RMS
-    (``torque="rms"``) or a smooth stand-in for the peak (``"peak"``: the mean 8-norm
-    ``mean(|tau|^8)^(1/8)``, at most the peak and dominated by it) of the motor torque over the
-    traversed input angles, the crank turning at ``speed``.
+    The score is ``sum_i |C(theta_i) - P_i|^2 + torque_weight * T^2 + shaking_force_weight *
+    F^2 + shaking_moment_weight * M^2`` with ``T`` the RMS (``torque="rms"``) or a smooth
+    stand-in for the peak (``"peak"``: the mean 8-norm ``mean(|tau|^8)^(1/8)``, at most the
+    peak and dominated by it) of the motor torque over the traversed input angles, the crank
+    turning at ``speed``; ``F`` and ``M`` the same measure (``shaking``) of the shaking
+    force's magnitude and of the shaking moment about the crank's pivot
+    (:func:`~._dynamics.shaking`).
 
     Attributes:
         masses: how the links weigh (None: no dynamics; the torque is not computed).
         speed: the crank's constant speed [rad / time].
         torque_weight: [length**2 / torque**2] the weight of ``T^2`` (0: kinematics only).
         torque: ``"rms"`` or ``"peak"``.
+        shaking_force_weight: [length**2 / force**2] the weight of ``F^2``.
+        shaking_moment_weight: [length**2 / torque**2] the weight of ``M^2``.
+        shaking: ``"rms"`` or ``"peak"``: the shaking force's and moment's measure.
         samples: input angles over the traversed motion at which the torque and the
             transmission angle are evaluated.
     """
@@ -134,15 +141,32 @@ class Objective:
     torque_weight: float = 0.0
     torque: str = "rms"
     samples: int = 48
+    shaking_force_weight: float = 0.0
+    shaking_moment_weight: float = 0.0
+    shaking: str = "rms"
+
+    @property
+    def dynamic(self) -> bool:
+        """Whether a dynamic term weighs in the score."""
+        return max(self.torque_weight, self.shaking_force_weight, self.shaking_moment_weight) > 0
+
+    @property
+    def shakes(self) -> bool:
+        """Whether the shaking force or moment weighs in the score."""
+        return max(self.shaking_force_weight, self.shaking_moment_weight) > 0
 
     def __post_init__(self):
-        if self.torque not in ("rms", "peak"):
-            raise ModelError(f"torque must be 'rms' or 'peak', got {self.torque!r}", "torque")
-        if not (np.isfinite(self.torque_weight) and self.torque_weight >= 0):
-            raise ModelError("torque_weight must be a finite number >= 0", "torque_weight")
-        if self.torque_weight > 0 and self.masses is None:
+        for key in ("torque", "shaking"):
+            if getattr(self, key) not in ("rms", "peak"):
+                raise ModelError(f"{key} must be 'rms' or 'peak', got {getattr(self, key)!r}", key)
+        for key in ("torque_weight", "shaking_force_weight", "shaking_moment_weight"):
+            w = getattr(self, key)
+            if not (np.isfinite(w) and w >= 0):
+                raise ModelError(f"{key} must be a finite number >= 0", key)
+        if self.dynamic and self.masses is None:
             raise ModelError(
-                "a torque objective needs the links' masses: give masses=Masses(density=...)",
+                "a torque or shaking objective needs the links' masses: give "
+                "masses=Masses(density=...)",
                 "masses",
             )
         if not (np.isfinite(self.speed) and self.speed > 0):
