@@ -1,11 +1,16 @@
-"""The shaking force and moment of synthesized linkages (:func:`mixdyn.synthesis.shaking`)
-against independent truths:
+"""The shaking force and moment and the joint reactions of synthesized linkages
+(:func:`mixdyn.synthesis.shaking`, :func:`mixdyn.synthesis.reactions`) against independent
+truths:
 
 * the rates of the links' momentum by central finite differences of the assembled positions
   (force ``-Omega^2 d2/dtheta2 sum m G``; moment about the crank's pivot ``-Omega^2 d/dtheta
   sum (J phi' + m (G - O2) x G')``), for a four-bar and a slider-crank;
 * the reactions of mixdyn's inverse dynamics of the built model, gravity off: the ground
   joints' forces and the motor's torque passed to the frame (slow);
+* the joint reactions (each link's Newton-Euler equations, one linear solve) against the
+  energy balance's motor torque and the momentum balance (the ground's forces on the links
+  are ``sum m (a - g)``: minus the shaking force minus the weight), and against md.inverse's
+  reactions joint by joint (slow);
 * the objective: refused without masses; with the shaking force weighed, a search finds a
   linkage through the same points that shakes less than the kinematics-only optimum, by
   md.inverse's reactions (slow).
@@ -26,6 +31,8 @@ from mixdyn.synthesis import (
     four_bar_model,
     link_angles,
     link_inertia,
+    motor_torque,
+    reactions,
     rod_and_slider,
     shaking,
     slider_crank_model,
@@ -98,6 +105,32 @@ def test_shaking_is_the_rate_of_the_links_momentum(lk):
     assert np.max(np.abs(force)) > 0.1 and np.max(np.abs(moment)) > 0.01  # real loads
 
 
+WEIGHING = Masses(density=2.0, payload=0.3, slider=0.4)  # gravity on: -9.81 m/s^2 along y
+
+
+@pytest.mark.parametrize(
+    "lk, ground",
+    [
+        (FOUR_BAR, (0, 3)),
+        pytest.param(SLIDER_CRANK, (0, 3), marks=pytest.mark.slow),  # long: CI's slow set
+    ],
+    ids=["four-bar", "slider-crank"],
+)
+def test_joint_reactions_balance_the_links_momentum_and_energy(lk, ground):
+    """Newton-Euler's reactions, gravity on: the motor's torque is the energy balance's
+    (:func:`motor_torque`), and the ground's forces on the links sum to ``sum m (a - g)``,
+    i.e. minus the shaking force (a third way: momentum) minus the links' weight."""
+    theta = np.linspace(0.2, 5.5, 4)
+    forces, torque = (np.asarray(a) for a in reactions(lk, WEIGHING, theta, SPEED))
+    tau = np.asarray(motor_torque(lk, WEIGHING, theta, SPEED))
+    force, _ = (np.asarray(a) for a in shaking(lk, WEIGHING, theta, SPEED))
+    assert np.max(np.abs(torque - tau)) < 1e-10 * np.max(np.abs(tau))
+    mass = sum(float(v[0]) for v in link_inertia(lk, WEIGHING).values())
+    want = -force - mass * np.array(WEIGHING.gravity)
+    got = forces[:, ground[0]] + forces[:, ground[1]]
+    assert np.max(np.abs(got - want)) < 1e-10 * np.max(np.abs(want))
+
+
 def test_a_shaking_objective_needs_masses_and_a_measure():
     with pytest.raises(ModelError, match="masses"):
         Objective(shaking_force_weight=1.0)
@@ -126,35 +159,57 @@ def test_shaking_is_what_mixdyns_inverse_dynamics_passes_to_the_frame():
         on_links = np.stack([sum(inv[f"{g}.Fx"] for g in ground),
                              sum(inv[f"{g}.Fy"] for g in ground)], axis=1)  # fmt: skip
         assert np.max(np.abs(force + on_links)) < 1e-9 * np.max(np.abs(force))
+        joints = ("O2", "A", "B", ground[1])
+        weighed = build(lk, WEIGHING, start=start, speed=SPEED)
+        loads = md.inverse(weighed, t)
+        pins, _ = (np.asarray(a) for a in reactions(lk, WEIGHING, theta, SPEED))
+        for k, name in enumerate(joints):
+            want = np.stack([loads[f"{name}.Fx"], loads[f"{name}.Fy"]], axis=1)
+            assert np.max(np.abs(pins[:, k] - want)) < 1e-9 * np.max(np.abs(pins))
         if lk is FOUR_BAR:
             o4 = float(lk.r1) * np.array([np.cos(float(lk.theta0)), np.sin(float(lk.theta0))])
             lever = o4[0] * inv["O4.Fy"] - o4[1] * inv["O4.Fx"]
             assert np.max(np.abs(moment + lever + inv["motor"])) < 1e-9 * np.max(np.abs(moment))
 
 
-@pytest.mark.slow  # long: run by CI's slow set (two searches)
-def test_the_shaking_objective_lowers_the_shaking_force_at_the_same_path_error():
-    """Five points, timing-free (a family of exact four-bars): with the shaking force in the
-    objective the best linkage still passes the points (error ~ 0) and its RMS shaking force,
-    from md.inverse's ground reactions of its model (gravity off), is well below the
-    kinematics-only optimum's."""
+def _ground_force(inv):
+    """The RMS over time of the ground joints' forces' resultant's magnitude [N]."""
+    f = np.hypot(inv["O2.Fx"] + inv["O4.Fx"], inv["O2.Fy"] + inv["O4.Fy"])
+    return np.sqrt(np.mean(f**2))
+
+
+def _peak_reaction(inv):
+    """The largest joint force's magnitude over the joints and the time [N]."""
+    return max(np.max(np.hypot(inv[f"{j}.Fx"], inv[f"{j}.Fy"])) for j in ("O2", "A", "B", "O4"))
+
+
+@pytest.mark.slow  # long: run by CI's slow set (two searches each)
+@pytest.mark.parametrize(
+    "weight, gravity, measured, attribute",
+    [
+        ({"shaking_force_weight": 1e-3}, (0.0, 0.0), _ground_force, "shaking_force_rms"),
+        ({"reaction_weight": 1e-4}, (0.0, -9.81), _peak_reaction, "reaction_peak"),
+    ],
+    ids=["shaking force", "peak joint reaction"],
+)
+def test_a_dynamic_objective_lowers_its_figure_at_the_same_path_error(
+    weight, gravity, measured, attribute
+):
+    """Five points, timing-free (a family of exact four-bars): with the shaking force (the
+    peak joint reaction) in the objective the best linkage still passes the points (error ~
+    0) and its figure, from md.inverse's reactions of its model, is well below the
+    kinematics-only optimum's (the RMS ground force, gravity off; the largest pin force)."""
     points = np.array([[0.50, 0.30], [0.58, 0.42], [0.48, 0.55], [0.32, 0.50], [0.30, 0.36]])
-    masses, speed = Masses(density=2.0, payload=0.5, gravity=(0.0, 0.0)), 2 * np.pi
+    masses, speed = Masses(density=2.0, payload=0.5, gravity=gravity), 2 * np.pi
     task = PathTask(points)
     kin = synthesize(task, Objective(masses=masses, speed=speed), starts=64, seed=3)
-    dyn = synthesize(
-        task,
-        Objective(masses=masses, speed=speed, shaking_force_weight=1e-3),
-        starts=64,
-        seed=3,
-    )
-    rms = []
+    dyn = synthesize(task, Objective(masses=masses, speed=speed, **weight), starts=64, seed=3)
+    figures = []
     for out in (kin, dyn):
         c = out.best
         assert c.error < 1e-16
-        t = np.linspace(0.0, (c.angles[-1] - c.angles[0]) / speed, 129)
-        inv = md.inverse(out.model(), t)
-        f = np.hypot(inv["O2.Fx"] + inv["O4.Fx"], inv["O2.Fy"] + inv["O4.Fy"])
-        assert np.sqrt(np.mean(f**2)) == pytest.approx(c.shaking_force_rms, rel=0.02)
-        rms.append(np.sqrt(np.mean(f**2)))
-    assert rms[1] < rms[0] / 2
+        t = np.linspace(0.0, (c.angles[-1] - c.angles[0]) / speed, 257)
+        figure = measured(md.inverse(out.model(), t))
+        assert figure == pytest.approx(getattr(c, attribute), rel=0.02)
+        figures.append(figure)
+    assert figures[1] < figures[0] / 2

@@ -76,8 +76,8 @@ PROPERTIES = {
     "SynthesisMassesSpec": "density payload slider",
     "SynthesisMotionSpec": "length poses",
     "SynthesisRunSpec": "bounds function keep kind linkage masses max_steps min_transmission "
-    "motion name points seed shaking shaking_force_weight shaking_moment_weight speed starts "
-    "timing torque torque_weight",
+    "motion name points reaction reaction_weight seed shaking shaking_force_weight "
+    "shaking_moment_weight speed starts timing torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -99,7 +99,7 @@ PROPERTIES = {
 # synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34);
 # and with a synthesis run's linkage and a slider's mass (issue 34); and with a synthesis
 # run's motion generation (issue 34).
-STRIPPED_SHA256 = "023f8985b5316a910d932f0bde7be29102d8ac9dd0caa3d762e028f4d7d8fbf8"
+STRIPPED_SHA256 = "94e57a5d2016f862984273ce8870162a729b968554d91fbb32a43ce2e9c22f2f"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -319,16 +319,20 @@ def test_a_function_file_finds_freudensteins_linkage_and_its_best_yaml_runs(tmp_
     assert np.max(np.abs(gap)) < 1e-8
 
 
-def test_shaking_weights_are_read_in_si():
+def test_dynamic_weights_are_read_in_si():
     """``shaking_force_weight: 2 mm^2/N^2`` is 2e-6 m^2/N^2 (by hand), the moment's
-    ``3 mm^2/(N*mm)^2`` 3 m^2/(N m)^2; ``shaking: peak`` is the measure."""
+    ``3 mm^2/(N*mm)^2`` 3 m^2/(N m)^2, ``reaction_weight: 5 cm^2/N^2`` 5e-4 m^2/N^2; the
+    measures as written."""
     text = _text(
         "    masses: {density: 2 kg/m}",
         "    shaking: peak",
         "    shaking_force_weight: 2 mm^2/N^2",
         "    shaking_moment_weight: 3 mm^2/(N*mm)^2",
+        "    reaction_weight: 5 cm^2/N^2",
+        "    reaction: rms",
     )
     o = Runner(mio.reads(text, "shaking.yaml")).plans["path"].objective
     assert o.shaking_force_weight == pytest.approx(2e-6, rel=1e-14)
     assert o.shaking_moment_weight == pytest.approx(3.0, rel=1e-14)
+    assert o.reaction_weight == pytest.approx(5e-4, rel=1e-14) and o.reaction == "rms"
     assert o.shaking == "peak" and o.torque_weight == 0 and o.dynamic

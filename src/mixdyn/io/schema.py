@@ -1166,6 +1166,12 @@ class SynthesisRunSpec(Spec):
     shaking_moment_weight: Scalar = 0.0
     """Weight of the shaking moment's measure squared (about the crank's pivot)
     [length**2/torque**2], e.g. ``1e-4 m^2/(N*m)^2``. Default 0."""
+    reaction: Literal["peak", "rms"] = "peak"
+    """The joint reactions' measure in the objective: ``peak`` (default: a smooth stand-in for
+    the largest joint force over the joints and the motion) or ``rms``."""
+    reaction_weight: Scalar = 0.0
+    """Weight of the joint reactions' measure squared (gravity included)
+    [length**2/force**2], e.g. ``1e-4 m^2/N^2``. Default 0."""
     starts: int = Field(default=2048, ge=1, le=1_000_000)
     """Random starts, each refined by Levenberg-Marquardt. Default 2048."""
     seed: int = Field(default=0, ge=0)

@@ -63,12 +63,15 @@ from .plan import Plan
 #: Candidates whose curves the figure draws at most (the best first).
 DRAWN = 5
 
-#: The shaking force's and moment's columns of ``candidates.csv`` (where the links weigh).
-SHAKING_COLUMNS = (
+#: The shaking force's and moment's and the joint reactions' columns of ``candidates.csv``
+#: (where the links weigh).
+DYNAMIC_COLUMNS = (
     "shaking_force_rms",
     "shaking_force_peak",
     "shaking_moment_rms",
     "shaking_moment_peak",
+    "reaction_rms",
+    "reaction_peak",
 )
 
 #: The kind of quantity of each column of ``candidates.csv`` (SI units written beside).
@@ -85,6 +88,8 @@ _COLUMN_KINDS = {
     "shaking_force_peak": "force",
     "shaking_moment_rms": "torque",
     "shaking_moment_peak": "torque",
+    "reaction_rms": "force",
+    "reaction_peak": "force",
     "min_transmission": "angle",
     "coupler_angle": "angle",
 }
@@ -211,6 +216,7 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             ("torque_weight", (-2, -2, 4)),  # length**2 / torque**2
             ("shaking_force_weight", (0, -2, 4)),  # length**2 / force**2
             ("shaking_moment_weight", (-2, -2, 4)),
+            ("reaction_weight", (0, -2, 4)),
         )
     }
     for key, weight in weights.items():
@@ -223,7 +229,12 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             )
     try:
         objective = Objective(
-            masses=masses, speed=speed, torque=r.torque, shaking=r.shaking, **weights
+            masses=masses,
+            speed=speed,
+            torque=r.torque,
+            shaking=r.shaking,
+            reaction=r.reaction,
+            **weights,
         )
     except ModelError as e:
         runner.fail((*path, e.element) if e.element else path, e.message, "")
@@ -270,7 +281,7 @@ def candidates_table(out: Synthesis):
     columns where the links weigh, a motion's carried body's angle in the coupler."""
     names = [*out.task.linkage.NAMES, "branch", "theta_first", "theta_last", "error", "score"]
     if out.objective.masses is not None:
-        names += ["torque_rms", "torque_peak", *SHAKING_COLUMNS]
+        names += ["torque_rms", "torque_peak", *DYNAMIC_COLUMNS]
     names.append("min_transmission")
     if isinstance(out.task, MotionTask):
         names.append("coupler_angle")
@@ -284,7 +295,7 @@ def candidates_table(out: Synthesis):
             score=c.score,
             torque_rms=c.torque_rms,
             torque_peak=c.torque_peak,
-            **{k: getattr(c, k) for k in SHAKING_COLUMNS},
+            **{k: getattr(c, k) for k in DYNAMIC_COLUMNS},
             min_transmission=c.min_transmission,
             coupler_angle=c.coupler_angle,
         )
@@ -465,9 +476,11 @@ class SynthesisKind(RunKind):
         timing = "timing free" if plan.task.timing is None else "timing given"
         what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
         for key, label in (("shaking_force_weight", "shaking force"),
-                           ("shaking_moment_weight", "shaking moment")):  # fmt: skip
+                           ("shaking_moment_weight", "shaking moment"),
+                           ("reaction_weight", "joint reactions")):  # fmt: skip
             if getattr(o, key):
-                what += f", {label} ({r.shaking}) weight {getattr(o, key):.3g}"
+                measure = r.reaction if key == "reaction_weight" else r.shaking
+                what += f", {label} ({measure}) weight {getattr(o, key):.3g}"
         through = f"{len(plan.task.points)} points, {timing}"
         if isinstance(plan.task, MotionTask):
             through = f"{len(plan.task.poses)} poses (L = {plan.task.weight_length:.4g} m)"

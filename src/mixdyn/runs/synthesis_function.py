@@ -32,6 +32,8 @@ PATH_KEYS = (
     "shaking",
     "shaking_force_weight",
     "shaking_moment_weight",
+    "reaction",
+    "reaction_weight",
 )
 
 

@@ -7,11 +7,12 @@ generate a function, searched by gradients, with dynamics in a path's objective.
   implicit derivatives, its transmission angle;
 * :mod:`._slidercrank` — the same for an offset slider-crank (:class:`SliderCrank`; the
   path task's ``linkage="slider_crank"``);
-* :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque and the
-  shaking force and moment;
+* :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque, the shaking
+  force and moment and the joint reactions;
 * :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
   angle), :class:`FunctionTask` (input-output angle pairs, or a function over a range) and
-  :class:`Objective` (path error, motor torque, shaking force and moment by weight);
+  :class:`Objective` (path error, motor torque, shaking force and moment, joint reactions by
+  weight);
 * :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
   Levenberg-Marquardt at once, checked, ranked and deduplicated;
 * :mod:`._motion` — motion generation: :class:`MotionTask` (precision poses of the coupler)
@@ -32,7 +33,7 @@ Example::
     out.write("best.yaml")                               # mixdyn run best.yaml
 """
 
-from ._dynamics import Masses, link_inertia, motor_torque, shaking
+from ._dynamics import Masses, link_inertia, motor_torque, reactions, shaking
 from ._fourbar import NAMES, FourBar, coupler_curve, coupler_point, link_angles, transmission_cosine
 from ._function import FunctionCandidate, FunctionSynthesis
 from ._linkage import Linkage
@@ -67,6 +68,7 @@ __all__ = [
     "linkage_model",
     "model_file_text",
     "motor_torque",
+    "reactions",
     "rod_and_slider",
     "shaking",
     "slider_crank_model",

@@ -33,6 +33,16 @@ centre's acceleration is ``Omega^2 G_i''`` and each link's angular acceleration
 the moment about the crank's pivot ``O2`` (the motor's reaction included): the ground
 pivots' reactions on the frame, and the motor's, summed (:func:`shaking`; checked in the
 tests against the reactions of :func:`mixdyn.inverse`).
+
+The joint reactions (:func:`reactions`) follow from each link's Newton-Euler equations at
+the same accelerations, gravity included: ``F_in - F_out + m_i g = m_i a_i`` and the moments
+about the link's centre, solved for the pins' forces and the motor's torque (a four-bar: the
+forces at ``O2``, ``A``, ``B``, ``O4`` and the torque, 9 unknowns in 9 equations; a
+slider-crank: at ``O2``, ``A``, ``B``, the slide's normal force and the torque, 8 in 8, its
+slider a point mass at ``B``). Each is the force that the body before the joint exerts on the
+body after it (the ground on the crank at ``O2``, the crank on the coupler at ``A``, the
+coupler on the rocker or the slider at ``B``, the ground on the rocker at ``O4`` or on the
+slider at the slide), as mixdyn's ``{joint}.Fx``, ``.Fy`` columns are.
 """
 
 from __future__ import annotations
@@ -240,6 +250,95 @@ def _shaking_one(lk: Linkage, inertia: dict, theta2, speed):
     return force, moment
 
 
+#: Each linkage type's joints for :func:`reactions`: ``(name, body before, body after,
+#: slide)`` with the bodies' places in :func:`link_inertia` (-1: the ground) and ``slide``
+#: True for a frictionless slide (its force along the slide's normal only).
+JOINTS = {
+    FourBar: (("O2", -1, 0, False), ("A", 0, 1, False), ("B", 1, 2, False), ("O4", -1, 2, False)),
+    SliderCrank: (
+        ("O2", -1, 0, False),
+        ("A", 0, 1, False),
+        ("B", 1, 2, False),
+        ("slide", -1, 2, True),
+    ),
+}
+
+
+def _joint_points(lk: Linkage, theta2) -> jax.Array:
+    """The joints' points from the crank's pivot (4, 2) [length], in :data:`JOINTS`' order (a
+    slide's: the slider's pin)."""
+    phi2 = lk.theta0 + theta2
+    a = lk.r2 * jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
+    phi3 = lk.coupler_angle(theta2)
+    b = a + lk.r3 * jnp.stack([jnp.cos(phi3), jnp.sin(phi3)])
+    if isinstance(lk, SliderCrank):
+        return jnp.stack([jnp.zeros(2), a, b, b])
+    o4 = lk.r1 * jnp.stack([jnp.cos(lk.theta0), jnp.sin(lk.theta0)])
+    return jnp.stack([jnp.zeros(2), a, b, o4])
+
+
+def _reactions_one(lk: Linkage, inertia: dict, grav, theta2, speed):
+    """The joints' forces (4, 2) and the motor's torque at one input angle (module
+    docstring): each moving link's three Newton-Euler equations, one linear solve."""
+    _, dd, _, alpha = _RATES[type(lk)](lk, inertia, theta2)
+    acc, alpha = speed**2 * dd, speed**2 * alpha
+    g = _centres(lk, inertia, theta2)
+    p = _joint_points(lk, theta2)
+    m = [jnp.asarray(v[0], dtype=jnp.float64) for v in inertia.values()]
+    j = [jnp.asarray(v[2], dtype=jnp.float64) for v in inertia.values()]
+    normal = _perp(jnp.stack([jnp.cos(lk.theta0), jnp.sin(lk.theta0)]))
+    bases = [normal[:, None] if slide else jnp.eye(2) for *_, slide in JOINTS[type(lk)]]
+    n = sum(b.shape[1] for b in bases) + 1  # the torque last
+    rows = [jnp.zeros((3, n)) for _ in range(3)]
+    at = 0
+    for (_, before, after, _), basis, point in zip(JOINTS[type(lk)], bases, p, strict=True):
+        k = basis.shape[1]
+        for body, sign in ((after, 1.0), (before, -1.0)):
+            if body < 0:
+                continue
+            r = point - g[body]
+            block = jnp.concatenate([basis, (r[0] * basis[1] - r[1] * basis[0])[None]]) * sign
+            rows[body] = rows[body].at[:, at : at + k].add(block)
+        at += k
+    rows[0] = rows[0].at[2, n - 1].set(1.0)  # the motor's torque on the crank
+    rhs = [jnp.concatenate([m[i] * (acc[i] - grav), (j[i] * alpha[i])[None]]) for i in range(3)]
+    # A slider (a point mass at its pin) on a slide: its moment is the slide's, not solved for.
+    keep = [slice(None)] * 3
+    for _, _, after, slide in JOINTS[type(lk)]:
+        if slide:
+            keep[after] = slice(0, 2)
+    matrix = jnp.concatenate([r[k] for r, k in zip(rows, keep, strict=True)])
+    x = jnp.linalg.solve(matrix, jnp.concatenate([b[k] for b, k in zip(rhs, keep, strict=True)]))
+    forces, at = [], 0
+    for basis in bases:
+        k = basis.shape[1]
+        forces.append(basis @ x[at : at + k])
+        at += k
+    return jnp.stack(forces), x[-1]
+
+
+@eqx.filter_jit
+def reactions(lk: Linkage, masses: Masses, theta2, speed) -> tuple[jax.Array, jax.Array]:
+    """The joint reactions and the motor's torque of a linkage whose crank turns at ``speed``
+    through ``theta2``, gravity included (module docstring).
+
+    Args:
+        lk: the four-bar or slider-crank (unbatched).
+        masses: how its links weigh.
+        theta2: (K,) input angles [rad].
+        speed: the crank's constant speed [rad / time].
+
+    Returns:
+        ``(forces (K, 4, 2), torque (K,))``: the joints' forces in :data:`JOINTS`' order
+        (``O2``, ``A``, ``B``, ``O4`` or the slide) [mass * length / time**2] and the motor's
+        torque [mass * length**2 / time**2] (:func:`motor_torque`'s).
+    """
+    inertia = link_inertia(lk, masses)
+    grav = jnp.asarray(masses.gravity, dtype=jnp.float64)
+    theta2 = jnp.asarray(theta2, dtype=jnp.float64)
+    return jax.vmap(lambda t: _reactions_one(lk, inertia, grav, t, speed))(theta2)
+
+
 @eqx.filter_jit
 def shaking(lk: Linkage, masses: Masses, theta2, speed) -> tuple[jax.Array, jax.Array]:
     """The shaking force and moment of a linkage whose crank turns at ``speed`` through
@@ -289,4 +388,13 @@ def motor_torque(fb: Linkage, masses: Masses, theta2, speed) -> jax.Array:
     return jax.vmap(lambda t: _torque_one(fb, inertia, grav, t, speed))(theta2)
 
 
-__all__ = ["Masses", "link_inertia", "link_rates", "motor_torque", "shaking", "slider_rates"]
+__all__ = [
+    "JOINTS",
+    "Masses",
+    "link_inertia",
+    "link_rates",
+    "motor_torque",
+    "reactions",
+    "shaking",
+    "slider_rates",
+]

@@ -16,6 +16,7 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
 * the torque (with a torque weight): ``sqrt(weight) T / s``;
 * the shaking force and moment (with their weights, :func:`~._dynamics.shaking`):
   ``sqrt(weight) F / s`` and ``sqrt(weight) M / s``;
+* the joint reactions (with their weight, :func:`~._dynamics.reactions`): ``sqrt(weight) R / s``;
 * a motion task's coupler angles (:mod:`._motion`): ``(L / s) (e^{i phi_i} - e^{i alpha_i})``
   (2N), the task a timing-free path task of the poses' points besides.
 
@@ -49,7 +50,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..runtime._programs import cached_jit
-from ._dynamics import Masses, motor_torque, shaking
+from ._dynamics import Masses, motor_torque, reactions, shaking
 from ._fourbar import FourBar
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
@@ -112,6 +113,7 @@ class _Program:
         masses: how the links weigh (None: no torque term).
         torque: the torque measure of the residuals (``"rms"``, ``"peak"``), None: none.
         shaking: the shaking force's and moment's measure, None: neither weighs.
+        reaction: the joint reactions' measure, None: they do not weigh.
         max_steps: Levenberg-Marquardt's steps at most per start.
         motion: a motion task (the coupler's angles at the points count too).
     """
@@ -125,6 +127,7 @@ class _Program:
     max_steps: int
     motion: bool = False
     shaking: str | None = None
+    reaction: str | None = None
 
 
 def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool) -> _Program:
@@ -140,6 +143,7 @@ def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool)
         max_steps=int(max_steps),
         motion=isinstance(task, MotionTask),
         shaking=objective.shaking if dynamic and objective.shakes else None,
+        reaction=objective.reaction if dynamic and objective.reaction_weight > 0 else None,
     )
 
 
@@ -161,6 +165,7 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
         "weight": f64(objective.torque_weight),
         "force_weight": f64(objective.shaking_force_weight),
         "moment_weight": f64(objective.shaking_moment_weight),
+        "reaction_weight": f64(objective.reaction_weight),
         "speed": f64(objective.speed),
         "angles": task.angles if motion else np.zeros(layout.n),  # a motion's poses [rad]
         "length": f64(task.weight_length / layout.scale if motion else 0.0),  # L / s
@@ -210,6 +215,10 @@ def _residuals(program: _Program, data: dict):
             m = _torque_measure(moment, program.shaking)
             parts.append(jnp.stack([jnp.sqrt(data["force_weight"]) * f,
                                     jnp.sqrt(data["moment_weight"]) * m]) / s)  # fmt: skip
+        if program.reaction is not None:
+            forces, _ = reactions(fb, program.masses, grid, data["speed"])
+            size = _force_measure(forces.reshape(-1, 2), program.reaction)
+            parts.append(jnp.sqrt(data["reaction_weight"]) * size[None] / s)
         return jnp.concatenate(parts)
 
     return r
@@ -266,6 +275,8 @@ class Candidate:
             (NaN without masses).
         shaking_moment_rms, shaking_moment_peak: the shaking moment about the crank's pivot
             over it [torque] (NaN without masses).
+        reaction_rms, reaction_peak: the joints' forces' magnitudes over the joints and the
+            motion, gravity included [force] (NaN without masses).
         min_transmission: the least transmission angle over the traversed motion [rad].
         coupler_angle: a motion task's ``gamma`` [rad]: the angle of the carried body's line
             from the coupler's line ``A -> B`` (the poses' angles are the coupler's plus it);
@@ -284,6 +295,8 @@ class Candidate:
     shaking_force_peak: float = float("nan")
     shaking_moment_rms: float = float("nan")
     shaking_moment_peak: float = float("nan")
+    reaction_rms: float = float("nan")
+    reaction_peak: float = float("nan")
 
     @property
     def linkage(self) -> Linkage:
@@ -392,6 +405,8 @@ class Synthesis(Ranked):
                 shaking_force_peak=c.shaking_force_peak,
                 shaking_moment_rms=c.shaking_moment_rms,
                 shaking_moment_peak=c.shaking_moment_peak,
+                reaction_rms=c.reaction_rms,
+                reaction_peak=c.reaction_peak,
                 min_transmission_deg=np.rad2deg(c.min_transmission),
             )
             if isinstance(self.task, MotionTask):
@@ -595,6 +610,10 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
                 "shaking_moment_rms": float(np.sqrt(np.mean(moment**2))),
                 "shaking_moment_peak": float(np.max(np.abs(moment))),
             }
+            forces, _ = reactions(fb, objective.masses, grid, objective.speed)
+            loads = np.linalg.norm(np.asarray(forces), axis=2)
+            shakes["reaction_rms"] = float(np.sqrt(np.mean(loads**2)))
+            shakes["reaction_peak"] = float(np.max(loads))
         gamma = 0.0
         if isinstance(task, MotionTask):
             gamma = float(offset(body_angles(fb, jnp.asarray(theta)), jnp.asarray(task.angles)))

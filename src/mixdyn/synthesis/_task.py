@@ -113,16 +113,18 @@ class PathTask:
 
 @dataclasses.dataclass(frozen=True)
 class Objective:
-    """How a candidate is scored: path error, plus the motor torque and the shaking force and
-    moment by weight.
+    """How a candidate is scored: path error, plus the motor torque, the shaking force and
+    moment and the joint reactions by weight.
 
     The score is ``sum_i |C(theta_i) - P_i|^2 + torque_weight * T^2 + shaking_force_weight *
-    F^2 + shaking_moment_weight * M^2`` with ``T`` the RMS (``torque="rms"``) or a smooth
-    stand-in for the peak (``"peak"``: the mean 8-norm ``mean(|tau|^8)^(1/8)``, at most the
-    peak and dominated by it) of the motor torque over the traversed input angles, the crank
-    turning at ``speed``; ``F`` and ``M`` the same measure (``shaking``) of the shaking
-    force's magnitude and of the shaking moment about the crank's pivot
-    (:func:`~._dynamics.shaking`).
+    F^2 + shaking_moment_weight * M^2 + reaction_weight * R^2`` with ``T`` the RMS
+    (``torque="rms"``) or a smooth stand-in for the peak (``"peak"``: the mean 8-norm
+    ``mean(|tau|^8)^(1/8)``, at most the peak and dominated by it) of the motor torque over
+    the traversed input angles, the crank turning at ``speed``; ``F`` and ``M`` the same
+    measure (``shaking``) of the shaking force's magnitude and of the shaking moment about
+    the crank's pivot (:func:`~._dynamics.shaking`); ``R`` the ``reaction`` measure
+    (``"peak"`` by default) of the joints' forces' magnitudes over the joints and the
+    motion, gravity included (:func:`~._dynamics.reactions`).
 
     Attributes:
         masses: how the links weigh (None: no dynamics; the torque is not computed).
@@ -132,6 +134,8 @@ class Objective:
         shaking_force_weight: [length**2 / force**2] the weight of ``F^2``.
         shaking_moment_weight: [length**2 / torque**2] the weight of ``M^2``.
         shaking: ``"rms"`` or ``"peak"``: the shaking force's and moment's measure.
+        reaction_weight: [length**2 / force**2] the weight of ``R^2``.
+        reaction: ``"peak"`` or ``"rms"``: the joint reactions' measure.
         samples: input angles over the traversed motion at which the torque and the
             transmission angle are evaluated.
     """
@@ -144,11 +148,14 @@ class Objective:
     shaking_force_weight: float = 0.0
     shaking_moment_weight: float = 0.0
     shaking: str = "rms"
+    reaction_weight: float = 0.0
+    reaction: str = "peak"
 
     @property
     def dynamic(self) -> bool:
         """Whether a dynamic term weighs in the score."""
-        return max(self.torque_weight, self.shaking_force_weight, self.shaking_moment_weight) > 0
+        return max(self.torque_weight, self.reaction_weight, self.shaking_force_weight,
+                   self.shaking_moment_weight) > 0  # fmt: skip
 
     @property
     def shakes(self) -> bool:
@@ -156,16 +163,17 @@ class Objective:
         return max(self.shaking_force_weight, self.shaking_moment_weight) > 0
 
     def __post_init__(self):
-        for key in ("torque", "shaking"):
+        for key in ("torque", "shaking", "reaction"):
             if getattr(self, key) not in ("rms", "peak"):
                 raise ModelError(f"{key} must be 'rms' or 'peak', got {getattr(self, key)!r}", key)
-        for key in ("torque_weight", "shaking_force_weight", "shaking_moment_weight"):
+        for key in ("torque_weight", "shaking_force_weight", "shaking_moment_weight",
+                    "reaction_weight"):  # fmt: skip
             w = getattr(self, key)
             if not (np.isfinite(w) and w >= 0):
                 raise ModelError(f"{key} must be a finite number >= 0", key)
         if self.dynamic and self.masses is None:
             raise ModelError(
-                "a torque or shaking objective needs the links' masses: give "
+                "a torque, shaking or reaction objective needs the links' masses: give "
                 "masses=Masses(density=...)",
                 "masses",
             )
