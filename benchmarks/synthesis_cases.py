@@ -1,9 +1,11 @@
 """mixdyn's path synthesis on the four-bar path-generation cases recorded in shared/refdata.
 
 Each case file (``fourbar_path_*.txt`` in the project's ``shared/refdata``) holds the targets,
-the timing (free, prescribed up to the start, or prescribed from the ground link), the
-variables' bounds, the source's constraints (Grashof; a crank; the points in order) and, where
-the source gives one, a design and the error of a published linkage. ``md.synthesize`` gets
+the timing (free, prescribed up to the start, prescribed from the ground link, or not stated),
+the variables' bounds, the source's constraints (Grashof; a crank; the points in order) and,
+where the source gives one, a design vector or a published linkage, whose error is computed
+here as the reference (no case file holds a published error: none was readable). Where a
+source states no bounds, ``UNSTATED`` sets them. ``md.synthesize`` gets
 the targets, the timing and the bounds; its best linkage, and its best one that also meets
 the source's constraints, are then measured here by a computation of their own (NumPy; the
 coupler point from the two circles' intersection on the linkage's branch, not mixdyn's
