@@ -437,15 +437,16 @@ def run(
         for i in range(count):
             if i not in made and i not in errors:
                 _checked(members[i], ts, lambda i=i: describe(i), i)
-        cs = [Constraints(m.joints, m.drivers, m.nq, linear_solver=c0.linear_solver)
-              for m in members]  # fmt: skip
+        if not one_structure(members):
+            return None
+        cs = _constraint_sets(c0, members)
         rough = [_rough(m, v) for m, v in zip(members, values, strict=True)]
         L = [length_scale(m) for m in members]
         held = tuple(first.model.coordinate_index(ref) for ref in values[0].hold)
         if len({v.hold for v in values}) > 1:
             return None  # other coordinates held
     alive = [None if i in errors else cs[i] for i in range(count)]
-    if not one_structure([c0, *alive]) or not (shared or one_structure(members)):
+    if cs is None or not one_structure([c0, *alive]):
         return None
     L, tol = np.asarray(L, dtype=float), np.array([v.tol for v in values])
 
@@ -464,6 +465,17 @@ def run(
     done = finished(count, stack.flagged(), _built(stack), errors, on_member)
     seconds["finishing"] = time.perf_counter() - clock - seconds["setup"] - seconds["equilibria"]
     return (stack, *done)
+
+
+def _constraint_sets(c0: Constraints, members: Sequence[Model]) -> list | None:
+    """Each member's constraint set of every row, ``c0`` (the first set-up's) with the
+    member's joints and drivers: the set's leaves are theirs, in order (one unflatten a
+    member; the members of one structure). None where the leaves do not match."""
+    treedef = jax.tree_util.tree_structure(c0)
+    rows = [jax.tree_util.tree_leaves((m.joints, m.drivers)) for m in members]
+    if any(len(r) != treedef.num_leaves for r in rows):  # pragma: no cover - a new field
+        return None
+    return [jax.tree_util.tree_unflatten(treedef, r) for r in rows]
 
 
 def _rough(model: Model, value: QuasiStatic) -> np.ndarray:
