@@ -238,8 +238,9 @@ def _centres(lk: Linkage, inertia: dict, theta2) -> jax.Array:
     return jnp.stack([_rot(phi2, crank), lk.r2 * e2 + _rot(phi3, coupler), last])
 
 
-def _shaking_one(lk: Linkage, inertia: dict, theta2, speed):
-    """The shaking force (2,) and moment about ``O2`` at one input angle (module docstring)."""
+def _shaking_one(lk: Linkage, inertia: dict, _grav, theta2, speed):
+    """The shaking force (2,) and moment about ``O2`` at one input angle (module docstring;
+    gravity left out)."""
     _, dd, _, a = _RATES[type(lk)](lk, inertia, theta2)
     g = _centres(lk, inertia, theta2)
     m = jnp.stack([jnp.asarray(v[0], dtype=jnp.float64) for v in inertia.values()])
@@ -333,10 +334,7 @@ def reactions(lk: Linkage, masses: Masses, theta2, speed) -> tuple[jax.Array, ja
         (``O2``, ``A``, ``B``, ``O4`` or the slide) [mass * length / time**2] and the motor's
         torque [mass * length**2 / time**2] (:func:`motor_torque`'s).
     """
-    inertia = link_inertia(lk, masses)
-    grav = jnp.asarray(masses.gravity, dtype=jnp.float64)
-    theta2 = jnp.asarray(theta2, dtype=jnp.float64)
-    return jax.vmap(lambda t: _reactions_one(lk, inertia, grav, t, speed))(theta2)
+    return _over_angles(_reactions_one, lk, masses, theta2, speed)
 
 
 @eqx.filter_jit
@@ -354,9 +352,7 @@ def shaking(lk: Linkage, masses: Masses, theta2, speed) -> tuple[jax.Array, jax.
         ``(force (K, 2), moment (K,))``: on the frame [mass * length / time**2], and about the
         crank's pivot ``O2`` [mass * length**2 / time**2].
     """
-    inertia = link_inertia(lk, masses)
-    theta2 = jnp.asarray(theta2, dtype=jnp.float64)
-    return jax.vmap(lambda t: _shaking_one(lk, inertia, t, speed))(theta2)
+    return _over_angles(_shaking_one, lk, masses, theta2, speed)
 
 
 def _torque_one(fb: Linkage, inertia: dict, grav, theta2, speed):
@@ -382,10 +378,16 @@ def motor_torque(fb: Linkage, masses: Masses, theta2, speed) -> jax.Array:
     Returns:
         (K,) the motor torque [mass * length**2 / time**2], positive along ``theta2``.
     """
-    inertia = link_inertia(fb, masses)
+    return _over_angles(_torque_one, fb, masses, theta2, speed)
+
+
+def _over_angles(one, lk: Linkage, masses: Masses, theta2, speed):
+    """``one(lk, inertia, gravity (2,), theta, speed)`` at each input angle of ``theta2``
+    (K,), stacked along a first axis."""
+    inertia = link_inertia(lk, masses)
     grav = jnp.asarray(masses.gravity, dtype=jnp.float64)
     theta2 = jnp.asarray(theta2, dtype=jnp.float64)
-    return jax.vmap(lambda t: _torque_one(fb, inertia, grav, t, speed))(theta2)
+    return jax.vmap(lambda t: one(lk, inertia, grav, t, speed))(theta2)
 
 
 __all__ = [
