@@ -305,17 +305,25 @@ class StaticStack:
     ) -> tuple[dict[str, np.ndarray], dict[str, str]]:
         """Every result column of every member, (M, N) each (``t``: (N,)), with the points'
         columns, in ``output_units``, and their units; a failed member's rows NaN (as
-        :func:`~._stacked.columns`)."""
+        :func:`~._stacked.columns`); a member run like its single run (flagged) has its
+        result's rows."""
         first = next((i for i in range(self.count) if i not in errors), None)
         if first is None:
             raise ValueError("no member of the sweep succeeded: there is nothing to label")
         result: Result = results[first]
         setup = self.setup(first)
         c = setup.start.constraints(independent_rows_only=True)
-        q, lam = (np.asarray(a) for a in self.arrays[:2])
+        q, lam = np.array(self.arrays[0]), np.asarray(self.arrays[1])
+        redone = [int(i) for i in np.flatnonzero(self.flagged()) if i not in errors]
+        for i in redone:
+            q[i] = results[i].q
         zeros = np.zeros_like(q)
         cols, units = body_columns(result.model, self.ts, q, zeros, zeros), result.units()
         extra, _ = _extra(c, setup.start.drivers, lam, np.asarray(self.arrays[3]), self.arrays[4])
+        for k in extra if redone else ():
+            extra[k] = np.array(extra[k], dtype=float)
+            for i in redone:
+                extra[k][i] = results[i][k]
         cols.update(extra)
         if set(cols) != set(result.columns()):  # pragma: no cover - a column made elsewhere
             raise RuntimeError("the stacked columns differ from a member's result's")
