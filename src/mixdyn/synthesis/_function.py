@@ -14,7 +14,8 @@ Levenberg-Marquardt through the assembly's implicit derivatives, ``jax.vmap`` ov
 starts. The residuals: for each pair the rocker's unit vector against the asked one,
 ``e^{i phi4(theta2_i + alpha)} - e^{i (theta4_i + beta)}`` (two components: smooth across the
 angle's wrap, ``|.| = 2 sin(|error| / 2)``); the loop's closure and transmission angle along
-the motion from the first input to the last, and the bounds, as penalties (as for a path).
+the motion from the first input to the last, the bounds and the Grashof type
+(:attr:`FunctionTask.grashof`, :mod:`._limits`), as penalties (as for a path).
 
 Three precision points with absolute angles and three unknowns are Freudenstein's classic
 problem: ``K1 cos theta4 - K2 cos theta2 + K3 = cos(theta2 - theta4)`` with ``K1 = r1/r2``,
@@ -34,6 +35,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ._fourbar import FourBar, link_angles, transmission_cosine
+from ._limits import LIMIT_MARGIN, grashof_gaps
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask
 
@@ -174,7 +176,8 @@ def _residuals(task: FunctionTask, samples: int):
         closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - cmax)
         lengths = u[:3]
         bounds = PENALTY * jnp.concatenate([jax.nn.relu(lo - lengths), jax.nn.relu(lengths - hi)])
-        return jnp.concatenate([angle, closure, bounds])
+        grashof = PENALTY * jax.nn.relu(grashof_gaps(fb, task.grashof) + LIMIT_MARGIN)
+        return jnp.concatenate([angle, closure, bounds, grashof])
 
     return r
 
@@ -245,6 +248,8 @@ def synthesize_function(
     slack = 1e-9 * hi
     ok = np.isfinite(error) & (worst <= np.cos(task.min_transmission))
     ok &= np.all((u_all[:, :3] >= lo - slack) & (u_all[:, :3] <= hi + slack), axis=1)
+    gaps = grashof_gaps(jax.vmap(_fourbar)(jnp.asarray(u_all), jnp.asarray(branches)), task.grashof)
+    ok &= np.all(np.asarray(gaps) <= 1e-9, axis=1)
     kept, keys = [], []
     for i in np.argsort(np.where(ok, error, np.inf))[: int(ok.sum())]:
         u = u_all[i]

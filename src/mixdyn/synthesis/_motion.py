@@ -66,6 +66,8 @@ class MotionTask:
             the poses' size, the largest distance of their points from their centre).
         linkage: the linkage type, as for a :class:`PathTask` (``"four_bar"``, the default,
             or ``"slider_crank"``); held as the class.
+        grashof: the Grashof type asked for, as for a :class:`PathTask` (default ``"any"``).
+        pivots: the ground pivots' regions, as for a :class:`PathTask` (default none).
         path: the :class:`PathTask` of the poses' points (timing free), made and checked from
             the above: the bounds, the box and the size are its.
     """
@@ -75,6 +77,8 @@ class MotionTask:
     min_transmission: float = 0.0
     length: float | None = None
     linkage: str | type = "four_bar"
+    grashof: str = "any"
+    pivots: dict = dataclasses.field(default_factory=dict)
     path: PathTask = dataclasses.field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -92,9 +96,12 @@ class MotionTask:
             bounds=self.bounds,
             min_transmission=self.min_transmission,
             linkage=self.linkage,
+            grashof=self.grashof,
+            pivots=self.pivots,
         )
         object.__setattr__(self, "path", path)
         object.__setattr__(self, "linkage", path.linkage)
+        object.__setattr__(self, "pivots", path.pivots)
         if self.length is not None:
             if not (np.isfinite(self.length) and self.length > 0):
                 raise ModelError(f"length must be > 0, got {self.length!r}", "length")

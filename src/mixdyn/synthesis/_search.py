@@ -12,6 +12,9 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
   between two points has a circuit defect and pays for it): ``10 relu(|cos mu| - c)`` with
   ``c = cos(min_transmission)`` (at most 0.999);
 * the bounds: ``10 relu(low - x)``, ``10 relu(x - high)``;
+* the Grashof type and the ground pivots' regions (:mod:`._limits`): ``10 relu(g / s + 0.001)``
+  of each gap ``g`` [length] (a linear condition on the lengths, a rectangle's side: met
+  where ``g <= 0``; the margin keeps a search that leans on it inside);
 * the order (timing-free): ``10 relu(-increment)`` and ``10 relu(sum - 2 pi)``;
 * the torque (with a torque weight): ``sqrt(weight) T / s``;
 * the shaking force and moment (with their weights, :func:`~._dynamics.shaking`):
@@ -52,6 +55,7 @@ from ..errors import ModelError
 from ..runtime._programs import cached_jit
 from ._dynamics import Masses, motor_torque, reactions, shaking
 from ._fourbar import FourBar
+from ._limits import LIMIT_MARGIN, grashof_gaps, region_arrays, region_gaps
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
 from ._slidercrank import SliderCrank
@@ -116,6 +120,8 @@ class _Program:
         reaction: the joint reactions' measure, None: they do not weigh.
         max_steps: Levenberg-Marquardt's steps at most per start.
         motion: a motion task (the coupler's angles at the points count too).
+        grashof: the Grashof type asked for (:mod:`._limits`).
+        regions: the ground pivots with a region (their rectangles are data).
     """
 
     n: int
@@ -128,6 +134,8 @@ class _Program:
     motion: bool = False
     shaking: str | None = None
     reaction: str | None = None
+    grashof: str = "any"
+    regions: tuple[str, ...] = ()
 
 
 def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool) -> _Program:
@@ -144,6 +152,8 @@ def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool)
         motion=isinstance(task, MotionTask),
         shaking=objective.shaking if dynamic and objective.shakes else None,
         reaction=objective.reaction if dynamic and objective.reaction_weight > 0 else None,
+        grashof=task.grashof,
+        regions=tuple(task.pivots),
     )
 
 
@@ -169,6 +179,7 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
         "speed": f64(objective.speed),
         "angles": task.angles if motion else np.zeros(layout.n),  # a motion's poses [rad]
         "length": f64(task.weight_length / layout.scale if motion else 0.0),  # L / s
+        **dict(zip(("region_low", "region_high"), region_arrays(task.pivots), strict=True)),
     }
 
 
@@ -198,7 +209,9 @@ def _residuals(program: _Program, data: dict):
         bounds = PENALTY * jnp.concatenate(
             [lo_on * jax.nn.relu(lo - v) / scale_of, hi_on * jax.nn.relu(v - hi) / scale_of]
         )
-        parts = [path, closure, bounds]
+        limits = jnp.concatenate([grashof_gaps(fb, program.grashof), region_gaps(
+            fb, program.regions, data["region_low"], data["region_high"])])  # fmt: skip
+        parts = [path, closure, bounds, PENALTY * jax.nn.relu(limits / s + LIMIT_MARGIN)]
         if not program.timed:
             inc = layout.increments(u)
             parts.append(PENALTY * jax.nn.relu(-inc))
@@ -424,6 +437,12 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
     if not (np.isfinite(lo[m - 1]) and np.isfinite(hi[m - 1])):
         lo[m - 1], hi[m - 1] = -np.pi, np.pi
     v = lo + (hi - lo) * rng.random((count, m))
+    if "O4" in task.pivots:  # the rocker's pivot within its region: r1 and theta0 from it
+        region = np.array(task.pivots["O4"])
+        d = region[:, 0] + (region[:, 1] - region[:, 0]) * rng.random((count, 2)) - v[:, -3:-1]
+        r1 = layout.linkage.NAMES.index("r1")
+        v[:, r1] = np.clip(np.hypot(d[:, 0], d[:, 1]), box[r1, 0], box[r1, 1])
+        v[:, -1] = np.clip(np.arctan2(d[:, 1], d[:, 0]), box[-1, 0], box[-1, 1])
     first = 2 * np.pi * rng.random((count, 1))
     u = np.concatenate(
         [v[:, : m - 3] / s, (v[:, m - 3 : m - 1] - c) / s, v[:, m - 1 :], first], axis=1
@@ -582,6 +601,12 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
     slack = np.array([1e-6 * s] * (m - 1) + [1e-9])
     ok = np.isfinite(scores) & np.isfinite(error) & (worst <= np.cos(task.min_transmission))
     ok &= np.all(v_all >= box[:, 0] - slack, axis=1) & np.all(v_all <= box[:, 1] + slack, axis=1)
+    batch = layout.linkage.from_vector(v_all, branches)
+    limits = np.concatenate(
+        [np.asarray(grashof_gaps(batch, task.grashof)),
+         np.asarray(region_gaps(batch, tuple(task.pivots), data["region_low"],
+                                data["region_high"]))], axis=1)  # fmt: skip
+    ok &= np.all(limits <= 1e-9 * s, axis=1)
     if layout.timing is None:  # order defect: the points not passed in order within a turn
         inc = layout.increments(u_all)
         ok &= np.all(inc >= -1e-9, axis=1) & (np.sum(inc, axis=1) <= 2 * np.pi + 1e-9)

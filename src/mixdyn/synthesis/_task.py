@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import ModelError
 from ._dynamics import Masses
 from ._fourbar import FourBar
+from ._limits import check_grashof, check_pivots
 from ._linkage import Linkage
 from ._slidercrank import SliderCrank
 
@@ -49,6 +50,14 @@ class PathTask:
         linkage: the linkage type: ``"four_bar"`` (:class:`~._fourbar.FourBar`, the
             default) or ``"slider_crank"`` (:class:`~._slidercrank.SliderCrank`), or the
             class itself; held as the class (:data:`LINKAGES`).
+        grashof: the Grashof type asked for (:mod:`._limits`): ``"any"`` (the default: the
+            loop has only to close along the traversed motion), ``"crank_rocker"`` (the crank
+            the shortest link of a Grashof four-bar: it turns a full revolution; a
+            slider-crank's crank turns fully, ``r2 + |e| <= r3``) or ``"double_crank"`` (the
+            ground the shortest; four-bars only).
+        pivots: ``name -> ((x_lo, x_hi), (y_lo, y_hi))`` [length]: rectangles in which the
+            ground pivots lie, ``"O2"`` (the crank's pivot; the bounds of ``x0``, ``y0``,
+            which are then not given) and a four-bar's ``"O4"``; held as tuples of floats.
     """
 
     points: np.ndarray
@@ -56,6 +65,8 @@ class PathTask:
     bounds: dict = dataclasses.field(default_factory=dict)
     min_transmission: float = 0.0
     linkage: str | type[Linkage] = "four_bar"
+    grashof: str = "any"
+    pivots: dict = dataclasses.field(default_factory=dict)
 
     def __post_init__(self):
         kind = self.linkage
@@ -92,6 +103,14 @@ class PathTask:
                 raise ModelError(f"a length's low bound must be > 0, got {lo!r}", name)
         if not 0.0 <= self.min_transmission < np.pi / 2:
             raise ModelError("min_transmission must lie in [0, pi/2) rad", "min_transmission")
+        check_grashof(self.linkage, self.grashof)
+        object.__setattr__(self, "pivots", check_pivots(self.linkage, self.pivots))
+        if "O2" in self.pivots and {"x0", "y0"} & set(self.bounds):
+            raise ModelError(
+                "the crank's pivot is bounded twice: give its region (pivots O2) or the bounds "
+                "of x0 and y0, not both",
+                "O2",
+            )
 
     @property
     def size(self) -> float:
@@ -108,6 +127,8 @@ class PathTask:
         out.update({"x0": (c[0] - 3 * s, c[0] + 3 * s), "y0": (c[1] - 3 * s, c[1] + 3 * s)})
         out["theta0"] = (-np.inf, np.inf)
         out.update({k: tuple(float(x) for x in v) for k, v in self.bounds.items()})
+        if "O2" in self.pivots:  # the crank's pivot's region: the bounds of x0, y0
+            out.update(x0=tuple(self.pivots["O2"][0]), y0=tuple(self.pivots["O2"][1]))
         return np.array([out[n] for n in self.linkage.NAMES], dtype=float)
 
 
@@ -209,6 +230,8 @@ class FunctionTask:
         bounds: ``(low, high)`` of the crank, coupler and rocker lengths as multiples of the
             ground link (default ``(0.05, 20)``).
         min_transmission: the least transmission angle from the first input to the last [rad].
+        grashof: the Grashof type asked for, as for a :class:`PathTask`: ``"any"`` (the
+            default), ``"crank_rocker"`` or ``"double_crank"``.
     """
 
     inputs: np.ndarray
@@ -216,6 +239,7 @@ class FunctionTask:
     free_start: bool = False
     bounds: tuple[float, float] = RATIO_BOUNDS
     min_transmission: float = 0.0
+    grashof: str = "any"
 
     def __post_init__(self):
         x = np.asarray(self.inputs, dtype=float)
@@ -236,6 +260,7 @@ class FunctionTask:
             raise ModelError(f"bounds must be 0 < low < high, got {self.bounds!r}", "bounds")
         if not 0.0 <= self.min_transmission < np.pi / 2:
             raise ModelError("min_transmission must lie in [0, pi/2) rad", "min_transmission")
+        check_grashof(FourBar, self.grashof)
         object.__setattr__(self, "inputs", x)
         object.__setattr__(self, "outputs", y)
         object.__setattr__(self, "bounds", (lo, hi))
