@@ -75,9 +75,10 @@ PROPERTIES = {
     "SynthesisFunctionSpec": "expr free_start input output pairs points ratios spacing x",
     "SynthesisMassesSpec": "density payload slider",
     "SynthesisMotionSpec": "length poses",
-    "SynthesisRunSpec": "bounds function keep kind linkage masses max_steps min_transmission "
-    "motion name points reaction reaction_weight seed shaking shaking_force_weight "
-    "shaking_moment_weight speed starts timing torque torque_weight",
+    "SynthesisPivotSpec": "x y",
+    "SynthesisRunSpec": "bounds function grashof keep kind linkage masses max_steps "
+    "min_transmission motion name pivots points reaction reaction_weight seed shaking "
+    "shaking_force_weight shaking_moment_weight speed starts timing torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -98,8 +99,9 @@ PROPERTIES = {
 # player's plot (issue 32); and with the synthesis run kind and bodies optional in a file of
 # synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34);
 # and with a synthesis run's linkage and a slider's mass (issue 34); and with a synthesis
-# run's motion generation (issue 34).
-STRIPPED_SHA256 = "94e57a5d2016f862984273ce8870162a729b968554d91fbb32a43ce2e9c22f2f"
+# run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
+# regions (issue 34).
+STRIPPED_SHA256 = "4ab705786b4773dc0281247d70371c2c64d265e1aae9fb47861f1d62f89ba8b8"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

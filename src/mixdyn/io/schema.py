@@ -1115,6 +1115,15 @@ class SynthesisMotionSpec(Spec):
     a point missed by a unit of length) [length]. Default: the poses' size."""
 
 
+class SynthesisPivotSpec(Spec):
+    """A rectangle in which a ground pivot of a synthesized linkage lies."""
+
+    x: tuple[Scalar, Scalar]
+    """``[low, high]`` of the pivot's x [length], e.g. ``[400 mm, 600 mm]``."""
+    y: tuple[Scalar, Scalar]
+    """``[low, high]`` of the pivot's y [length], e.g. ``[-100 mm, 0 mm]``."""
+
+
 class SynthesisRunSpec(Spec):
     """A linkage synthesized to draw a path, carry its coupler through poses or generate a
     function (``mixdyn.synthesize``): random starts refined by Levenberg-Marquardt, a path's
@@ -1147,6 +1156,14 @@ class SynthesisRunSpec(Spec):
     pivot) [length], ``theta0`` [rad]. Default: lengths 0.05-5 target sizes."""
     min_transmission: Scalar = 0.0
     """The least transmission angle along the motion [rad], e.g. ``40 deg``. Default 0."""
+    grashof: Literal["any", "crank_rocker", "double_crank"] = "any"
+    """The Grashof type: ``crank_rocker`` (the crank the shortest link of a Grashof four-bar:
+    it turns fully; a slider-crank's crank turns fully, ``r2 + |e| <= r3``), ``double_crank``
+    (the ground the shortest; four-bars) or ``any`` (default: the loop closes along the
+    motion)."""
+    pivots: dict[str, SynthesisPivotSpec] = Field(default_factory=dict)
+    """Rectangles in which the ground pivots lie: ``O2`` (the crank's) and a four-bar's ``O4``
+    (the rocker's), e.g. ``{O4: {x: [400 mm, 600 mm], y: [-100 mm, 0 mm]}}``. Default none."""
     masses: SynthesisMassesSpec | None = None
     """How the links weigh (needed for the torque): ``{density: 2 kg/m, payload: 0.5
     kg}``; gravity is the file's ``gravity``. Default: none (kinematics only)."""

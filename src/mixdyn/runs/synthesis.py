@@ -54,6 +54,7 @@ from ..synthesis import (
     Synthesis,
     coupler_curve,
 )
+from ..synthesis._limits import pivot_names
 from ..synthesis._task import LINKAGES
 from ..units import SI, dimension, factor
 from .console import PROGRESS_LOG_EVERY, clean, esc
@@ -177,19 +178,22 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             _si(runner, v, kind, (*path, "bounds", name, k)) for k, v in enumerate(ends)
         )
     min_mu = _si(runner, r.min_transmission, "angle", (*path, "min_transmission"))
+    options = {
+        "bounds": bounds,
+        "min_transmission": min_mu,
+        "linkage": linkage,
+        "grashof": r.grashof,
+        "pivots": _pivots(runner, path, r, linkage),
+    }
     if r.motion is not None:
         from .synthesis_motion import motion_task
 
-        options = {"bounds": bounds, "min_transmission": min_mu, "linkage": linkage}
         task = motion_task(runner, path, r, functools.partial(_si, runner), options)
     else:
         try:
-            task = PathTask(
-                points, timing=timing, bounds=bounds, min_transmission=min_mu, linkage=linkage
-            )
+            task = PathTask(points, timing=timing, **options)
         except ModelError as e:
-            where = ("bounds", e.element) if e.element in bounds else (e.element,)
-            runner.fail((*path, *where) if e.element else path, e.message, "")
+            runner.fail(task_element(path, e.element, options), e.message, "")
     masses = None
     if r.masses is not None:
         mp = (*path, "masses")
@@ -241,6 +245,36 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
     return SynthesisPlan(r, index, np.zeros(1), (), task=task, objective=objective)
 
 
+def _pivots(runner, path, r: s.SynthesisRunSpec, linkage) -> dict:
+    """The run's ground-pivot regions in SI: ``name -> ((x_lo, x_hi), (y_lo, y_hi))``; a
+    pivot the linkage lacks an input error at its line."""
+    out = {}
+    for name, region in r.pivots.items():
+        where = (*path, "pivots", name)
+        if name not in pivot_names(linkage):
+            runner.fail(
+                where,
+                f"no ground pivot {name!r} of a {linkage.TITLE}",
+                f"give a region for one of {', '.join(pivot_names(linkage))}",
+            )
+        out[name] = tuple(
+            tuple(_si(runner, v, "length", (*where, axis, k)) for k, v in enumerate(ends))
+            for axis, ends in (("x", region.x), ("y", region.y))
+        )
+    return out
+
+
+def task_element(path, element: str | None, options: dict) -> tuple:
+    """Where in run ``path`` the task's fault at ``element`` lies: a bound's or a pivot's line
+    (of ``options``' ``bounds``, ``pivots``), else the key's."""
+    if not element:
+        return path
+    for key in ("bounds", "pivots"):
+        if element in options.get(key, {}):
+            return (*path, key, element)
+    return (*path, element)
+
+
 def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
     """Search (:func:`mixdyn.synthesize`); no feasible linkage is a numerical failure."""
     from ..synthesis import synthesize
@@ -267,6 +301,17 @@ def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
 def _title(task) -> str:
     """The task's linkage in words (a function task's: a four-bar)."""
     return getattr(task, "linkage", FourBar).TITLE
+
+
+def _form(task) -> str:
+    """What a path's or a motion's task asks of the linkage's form, in words: its Grashof type
+    and its ground pivots' regions [m] ("" where nothing)."""
+    words = []
+    if task.grashof != "any":
+        words.append(task.grashof.replace("_", "-"))
+    for name, ((x0, x1), (y0, y1)) in task.pivots.items():
+        words.append(f"{name} in x [{x0:.4g}, {x1:.4g}] m, y [{y0:.4g}, {y1:.4g}] m")
+    return f" ({'; '.join(words)})" if words else ""
 
 
 def _task_name(task) -> str:
@@ -469,6 +514,8 @@ class SynthesisKind(RunKind):
         r, o = plan.spec, plan.objective
         if o is None:
             start = ", start angles free" if plan.task.free_start else ""
+            if plan.task.grashof != "any":
+                start += f", {plan.task.grashof.replace('_', '-')}"
             return (
                 f"run [bold]{esc(r.name)}[/bold] (synthesis): a four-bar generating a function "
                 f"at {len(plan.task.inputs)} points{start}, {r.starts} starts, seed {r.seed}"
@@ -485,8 +532,8 @@ class SynthesisKind(RunKind):
         if isinstance(plan.task, MotionTask):
             through = f"{len(plan.task.poses)} poses (L = {plan.task.weight_length:.4g} m)"
         return (
-            f"run [bold]{esc(r.name)}[/bold] (synthesis): a {_title(plan.task)} through "
-            f"{through}{what}, {r.starts} starts, seed {r.seed}"
+            f"run [bold]{esc(r.name)}[/bold] (synthesis): a {_title(plan.task)}"
+            f"{_form(plan.task)} through {through}{what}, {r.starts} starts, seed {r.seed}"
         )
 
     def task(self, plan: SynthesisPlan, mode: str) -> tuple[str, float | None]:

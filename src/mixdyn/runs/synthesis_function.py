@@ -34,6 +34,7 @@ PATH_KEYS = (
     "shaking_moment_weight",
     "reaction",
     "reaction_weight",
+    "pivots",
 )
 
 
@@ -50,7 +51,8 @@ def function_task(runner, path, r: s.SynthesisRunSpec, si) -> FunctionTask:
     fp = (*path, "function")
     ratios = tuple(si(v, "dimensionless", (*fp, "ratios", k)) for k, v in enumerate(f.ratios))
     min_mu = si(r.min_transmission, "angle", (*path, "min_transmission"))
-    options = {"free_start": f.free_start, "bounds": ratios, "min_transmission": min_mu}
+    options = {"free_start": f.free_start, "bounds": ratios, "min_transmission": min_mu,
+               "grashof": r.grashof}  # fmt: skip
     try:
         if f.pairs is not None:
             pairs = np.array(

@@ -22,8 +22,8 @@ from ..synthesis import MotionTask
 
 def motion_task(runner, path, r: s.SynthesisRunSpec, si, options: dict) -> MotionTask:
     """The motion task of run ``r`` at ``path`` (``si``: a number of the file in SI;
-    ``options``: the task's ``bounds``, ``min_transmission`` and ``linkage``, read as a
-    path's)."""
+    ``options``: the task's ``bounds``, ``min_transmission``, ``linkage``, ``grashof`` and
+    ``pivots``, read as a path's)."""
     if "timing" in r.model_fields_set:
         runner.fail(
             (*path, "timing"),
@@ -42,11 +42,10 @@ def motion_task(runner, path, r: s.SynthesisRunSpec, si, options: dict) -> Motio
     try:
         return MotionTask(np.array(poses), length=length, **options)
     except ModelError as e:
-        bounds = options.get("bounds", {})
-        if e.element in bounds:
-            runner.fail((*path, "bounds", e.element), e.message, "")
-        where = {"poses": mp, "length": (*mp, "length")}.get(e.element, (*path, e.element))
-        runner.fail(where, e.message, "")
+        from .synthesis import task_element
+
+        where = {"poses": mp, "length": (*mp, "length")}.get(e.element)
+        runner.fail(where or task_element(path, e.element, options), e.message, "")
 
 
 def _angle(runner, value, where, si) -> float:
