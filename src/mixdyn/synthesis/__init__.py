@@ -17,6 +17,9 @@ generate a function, searched by gradients, with dynamics in a path's objective.
   Levenberg-Marquardt at once, checked, ranked and deduplicated;
 * :mod:`._motion` — motion generation: :class:`MotionTask` (precision poses of the coupler)
   and its pose error, searched as a timing-free path whose coupler angles count too;
+* :mod:`._fourier` and :mod:`._shape` — shape-only path generation: a closed curve's
+  normalised elliptic Fourier descriptors, the search for a linkage whose coupler curve over
+  a full turn has that shape (:class:`ShapeTask`), placed onto it;
 * :mod:`._function` — the same search for a function task (:class:`FunctionSynthesis`);
 * :mod:`._solve` — what both searches share: the batched Levenberg-Marquardt solve of many
   starts, chunk by chunk with progress, and the best of a ranked result;
@@ -39,6 +42,7 @@ from ._function import FunctionCandidate, FunctionSynthesis
 from ._linkage import Linkage
 from ._motion import MotionTask
 from ._search import Candidate, Synthesis, synthesize
+from ._shape import ShapeCandidate, ShapeSynthesis, ShapeTask
 from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
 from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
 from .build import four_bar_model, linkage_model, model_file_text, slider_crank_model
@@ -57,6 +61,9 @@ __all__ = [
     "MotionTask",
     "Objective",
     "PathTask",
+    "ShapeCandidate",
+    "ShapeSynthesis",
+    "ShapeTask",
     "SliderCrank",
     "Synthesis",
     "chebyshev",

@@ -477,7 +477,9 @@ def synthesize(
             (poses, bounds, transmission angle: a timing-free path task whose coupler angles
             count too, :mod:`._motion`), or the function task (input-output angle pairs;
             :func:`~._function.synthesize_function`, which takes ``starts``, ``seed``,
-            ``chunk``, ``max_steps``, ``keep`` and ``progress``).
+            ``chunk``, ``max_steps``, ``keep`` and ``progress``), or the shape task (a
+            closed curve's shape, :class:`~._shape.ShapeTask`: :func:`~._shape.synthesize_shape`,
+            ``polish`` unused).
         objective: the objective (default: the path error alone; a function task's is its
             angle error, and it takes none).
         starts: random starts, half on each assembly branch.
@@ -495,7 +497,8 @@ def synthesize(
     Returns:
         A :class:`Synthesis` (a :class:`~._function.FunctionSynthesis` for a function task):
         for a motion task, its candidates' error is the pose error and their
-        ``coupler_angle`` the carried body's line in the coupler.
+        ``coupler_angle`` the carried body's line in the coupler; for a shape task a
+        :class:`~._shape.ShapeSynthesis`, its candidates' error the shape error.
 
     Raises:
         ModelError: a bad number of starts, chunk or step count; an objective for a
@@ -510,6 +513,19 @@ def synthesize(
 
         return synthesize_function(
             task,
+            starts=starts,
+            seed=seed,
+            chunk=chunk,
+            max_steps=max_steps,
+            keep=keep,
+            progress=progress,
+        )
+    from ._shape import ShapeTask, synthesize_shape
+
+    if isinstance(task, ShapeTask):
+        return synthesize_shape(
+            task,
+            objective,
             starts=starts,
             seed=seed,
             chunk=chunk,
