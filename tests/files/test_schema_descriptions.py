@@ -100,8 +100,8 @@ PROPERTIES = {
 # synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34);
 # and with a synthesis run's linkage and a slider's mass (issue 34); and with a synthesis
 # run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
-# regions (issue 34).
-STRIPPED_SHA256 = "4ab705786b4773dc0281247d70371c2c64d265e1aae9fb47861f1d62f89ba8b8"
+# regions (issue 34); and with a synthesis run's six-bar linkages (issue 34).
+STRIPPED_SHA256 = "4afec997f41f701df8e45ddad20a9369b45dd9d7c8dc79b0982076e859e557d3"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -1137,15 +1137,25 @@ class SynthesisRunSpec(Spec):
     points: list[Vec2] | None = Field(default=None, min_length=2)
     """Path generation: the target points ``[x, y]`` [length], in the order the coupler
     point passes them as the crank turns positively, e.g. ``[[500 mm, 300 mm], ...]``."""
+    shape: Literal["points", "fourier"] = "points"
+    """The path's error: ``points`` (default: the coupler point through each point) or
+    ``fourier`` (shape alone: the points are a closed curve's; the coupler curve over a full
+    crank turn takes its shape by normalised elliptic Fourier descriptors, anywhere, at any
+    size and turn, then is placed onto the points)."""
+    harmonics: int = Field(default=8, ge=2, le=64)
+    """The elliptic Fourier harmonics compared with ``shape: fourier``; more than twice as
+    many points needed. Default 8."""
     function: SynthesisFunctionSpec | None = None
     """Function generation instead of a path: ``{expr: log10(x), x: [1, 2], input: [0 deg,
     60 deg], output: [240 deg, 180 deg]}`` or ``{pairs: [[crank, rocker], ...]}``."""
     motion: SynthesisMotionSpec | None = None
     """Motion generation instead of a path: ``{poses: [[0 mm, 0 mm, 0 deg], [300 mm, 250 mm,
     40 deg], ...]}`` (the coupler point and angle at each pose)."""
-    linkage: Literal["four_bar", "slider_crank"] = "four_bar"
-    """The linkage of a path or a motion: ``four_bar`` (default) or ``slider_crank`` (an offset
-    slider-crank; its coupler point on the connecting rod)."""
+    linkage: Literal["four_bar", "slider_crank", "stephenson3", "watt1"] = "four_bar"
+    """The linkage of a path or a motion: ``four_bar`` (default), ``slider_crank`` (an offset
+    slider-crank; its coupler point on the connecting rod), ``stephenson3`` or ``watt1`` (a
+    Stephenson III or Watt I six-bar; its coupler point on the dyad's link ``D E``; no
+    masses)."""
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
     turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only

@@ -1,9 +1,11 @@
-"""Synthesis runs of a model file: a four-bar or a slider-crank made to draw a path or carry
-its coupler through poses, or a four-bar to generate a function (:func:`mixdyn.synthesize`).
+"""Synthesis runs of a model file: a four-bar, a slider-crank or a six-bar made to draw a path
+or carry its coupler through poses, or a four-bar to generate a function
+(:func:`mixdyn.synthesize`).
 
-A ``synthesis`` run describes the task (the linkage, ``four_bar`` or ``slider_crank``, the
-target points, the timing, bounds of the linkage's numbers, the least transmission angle),
-how the links weigh and how the motor torque counts, and the search (starts, seed); or, with
+A ``synthesis`` run describes the task (the linkage, ``four_bar``, ``slider_crank``,
+``stephenson3`` or ``watt1``, the target points, the timing, bounds of the linkage's numbers,
+the least transmission angle), how the links weigh and how the motor torque counts (a
+six-bar's path alone: no masses), and the search (starts, seed); or, with
 ``motion:``, the coupler's poses instead of points (:mod:`.synthesis_motion`); or, with
 ``function:``, a function task (:mod:`.synthesis_function`). It needs no mechanism in the
 file: a file whose runs are all synthesis runs may have no bodies (``mixdyn check`` then
@@ -36,6 +38,8 @@ import functools
 import sys
 import time
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 
 from ..errors import ModelError, NumericalError
@@ -43,6 +47,8 @@ from ..io import schema as s
 from ..synthesis import (
     NAMES,
     SLIDER_NAMES,
+    STEPHENSON_NAMES,
+    WATT_NAMES,
     FourBar,
     FunctionSynthesis,
     FunctionTask,
@@ -50,6 +56,7 @@ from ..synthesis import (
     MotionTask,
     Objective,
     PathTask,
+    SixBar,
     SliderCrank,
     Synthesis,
     coupler_curve,
@@ -77,7 +84,11 @@ DYNAMIC_COLUMNS = (
 
 #: The kind of quantity of each column of ``candidates.csv`` (SI units written beside).
 _COLUMN_KINDS = {
-    **{n: "length" for n in (*NAMES, *SLIDER_NAMES) if n != "theta0"},
+    **{
+        n: "length"
+        for n in (*NAMES, *SLIDER_NAMES, *STEPHENSON_NAMES, *WATT_NAMES)
+        if n != "theta0"
+    },
     "theta0": "angle",
     "theta_first": "angle",
     "theta_last": "angle",
@@ -185,7 +196,11 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
         "grashof": r.grashof,
         "pivots": _pivots(runner, path, r, linkage),
     }
-    if r.motion is not None:
+    if r.shape == "fourier":
+        from .synthesis_shape import shape_task
+
+        task = shape_task(runner, path, r, points, min_mu, linkage)
+    elif r.motion is not None:
         from .synthesis_motion import motion_task
 
         task = motion_task(runner, path, r, functools.partial(_si, runner), options)
@@ -203,6 +218,13 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             runner.fail((*mp, "density"), f"the density must be > 0, got {density:g}", "")
         if not payload >= 0:
             runner.fail((*mp, "payload"), f"the payload must be >= 0, got {payload:g}", "")
+        if issubclass(linkage, SixBar):
+            runner.fail(
+                mp,
+                f"a {linkage.TITLE}'s dynamics (motor torque, shaking, reactions) are not part "
+                "of synthesis",
+                "leave masses out: the search is for the path alone",
+            )
         slider = _si(runner, r.masses.slider, "mass", (*mp, "slider"))
         if linkage is SliderCrank and not slider > 0:
             runner.fail(
@@ -346,7 +368,16 @@ def candidates_table(out: Synthesis):
         )
         rows.append([row[n] for n in names])
     units = {n: _SI_LABELS[k] for n, k in _COLUMN_KINDS.items() if n in names}
+    from .synthesis_shape import shape_columns
+
+    shape_columns(out, names, units, rows)
     return names, units, np.array(rows, dtype=float)
+
+
+@jax.jit
+def _transmission_cosines(lk, theta):
+    """(K,) ``lk``'s transmission cosine at the input angles ``theta`` (K,) [rad]."""
+    return jax.vmap(lk.transmission_cosine)(theta)
 
 
 def _curves(c, samples: int = 241) -> tuple[np.ndarray, np.ndarray]:
@@ -359,6 +390,10 @@ def _curves(c, samples: int = 241) -> tuple[np.ndarray, np.ndarray]:
     run = np.asarray(coupler_curve(fb, np.linspace(a0, a1, samples)))
     rest_angles = np.linspace(a1, a0 + 2 * np.pi, samples)
     rest = np.array(coupler_curve(fb, rest_angles))
+    if isinstance(fb, SixBar):  # either loop open: its transmission cosine beyond 1
+        cos = np.asarray(_transmission_cosines(fb, jnp.asarray(rest_angles)))
+        rest[np.abs(cos) > 1.0] = np.nan
+        return run, rest
     if isinstance(fb, SliderCrank):  # the crank pin's height above the slide against r3
         r2, r3, e = (float(getattr(fb, n)) for n in ("r2", "r3", "e"))
         rest[np.abs(r2 * np.sin(rest_angles) - e) > r3] = np.nan
@@ -531,6 +566,9 @@ class SynthesisKind(RunKind):
         through = f"{len(plan.task.points)} points, {timing}"
         if isinstance(plan.task, MotionTask):
             through = f"{len(plan.task.poses)} poses (L = {plan.task.weight_length:.4g} m)"
+        from .synthesis_shape import shape_words
+
+        through = shape_words(plan.task) or through
         return (
             f"run [bold]{esc(r.name)}[/bold] (synthesis): a {_title(plan.task)}"
             f"{_form(plan.task)} through {through}{what}, {r.starts} starts, seed {r.seed}"
@@ -565,6 +603,8 @@ class SynthesisKind(RunKind):
             best = f"best angle error {c.error:.3g} rad²"
         else:
             best = f"best {_task_name(out.task).replace('motion', 'pose')} error {c.error:.3g} m²"
+            if hasattr(c, "distance"):  # a shape's (mixdyn.synthesis.ShapeCandidate)
+                best = f"best shape error {c.error:.3g}, farthest point {c.distance:.3g} m off"
             if np.isfinite(c.torque_rms):
                 best += f", motor torque RMS {c.torque_rms:.4g} N·m"
             if plan.objective is not None and plan.objective.shakes:

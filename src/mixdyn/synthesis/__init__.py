@@ -1,5 +1,5 @@
-"""Linkage synthesis: four-bars and slider-cranks that draw a given path, four-bars that
-generate a function, searched by gradients, with dynamics in a path's objective.
+"""Linkage synthesis: four-bars, slider-cranks and six-bars that draw a given path, four-bars
+that generate a function, searched by gradients, with dynamics in a path's objective.
 
 * :mod:`._linkage` — what the linkages share (:class:`Linkage`): the crank, the coupler
   point and curve, the transmission angle's contract;
@@ -7,6 +7,12 @@ generate a function, searched by gradients, with dynamics in a path's objective.
   implicit derivatives, its transmission angle;
 * :mod:`._slidercrank` — the same for an offset slider-crank (:class:`SliderCrank`; the
   path task's ``linkage="slider_crank"``);
+* :mod:`._sixbar` — what the six-bars share: a four-bar and a dyad closed by a second
+  circle intersection, the coupler point on the dyad; :mod:`._stephenson`
+  (:class:`StephensonIII`, ``linkage="stephenson3"``) and :mod:`._watt` (:class:`WattI`,
+  ``linkage="watt1"``), searched for a path or a motion by kinematics alone;
+* :mod:`._limits` — the Grashof type (:func:`grashof_type`; a task's ``grashof``) and the
+  ground pivots' regions (a task's ``pivots``) as gaps: penalties and exact checks;
 * :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque, the shaking
   force and moment and the joint reactions;
 * :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
@@ -39,18 +45,31 @@ Example::
 from ._dynamics import Masses, link_inertia, motor_torque, reactions, shaking
 from ._fourbar import NAMES, FourBar, coupler_curve, coupler_point, link_angles, transmission_cosine
 from ._function import FunctionCandidate, FunctionSynthesis
+from ._limits import GRASHOF, grashof_type
 from ._linkage import Linkage
 from ._motion import MotionTask
 from ._search import Candidate, Synthesis, synthesize
 from ._shape import ShapeCandidate, ShapeSynthesis, ShapeTask
+from ._sixbar import SixBar
 from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
+from ._stephenson import STEPHENSON_NAMES, StephensonIII
 from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
-from .build import four_bar_model, linkage_model, model_file_text, slider_crank_model
+from ._watt import WATT_NAMES, WattI
+from .build import (
+    four_bar_model,
+    linkage_model,
+    model_file_text,
+    six_bar_model,
+    slider_crank_model,
+)
 
 __all__ = [
+    "GRASHOF",
     "LINKAGES",
     "NAMES",
     "SLIDER_NAMES",
+    "STEPHENSON_NAMES",
+    "WATT_NAMES",
     "Candidate",
     "FourBar",
     "FunctionCandidate",
@@ -64,12 +83,16 @@ __all__ = [
     "ShapeCandidate",
     "ShapeSynthesis",
     "ShapeTask",
+    "SixBar",
     "SliderCrank",
+    "StephensonIII",
     "Synthesis",
+    "WattI",
     "chebyshev",
     "coupler_curve",
     "coupler_point",
     "four_bar_model",
+    "grashof_type",
     "link_angles",
     "link_inertia",
     "linkage_model",
@@ -78,6 +101,7 @@ __all__ = [
     "reactions",
     "rod_and_slider",
     "shaking",
+    "six_bar_model",
     "slider_crank_model",
     "synthesize",
     "transmission_cosine",

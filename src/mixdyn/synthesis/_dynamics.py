@@ -220,6 +220,9 @@ def _slider_crank_rates(sc: SliderCrank, inertia: dict, theta2):
 #: Each linkage type's link rates (:func:`_torque_one`).
 _RATES = {FourBar: _four_bar_rates, SliderCrank: _slider_crank_rates}
 
+#: The linkage types whose dynamics are computed here (a six-bar's are not).
+DYNAMICS = tuple(_RATES)
+
 
 def _centres(lk: Linkage, inertia: dict, theta2) -> jax.Array:
     """Each link's centre of mass from the crank's pivot ``O2`` (3, 2) [length]: crank,
@@ -391,6 +394,7 @@ def _over_angles(one, lk: Linkage, masses: Masses, theta2, speed):
 
 
 __all__ = [
+    "DYNAMICS",
     "JOINTS",
     "Masses",
     "link_inertia",

@@ -11,7 +11,9 @@ comes from the subclass's closed-form assembly (:meth:`Linkage.coupler_angle`), 
 coupler point is ``C = A + R(phi3) (rcx, rcy)`` in the coupler's frame (x from the crank pin
 ``A`` towards the coupler's other pin ``B``).
 
-Final subclasses: :class:`~._fourbar.FourBar` and :class:`~._slidercrank.SliderCrank`.
+Final subclasses: :class:`~._fourbar.FourBar`, :class:`~._slidercrank.SliderCrank`, and the
+six-bars of :mod:`._sixbar` (:class:`~._stephenson.StephensonIII`, :class:`~._watt.WattI`),
+whose coupler is the link that carries the coupler point.
 """
 
 from __future__ import annotations
@@ -43,12 +45,15 @@ class Linkage(eqx.Module):
         LENGTHS: the numbers that are positive lengths (bounded by default).
         KIND: its name in tasks and model files (``"four_bar"``, ``"slider_crank"``).
         TITLE: its name in messages (``"four-bar"``, ``"slider-crank"``).
+        BRANCHES: the values of ``branch`` the search spreads its starts over (one assembly
+            branch each; a six-bar's code both loops', :mod:`._sixbar`).
     """
 
     NAMES: ClassVar[tuple[str, ...]]
     LENGTHS: ClassVar[tuple[str, ...]]
     KIND: ClassVar[str]
     TITLE: ClassVar[str]
+    BRANCHES: ClassVar[tuple[float, ...]] = (1.0, -1.0)
 
     @classmethod
     def from_vector(cls, v, branch):

@@ -24,8 +24,9 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
   (2N), the task a timing-free path task of the poses' points besides.
 
 The branch (which side of ``A O4`` the pin ``B`` lies on; for a slider-crank, ahead of ``A``
-along the slide or behind it) is fixed per start, half the starts
-on each, so that no candidate changes branch between points. Every start is solved by
+along the slide or behind it; a six-bar's both loops', :mod:`._sixbar`) is fixed per start,
+the starts spread evenly over the linkage's ``BRANCHES``, so that no candidate changes branch
+between points. Every start is solved by
 optimistix' Levenberg-Marquardt (a well-kept library; derivatives through the assembly's
 implicit rule), ``jax.vmap`` over a chunk of starts, chunk after chunk (progress reported
 after each). The task's numbers are the programs' array arguments (:class:`_Program` is their
@@ -53,7 +54,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..runtime._programs import cached_jit
-from ._dynamics import Masses, motor_torque, reactions, shaking
+from ._dynamics import DYNAMICS, Masses, motor_torque, reactions, shaking
 from ._fourbar import FourBar
 from ._limits import LIMIT_MARGIN, grashof_gaps, region_arrays, region_gaps
 from ._linkage import Linkage, coupler_point, transmission_cosine
@@ -538,6 +539,12 @@ def synthesize(
         if int(value) < 1:
             raise ModelError(f"{label} must be at least 1, got {value!r}", label)
     masses = objective.masses
+    if masses is not None and task.linkage not in DYNAMICS:
+        raise ModelError(
+            f"a {task.linkage.TITLE}'s dynamics (motor torque, shaking, reactions) are not "
+            "part of synthesis: search it for its path alone (give no masses)",
+            "masses",
+        )
     if masses is not None and task.linkage is SliderCrank and not masses.slider > 0:
         raise ModelError(
             "a slider-crank's slider needs a mass > 0 with the links' masses (its model's "
@@ -554,7 +561,8 @@ def synthesize(
     weighed = _program(task, objective, max_steps, torque=True)
     rng = np.random.default_rng(seed)
     u0 = _starts(layout, task, box, starts, rng)
-    branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
+    codes = np.asarray(task.linkage.BRANCHES)
+    branches = codes[np.arange(starts) % len(codes)]
     s2 = layout.scale**2
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b * s2))
     solve = functools.partial(_solve_chunk, weighed, data)

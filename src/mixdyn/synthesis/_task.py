@@ -21,9 +21,16 @@ from ._fourbar import FourBar
 from ._limits import check_grashof, check_pivots
 from ._linkage import Linkage
 from ._slidercrank import SliderCrank
+from ._stephenson import StephensonIII
+from ._watt import WattI
 
 #: The linkage types of a path task by name (``PathTask(linkage=...)``, ``linkage:`` in files).
-LINKAGES: dict[str, type[Linkage]] = {"four_bar": FourBar, "slider_crank": SliderCrank}
+LINKAGES: dict[str, type[Linkage]] = {
+    "four_bar": FourBar,
+    "slider_crank": SliderCrank,
+    "stephenson3": StephensonIII,
+    "watt1": WattI,
+}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -48,8 +55,10 @@ class PathTask:
         min_transmission: the least transmission angle along the traversed motion [rad]
             (0: the loop only has to close).
         linkage: the linkage type: ``"four_bar"`` (:class:`~._fourbar.FourBar`, the
-            default) or ``"slider_crank"`` (:class:`~._slidercrank.SliderCrank`), or the
-            class itself; held as the class (:data:`LINKAGES`).
+            default), ``"slider_crank"`` (:class:`~._slidercrank.SliderCrank`),
+            ``"stephenson3"`` (:class:`~._stephenson.StephensonIII`) or ``"watt1"``
+            (:class:`~._watt.WattI`), or the class itself; held as the class
+            (:data:`LINKAGES`).
         grashof: the Grashof type asked for (:mod:`._limits`): ``"any"`` (the default: the
             loop has only to close along the traversed motion), ``"crank_rocker"`` (the crank
             the shortest link of a Grashof four-bar: it turns a full revolution; a

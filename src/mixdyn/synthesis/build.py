@@ -5,7 +5,9 @@ bodies (crank, coupler, rocker) with the masses of :class:`~._dynamics.Masses`, 
 joints, the coupler point ``coupler.P``, and the crank driven at a constant speed from the
 first input angle. :func:`slider_crank_model` builds a :class:`~._slidercrank.SliderCrank`'s:
 crank, rod and slider, three revolute joints and a translational one along the slide, the
-coupler point ``rod.P``. :func:`linkage_model` picks the builder by the linkage's type;
+coupler point ``rod.P``. :func:`six_bar_model` builds a six-bar's (Stephenson III, Watt I:
+five massless links, seven revolute joints, the coupler point ``tracer.P``).
+:func:`linkage_model` picks the builder by the linkage's type;
 :func:`model_file_text` writes the model with a kinematic run (the achieved path) and an
 inverse run (the motor torque) over the traversed input angles.
 """
@@ -20,7 +22,10 @@ from ..units import SI
 from ._dynamics import Masses, link_inertia
 from ._fourbar import FourBar, link_angles
 from ._linkage import Linkage
+from ._sixbar import SixBar
 from ._slidercrank import SliderCrank, rod_and_slider
+from ._stephenson import StephensonIII
+from ._watt import WattI
 
 
 def _numbers(lk: Linkage) -> Linkage:
@@ -114,6 +119,12 @@ def _inertia(lk: Linkage, masses: Masses | None) -> dict:
 
 def _centroids(lk: Linkage) -> dict:
     """The links' frame origins used for massless links: their midpoints (a slider's pin)."""
+    if isinstance(lk, SixBar):
+        names = ("crank", "coupler", "rocker", "tracer", "follower")
+        return {
+            k: np.array([float(getattr(lk, f"r{i}")) / 2, 0.0])
+            for i, k in enumerate(names, start=2)
+        }
     if isinstance(lk, SliderCrank):
         return {
             "crank": np.array([float(lk.r2) / 2, 0.0]),
@@ -200,13 +211,113 @@ def slider_crank_model(
     )
 
 
+def six_bar_model(
+    sb: SixBar,
+    masses: Masses | None = None,
+    *,
+    start: float = 0.0,
+    speed: float = 1.0,
+    name=None,
+    coupler_angle: float = 0.0,
+):
+    """The mixdyn model of a six-bar (:class:`~._stephenson.StephensonIII` or
+    :class:`~._watt.WattI`), its crank at ``start`` at t = 0 turning at ``speed``; massless
+    links, for kinematics (synthesis computes no six-bar's dynamics).
+
+    Args:
+        sb: the six-bar (unbatched), model units.
+        masses: None (links of mass are refused).
+        start: the input angle ``theta2`` at t = 0 [rad].
+        speed: the crank's constant speed [rad / time].
+        name: the model's name (default: "synthesized" and the linkage's title).
+        coupler_angle: the tracer body's frame from its line ``D -> E`` [rad]
+            (:func:`four_bar_model`'s); 0: along it.
+
+    Returns:
+        A :class:`mixdyn.Model` in SI units (the numbers read as m, kg, s): the bodies
+        ``crank`` (points ``O``, ``A``), ``coupler`` (``A``, ``B``, ``D``), ``rocker`` (``O``,
+        ``B``, and a Watt I's ``F``), ``tracer`` (``D``, ``E`` and the coupler point ``P``)
+        and ``follower`` (``E``, and ``O`` at a Stephenson III's ground pivot ``O6`` or ``F``
+        at a Watt I's rocker point); the revolute joints ``O2``, ``A``, ``B``, ``O4``, ``D``,
+        ``E`` and ``O6`` (Stephenson III) or ``F`` (Watt I); the driver ``motor``.
+
+    Raises:
+        ModelError: masses given.
+    """
+    if masses is not None:
+        raise ModelError(
+            f"a {sb.TITLE}'s model is built for kinematics: its links have no masses here "
+            "(give masses=None)",
+            "masses",
+        )
+    sb = _numbers(sb)
+    j = {k: np.asarray(v, dtype=float) for k, v in sb.joints(start).items()}
+    phi2 = float(sb.theta0) + start
+    r = {n: float(getattr(sb, n)) for n in sb.NAMES}
+    ex = np.array([1.0, 0.0])
+    d = np.array([r["dx"], r["dy"]])
+    c = np.array([r["rcx"], r["rcy"]])
+    inertia = _inertia(sb, None)
+    watt = isinstance(sb, WattI)
+    rocker = {"O": 0 * ex, "B": r["r4"] * ex}
+    if watt:
+        rocker["F"] = np.array([r["fx"], r["fy"]])
+    end = "F" if watt else "O"
+    points = {
+        "crank": {"O": 0 * ex, "A": r["r2"] * ex},
+        "coupler": {"A": 0 * ex, "B": r["r3"] * ex, "D": d},
+        "rocker": rocker,
+        "tracer": {"D": 0 * ex, "E": r["r5"] * ex, "P": c},
+        "follower": {end: 0 * ex, "E": r["r6"] * ex},
+    }
+    frames = {
+        "crank": (j["O2"], phi2),
+        "coupler": (j["A"], j["phi3"]),
+        "rocker": (j["O4"], j["phi4"]),
+        "tracer": (j["D"], j["phi5"]),
+        "follower": (j["X"], j["phi6"]),
+    }
+    bodies = [
+        _body(k, inertia[k], *frames[k], points[k], float(coupler_angle) if k == "tracer" else 0)
+        for k in points
+    ]
+    ground = {"O2": tuple(j["O2"]), "O4": tuple(j["O4"])}
+    last = Revolute("F", "rocker.F", "follower.F")
+    if not watt:
+        ground["O6"] = tuple(j["X"])
+        last = Revolute("O6", "ground.O6", "follower.O")
+    return Model(
+        bodies=bodies,
+        ground=ground,
+        joints=[
+            Revolute("O2", "ground.O2", "crank.O"),
+            Revolute("A", "crank.A", "coupler.A"),
+            Revolute("B", "coupler.B", "rocker.B"),
+            Revolute("O4", "ground.O4", "rocker.O"),
+            Revolute("D", "coupler.D", "tracer.D"),
+            Revolute("E", "tracer.E", "follower.E"),
+            last,
+        ],
+        drivers=[CoordinateDriver("motor", "crank", "phi", law=Ramp(phi2, speed))],
+        gravity=(0.0, 0.0),
+        units=SI,
+        name=name or f"synthesized {sb.TITLE}",
+    )
+
+
 #: Each linkage type's model builder and the body that carries its coupler point ``P``.
-BUILDERS = {FourBar: (four_bar_model, "coupler"), SliderCrank: (slider_crank_model, "rod")}
+BUILDERS = {
+    FourBar: (four_bar_model, "coupler"),
+    SliderCrank: (slider_crank_model, "rod"),
+    StephensonIII: (six_bar_model, "tracer"),
+    WattI: (six_bar_model, "tracer"),
+}
 
 
 def linkage_model(lk: Linkage, masses: Masses | None = None, **options):
-    """The mixdyn model of ``lk`` by its type (:func:`four_bar_model` or
-    :func:`slider_crank_model`, which take the ``options``: ``start``, ``speed``...)."""
+    """The mixdyn model of ``lk`` by its type (:func:`four_bar_model`,
+    :func:`slider_crank_model` or :func:`six_bar_model`, which take the ``options``:
+    ``start``, ``speed``...)."""
     build, _ = BUILDERS[type(lk)]
     return build(lk, masses, **options)
 
@@ -283,5 +394,6 @@ __all__ = [
     "four_bar_model",
     "linkage_model",
     "model_file_text",
+    "six_bar_model",
     "slider_crank_model",
 ]

@@ -1,0 +1,77 @@
+"""The Watt I six-bar of synthesis: a four-bar whose coupler and rocker are joined by a dyad,
+the coupler point on the dyad's link from the coupler.
+
+Topology: Watt's chain (its two ternary links joined to each other) with a binary link as
+the ground: the coupler ``A B D`` and the rocker ``O4 B F`` are the ternaries, joined at
+``B``; the ground ``O2 O4``, the crank ``O2 A``, the tracer ``D E`` and the follower
+``F E`` the binaries. The name and topology are those of the Watt I mechanism of the PMKS+
+verification set (PMKS-Web/PMKS_Verification, as its fixtures list it: ground pivots ``A``,
+``G``; links ``AB``, ``BCD``, ``DE``, ``EF``, ``CFG``; read through the code search of
+public repositories): the inversion of Watt's chain that grounds a binary link (grounding a
+ternary one gives Watt II, two four-bars in series).
+
+Numbers (module :mod:`._sixbar`'s notation): ``r1``..``r4`` the four-bar, ``r5 = |D E|``,
+``r6 = |F E|``, ``(dx, dy)`` the point ``D`` in the coupler's frame, ``(fx, fy)`` the point
+``F = O4 + R(phi4) (fx, fy)`` in the rocker's frame (x from ``O4`` towards ``B``),
+``(rcx, rcy)`` the coupler point on the tracer, ``x0``, ``y0``, ``theta0``.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import jax
+
+from ._sixbar import SixBar, _turned
+
+#: Names of the numbers of a Watt I six-bar, in the order of its ``vector``.
+WATT_NAMES = (
+    "r1", "r2", "r3", "r4", "r5", "r6", "dx", "dy", "fx", "fy", "rcx", "rcy", "x0", "y0",
+    "theta0",
+)  # fmt: skip
+
+
+class WattI(SixBar):
+    """A Watt I six-bar's dimensions and placement [length, rad]; every field may carry a
+    batch.
+
+    Attributes:
+        r1, r2, r3, r4: ground, crank, coupler and rocker lengths [length].
+        r5, r6: the tracer ``D E`` and the follower ``F E`` [length].
+        dx, dy: ``D`` in the coupler's frame (x along ``A -> B``) [length].
+        fx, fy: ``F`` in the rocker's frame (x along ``O4 -> B``) [length].
+        rcx, rcy: the coupler point in the tracer's frame (x along ``D -> E``) [length].
+        x0, y0: the crank's ground pivot ``O2`` [length].
+        theta0: the ground link's angle ``O2 -> O4`` [rad].
+        branch: ``b4 + 2 b6`` (3, 1, -1 or -3): the two loops' branches (:mod:`._sixbar`).
+    """
+
+    NAMES: ClassVar[tuple[str, ...]] = WATT_NAMES
+    LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4", "r5", "r6")
+    KIND: ClassVar[str] = "watt1"
+    TITLE: ClassVar[str] = "Watt I six-bar"
+
+    r1: jax.Array
+    r2: jax.Array
+    r3: jax.Array
+    r4: jax.Array
+    r5: jax.Array
+    r6: jax.Array
+    dx: jax.Array
+    dy: jax.Array
+    fx: jax.Array
+    fy: jax.Array
+    rcx: jax.Array
+    rcy: jax.Array
+    x0: jax.Array
+    y0: jax.Array
+    theta0: jax.Array
+    branch: jax.Array
+
+    def dyad_pivot(self, phi4) -> jax.Array:
+        """The rocker's point ``F`` (2,) [length] with the rocker at ``phi4``."""
+        _, o4 = self.pivots()
+        return o4 + _turned(phi4, self.fx, self.fy)
+
+
+__all__ = ["WATT_NAMES", "WattI"]

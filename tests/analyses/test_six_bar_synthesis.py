@@ -1,0 +1,215 @@
+"""Six-bar path generation (mixdyn.synthesis, ``linkage="stephenson3"`` and ``"watt1"``)
+against independent truths.
+
+* the closed-form assembly against its loop-closure equations on every branch (the links'
+  lengths, the pins where the angles put them, the sides the branches name, the transmission
+  angles as the angles between the links), in NumPy from the returned angles;
+* derivatives through the two implicit circle intersections against central finite
+  differences, forward and reverse; an open second loop finite and measured;
+* what a task, a search and a model refuse for a six-bar (its dynamics) before computing;
+* (slow) the written model's kinematic analysis (Newton's assembly of seven revolute joints,
+  a second method) puts the coupler point where the closed form does;
+* (slow) a search recovers a known six-bar's coupler curve from eight of its points, and its
+  written model file, run by md.kinematic, passes them.
+"""
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import mixdyn as md
+from mixdyn.errors import ModelError
+from mixdyn.synthesis import (
+    Masses,
+    Objective,
+    PathTask,
+    StephensonIII,
+    WattI,
+    coupler_curve,
+    six_bar_model,
+    synthesize,
+)
+
+# A Grashof crank-rocker (ground 1, crank 0.3, coupler 1.1, rocker 0.9) with a dyad that
+# closes over the whole turn on every branch [m, rad]: r5, r6, D in the coupler, then O6 in
+# the ground link's frame (Stephenson III) or F in the rocker's (Watt I), the coupler point
+# on the tracer, the crank's pivot and the ground link's angle.
+HEAD = [1.0, 0.3, 1.1, 0.9, 1.2, 1.0, 0.6, 0.4]
+TAIL = [0.5, 0.2, 0.1, -0.2, 0.3]
+CASES = {
+    StephensonIII: np.array([*HEAD, 1.5, 1.2, *TAIL]),
+    WattI: np.array([*HEAD, 0.5, 0.3, *TAIL]),
+}
+
+
+def _rot(phi, p):
+    """``R(phi) p`` for angles (K,) and a point (2,): (K, 2)."""
+    c, s = np.cos(phi), np.sin(phi)
+    return np.stack([c * p[0] - s * p[1], s * p[0] + c * p[1]], -1)
+
+
+def _unit(phi):
+    return np.stack([np.cos(phi), np.sin(phi)], -1)
+
+
+def _cross(u, w):
+    return u[:, 0] * w[:, 1] - u[:, 1] * w[:, 0]
+
+
+@jax.jit
+def _assembly(lk, theta):
+    """The closed form at ``theta`` (K,): its joints, angles and transmission cosines."""
+    joints = jax.vmap(lk.joints)(theta)
+    return joints, jax.vmap(lk.transmission_cosines)(theta), coupler_curve(lk, theta)
+
+
+@pytest.mark.parametrize("cls", [StephensonIII, WattI])
+def test_closed_form_closes_both_loops_on_every_branch(cls):
+    """Over a crank turn, on each of the four branch codes: |AB| = r3, |O4 B| = r4,
+    |DE| = r5, |XE| = r6, each pin where its link's angle puts it (1e-12); D, the
+    follower's pivot X and the coupler point from the numbers by hand; B on the side b4 of
+    A -> O4, E on the side b6 of D -> X; cos mu1 = cos(phi3 - phi4), cos mu2 = cos(phi5 -
+    phi6); the four branches draw four different curves."""
+    v = CASES[cls]
+    n = dict(zip(cls.NAMES, v, strict=True))
+    theta = jnp.linspace(0.0, 2 * np.pi, 61)
+    phi2 = n["theta0"] + np.asarray(theta)
+    o2 = np.array([n["x0"], n["y0"]])
+    curves = []
+    for code in cls.BRANCHES:
+        b6 = 1.0 if code > 0 else -1.0
+        b4 = code - 2 * b6
+        j, cos_mu, curve = _assembly(cls.from_vector(jnp.asarray(v), code), theta)
+        j = {k: np.asarray(x) for k, x in j.items()}
+        a = o2 + n["r2"] * _unit(phi2)
+        o4 = o2 + n["r1"] * _unit(np.array([n["theta0"]]))[0]
+        np.testing.assert_allclose(j["A"], a, atol=1e-12)
+        np.testing.assert_allclose(j["B"], a + n["r3"] * _unit(j["phi3"]), atol=1e-12)
+        np.testing.assert_allclose(j["B"], o4 + n["r4"] * _unit(j["phi4"]), atol=1e-12)
+        d = a + _rot(j["phi3"], (n["dx"], n["dy"]))
+        if cls is StephensonIII:
+            x = np.broadcast_to(o2 + _rot(np.array([n["theta0"]]), (n["gx"], n["gy"]))[0], d.shape)
+        else:
+            x = o4 + _rot(j["phi4"], (n["fx"], n["fy"]))
+        np.testing.assert_allclose(j["D"], d, atol=1e-12)
+        np.testing.assert_allclose(j["X"], x, atol=1e-12)
+        np.testing.assert_allclose(j["E"], d + n["r5"] * _unit(j["phi5"]), atol=1e-12)
+        np.testing.assert_allclose(j["E"], x + n["r6"] * _unit(j["phi6"]), atol=1e-12)
+        np.testing.assert_allclose(np.asarray(curve), d + _rot(j["phi5"], (n["rcx"], n["rcy"])),
+                                   atol=1e-12)  # fmt: skip
+        assert np.all(b4 * _cross(o4 - a, j["B"] - a) > 0)
+        assert np.all(b6 * _cross(x - d, j["E"] - d) > 0)
+        cos_mu = np.asarray(cos_mu)
+        np.testing.assert_allclose(cos_mu[:, 0], np.cos(j["phi3"] - j["phi4"]), atol=1e-12)
+        np.testing.assert_allclose(cos_mu[:, 1], np.cos(j["phi5"] - j["phi6"]), atol=1e-12)
+        assert np.max(np.abs(cos_mu)) < 0.96  # both loops close along the whole turn
+        curves.append(np.asarray(curve))
+    for k in range(4):
+        for m in range(k):
+            assert np.max(np.abs(curves[k] - curves[m])) > 0.05
+
+
+def _curve(cls):
+    def f(x):
+        lk = cls.from_vector(x[:15], -1.0)  # b4 = +1, b6 = -1
+        return coupler_curve(lk, x[15:]).ravel()
+
+    return f
+
+
+@pytest.mark.parametrize(
+    "cls, reverse",
+    [
+        (WattI, False),  # the follower's pivot on the rocker: both loops' rules chained
+        pytest.param(WattI, True, marks=pytest.mark.slow),  # long: run by CI's slow set
+        pytest.param(StephensonIII, True, marks=pytest.mark.slow),  # long: CI's slow set
+    ],
+)
+def test_derivatives_are_finite_differences_and_an_open_dyad_is_finite(cls, reverse):
+    """dC/d(numbers, theta2) through both implicit rules, forward (and, slow, reverse)
+    against central differences; a follower too short to reach: finite values and
+    derivatives, the worse transmission cosine beyond 1."""
+    x = jnp.concatenate([jnp.asarray(CASES[cls]), jnp.array([0.4, 2.5, -1.0])])
+    f = _curve(cls)
+    forward = jax.jit(jax.jacfwd(f))
+    jf = np.asarray(forward(x))
+    g = jax.jit(f)
+    h = 1e-6
+    fd = np.stack([(g(x.at[k].add(h)) - g(x.at[k].add(-h))) / (2 * h) for k in range(len(x))], -1)
+    scale = np.max(np.abs(fd))
+    assert np.max(np.abs(jf - fd)) < 1e-7 * scale
+    if reverse:
+        assert np.max(np.abs(np.asarray(jax.jit(jax.jacrev(f))(x)) - jf)) < 1e-12 * scale
+    short = x.at[4].set(0.05).at[5].set(0.05)  # r5 + r6 = 0.1 < |D X|
+    lk = cls.from_vector(short[:15], -1.0)
+    assert abs(float(lk.transmission_cosine(0.4))) > 1.0
+    assert np.all(np.isfinite(np.asarray(g(short))))
+    assert np.all(np.isfinite(np.asarray(forward(short))))
+
+
+def test_a_six_bars_task_search_and_model_refuse_what_they_cannot_do():
+    """The task checks a six-bar's numbers and bounds them all; its dynamics are refused
+    before any search (synthesis computes none), and so are its model's masses."""
+    points = np.array([[0.0, 0.0], [0.1, 0.05], [0.15, 0.12]])
+    box = PathTask(points, linkage="watt1", bounds={"fx": (-0.1, 0.2)}).box()
+    assert box.shape == (15, 2) and tuple(box[8]) == (-0.1, 0.2)
+    assert np.all(np.isfinite(box[:-1]))  # every number but theta0 bounded by default
+    with pytest.raises(ModelError, match="no number 'gx' of a Watt I six-bar"):
+        PathTask(points, linkage="watt1", bounds={"gx": (0.1, 0.2)})
+    with pytest.raises(ModelError, match="no linkage 'stephenson'"):
+        PathTask(points, linkage="stephenson")
+    task = PathTask(points, linkage="stephenson3")
+    assert task.linkage is StephensonIII
+    with pytest.raises(ModelError, match="Stephenson III six-bar's dynamics"):
+        synthesize(task, Objective(masses=Masses(density=1.0)), starts=1)
+    lk = StephensonIII.from_vector(jnp.asarray(CASES[StephensonIII]), 1.0)
+    with pytest.raises(ModelError, match="masses"):
+        six_bar_model(lk, Masses(density=1.0))
+
+
+@pytest.mark.slow  # long: run by CI's slow set (compiles the model's kinematic analysis)
+@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0)])
+def test_closed_form_is_mixdyns_kinematic_analysis(cls, code):
+    """Over a crank turn the built model's kinematic analysis (Newton's assembly of the five
+    links and seven revolute joints) puts tracer.P where the closed form puts the coupler
+    point, and the tracer at the closed form's angle, to 1e-9."""
+    lk = cls.from_vector(jnp.asarray(CASES[cls]), code)
+    start, speed = 0.4, 2.0
+    t = np.linspace(0.0, 2 * np.pi / speed, 37)
+    kin = md.kinematic(six_bar_model(lk, start=start, speed=speed), t)
+    p, _, _ = kin.point("tracer.P")
+    theta = jnp.asarray(start + speed * t)
+    assert np.max(np.abs(p - np.asarray(coupler_curve(lk, theta)))) < 1e-9
+    phi5 = np.asarray(jax.vmap(lk.coupler_angle)(theta))
+    assert np.max(np.abs(np.angle(np.exp(1j * (kin["tracer.phi"] - phi5))))) < 1e-9
+
+
+@pytest.mark.slow  # long: run by CI's slow set (each search compiles its programs, ~10 s)
+@pytest.mark.parametrize("cls", [StephensonIII, WattI])
+def test_search_recovers_a_known_six_bars_curve(cls, tmp_path):
+    """Eight points of the fixture's coupler curve with their input angles, every number
+    bounded within 20 % of the fixture's (a designer's box): the best six-bar passes the
+    points (error <= 1e-8) and draws the fixture's curve between them (1e-5); its model
+    file, loaded and run by md.kinematic, passes the points."""
+    v = CASES[cls]
+    truth = cls.from_vector(jnp.asarray(v), 3.0)
+    theta = np.linspace(0.3, 4.5, 8)
+    points = np.asarray(coupler_curve(truth, theta))
+    bounds = {
+        name: (x - 0.2 * max(abs(x), 0.3), x + 0.2 * max(abs(x), 0.3))
+        for name, x in zip(cls.NAMES[:-1], v[:-1], strict=True)
+    }
+    out = synthesize(PathTask(points, timing=theta, linkage=cls, bounds=bounds), starts=64,
+                     chunk=64, seed=1)  # fmt: skip
+    best = out.best
+    assert isinstance(best.linkage, cls) and best.error <= 1e-8
+    fine = np.linspace(theta[0], theta[-1], 200)
+    drawn = coupler_curve(best.linkage, fine - theta[0] + best.angles[0])
+    assert np.max(np.abs(np.asarray(drawn) - np.asarray(coupler_curve(truth, fine)))) < 1e-5
+    out.write(tmp_path / "best.yaml")
+    loaded = md.load(tmp_path / "best.yaml")
+    kin = md.kinematic(loaded.model, (best.angles - best.angles[0]) / out.objective.speed)
+    p, _, _ = kin.point("tracer.P")
+    assert np.max(np.abs(p - np.asarray(coupler_curve(best.linkage, best.angles)))) < 1e-9
+    assert np.sum((p - points) ** 2) <= 1e-8
