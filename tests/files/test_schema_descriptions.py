@@ -76,9 +76,9 @@ PROPERTIES = {
     "SynthesisMassesSpec": "density payload slider",
     "SynthesisMotionSpec": "length poses",
     "SynthesisPivotSpec": "x y",
-    "SynthesisRunSpec": "bounds function grashof keep kind linkage masses max_steps "
+    "SynthesisRunSpec": "bounds function grashof harmonics keep kind linkage masses max_steps "
     "min_transmission motion name pivots points reaction reaction_weight seed shaking "
-    "shaking_force_weight shaking_moment_weight speed starts timing torque torque_weight",
+    "shaking_force_weight shaking_moment_weight shape speed starts timing torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -100,8 +100,9 @@ PROPERTIES = {
 # synthesis runs alone (issue 34); and with a synthesis run's function generation (issue 34);
 # and with a synthesis run's linkage and a slider's mass (issue 34); and with a synthesis
 # run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
-# regions (issue 34); and with a synthesis run's six-bar linkages (issue 34).
-STRIPPED_SHA256 = "4afec997f41f701df8e45ddad20a9369b45dd9d7c8dc79b0982076e859e557d3"
+# regions (issue 34); and with a synthesis run's six-bar linkages (issue 34); and with a
+# synthesis run's shape-only error (shape, harmonics; issue 34).
+STRIPPED_SHA256 = "41949c1fa276621201fa4cf16d5b3ecb8e80584491905117011f1734ef071ccb"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -1140,8 +1140,8 @@ class SynthesisRunSpec(Spec):
     shape: Literal["points", "fourier"] = "points"
     """The path's error: ``points`` (default: the coupler point through each point) or
     ``fourier`` (shape alone: the points are a closed curve's; the coupler curve over a full
-    crank turn takes its shape by normalised elliptic Fourier descriptors, anywhere, at any
-    size and turn, then is placed onto the points)."""
+    crank turn takes its shape by normalised elliptic Fourier descriptors, then is placed
+    onto them)."""
     harmonics: int = Field(default=8, ge=2, le=64)
     """The elliptic Fourier harmonics compared with ``shape: fourier``; more than twice as
     many points needed. Default 8."""

@@ -537,6 +537,9 @@ class SynthesisKind(RunKind):
                 options.update(axes=("crank angle", "rocker angle"), error_unit="rad²")
             else:
                 asked, curves, options = out.task.points, [_curves(c) for c in drawn], {}
+                from .synthesis_shape import figure_options
+
+                options.update(figure_options(out.task))
                 if isinstance(out.task, MotionTask):
                     options["angles"] = out.task.angles
             outputs.painter.draw(

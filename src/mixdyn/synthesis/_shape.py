@@ -149,6 +149,16 @@ class ShapeTask:
         return None
 
     @property
+    def grashof(self) -> str:
+        """``"any"``: no Grashof type asked beyond a crank that turns fully."""
+        return "any"
+
+    @property
+    def pivots(self) -> dict:
+        """No ground pivots' regions (a shape fixes no place)."""
+        return {}
+
+    @property
     def size(self) -> float:
         """The targets' size: the largest distance from their centre [length]."""
         c = self.points.mean(axis=0)
