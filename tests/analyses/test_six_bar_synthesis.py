@@ -10,7 +10,9 @@ against independent truths.
 * (slow) the written model's kinematic analysis (Newton's assembly of seven revolute joints,
   a second method) puts the coupler point where the closed form does;
 * (slow) a search recovers a known six-bar's coupler curve from eight of its points, and its
-  written model file, run by md.kinematic, passes them.
+  written model file, run by md.kinematic, passes them;
+* (slow) motion generation carries a six-bar's tracer through six poses of a known one, its
+  written model run by md.kinematic.
 """
 
 import jax
@@ -213,3 +215,32 @@ def test_search_recovers_a_known_six_bars_curve(cls, tmp_path):
     p, _, _ = kin.point("tracer.P")
     assert np.max(np.abs(p - np.asarray(coupler_curve(best.linkage, best.angles)))) < 1e-9
     assert np.sum((p - points) ** 2) <= 1e-8
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search compiles its programs, ~35 s)
+def test_motion_generation_carries_a_six_bars_tracer_through_poses(tmp_path):
+    """Six poses of the Stephenson III fixture's tracer (its coupler point, and its angle
+    plus 0.4 rad), every number within 20 % of the fixture's: the best six-bar's pose error
+    <= 1e-8, and its written model file, run by md.kinematic, puts tracer.P and tracer.phi
+    on the poses (1e-8)."""
+    from mixdyn.synthesis import MotionTask
+
+    v = CASES[StephensonIII]
+    truth = StephensonIII.from_vector(jnp.asarray(v), 3.0)
+    theta = np.linspace(0.3, 4.5, 6)
+    points = np.asarray(coupler_curve(truth, theta))
+    angles = np.asarray(jax.vmap(truth.coupler_angle)(jnp.asarray(theta))) + 0.4
+    bounds = {
+        name: (x - 0.2 * max(abs(x), 0.3), x + 0.2 * max(abs(x), 0.3))
+        for name, x in zip(StephensonIII.NAMES[:-1], v[:-1], strict=True)
+    }
+    task = MotionTask(np.column_stack([points, angles]), linkage="stephenson3", bounds=bounds)
+    out = synthesize(task, starts=64, chunk=64, seed=1)
+    best = out.best
+    assert isinstance(best.linkage, StephensonIII) and best.error <= 1e-8
+    out.write(tmp_path / "best.yaml")
+    loaded = md.load(tmp_path / "best.yaml")
+    kin = md.kinematic(loaded.model, (best.angles - best.angles[0]) / out.objective.speed)
+    p, _, _ = kin.point("tracer.P")
+    assert np.max(np.abs(p - points)) < 1e-8
+    assert np.max(np.abs(np.angle(np.exp(1j * (kin["tracer.phi"] - angles))))) < 1e-8

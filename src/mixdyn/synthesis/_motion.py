@@ -2,15 +2,16 @@
 
 A pose is where the carried body is and how it is turned: its reference point ``P_i = (x_i,
 y_i)`` [length] (the coupler point) and the angle ``alpha_i`` [rad] of a line fixed in it. The
-body is the coupler (a four-bar's, or a slider-crank's connecting rod with ``linkage=
-"slider_crank"``), and that line makes an unknown but constant angle ``gamma`` (the coupler
-angle of a result, :attr:`~._search.Candidate.coupler_angle`) with the coupler's own line from
-its crank pin ``A`` towards its other pin ``B``: at the crank's angle ``theta_i`` the body's
-angle is ``phi_i = phi3(theta_i) + gamma``. The crank's angle at each pose is an unknown (one
-per pose), as in a timing-free path task; ``gamma`` is not a variable of the search but the
-least-squares offset of the poses' unit vectors (variable projection, :func:`offset`),
-``gamma = arg sum_i e^{i (alpha_i - phi3_i)}``, so that only the differences of the asked
-angles count.
+body is the coupler (a four-bar's, a slider-crank's connecting rod with ``linkage=
+"slider_crank"``, or a six-bar's tracer ``D E``, :mod:`._sixbar`), and that line makes an
+unknown but constant angle ``gamma`` (the coupler angle of a result,
+:attr:`~._search.Candidate.coupler_angle`) with the coupler's own line from its crank pin ``A``
+towards its other pin ``B`` (a tracer's from ``D`` towards ``E``): at the crank's angle
+``theta_i`` the body's angle is ``phi_i = phi3(theta_i) + gamma``. The crank's angle at each
+pose is an unknown (one per pose), as in a timing-free path task; ``gamma`` is not a variable
+of the search but the least-squares offset of the poses' unit vectors (variable projection,
+:func:`offset`), ``gamma = arg sum_i e^{i (alpha_i - phi3_i)}``, so that only the differences
+of the asked angles count.
 
 The error of a candidate (:meth:`MotionTask.error`) is
 
@@ -65,7 +66,8 @@ class MotionTask:
         length: the characteristic length ``L`` [length] that weighs the angle error (None:
             the poses' size, the largest distance of their points from their centre).
         linkage: the linkage type, as for a :class:`PathTask` (``"four_bar"``, the default,
-            or ``"slider_crank"``); held as the class.
+            ``"slider_crank"``, or a six-bar, ``"stephenson3"`` or ``"watt1"``, whose carried
+            body is the tracer ``D E``); held as the class.
         grashof: the Grashof type asked for, as for a :class:`PathTask` (default ``"any"``).
         pivots: the ground pivots' regions, as for a :class:`PathTask` (default none).
         path: the :class:`PathTask` of the poses' points (timing free), made and checked from
