@@ -131,10 +131,11 @@ def test_four_bar_impulse_keeps_the_joints_and_matches_the_hand_derivation():
 
 
 def test_rigid_contact_refusals():
-    """A rigid contact with friction, or run (forward or mixed) by a fixed-step method, is
-    refused before any computing (named input errors)."""
+    """A rigid contact with a friction regularization (``v_stick``: its impacts stick or
+    slip exactly), or run (forward or mixed) by a fixed-step method, is refused before any
+    computing (named input errors)."""
     ball = md.Body("ball", 1.0, 1e-3, q0=(0.0, 1.0, 0.0))
-    with pytest.raises(md.ModelError, match="friction"):
+    with pytest.raises(md.ModelError, match="remove v_stick"):
         md.CircleLineContact(
             "floor", "ball", 0.05, ("ground", (0.0, 0.0)), contact_model="rigid",
             restitution=0.8, mu=0.3, v_stick=1e-3,

@@ -28,6 +28,17 @@ law (``G qd+ = -e v-``); ``P >= 0`` the contact's normal impulse [force * time] 
 ``Lambda`` the constraints' impulses (solved through the Schur complement
 ``A M^-1 A^T``, ``A = [Phi_q; G]``, in the least-squares sense where rows are redundant).
 
+A contact with a friction coefficient ``mu`` adds Coulomb's law on the impulses
+(:mod:`._impact_friction`): its tangential row ``G_t`` (the sliding speed
+``v_t = G_t qd`` along ``z x n``) beside ``G``, and a tangential impulse ``T`` along it,
+``M (qd+ - qd-) = Phi_q^T Lambda + G^T P + G_t^T T``; the point sticks
+(``G_t qd+ = 0``, where ``|T| <= mu P``) or else slides (``T = +-mu P``, in the direction
+of the sticking impulse). Newton's law with friction can give energy where the normal and
+tangential motions are coupled: an impact whose contact impulses would do positive work,
+or whose sliding normal impulse would pull (jamming), ends the run as a
+:class:`~mixdyn.errors.NumericalError`. The multi-point plastic impacts of :func:`settle`
+and the resting points are frictionless.
+
 In a mixed run (:mod:`.mixed`: ``p`` unknown forces of directions ``B`` (nq, p), ``p``
 prescribed motions ``Psi``) a prescribed motion's velocity cannot jump: its unknown force
 takes an impulse ``F`` [force * time] instead of a constraint's. The prescribed motions are
@@ -89,6 +100,7 @@ from ..errors import (
 from ..model._compliant import rigid_contacts
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
+from ._impact_friction import coulomb_impulse
 from ._problem import Problem
 from ._resting import hold, hold_positions, holding, n_holds, normal_forces
 from .methods import Projection
@@ -121,6 +133,9 @@ FORCE_TOL = 1e-9
 #: At a lift-off, the resting points whose normal forces are within this part of the
 #: largest at the segment's start lift off together (a block pulled up at its centre).
 LIFT_TOL = 1e-9
+#: A frictional impact whose contact impulses' work exceeds this part of their size
+#: (``|P v-| + |T v_t-|``) gives the bodies energy: the run ends as a numerical failure.
+ENERGY_TOL = 1e-9
 #: The most steps of one segment's solve (its dense output's size); a segment that runs out
 #: goes on as the next.
 SEGMENT_STEPS = 2048
@@ -170,6 +185,12 @@ def _origins(contacts, q0, length):
 def _gaps(contacts, q):
     """The gaps ``g = -delta`` (k,) [length] of every rigid contact point, in order."""
     return jnp.concatenate([-jnp.atleast_1d(c.penetration(q)) for c in contacts])
+
+
+def _slidings(contacts, q, qd):
+    """The sliding speeds (k,) [velocity] of every rigid contact point along ``z x n``, in
+    order (linear in ``qd``)."""
+    return jnp.concatenate([jnp.atleast_1d(c.sliding(q, qd)) for c in contacts])
 
 
 @cached_jit
@@ -244,8 +265,9 @@ def _impact_state(problem: Problem, contacts, q, qd, t, tol):
     """At an impact: the positions and velocities projected on the constraints, the
     constraint Jacobian (m, nq), the rows along which the constraints' impulses act (m, nq:
     the Jacobian's, but for a mixed problem's last ``p`` rows, the prescribed motions, whose
-    impulses act along the unknown forces' directions ``B^T``), ``Phi_t`` (m,), the gaps (k,)
-    and their gradients (k, nq)."""
+    impulses act along the unknown forces' directions ``B^T``), ``Phi_t`` (m,), the gaps (k,),
+    their gradients (k, nq) and the tangential velocities' rows (k, nq): ``v_t = G_t qd``,
+    the sliding speeds of :meth:`~mixdyn.model._compliant._Compliant.sliding`."""
     q, _ = problem.project_positions(q, t, tol)
     qd = problem.project_velocities(q, qd, t)
     c = problem.c
@@ -257,7 +279,8 @@ def _impact_state(problem: Problem, contacts, q, qd, t, tol):
     phit = c.phi_t(q, t) if c.m else jnp.zeros(0)
     g = _gaps(contacts, q)
     G = jax.jacfwd(lambda x: _gaps(contacts, x))(q)
-    return q, qd, J, D, phit, g, G
+    Gt = jax.jacfwd(lambda v: _slidings(contacts, q, v))(qd)
+    return q, qd, J, D, phit, g, G, Gt
 
 
 @cached_jit(optimize=False)  # a few times per run
@@ -378,6 +401,34 @@ def _refuse_penetration(owner, gaps, scale) -> None:
         )
 
 
+def _refuse_frictional(found, v, vt, name, t, fail) -> None:
+    """End the run (``fail``) where a frictional impact (:func:`coulomb_impulse`'s
+    ``found``, at the normal and tangential velocities ``v``, ``vt`` before) at the contact
+    ``name`` jams (its normal impulse would pull) or gives the bodies energy (Newton's law
+    with friction, see :mod:`._impact_friction`)."""
+    if found.P < 0.0:
+        fail(
+            NumericalError(
+                f"the impact at {name} jams: sliding with mu, its normal impulse would pull "
+                f"(P = {found.P:.4g}; the friction's impulse drives the contact point into its "
+                "contact); lower mu, or give the contact a compliant contact_model",
+                t,
+                (name,),
+            )
+        )
+    if found.work > ENERGY_TOL * (abs(found.P * v) + abs(found.T * vt)):
+        fail(
+            NumericalError(
+                f"the frictional impact at {name} would give the bodies energy "
+                f"({found.work:.4g} [energy]: Newton's restitution with Coulomb friction where "
+                "the slip reverses during the impact, see Stronge 1991); lower mu or the "
+                "restitution, or give the contact a compliant contact_model",
+                t,
+                (name,),
+            )
+        )
+
+
 def _message(code) -> str:
     """diffrax's message of its result ``code``."""
     import diffrax
@@ -406,17 +457,21 @@ def simulate_impacts(case, progress=None) -> Result:
     """Integrate a forward or mixed ``case`` (:class:`~._simulate.Case`) whose model has rigid
     contacts, impact by impact, and build its result: the forward columns, ``work.impacts``
     (the kinetic energy the impacts took, accumulated [energy]), ``{contact}.impulse``
-    (the contact's normal impulses accumulated [force * time]) and ``{contact}.normal``
-    (its normal force while it rests [force], summed over its contact points; 0 while
-    apart); ``stats["impacts"]``: each impact's ``t``, ``contact``, ``impulse``,
-    ``normal_velocity_before`` and ``_after``, the constraints' impulses ``reactions`` (by
-    constraint row), the positions ``q`` and the velocities ``qd_before`` and ``qd_after``
-    (model units); ``stats["rests"]``: each rest's ``contact``, ``start`` and ``end``
-    (its lift-off, or the run's end) [time]. A mixed run adds ``{force}.impulse`` per
-    unknown force (its impulses accumulated [force * time], their work in
-    ``work.constraints``) and each impact's unknown forces' impulses ``unknown`` (by
-    name). ``progress``: an optional ``f(t)`` called at each output time once the run is
-    done."""
+    (the contact's normal impulses accumulated [force * time]), with ``mu``
+    ``{contact}.friction_impulse`` (its friction impulses on body j along ``z x n``,
+    accumulated [force * time]) and ``{contact}.normal`` (its normal force while it rests
+    [force], summed over its contact points; 0 while apart); ``stats["impacts"]``: each
+    impact's ``t``, ``contact``, ``impulse``, ``normal_velocity_before`` and ``_after``,
+    ``friction_impulse`` (on body j along ``z x n``; 0 without ``mu``),
+    ``tangential_velocity_before`` and ``_after`` (the sliding speed along ``z x n``),
+    ``sticks`` (whether the friction held the contact point; false without ``mu``), the
+    constraints' impulses ``reactions`` (by constraint row), the positions ``q`` and the
+    velocities ``qd_before`` and ``qd_after`` (model units); ``stats["rests"]``: each rest's
+    ``contact``, ``start`` and ``end`` (its lift-off, or the run's end) [time]. A mixed run
+    adds ``{force}.impulse`` per unknown force (its impulses accumulated [force * time],
+    their work in ``work.constraints``) and each impact's unknown forces' impulses
+    ``unknown`` (by name). ``progress``: an optional ``f(t)`` called at each output time
+    once the run is done."""
     from ._simulate import (
         _post,
         _post_arrays,
@@ -440,6 +495,7 @@ def simulate_impacts(case, progress=None) -> Result:
         return problems[resting]
 
     e_point = np.array([float(c.restitution) for c in owner])
+    mu_point = np.array([np.nan if c.mu is None else float(c.mu) for c in owner])
     Minv = np.asarray(problem.Minv, float)
     span = float(ts[-1] - ts[0])
     scale = length_scale(model)
@@ -451,12 +507,14 @@ def simulate_impacts(case, progress=None) -> Result:
     Q, QD, W = np.full((N, nq), np.nan), np.full((N, nq), np.nan), np.zeros((N, 2))
     W_imp, W_unk = np.zeros(N), np.zeros(N)
     P_acc = {c.name: np.zeros(N) for c in contacts}
+    T_acc = {c.name: np.zeros(N) for c in contacts if c.mu is not None}
     unknown, p = problem.unknown, problem.p
     first_hold = problem.c.m - p  # the held points' rows: the len(resting) from here
     F_acc = {name: np.zeros(N) for name in unknown}
     impacts = {"t": [], "contact": [], "impulse": [], "normal_velocity_before": [],
-               "normal_velocity_after": [], "reactions": [], "q": [], "qd_before": [],
-               "qd_after": []}  # fmt: skip
+               "normal_velocity_after": [], "friction_impulse": [],
+               "tangential_velocity_before": [], "tangential_velocity_after": [], "sticks": [],
+               "reactions": [], "q": [], "qd_before": [], "qd_after": []}  # fmt: skip
     if p:
         impacts["unknown"] = []
     rests = {"contact": [], "start": [], "end": []}
@@ -464,6 +522,7 @@ def simulate_impacts(case, progress=None) -> Result:
     y = (jnp.asarray(case.q0), jnp.asarray(case.qd0), jnp.zeros(2))
     lost, worked, steps, segments = 0.0, 0.0, 0, 1
     totals = {c.name: 0.0 for c in contacts}
+    T_totals = dict.fromkeys(T_acc, 0.0)
     F_totals = dict.fromkeys(unknown, 0.0)
     filled = np.zeros(N, bool)
     held_at: dict[tuple, list] = {}  # the output times of each set of resting points
@@ -496,15 +555,23 @@ def simulate_impacts(case, progress=None) -> Result:
         lost += 0.5 * (qd_new @ (qd_new / Minv) - qd @ (qd / Minv)) - w
         return F
 
-    def record(i, P, lam, labels, q, qd, qd_new, G_i, F):
+    def record(i, P, lam, labels, q, qd, qd_new, G_i, F, Gt_i, T=0.0, sticks=False):
         """Record contact point ``i``'s impact: its impulse ``P``, normal velocities, the
-        constraints' impulses ``lam`` by row ``labels`` and the unknown forces' ``F``."""
+        constraints' impulses ``lam`` by row ``labels``, the unknown forces' ``F``, the
+        friction impulse ``T``, the tangential velocities (row ``Gt_i``) and whether the
+        point sticks."""
         totals[owner[i].name] += P
+        if owner[i].name in T_totals:
+            T_totals[owner[i].name] += T
         impacts["t"].append(t0)
         impacts["contact"].append(owner[i].name)
         impacts["impulse"].append(float(P))
         impacts["normal_velocity_before"].append(float(G_i @ qd))
         impacts["normal_velocity_after"].append(float(G_i @ qd_new))
+        impacts["friction_impulse"].append(float(T))
+        impacts["tangential_velocity_before"].append(float(Gt_i @ qd))
+        impacts["tangential_velocity_after"].append(float(Gt_i @ qd_new))
+        impacts["sticks"].append(bool(sticks))
         n = len(lam) - p
         impacts["reactions"].append(dict(zip(labels[:n], lam[:n].tolist(), strict=False)))
         if p:
@@ -528,7 +595,7 @@ def simulate_impacts(case, progress=None) -> Result:
     while True:
         # the impacts at t0: sequential, the fastest approach first; a point approaching
         # slower than the rest speed comes to rest (a plastic impulse, then held)
-        q, qd, J, D, phit, g, G = state_at(y[0], y[1])
+        q, qd, J, D, phit, g, G, Gt = state_at(y[0], y[1])
         struck: set[int] = set()  # the points struck at t0
         deep = np.flatnonzero(g < -MISSED * scale)
         if deep.size:
@@ -555,7 +622,7 @@ def simulate_impacts(case, progress=None) -> Result:
                 jump(qd, qd_new, lam, D)
                 resting = tuple(sorted((*resting, i)))
                 started[i] = t0
-                q, qd, J, D, phit, g, G = state_at(q, qd_new)
+                q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                 continue
             if len(impacts["t"]) >= MAX_IMPACTS:
                 fail(
@@ -581,21 +648,27 @@ def simulate_impacts(case, progress=None) -> Result:
                     labels = problem.c.active_labels
                     for j, push in zip(settled, pushes, strict=True):
                         started.setdefault(j, t0)
-                        record(j, push, lam, labels, q, qd, qd_new, G[j], F)
+                        record(j, push, lam, labels, q, qd, qd_new, G[j], F, Gt[j])
                     for j in set(resting) - set(settled):
                         release(j, t0)
                     resting = tuple(sorted(settled))
-                    q, qd, J, D, phit, g, G = state_at(q, qd_new)
+                    q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                     struck.clear()
                     continue
             struck.add(i)
             comes_to_rest = -v[i] < rest
             e_i = 0.0 if comes_to_rest else e_point[i]
-            qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i, D)
+            T, sticks = 0.0, False
+            if np.isnan(mu_point[i]):
+                qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i, D)
+            else:
+                found = coulomb_impulse(Minv, J, phit, G[i], Gt[i], qd, e_i, mu_point[i], D)
+                qd_new, lam, P, T, sticks = found[:5]
+                _refuse_frictional(found, v[i], float(Gt[i] @ qd), owner[i].name, t0, fail)
             pulled = [j for k, j in enumerate(resting) if lam[first_hold + k] < 0.0]
             if pulled:  # a resting point the impact pulls away lifts off: again without it
                 release(pulled[0], t0)
-                q, qd, J, D, phit, g, G = state_at(q, qd)
+                q, qd, J, D, phit, g, G, Gt = state_at(q, qd)
                 continue
             if abs(G[i] @ qd_new + e_i * v[i]) > IMPULSE_TOL * abs(v[i]):
                 fail(
@@ -611,12 +684,12 @@ def simulate_impacts(case, progress=None) -> Result:
                 )
             F = jump(qd, qd_new, lam, D)
             labels = held_problem(resting).c.active_labels
-            record(i, P, lam, labels, q, qd, qd_new, G[i], F)
+            record(i, P, lam, labels, q, qd, qd_new, G[i], F, Gt[i], T, sticks)
             qd = qd_new
             if comes_to_rest:
                 resting = tuple(sorted((*resting, i)))
                 started[i] = t0
-                q, qd, J, D, phit, g, G = state_at(q, qd)
+                q, qd, J, D, phit, g, G, Gt = state_at(q, qd)
         # a resting point that the motion pulls away (a tensile normal force) lifts off; one
         # touching without a normal force (nothing presses it on) is apart
         forces = np.zeros(0)
@@ -648,6 +721,8 @@ def simulate_impacts(case, progress=None) -> Result:
         W_imp[take], W_unk[take] = lost, worked
         for name in P_acc:
             P_acc[name][take] = totals[name]
+        for name in T_acc:
+            T_acc[name][take] = T_totals[name]
         for name in F_acc:
             F_acc[name][take] = F_totals[name]
         if resting:
@@ -698,6 +773,8 @@ def simulate_impacts(case, progress=None) -> Result:
     for name, acc in P_acc.items():
         extra[f"{name}.impulse"] = acc
         extra[f"{name}.normal"] = normals[name]
+    for name, acc in T_acc.items():
+        extra[f"{name}.friction_impulse"] = acc
     for name, acc in F_acc.items():
         extra[f"{name}.impulse"] = acc
     balance_cols = dict(extra, **{"work.nonconservative": W[:, 0] + W_imp})
@@ -706,6 +783,7 @@ def simulate_impacts(case, progress=None) -> Result:
     kinds = post_kinds(problem, case.n_drivers)
     kinds["work.impacts"] = "energy"
     kinds.update({f"{c.name}.impulse": "impulse" for c in contacts})
+    kinds.update({f"{name}.friction_impulse": "impulse" for name in T_acc})
     kinds.update({f"{name}.impulse": "impulse" for name in unknown})
     kinds.update({f"{c.name}.normal": "force" for c in contacts})
     stats = {

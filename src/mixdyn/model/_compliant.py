@@ -19,9 +19,10 @@ a pure JAX function of ``(q, qd)`` and the numbers of the element (derivatives b
 differentiation).
 
 A pair whose ``contact_model`` is ``rigid`` exerts no force: its bodies collide with
-Newton's restitution at the instants its penetration reaches zero, and rest on each other
-once the impacts accumulate, the penetration held at zero (forward and mixed dynamics with
-impacts, :mod:`mixdyn.analysis._impacts`); it needs no material.
+Newton's restitution at the instants its penetration reaches zero (with ``mu``, Coulomb's
+law on the impulses: :mod:`mixdyn.analysis._impact_friction`), and rest on each other once
+the impacts accumulate, the penetration held at zero, without friction (forward and mixed
+dynamics with impacts, :mod:`mixdyn.analysis._impacts`); it needs no material.
 
 The stiffness of a compliant pair is Hertz's, from one material's Young's modulus and
 Poisson's ratio and the pair's radii (:func:`~mixdyn.model._contact_law.hertz_stiffness`).
@@ -151,7 +152,8 @@ def _mu():
     return quantity(
         "dimensionless",
         "Coulomb friction coefficient at the contact (>= 0); default none (no friction, no "
-        "friction column).",
+        "friction column). A rigid contact: Coulomb's law on its impacts' impulses (stick or "
+        "slip; its resting points slide without friction).",
         None,
         converter=_optional,
         at_least=0.0,
@@ -163,7 +165,7 @@ def _v_stick():
     return quantity(
         "velocity",
         "Friction's regularization speed: the friction is ``-mu F tanh(v_t / v_stick)``. "
-        "Required with ``mu``.",
+        "Required with ``mu`` on a compliant contact; a rigid contact takes none.",
         None,
         converter=_optional,
         above=0.0,
@@ -174,12 +176,13 @@ def _v_stick():
 def _check_law(e, name: str) -> None:
     """The checks of a contact law's numbers that their declared ranges do not make."""
     if getattr(e, "contact_model", None) == RIGID:
-        if e.mu is not None:
+        if e.v_stick is not None:
             raise ModelError(
-                "a rigid contact takes no friction (its impacts are frictionless): remove mu, "
-                "or choose a compliant contact_model (e.g. lankarani_nikravesh)",
+                "a rigid contact's friction acts in its impacts, which stick or slip exactly "
+                "(Coulomb's law on the impulses): remove v_stick (the regularization of a "
+                "compliant contact's friction)",
                 name,
-                field="mu",
+                field="v_stick",
             )
         if not np.all(np.asarray(e.restitution) <= 1.0):
             raise ModelError(
@@ -274,7 +277,7 @@ class _Compliant(ForceElement):
         """Hertz's stiffness ``K`` [force / length**1.5]."""
         return hertz_stiffness(self.young_modulus, self.poisson, self.effective_radius())
 
-    def _sliding(self, q, qd):
+    def sliding(self, q, qd):
         """The sliding speeds of j on i at the contact points, along ``z x n`` (k,)
         [velocity]."""
         P, n = (jnp.atleast_2d(x) for x in self.frame(q))
@@ -296,7 +299,7 @@ class _Compliant(ForceElement):
         F = normal_force(delta, J @ qd, self.stiffness, self.restitution, speed, self.contact_model)
         if self.mu is None:
             return delta, J, F, None
-        return delta, J, F, friction_force(F, self._sliding(q, qd), self.mu, self.v_stick)
+        return delta, J, F, friction_force(F, self.sliding(q, qd), self.mu, self.v_stick)
 
     def passive(self, q, qd, t, nq):
         """The contact's generalized force (nq,): evaluated where a penetration is positive,
@@ -309,7 +312,7 @@ class _Compliant(ForceElement):
             _, J, F, Ft = self._state(q, qd)
             Q = -F @ J
             if Ft is not None:
-                Q = Q + Ft @ jax.jacfwd(self._sliding, argnums=1)(q, qd)
+                Q = Q + Ft @ jax.jacfwd(self.sliding, argnums=1)(q, qd)
             return Q
 
         def apart(q, qd):
