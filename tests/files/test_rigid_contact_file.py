@@ -1,9 +1,11 @@
-"""A rigid contact in a model file: a mixed run by a fixed-step method is refused before
-computing (exit 2, the run's line and the contact named, with the fix; a mixed run by the
+"""A rigid contact in a model file: a forward or mixed run by a fixed-step method, or with a
+fixed step, is refused by ``mixdyn check`` and by ``mixdyn run`` before computing (exit 2,
+the line of the method or step, the contact named, with the fix; a mixed run by the
 projection method takes its impacts: ``tests/validation/test_mixed_impacts.py``)."""
 
 from __future__ import annotations
 
+import pytest
 from typer.testing import CliRunner
 
 from mixdyn.cli import app
@@ -32,10 +34,31 @@ runs:
 """
 
 
-def test_a_mixed_run_with_a_rigid_contact_by_a_fixed_step_method_is_an_input_error(tmp_path):
+@pytest.mark.parametrize(
+    "old, new, line, words",
+    [
+        ("", "", 18, "rigid contacts are integrated with the projection method, not baumgarte"),
+        ("    method: baumgarte\n", "", 18, "rigid contacts need the adaptive steps"),
+        (
+            '    kind: mixed\n    prescribed: [{coordinate: ball.x, law: "0"}]\n'
+            "    unknown: [push]\n",
+            "    kind: forward\n",
+            16,
+            "rigid contacts are integrated with the projection method, not baumgarte",
+        ),
+    ],
+    ids=["mixed by baumgarte", "mixed with dt", "forward by baumgarte"],
+)
+@pytest.mark.parametrize("command", ["check", "run"])
+def test_a_rigid_contact_needs_the_projection_methods_adaptive_steps(
+    tmp_path, command, old, new, line, words
+):
     path = tmp_path / "ball.yaml"
-    path.write_text(BALL)
-    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
+    path.write_text(BALL.replace(old, new) if old else BALL)
+    out = tmp_path / "out"
+    args = [command, str(path)] + (["--out", str(out)] if command == "run" else [])
+    res = CliRunner().invoke(app, args)
     assert res.exit_code == 2, res.output
-    assert "ball.yaml:14: run 'drop': floor: rigid contacts are integrated with the" in res.output
-    assert "projection method, not baumgarte: use method='projection'" in res.output
+    assert f"ball.yaml:{line}: run 'drop'" in res.output
+    assert f"floor: {words}" in res.output
+    assert not out.exists()  # refused before anything ran

@@ -1,6 +1,7 @@
 """A run's settings, checked when it is planned: its ``options`` (only the names its analysis
 takes, none that repeats a setting of the run itself, every value of the right type, finite
-and in range), its step (a fixed-step method's ``dt``, ``span / dt`` within ``max_steps``),
+and in range), its step (a fixed-step method's ``dt``, ``span / dt`` within ``max_steps``;
+the projection method's adaptive steps for rigid contacts),
 and a mixed run's unknown forces paired one to one with its prescribed motions; then its
 outputs (:mod:`.outputs`) and laws (:mod:`.laws`)."""
 
@@ -18,6 +19,7 @@ from ...analysis._options import (
 from ...analysis._simulate import ENERGY_TOL
 from ...analysis.methods import FIXED_STEP, OPTIONS
 from ...io import schema as s
+from ...model._compliant import rigid_contacts
 from ..plan import Plan
 from .laws import check_laws
 from .outputs import check_outputs
@@ -118,6 +120,7 @@ def check_step(runner, plan: Plan) -> None:
         return
     path = plan.path
     check_first_step(runner, plan)
+    check_rigid_method(runner, plan)
     if r.dt is None:
         if r.method in FIXED_STEP:
             span = float(plan.times[-1] - plan.times[0])
@@ -141,6 +144,29 @@ def check_step(runner, plan: Plan) -> None:
             f"max_steps = {int(limit):,}",
             f"use a larger step (dt: {span / fair:.3g} gives {fair:,} steps) or raise "
             "options.max_steps",
+        )
+
+
+def check_rigid_method(runner, plan: Plan) -> None:
+    """A forward or mixed run of a model with rigid contacts: the projection method with its
+    adaptive steps (impacts are found by events), as the run itself refuses otherwise."""
+    r = plan.spec
+    rigid = rigid_contacts(runner.model) if runner.model is not None else ()
+    if not rigid:
+        return
+    if r.method != "projection":
+        runner.fail(
+            (*plan.path, "method"),
+            f"{rigid[0].name}: rigid contacts are integrated with the projection method, not "
+            f"{r.method}",
+            "use method: projection (the default), or give the contacts a compliant contact_model",
+        )
+    if r.dt is not None:
+        runner.fail(
+            (*plan.path, "dt"),
+            f"{rigid[0].name}: rigid contacts need the adaptive steps (their impacts are found "
+            "by events)",
+            "remove dt",
         )
 
 
