@@ -19,6 +19,9 @@
   friction, the wall's impulse from the angular momentum about the pin,
   ``J_O (w+ - w-) = (r x n) P + (r x t) T`` with ``T = -mu P sign(v_t-)``, the impacts'
   loss ``J_O (w+**2 - w-**2) / 2``, and the energy balance closed with it.
+- The same in a mixed run (slow): a pendulum on a slider whose x is prescribed strikes a
+  rough wall; its ``w+``, the wall's impulses and the unknown force's impulse from the x
+  momentum, the balance closed.
 - A model file with ``mu`` on a rigid contact (slow): ``mixdyn run`` writes the friction
   impulse column ``floor.friction_impulse`` (the disc's sliding impulse).
 """
@@ -197,6 +200,52 @@ def test_a_pendulum_striking_a_tilted_wall_slides_and_closes_its_energy_balance(
     np.testing.assert_allclose(r["work.impacts"][k], lost, rtol=1e-9)
     closure = r["energy.total"] - r["energy.total"][0] - r["work.impacts"]
     assert np.max(np.abs(closure)) < 1e-9 * abs(lost)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_pendulum_on_a_driven_slider_strikes_a_rough_wall_in_a_mixed_run():
+    """The slider's x prescribed (``V``, its force ``F`` unknown), the rod on its pin
+    striking a vertical wall (``n = (-1, 0)``, ``t = (0, -1)``) with friction: the rod's
+    one degree of freedom slides; Newton's law on the contact point gives ``w+``, the
+    angular momentum about the pin (moving uniformly) the wall's impulse
+    ``J_pin (w+ - w-) = r x (P n + T t)``, ``T = -mu P sign(v_t-)``, and the x momentum
+    ``F``'s impulse ``m (w+ - w-) (-r_cm,y) = P n_x + F_imp``."""
+    L, m, ms, R, V, e, mu = 0.4, 0.5, 2.0, 0.01, 0.5, 0.6, 0.3
+    J_pin = m * L**2 / 3
+    th0 = math.radians(-30)
+    slider = md.Body("slider", ms, 0.01, q0=(0.0, 0.0, 0.0))
+    rod = md.Body("rod", m, m * L**2 / 12,
+                  q0=(L / 2 * math.sin(th0), -L / 2 * math.cos(th0), th0 - math.pi / 2),
+                  points={"O": (-L / 2, 0.0), "tip": (L / 2, 0.0)})  # fmt: skip
+    wall = md.CircleLineContact("wall", "rod.tip", R, ("ground", (0.13, 0.0)), axis=(0.0, 1.0),
+                                contact_model="rigid", restitution=e, mu=mu)  # fmt: skip
+    F = md.PointForce("F", "slider", along=(1.0, 0.0), law=md.Polynomial([0.0]))
+    joints = [md.Translational("rail", "ground", "slider", axis=(1, 0)),
+              md.Revolute("pin", "slider", "rod.O")]  # fmt: skip
+    model = md.Model([slider, rod], joints, forces=[wall, F], gravity=(0, -9.81))
+    drive = md.CoordinateDriver("drive", "slider", "x", law=md.Polynomial([0.0, V]))
+    r = md.mixed(model, np.linspace(0.0, 0.3, 31), prescribed=[drive], unknown=["F"],
+                 qd0={"rod.phi": 1.5}, rtol=1e-11, atol=1e-13)  # fmt: skip
+    imp = r.stats["impacts"]
+    q, w_before = imp["q"][0], imp["qd_before"][0][5]
+    n, t = np.array([-1.0, 0.0]), np.array([0.0, -1.0])
+    arm = L * np.array([math.cos(q[5]), math.sin(q[5])]) - R * n  # pin to the contact point
+    k_arm = np.array([-arm[1], arm[0]])
+    vn = n @ (np.array([V, 0.0]) + w_before * k_arm)
+    w_after = (-e * vn - n[0] * V) / (n @ k_arm)
+    vt = t @ (np.array([V, 0.0]) + w_before * k_arm)
+    tau = -mu * math.copysign(1.0, vt)
+    P = J_pin * (w_after - w_before) / (arm[0] * n[1] - arm[1] * n[0]
+                                        + tau * (arm[0] * t[1] - arm[1] * t[0]))  # fmt: skip
+    F_imp = m * (w_after - w_before) * (-L / 2 * math.sin(q[5])) - P * n[0]
+    assert not imp["sticks"][0] and P > 0
+    np.testing.assert_allclose(imp["qd_after"][0][5], w_after, rtol=1e-9)
+    np.testing.assert_allclose([imp["impulse"][0], imp["friction_impulse"][0]], [P, tau * P],
+                               rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(imp["unknown"][0]["F"], F_imp, rtol=1e-9)
+    np.testing.assert_allclose(r["wall.friction_impulse"][-1], tau * P, rtol=1e-9)
+    np.testing.assert_allclose(r["slider.vx"], V, rtol=1e-12)
+    assert r.stats["energy_balance_error"] < 1e-9
 
 
 FILE = """\
