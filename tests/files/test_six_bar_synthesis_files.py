@@ -2,20 +2,22 @@
 ``watt1``): the linkage and its numbers read with their units, what a six-bar's run cannot do
 (masses, another linkage's numbers) refused at its line before anything computes, a bad
 linkage name an input error (exit 2) from the command; the figure's curve left out where the
-dyad opens."""
+dyad opens (slow); the file's search finds a known Watt I and its best.yaml runs (slow)."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
+import mixdyn as md
 import mixdyn.io as mio
 from mixdyn.cli import app
 from mixdyn.io import FileError
 from mixdyn.runs import Runner
 from mixdyn.runs.report import report
-from mixdyn.synthesis import Candidate, StephensonIII, WattI
+from mixdyn.synthesis import Candidate, StephensonIII, WattI, coupler_curve
 
 HEAD = "mixdyn: 1\nunits: {length: mm, mass: kg, time: s}\nruns:\n  - name: path\n"
 
@@ -90,3 +92,51 @@ def test_the_figure_leaves_out_where_the_dyad_opens():
     cos_mu = np.asarray(jax.jit(jax.vmap(lk.transmission_cosine))(angles))
     assert np.any(np.abs(cos_mu) > 1) and np.any(np.abs(cos_mu) < 1)
     np.testing.assert_array_equal(np.isnan(rest[:, 0]), np.abs(cos_mu) > 1)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search compiles its programs, ~25 s)
+def test_file_search_finds_a_watt_i_and_best_yaml_runs(tmp_path):
+    """Eight points of a Watt I's curve in mm, their input angles in deg, every number bounded
+    within 20 % of the fixture's: ``mixdyn run`` (the command, figures on) finds a Watt I
+    through them (error <= 1e-8 m², its numbers and branch code in candidates.csv, its figure
+    written); the written best.yaml, run by Newton's assembly of its seven joints, puts
+    tracer.P on the candidate's closed-form points."""
+    v = np.array([1.0, 0.3, 1.1, 0.9, 1.2, 1.0, 0.6, 0.4, 0.5, 0.3, 0.5, 0.2, 0.1, -0.2, 0.3])
+    theta = np.linspace(20.0, 250.0, 8)
+    points = np.asarray(coupler_curve(WattI.from_vector(jnp.asarray(v), 3.0), np.deg2rad(theta)))
+    listed = ", ".join(f"[{float(x) * 1e3!r}, {float(y) * 1e3!r}]" for x, y in points)
+    timing = ", ".join(f"{a:g} deg" for a in theta)
+    box = ", ".join(
+        f"{n}: [{(x - 0.2 * max(abs(x), 0.3)) * 1e3!r}, {(x + 0.2 * max(abs(x), 0.3)) * 1e3!r}]"
+        for n, x in zip(WattI.NAMES[:-1], v[:-1].tolist(), strict=True)
+    )
+    text = (
+        HEAD
+        + "    kind: synthesis\n    linkage: watt1\n"
+        + (
+            f"    points: [{listed}]\n    timing: [{timing}]\n    bounds: {{{box}}}\n"
+            "    starts: 64\n    seed: 1\n"
+        )
+    )
+    path = tmp_path / "task.yaml"
+    path.write_text(text)
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    folder = tmp_path / "out" / "path"
+    table = pd.read_csv(folder / "candidates.csv")
+    assert list(table.columns[8:10]) == ["fx [m]", "fy [m]"]
+    assert float(table["error [m²]"].iloc[0]) <= 1e-8
+    assert float(table["branch"].iloc[0]) in WattI.BRANCHES
+    assert (folder / "synthesis.png").exists()
+    best = md.load(folder / "best.yaml")
+    assert {j.name for j in best.model.joints} == {"O2", "A", "B", "O4", "D", "E", "F"}
+    row = table.iloc[0]
+    found = WattI(*(np.float64(row[f"{n} [{'rad' if n == 'theta0' else 'm'}]"])
+                    for n in WattI.NAMES), np.float64(row["branch"]))  # fmt: skip
+    first, last = float(row["theta_first [rad]"]), float(row["theta_last [rad]"])
+    angles = first + np.deg2rad(theta - theta[0])
+    assert angles[-1] == pytest.approx(last, abs=1e-12)
+    kin = md.kinematic(best.model, angles - first)
+    p, _, _ = kin.point("tracer.P")
+    assert np.max(np.abs(p - np.asarray(coupler_curve(found, jnp.asarray(angles))))) < 1e-9
+    assert np.sum((p - points) ** 2) <= 1e-8
