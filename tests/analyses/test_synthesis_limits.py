@@ -174,3 +174,50 @@ def test_every_kept_candidates_rocker_pivot_lies_in_its_region():
         x = float(fb.x0) + float(fb.r1) * np.cos(float(fb.theta0))
         y = float(fb.y0) + float(fb.r1) * np.sin(float(fb.theta0))
         assert region[0][0] <= x <= region[0][1] and region[1][0] <= y <= region[1][1]
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search compiles its program)
+def test_a_slider_crank_search_asked_to_turn_fully_returns_full_turning_cranks():
+    """Timed points of a slider-crank whose crank cannot turn fully (r2 + |e| = 0.4 > r3 =
+    0.35); asked for ``crank_rocker``, every kept slider-crank has ``r2 + |e| <= r3`` (by hand)
+    and, assembled at 360 crank angles, its rod's end ``A + r3 e^{i phi3}`` lies on the slide
+    everywhere."""
+    from mixdyn.synthesis import coupler_curve, rod_and_slider
+
+    jammed = SliderCrank.from_vector(np.array([0.3, 0.35, 0.1, 0.15, 0.08, 0.0, 0.0, 0.2]), 1.0)
+    theta = np.deg2rad(np.linspace(-50.0, 230.0, 8))
+    points = np.asarray(coupler_curve(jammed, theta))
+    task = PathTask(points, timing=theta, linkage="slider_crank", grashof="crank_rocker")
+    out = synthesize(task, starts=256, chunk=256)
+    assert out.candidates
+    t = np.linspace(0.0, 2 * np.pi, 360, endpoint=False)
+    for c in out.candidates:
+        v = {n: float(getattr(c.fourbar, n)) for n in c.fourbar.NAMES}
+        assert v["r2"] + abs(v["e"]) <= v["r3"]
+        import jax
+
+        phi3 = np.asarray(jax.vmap(lambda x, sc=c.fourbar: rod_and_slider(sc, x)[0])(t))
+        phi2 = v["theta0"] + t
+        # the rod's end from O2, across the slide's direction: the offset e everywhere
+        bx = v["r2"] * np.cos(phi2) + v["r3"] * np.cos(phi3)
+        by = v["r2"] * np.sin(phi2) + v["r3"] * np.sin(phi3)
+        across = -np.sin(v["theta0"]) * bx + np.cos(v["theta0"]) * by
+        assert np.max(np.abs(across - v["e"])) < 1e-9 * v["r3"]
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search compiles its program)
+def test_a_function_search_asked_for_crank_rockers_returns_crank_rockers():
+    """The triple rocker's rocker angles at six crank angles: asked for crank-rockers, every
+    kept four-bar is one (by hand) and its loop closes over a whole turn."""
+    from mixdyn.synthesis import link_angles
+
+    fb = FourBar.from_vector(np.array([1.0, 0.8, 0.9, 0.85, 0, 0, 0, 0, 0]), 1.0)
+    inputs = np.linspace(-2.4, 2.4, 6)
+    outputs = np.array([float(link_angles(fb, x)[1]) for x in inputs])
+    out = synthesize(FunctionTask(inputs, outputs, grashof="crank_rocker"), starts=256)
+    assert out.candidates
+    for c in out.candidates:
+        r = np.array([1.0, float(c.fourbar.r2), float(c.fourbar.r3), float(c.fourbar.r4)])
+        s = np.sort(r)
+        assert s[0] + s[3] <= s[1] + s[2] and r[1] == s[0]
+        assert _closes_over_a_turn(*r)

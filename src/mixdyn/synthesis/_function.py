@@ -35,7 +35,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ._fourbar import FourBar, link_angles, transmission_cosine
-from ._limits import LIMIT_MARGIN, grashof_gaps
+from ._limits import grashof_gaps, penalty
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import FunctionTask
 
@@ -176,7 +176,7 @@ def _residuals(task: FunctionTask, samples: int):
         closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - cmax)
         lengths = u[:3]
         bounds = PENALTY * jnp.concatenate([jax.nn.relu(lo - lengths), jax.nn.relu(lengths - hi)])
-        grashof = PENALTY * jax.nn.relu(grashof_gaps(fb, task.grashof) + LIMIT_MARGIN)
+        grashof = penalty(grashof_gaps(fb, task.grashof))
         return jnp.concatenate([angle, closure, bounds, grashof])
 
     return r

@@ -26,9 +26,10 @@ crank. Each condition is a gap ``g <= 0`` [length] (:func:`grashof_gaps`).
 (every linkage), and a four-bar's rocker pivot ``O4 = O2 + r1 (cos theta0, sin theta0)``.
 Each side is a gap ``g <= 0`` [length] (:func:`region_gaps`).
 
-The search adds ``10 relu(g / s + 0.001)`` for every gap (``s`` the targets' size; the margin
-:data:`LIMIT_MARGIN` keeps a search that leans on a condition inside it); the ranking keeps a
-candidate only where every gap is at most ``1e-9 s``.
+The search adds ``30 relu(g / s + 0.001)`` for every gap (:func:`penalty`; ``s`` the targets'
+size): the weight is three times a bound's and the margin :data:`LIMIT_MARGIN` keeps a search
+that leans on a condition (a crank-rocker through points no crank-rocker passes) inside it,
+where the ranking's exact check keeps a candidate only if every gap is at most ``1e-9 s``.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ from ._slidercrank import SliderCrank
 #: The margin of the search's penalties on the gaps, in targets' sizes (a search that leans on
 #: a condition ends this far inside it, so that the exact check keeps it).
 LIMIT_MARGIN = 1e-3
+#: The weight of the search's penalties on the gaps.
+LIMIT_PENALTY = 30.0
 
 #: The Grashof types a task may ask for.
 GRASHOF = ("any", "crank_rocker", "double_crank")
@@ -134,6 +137,11 @@ def region_gaps(lk, names: tuple[str, ...], low, high) -> jax.Array:
     return gaps.reshape(*gaps.shape[:-2], -1)
 
 
+def penalty(gaps) -> jax.Array:
+    """The search's residuals of ``gaps`` (K,) in targets' sizes: ``30 relu(g + 0.001)``."""
+    return LIMIT_PENALTY * jax.nn.relu(gaps + LIMIT_MARGIN)
+
+
 def check_grashof(linkage: type, grashof: str) -> None:
     """Refuse a Grashof type that ``linkage`` cannot be asked for (a
     :class:`~mixdyn.errors.ModelError` at ``grashof``)."""
@@ -183,10 +191,12 @@ def check_pivots(linkage: type, pivots: dict) -> dict[str, tuple]:
 __all__ = [
     "GRASHOF",
     "LIMIT_MARGIN",
+    "LIMIT_PENALTY",
     "check_grashof",
     "check_pivots",
     "grashof_gaps",
     "grashof_type",
+    "penalty",
     "pivot_names",
     "pivot_points",
     "region_arrays",

@@ -12,7 +12,7 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
   between two points has a circuit defect and pays for it): ``10 relu(|cos mu| - c)`` with
   ``c = cos(min_transmission)`` (at most 0.999);
 * the bounds: ``10 relu(low - x)``, ``10 relu(x - high)``;
-* the Grashof type and the ground pivots' regions (:mod:`._limits`): ``10 relu(g / s + 0.001)``
+* the Grashof type and the ground pivots' regions (:mod:`._limits`): ``30 relu(g / s + 0.001)``
   of each gap ``g`` [length] (a linear condition on the lengths, a rectangle's side: met
   where ``g <= 0``; the margin keeps a search that leans on it inside);
 * the order (timing-free): ``10 relu(-increment)`` and ``10 relu(sum - 2 pi)``;
@@ -56,7 +56,7 @@ from ..errors import ModelError
 from ..runtime._programs import cached_jit
 from ._dynamics import DYNAMICS, Masses, motor_torque, reactions, shaking
 from ._fourbar import FourBar
-from ._limits import LIMIT_MARGIN, grashof_gaps, region_arrays, region_gaps
+from ._limits import grashof_gaps, penalty, region_arrays, region_gaps
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
 from ._slidercrank import SliderCrank
@@ -212,7 +212,7 @@ def _residuals(program: _Program, data: dict):
         )
         limits = jnp.concatenate([grashof_gaps(fb, program.grashof), region_gaps(
             fb, program.regions, data["region_low"], data["region_high"])])  # fmt: skip
-        parts = [path, closure, bounds, PENALTY * jax.nn.relu(limits / s + LIMIT_MARGIN)]
+        parts = [path, closure, bounds, penalty(limits / s)]
         if not program.timed:
             inc = layout.increments(u)
             parts.append(PENALTY * jax.nn.relu(-inc))
