@@ -58,9 +58,14 @@ def stack(trees: Sequence):
     """PyTrees of one structure stacked leaf by leaf (leading axis: the member); a leaf that
     is the same object in every tree (a shared set-up's) is broadcast."""
     leaves = [jax.tree_util.tree_leaves(t) for t in trees]
-    treedef = jax.tree_util.tree_structure(trees[0])
+    return stack_leaves(jax.tree_util.tree_structure(trees[0]), leaves)
+
+
+def stack_leaves(treedef, rows: Sequence[list]):
+    """The PyTree ``treedef`` with every member's leaves ``rows`` (a list of leaves a
+    member, flattened once) stacked leaf by leaf, as :func:`stack`."""
     return jax.tree_util.tree_unflatten(
-        treedef, [_stack_column(col) for col in zip(*leaves, strict=True)]
+        treedef, [_stack_column(col) for col in zip(*rows, strict=True)]
     )
 
 
@@ -111,4 +116,4 @@ def finished(
     return LazyResults(count, build, outcomes), errors
 
 
-__all__ = ["finished", "in_chunks", "one_structure", "prepare_each", "stack"]
+__all__ = ["finished", "in_chunks", "one_structure", "prepare_each", "stack", "stack_leaves"]

@@ -38,7 +38,7 @@ from ..model import Model
 from ..runtime._programs import cached_jit
 from . import _setup
 from ._assembly import length_scale, start_q
-from ._prepared_members import finished, in_chunks, one_structure, prepare_each
+from ._prepared_members import finished, in_chunks, prepare_each, stack_leaves
 from ._prepared_members import stack as stack_trees
 from ._reactions import (
     contact_columns,
@@ -438,14 +438,17 @@ def run(
     c0 = first.start.constraints(independent_rows_only=True)
     if c0.m != c0.n_full:
         return None  # a redundant row: the members' rows kept may differ
+    flat = [jax.tree_util.tree_flatten(m) for m in members]  # once a member
+    treedef = jax.tree_util.tree_structure(c0)
     if shared:
-        cs, rough, L = [c0] * count, [first.start.q] * count, [length_scale(first.model)] * count
+        cs = [jax.tree_util.tree_leaves(c0)] * count
+        rough, L = [first.start.q] * count, [length_scale(first.model)] * count
         held = ()
     else:
         for i in range(count):
             if i not in made and i not in errors:
                 _checked(members[i], ts, lambda i=i: describe(i), i)
-        if not one_structure(members):
+        if any(d != flat[0][1] for _, d in flat):
             return None
         cs = _constraint_sets(c0, members)
         rough = [_rough(m, v) for m, v in zip(members, values, strict=True)]
@@ -453,15 +456,15 @@ def run(
         held = tuple(first.model.coordinate_index(ref) for ref in values[0].hold)
         if len({v.hold for v in values}) > 1:
             return None  # other coordinates held
-    alive = [None if i in errors else cs[i] for i in range(count)]
-    if cs is None or not one_structure([c0, *alive]):
+    if cs is None:
         return None
+    alive = [None if i in errors else cs[i] for i in range(count)]
     L, tol = np.asarray(L, dtype=float), np.array([v.tol for v in values])
 
     def program(idx: list[int]) -> tuple:
         q0 = stack_trees([rough[i] for i in idx])
-        model = stack_trees([members[i] for i in idx])
-        c = stack_trees([cs[i] for i in idx])
+        model = stack_leaves(flat[0][1], [flat[i][0] for i in idx])
+        c = stack_leaves(treedef, [cs[i] for i in idx])
         max_iter = jnp.asarray(values[0].max_iter)
         return _equilibria_batch_jit(
             CHUNK, model, c, q0, L[idx], jnp.asarray(ts), tol[idx], max_iter, held
@@ -476,14 +479,14 @@ def run(
 
 
 def _constraint_sets(c0: Constraints, members: Sequence[Model]) -> list | None:
-    """Each member's constraint set of every row, ``c0`` (the first set-up's) with the
-    member's joints and drivers: the set's leaves are theirs, in order (one unflatten a
-    member; the members of one structure). None where the leaves do not match."""
+    """Each member's constraint set of every row as its leaves: ``c0``'s (the first
+    set-up's, every row kept) with the member's joints and drivers, in order (the members of
+    one structure). None where they do not match."""
     treedef = jax.tree_util.tree_structure(c0)
-    rows = [jax.tree_util.tree_leaves((m.joints, m.drivers)) for m in members]
-    if any(len(r) != treedef.num_leaves for r in rows):  # pragma: no cover - a new field
+    first = jax.tree_util.tree_structure((members[0].joints, members[0].drivers))
+    if first.num_leaves != treedef.num_leaves:  # pragma: no cover - a new field
         return None
-    return [jax.tree_util.tree_unflatten(treedef, r) for r in rows]
+    return [jax.tree_util.tree_leaves((m.joints, m.drivers)) for m in members]
 
 
 def _rough(model: Model, value: QuasiStatic) -> np.ndarray:
