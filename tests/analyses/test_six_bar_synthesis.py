@@ -6,7 +6,9 @@ against independent truths.
   angles as the angles between the links), in NumPy from the returned angles;
 * derivatives through the two implicit circle intersections against central finite
   differences, forward and reverse; an open second loop finite and measured;
-* what a task, a search and a model refuse for a six-bar (its dynamics) before computing;
+* a six-bar's task checked by its numbers;
+* (slow) the motor torque, the joint reactions and the shaking force and moment against
+  md.inverse of the written model (its Lagrange multipliers, a second method);
 * (slow) the written model's kinematic analysis (Newton's assembly of seven revolute joints,
   a second method) puts the coupler point where the closed form does;
 * (slow) a search recovers a known six-bar's coupler curve from eight of its points, and its
@@ -24,11 +26,13 @@ import mixdyn as md
 from mixdyn.errors import ModelError
 from mixdyn.synthesis import (
     Masses,
-    Objective,
     PathTask,
     StephensonIII,
     WattI,
     coupler_curve,
+    motor_torque,
+    reactions,
+    shaking,
     six_bar_model,
     synthesize,
 )
@@ -150,9 +154,8 @@ def test_derivatives_are_finite_differences_and_an_open_dyad_is_finite(cls, reve
     assert np.all(np.isfinite(np.asarray(forward(short))))
 
 
-def test_a_six_bars_task_search_and_model_refuse_what_they_cannot_do():
-    """The task checks a six-bar's numbers and bounds them all; its dynamics are refused
-    before any search (synthesis computes none), and so are its model's masses."""
+def test_a_six_bars_task_is_checked_by_its_numbers():
+    """The task checks a six-bar's numbers and bounds them all."""
     points = np.array([[0.0, 0.0], [0.1, 0.05], [0.15, 0.12]])
     box = PathTask(points, linkage="watt1", bounds={"fx": (-0.1, 0.2)}).box()
     assert box.shape == (15, 2) and tuple(box[8]) == (-0.1, 0.2)
@@ -161,13 +164,7 @@ def test_a_six_bars_task_search_and_model_refuse_what_they_cannot_do():
         PathTask(points, linkage="watt1", bounds={"gx": (0.1, 0.2)})
     with pytest.raises(ModelError, match="no linkage 'stephenson'"):
         PathTask(points, linkage="stephenson")
-    task = PathTask(points, linkage="stephenson3")
-    assert task.linkage is StephensonIII
-    with pytest.raises(ModelError, match="Stephenson III six-bar's dynamics"):
-        synthesize(task, Objective(masses=Masses(density=1.0)), starts=1)
-    lk = StephensonIII.from_vector(jnp.asarray(CASES[StephensonIII]), 1.0)
-    with pytest.raises(ModelError, match="masses"):
-        six_bar_model(lk, Masses(density=1.0))
+    assert PathTask(points, linkage="stephenson3").linkage is StephensonIII
 
 
 @pytest.mark.slow  # long: run by CI's slow set (compiles the model's kinematic analysis)
@@ -185,6 +182,47 @@ def test_closed_form_is_mixdyns_kinematic_analysis(cls, code):
     assert np.max(np.abs(p - np.asarray(coupler_curve(lk, theta)))) < 1e-9
     phi5 = np.asarray(jax.vmap(lk.coupler_angle)(theta))
     assert np.max(np.abs(np.angle(np.exp(1j * (kin["tracer.phi"] - phi5))))) < 1e-9
+
+
+#: The links' masses of the dynamics tests: bars of 2 kg/m, 0.3 kg at the coupler point, gravity
+#: on (the torque and reactions) and off (the shaking).
+MASSES = Masses(density=2.0, payload=0.3)
+FLOATING = Masses(density=2.0, payload=0.3, gravity=(0.0, 0.0))
+
+
+@pytest.mark.slow  # long: run by CI's slow set (compiles the models' inverse analyses)
+@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0)])
+def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
+    """The built model with masses run by md.inverse over a crank turn: the motor torque of
+    the energy balance and the reactions' torque equal its driver effort, each joint's
+    reaction its {joint}.Fx/.Fy (1e-9 relative); gravity off, the shaking force is minus the
+    sum of the ground joints' reactions on the links, and the shaking moment about O2 minus
+    their moments and the motor's torque."""
+    lk = cls.from_vector(jnp.asarray(CASES[cls]), code)
+    start, speed = 0.4, 3.0
+    t = np.linspace(0.0, 2 * np.pi / speed, 25)
+    theta = start + speed * t
+    inv = md.inverse(six_bar_model(lk, MASSES, start=start, speed=speed), t)
+    tau = np.asarray(motor_torque(lk, MASSES, theta, speed))
+    forces, torque = (np.asarray(a) for a in reactions(lk, MASSES, theta, speed))
+    assert np.max(np.abs(tau)) > 10.0  # a real load
+    assert np.max(np.abs(inv["motor"] - tau)) < 1e-9 * np.max(np.abs(tau))
+    assert np.max(np.abs(torque - tau)) < 1e-9 * np.max(np.abs(tau))
+    names = ("O2", "A", "B", "O4", "D", "E", "O6" if cls is StephensonIII else "F")
+    for k, name in enumerate(names):
+        want = np.stack([inv[f"{name}.Fx"], inv[f"{name}.Fy"]], axis=1)
+        assert np.max(np.abs(forces[:, k] - want)) < 1e-9 * np.max(np.abs(forces))
+    free = md.inverse(six_bar_model(lk, FLOATING, start=start, speed=speed), t)
+    force, moment = (np.asarray(a) for a in shaking(lk, FLOATING, theta, speed))
+    ground = [n for n in names if n in ("O2", "O4", "O6")]
+    on_links = np.stack([sum(free[f"{g}.Fx"] for g in ground),
+                         sum(free[f"{g}.Fy"] for g in ground)], axis=1)  # fmt: skip
+    assert np.max(np.abs(force + on_links)) < 1e-9 * np.max(np.abs(force))
+    o2 = np.array([lk.x0, lk.y0], dtype=float)
+    points = {"O4": np.asarray(lk.pivots()[1]), "O6": np.asarray(lk.dyad_pivot(0.0))}
+    lever = sum((points[g] - o2)[0] * free[f"{g}.Fy"] - (points[g] - o2)[1] * free[f"{g}.Fx"]
+                for g in ground if g != "O2")  # fmt: skip
+    assert np.max(np.abs(moment + lever + free["motor"])) < 1e-9 * np.max(np.abs(moment))
 
 
 @pytest.mark.slow  # long: run by CI's slow set (each search compiles its programs, ~10 s)

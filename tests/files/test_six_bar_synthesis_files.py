@@ -1,6 +1,6 @@
 """Six-bar synthesis runs in model files (``kind: synthesis``, ``linkage: stephenson3`` or
-``watt1``): the linkage and its numbers read with their units, what a six-bar's run cannot do
-(masses, another linkage's numbers) refused at its line before anything computes, a bad
+``watt1``): the linkage, its numbers and masses read with their units, another linkage's
+numbers refused at its line before anything computes, a bad
 linkage name an input error (exit 2) from the command; the figure's curve left out where the
 dyad opens (slow); the file's search finds a known Watt I and its best.yaml runs (slow)."""
 
@@ -35,10 +35,18 @@ def _line(text: str, marker: str) -> int:
                                                ("watt1", WattI, "fx")])  # fmt: skip
 def test_the_linkage_and_its_bounds_are_read_in_si(name, cls, number, tmp_path):
     """``linkage: stephenson3`` / ``watt1``: the task's linkage, its dyad pivot's bound in SI
-    (mm -> m, by hand); ``mixdyn check`` names the linkage."""
-    text = _text(f"    linkage: {name}", f"    bounds: {{{number}: [-20, 30], r5: [10, 90]}}")
+    (mm -> m, by hand), its masses and torque weight read; ``mixdyn check`` names the
+    linkage."""
+    text = _text(
+        f"    linkage: {name}",
+        f"    bounds: {{{number}: [-20, 30], r5: [10, 90]}}",
+        "    masses: {density: 2 kg/m, payload: 300 g}",
+        "    torque_weight: 1e-4 m^2/(N*m)^2",
+    )
     plan = Runner(mio.reads(text, "six.yaml")).plans["path"]
-    assert plan.task.linkage is cls and plan.objective.masses is None
+    assert plan.task.linkage is cls
+    assert plan.objective.masses.payload == pytest.approx(0.3, rel=1e-15)
+    assert plan.objective.torque_weight == pytest.approx(1e-4, rel=1e-15)
     box = plan.task.box()
     np.testing.assert_allclose(box[cls.NAMES.index(number)], [-0.02, 0.03], rtol=1e-15)
     np.testing.assert_allclose(box[4], [0.01, 0.09], rtol=1e-15)
@@ -50,7 +58,6 @@ def test_the_linkage_and_its_bounds_are_read_in_si(name, cls, number, tmp_path):
 @pytest.mark.parametrize(
     "extra, marker, words",
     [
-        (["    linkage: watt1", "    masses: {density: 2 kg/m}"], "masses", "dynamics"),
         (["    linkage: stephenson3", "    bounds: {fx: [1, 2]}"], "bounds", "no number 'fx'"),
         (["    linkage: watt1", "    bounds: {e: [1, 2]}"], "bounds", "no number 'e'"),
     ],

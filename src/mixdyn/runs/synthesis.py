@@ -4,8 +4,8 @@ or carry its coupler through poses, or a four-bar to generate a function
 
 A ``synthesis`` run describes the task (the linkage, ``four_bar``, ``slider_crank``,
 ``stephenson3`` or ``watt1``, the target points, the timing, bounds of the linkage's numbers,
-the least transmission angle), how the links weigh and how the motor torque counts (a
-six-bar's path alone: no masses), and the search (starts, seed); or, with
+the least transmission angle), how the links weigh and how the motor torque counts, and the
+search (starts, seed); or, with
 ``motion:``, the coupler's poses instead of points (:mod:`.synthesis_motion`); or, with
 ``function:``, a function task (:mod:`.synthesis_function`). It needs no mechanism in the
 file: a file whose runs are all synthesis runs may have no bodies (``mixdyn check`` then
@@ -218,13 +218,6 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
             runner.fail((*mp, "density"), f"the density must be > 0, got {density:g}", "")
         if not payload >= 0:
             runner.fail((*mp, "payload"), f"the payload must be >= 0, got {payload:g}", "")
-        if issubclass(linkage, SixBar):
-            runner.fail(
-                mp,
-                f"a {linkage.TITLE}'s dynamics (motor torque, shaking, reactions) are not part "
-                "of synthesis",
-                "leave masses out: the search is for the path alone",
-            )
         slider = _si(runner, r.masses.slider, "mass", (*mp, "slider"))
         if linkage is SliderCrank and not slider > 0:
             runner.fail(

@@ -3,8 +3,10 @@
 A candidate's links are bars of one linear density (kg per unit length): the crank ``O2 A``,
 the rocker ``O4 B`` (a four-bar's) and the coupler (a slider-crank's rod), a rigid triangle of
 bars ``A B``, ``A C``, ``B C``, with an optional payload (a point mass) at the coupler point
-``C``; a slider-crank's slider is a point mass at its pin ``B``. Their masses, centres of mass
-and inertias follow the candidate's dimensions, so that a search can trade length for torque.
+``C``; a slider-crank's slider is a point mass at its pin ``B``; a six-bar's coupler is the
+triangle ``A B D``, a Watt I's rocker the triangle ``O4 B F``, its tracer the triangle
+``D E C`` with the payload, its follower a bar. Their masses, centres of mass and inertias
+follow the candidate's dimensions, so that a search can trade length for torque.
 
 The motor torque of a crank turned at a constant speed ``Omega`` without friction is the
 derivative of the mechanical energy by the input angle (power balance,
@@ -18,9 +20,11 @@ with ``G_i`` each link's centre of mass and ``phi_i`` its angle from the assembl
 phi_i'') - sum_i m_i g . G_i'`` in closed form, the rates ``phi_i'``, ``phi_i''`` (a slider's
 ``s'``, ``s''``) from the closure equations differentiated by the input angle
 (:func:`link_rates`, :func:`slider_rates`), so that a search differentiates an explicit
-function once instead of the assembly three times. It is the driver effort of mixdyn's
-inverse dynamics of the same mechanism (checked in the tests against :func:`mixdyn.inverse`
-of :func:`~.build.four_bar_model` and :func:`~.build.slider_crank_model`).
+function once instead of the assembly three times; a six-bar's rates are its closed form's
+first and second derivatives in forward mode (each loop's by the closure's implicit rule).
+It is the driver effort of mixdyn's inverse dynamics of the same mechanism (checked in the
+tests against :func:`mixdyn.inverse` of :func:`~.build.four_bar_model`,
+:func:`~.build.slider_crank_model` and :func:`~.build.six_bar_model`).
 
 The shaking force and moment (Berkof and Lowen's, 1969) are what the moving links' inertia
 passes to the frame, gravity left out: with the crank at the constant speed ``Omega`` each
@@ -34,15 +38,16 @@ the moment about the crank's pivot ``O2`` (the motor's reaction included): the g
 pivots' reactions on the frame, and the motor's, summed (:func:`shaking`; checked in the
 tests against the reactions of :func:`mixdyn.inverse`).
 
-The joint reactions (:func:`reactions`) follow from each link's Newton-Euler equations at
-the same accelerations, gravity included: ``F_in - F_out + m_i g = m_i a_i`` and the moments
-about the link's centre, solved for the pins' forces and the motor's torque (a four-bar: the
-forces at ``O2``, ``A``, ``B``, ``O4`` and the torque, 9 unknowns in 9 equations; a
-slider-crank: at ``O2``, ``A``, ``B``, the slide's normal force and the torque, 8 in 8, its
-slider a point mass at ``B``). Each is the force that the body before the joint exerts on the
-body after it (the ground on the crank at ``O2``, the crank on the coupler at ``A``, the
-coupler on the rocker or the slider at ``B``, the ground on the rocker at ``O4`` or on the
-slider at the slide), as mixdyn's ``{joint}.Fx``, ``.Fy`` columns are.
+The joint reactions (:func:`reactions`) follow from each link's Newton-Euler equations at the
+same accelerations, gravity included: ``F_in - F_out + m_i g = m_i a_i`` and the moments about
+the link's centre, solved for the pins' forces and the motor's torque (a four-bar: the forces
+at ``O2``, ``A``, ``B``, ``O4`` and the torque, 9 unknowns in 9 equations; a slider-crank: at
+``O2``, ``A``, ``B``, the slide's normal force and the torque, 8 in 8, its slider a point mass
+at ``B``; a six-bar: at its seven joints and the torque, 15 in 15). Each is the force that the
+body before the joint exerts on the body after it (the ground on the crank at ``O2``, the crank
+on the coupler at ``A``, the coupler on the rocker or the slider at ``B``, the ground on the
+rocker at ``O4`` or on the slider at the slide), as mixdyn's ``{joint}.Fx``, ``.Fy`` columns
+are.
 """
 
 from __future__ import annotations
@@ -55,7 +60,10 @@ import jax.numpy as jnp
 
 from ._fourbar import FourBar, link_angles
 from ._linkage import Linkage, guarded
+from ._sixbar import SixBar
 from ._slidercrank import SliderCrank, rod_and_slider
+from ._stephenson import StephensonIII
+from ._watt import WattI
 
 
 @dataclasses.dataclass(frozen=True)
@@ -102,6 +110,8 @@ def link_inertia(fb: Linkage, masses: Masses) -> dict[str, tuple]:
     z = jnp.zeros(2)
     ex = jnp.array([1.0, 0.0])
     crank = _bars([(z, fb.r2 * ex)], masses.density)
+    if isinstance(fb, SixBar):
+        return _six_bar_inertia(fb, masses, crank)
     coupler = _coupler(fb, masses)
     if isinstance(fb, SliderCrank):
         m = jnp.asarray(masses.slider, dtype=jnp.float64)
@@ -112,15 +122,41 @@ def link_inertia(fb: Linkage, masses: Masses) -> dict[str, tuple]:
 
 def _coupler(fb: Linkage, masses: Masses):
     """The coupler's triangle of bars and payload (:func:`link_inertia`)."""
+    return _plate(fb.r3, jnp.stack([fb.rcx, fb.rcy]), masses.density, masses.payload)
+
+
+def _plate(length, c, density, payload):
+    """A link from its frame's origin to ``(length, 0)`` with a third point ``c`` (2,): the
+    triangle of bars through them, a point mass ``payload`` at ``c``."""
     z = jnp.zeros(2)
-    b, c = fb.r3 * jnp.array([1.0, 0.0]), jnp.stack([fb.rcx, fb.rcy])
-    m3, g3, j3 = _bars([(z, b), (z, c), (b, c)], masses.density)
-    if masses.payload:
-        mp = masses.payload
-        g = (m3 * g3 + mp * c) / (m3 + mp)
-        j3 = j3 + m3 * jnp.sum((g3 - g) ** 2) + mp * jnp.sum((c - g) ** 2)
-        m3, g3 = m3 + mp, g
+    b = length * jnp.array([1.0, 0.0])
+    m3, g3, j3 = _bars([(z, b), (z, c), (b, c)], density)
+    if payload:
+        g = (m3 * g3 + payload * c) / (m3 + payload)
+        j3 = j3 + m3 * jnp.sum((g3 - g) ** 2) + payload * jnp.sum((c - g) ** 2)
+        m3, g3 = m3 + payload, g
     return m3, g3, j3
+
+
+def _six_bar_inertia(sb: SixBar, masses: Masses, crank) -> dict[str, tuple]:
+    """A six-bar's links (:func:`link_inertia`): the coupler the triangle ``A B D``, a
+    Watt I's rocker the triangle ``O4 B F`` (a Stephenson III's a bar), the tracer the
+    triangle ``D E C`` with the payload at ``C``, the follower a bar; the frames as the
+    model's (:func:`~.build.six_bar_model`: from ``A``, ``O4``, ``D``, ``X`` along their
+    links)."""
+    z, ex = jnp.zeros(2), jnp.array([1.0, 0.0])
+    rho = masses.density
+    if isinstance(sb, WattI):
+        rocker = _plate(sb.r4, jnp.stack([sb.fx, sb.fy]), rho, 0.0)
+    else:
+        rocker = _bars([(z, sb.r4 * ex)], rho)
+    return {
+        "crank": crank,
+        "coupler": _plate(sb.r3, jnp.stack([sb.dx, sb.dy]), rho, 0.0),
+        "rocker": rocker,
+        "tracer": _plate(sb.r5, jnp.stack([sb.rcx, sb.rcy]), rho, masses.payload),
+        "follower": _bars([(z, sb.r6 * ex)], rho),
+    }
 
 
 def _rot(phi, v):
@@ -217,16 +253,48 @@ def _slider_crank_rates(sc: SliderCrank, inertia: dict, theta2):
     return d, dd, jnp.stack([1.0, w3, 0.0]), jnp.stack([0.0, a3, 0.0])
 
 
-#: Each linkage type's link rates (:func:`_torque_one`).
-_RATES = {FourBar: _four_bar_rates, SliderCrank: _slider_crank_rates}
+def _six_bar_pose(sb: SixBar, inertia: dict, theta2):
+    """A six-bar's links' centres of mass from ``O2`` (5, 2) [length] and angles (5,) [rad]
+    at ``theta2``: crank, coupler, rocker, tracer, follower (frames from ``O2``, ``A``,
+    ``O4``, ``D``, ``X``)."""
+    j = sb.joints(theta2)
+    origins = (j["O2"], j["A"], j["O4"], j["D"], j["X"])
+    angles = jnp.stack([sb.theta0 + theta2, j["phi3"], j["phi4"], j["phi5"], j["phi6"]])
+    g = jnp.stack([o - j["O2"] + _rot(a, v[1]) for o, a, v in
+                   zip(origins, angles, inertia.values(), strict=True)])  # fmt: skip
+    return g, angles
 
-#: The linkage types whose dynamics are computed here (a six-bar's are not).
+
+def _six_bar_rates(sb: SixBar, inertia: dict, theta2):
+    """Each link's centre velocity and acceleration (5, 2) and angular rates (5,) by the
+    input angle: the closed form's first and second derivatives in forward mode (each loop's
+    derivatives the closure equations' implicit rule, :mod:`._sixbar`)."""
+
+    def first(t):
+        return jax.jvp(lambda s: _six_bar_pose(sb, inertia, s), (t,), (jnp.ones_like(t),))[1]
+
+    theta2 = jnp.asarray(theta2, dtype=jnp.float64)
+    (d, w), (dd, a) = jax.jvp(first, (theta2,), (jnp.ones_like(theta2),))
+    return d, dd, w, a
+
+
+#: Each linkage type's link rates (:func:`_torque_one`).
+_RATES = {
+    FourBar: _four_bar_rates,
+    SliderCrank: _slider_crank_rates,
+    StephensonIII: _six_bar_rates,
+    WattI: _six_bar_rates,
+}
+
+#: The linkage types whose dynamics are computed here.
 DYNAMICS = tuple(_RATES)
 
 
 def _centres(lk: Linkage, inertia: dict, theta2) -> jax.Array:
     """Each link's centre of mass from the crank's pivot ``O2`` (3, 2) [length]: crank,
-    coupler (rod), rocker (slider)."""
+    coupler (rod), rocker (slider); a six-bar's five (:func:`_six_bar_pose`)."""
+    if isinstance(lk, SixBar):
+        return _six_bar_pose(lk, inertia, theta2)[0]
     phi2 = lk.theta0 + theta2
     e2 = jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
     crank, coupler, third = (v[1] for v in inertia.values())
@@ -254,6 +322,17 @@ def _shaking_one(lk: Linkage, inertia: dict, _grav, theta2, speed):
     return force, moment
 
 
+#: A six-bar's joints but the follower's other end (the bodies: crank, coupler, rocker,
+#: tracer, follower).
+_SIX_BAR_JOINTS = (
+    ("O2", -1, 0, False),
+    ("A", 0, 1, False),
+    ("B", 1, 2, False),
+    ("O4", -1, 2, False),
+    ("D", 1, 3, False),
+    ("E", 3, 4, False),
+)
+
 #: Each linkage type's joints for :func:`reactions`: ``(name, body before, body after,
 #: slide)`` with the bodies' places in :func:`link_inertia` (-1: the ground) and ``slide``
 #: True for a frictionless slide (its force along the slide's normal only).
@@ -265,12 +344,17 @@ JOINTS = {
         ("B", 1, 2, False),
         ("slide", -1, 2, True),
     ),
+    StephensonIII: (*_SIX_BAR_JOINTS, ("O6", -1, 4, False)),
+    WattI: (*_SIX_BAR_JOINTS, ("F", 2, 4, False)),
 }
 
 
 def _joint_points(lk: Linkage, theta2) -> jax.Array:
-    """The joints' points from the crank's pivot (4, 2) [length], in :data:`JOINTS`' order (a
+    """The joints' points from the crank's pivot (J, 2) [length], in :data:`JOINTS`' order (a
     slide's: the slider's pin)."""
+    if isinstance(lk, SixBar):
+        j = lk.joints(theta2)
+        return jnp.stack([j[k] - j["O2"] for k in ("O2", "A", "B", "O4", "D", "E", "X")])
     phi2 = lk.theta0 + theta2
     a = lk.r2 * jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
     phi3 = lk.coupler_angle(theta2)
@@ -282,7 +366,7 @@ def _joint_points(lk: Linkage, theta2) -> jax.Array:
 
 
 def _reactions_one(lk: Linkage, inertia: dict, grav, theta2, speed):
-    """The joints' forces (4, 2) and the motor's torque at one input angle (module
+    """The joints' forces (J, 2) and the motor's torque at one input angle (module
     docstring): each moving link's three Newton-Euler equations, one linear solve."""
     _, dd, _, alpha = _RATES[type(lk)](lk, inertia, theta2)
     acc, alpha = speed**2 * dd, speed**2 * alpha
@@ -293,7 +377,8 @@ def _reactions_one(lk: Linkage, inertia: dict, grav, theta2, speed):
     normal = _perp(jnp.stack([jnp.cos(lk.theta0), jnp.sin(lk.theta0)]))
     bases = [normal[:, None] if slide else jnp.eye(2) for *_, slide in JOINTS[type(lk)]]
     n = sum(b.shape[1] for b in bases) + 1  # the torque last
-    rows = [jnp.zeros((3, n)) for _ in range(3)]
+    nb = len(inertia)
+    rows = [jnp.zeros((3, n)) for _ in range(nb)]
     at = 0
     for (_, before, after, _), basis, point in zip(JOINTS[type(lk)], bases, p, strict=True):
         k = basis.shape[1]
@@ -305,9 +390,9 @@ def _reactions_one(lk: Linkage, inertia: dict, grav, theta2, speed):
             rows[body] = rows[body].at[:, at : at + k].add(block)
         at += k
     rows[0] = rows[0].at[2, n - 1].set(1.0)  # the motor's torque on the crank
-    rhs = [jnp.concatenate([m[i] * (acc[i] - grav), (j[i] * alpha[i])[None]]) for i in range(3)]
+    rhs = [jnp.concatenate([m[i] * (acc[i] - grav), (j[i] * alpha[i])[None]]) for i in range(nb)]
     # A slider (a point mass at its pin) on a slide: its moment is the slide's, not solved for.
-    keep = [slice(None)] * 3
+    keep = [slice(None)] * nb
     for _, _, after, slide in JOINTS[type(lk)]:
         if slide:
             keep[after] = slice(0, 2)
@@ -333,9 +418,9 @@ def reactions(lk: Linkage, masses: Masses, theta2, speed) -> tuple[jax.Array, ja
         speed: the crank's constant speed [rad / time].
 
     Returns:
-        ``(forces (K, 4, 2), torque (K,))``: the joints' forces in :data:`JOINTS`' order
-        (``O2``, ``A``, ``B``, ``O4`` or the slide) [mass * length / time**2] and the motor's
-        torque [mass * length**2 / time**2] (:func:`motor_torque`'s).
+        ``(forces (K, J, 2), torque (K,))``: the joints' forces in :data:`JOINTS`' order
+        (``O2``, ``A``, ``B``, ``O4`` or the slide; a six-bar's seven) [mass * length /
+        time**2] and the motor's torque [mass * length**2 / time**2] (:func:`motor_torque`'s).
     """
     return _over_angles(_reactions_one, lk, masses, theta2, speed)
 

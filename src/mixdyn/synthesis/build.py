@@ -6,7 +6,7 @@ joints, the coupler point ``coupler.P``, and the crank driven at a constant spee
 first input angle. :func:`slider_crank_model` builds a :class:`~._slidercrank.SliderCrank`'s:
 crank, rod and slider, three revolute joints and a translational one along the slide, the
 coupler point ``rod.P``. :func:`six_bar_model` builds a six-bar's (Stephenson III, Watt I:
-five massless links, seven revolute joints, the coupler point ``tracer.P``).
+five links, seven revolute joints, the coupler point ``tracer.P``).
 :func:`linkage_model` picks the builder by the linkage's type;
 :func:`model_file_text` writes the model with a kinematic run (the achieved path) and an
 inverse run (the motor torque) over the traversed input angles.
@@ -221,12 +221,13 @@ def six_bar_model(
     coupler_angle: float = 0.0,
 ):
     """The mixdyn model of a six-bar (:class:`~._stephenson.StephensonIII` or
-    :class:`~._watt.WattI`), its crank at ``start`` at t = 0 turning at ``speed``; massless
-    links, for kinematics (synthesis computes no six-bar's dynamics).
+    :class:`~._watt.WattI`), its crank at ``start`` at t = 0 turning at ``speed``.
 
     Args:
         sb: the six-bar (unbatched), model units.
-        masses: None (links of mass are refused).
+        masses: how its links weigh (:func:`~._dynamics.link_inertia`: the coupler, a Watt
+            I's rocker and the tracer triangles of bars, the payload at the coupler point);
+            None: massless links, for kinematics only.
         start: the input angle ``theta2`` at t = 0 [rad].
         speed: the crank's constant speed [rad / time].
         name: the model's name (default: "synthesized" and the linkage's title).
@@ -240,16 +241,7 @@ def six_bar_model(
         and ``follower`` (``E``, and ``O`` at a Stephenson III's ground pivot ``O6`` or ``F``
         at a Watt I's rocker point); the revolute joints ``O2``, ``A``, ``B``, ``O4``, ``D``,
         ``E`` and ``O6`` (Stephenson III) or ``F`` (Watt I); the driver ``motor``.
-
-    Raises:
-        ModelError: masses given.
     """
-    if masses is not None:
-        raise ModelError(
-            f"a {sb.TITLE}'s model is built for kinematics: its links have no masses here "
-            "(give masses=None)",
-            "masses",
-        )
     sb = _numbers(sb)
     j = {k: np.asarray(v, dtype=float) for k, v in sb.joints(start).items()}
     phi2 = float(sb.theta0) + start
@@ -257,7 +249,7 @@ def six_bar_model(
     ex = np.array([1.0, 0.0])
     d = np.array([r["dx"], r["dy"]])
     c = np.array([r["rcx"], r["rcy"]])
-    inertia = _inertia(sb, None)
+    inertia = _inertia(sb, masses)
     watt = isinstance(sb, WattI)
     rocker = {"O": 0 * ex, "B": r["r4"] * ex}
     if watt:
@@ -299,7 +291,7 @@ def six_bar_model(
             last,
         ],
         drivers=[CoordinateDriver("motor", "crank", "phi", law=Ramp(phi2, speed))],
-        gravity=(0.0, 0.0),
+        gravity=(0.0, 0.0) if masses is None else tuple(float(x) for x in masses.gravity),
         units=SI,
         name=name or f"synthesized {sb.TITLE}",
     )
