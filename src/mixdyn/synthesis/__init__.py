@@ -10,7 +10,7 @@ that generate a function, searched by gradients, with dynamics in a path's objec
 * :mod:`._sixbar` — what the six-bars share: a four-bar and a dyad closed by a second
   circle intersection, the coupler point on the dyad; :mod:`._stephenson`
   (:class:`StephensonIII`, ``linkage="stephenson3"``) and :mod:`._watt` (:class:`WattI`,
-  ``linkage="watt1"``), searched for a path or a motion by kinematics alone;
+  ``linkage="watt1"``), searched for a path or a motion, with their dynamics as a four-bar's;
 * :mod:`._limits` — the Grashof type (:func:`grashof_type`; a task's ``grashof``) and the
   ground pivots' regions (a task's ``pivots``) as gaps: penalties and exact checks;
 * :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque, the shaking
