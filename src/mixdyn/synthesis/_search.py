@@ -1,7 +1,7 @@
 """The search: thousands of random starts at once, each refined by Levenberg-Marquardt.
 
-The linkage is the task's (:attr:`PathTask.linkage`: a four-bar or a slider-crank). A
-candidate's variables ``u`` are dimensionless: the linkage's lengths and placement divided by
+The linkage is the task's (:attr:`PathTask.linkage`: a four-bar, a slider-crank or a six-bar).
+A candidate's variables ``u`` are dimensionless: the linkage's lengths and placement divided by
 the targets' size ``s`` (the crank's pivot from the targets' centre), ``theta0``, the crank's
 angle at the first point ``theta_1`` and, where the timing is free, the increments
 ``theta_{i+1} - theta_i``. Its residuals (all divided by ``s``):
@@ -278,7 +278,8 @@ class Candidate:
     Attributes:
         fourbar: the linkage's numbers (NumPy scalars), model units: a
             :class:`~._fourbar.FourBar`, or the task's other linkage type
-            (:class:`~._slidercrank.SliderCrank`); also :attr:`linkage`.
+            (:class:`~._slidercrank.SliderCrank`, a six-bar of :mod:`._sixbar`); also
+            :attr:`linkage`.
         angles: (N,) its input angles at the targets [rad].
         error: ``sum_i |C(theta_i) - P_i|^2`` [length**2] (a motion task's plus its angle
             term, :meth:`MotionTask.error`).
@@ -314,7 +315,7 @@ class Candidate:
 
     @property
     def linkage(self) -> Linkage:
-        """The synthesized linkage (a four-bar or a slider-crank: the task's type)."""
+        """The synthesized linkage (a four-bar, a slider-crank or a six-bar: the task's type)."""
         return self.fourbar
 
     def numbers(self) -> dict[str, float]:
@@ -471,7 +472,8 @@ def synthesize(
     """Linkages whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
     coupler passes its poses (a :class:`~._motion.MotionTask`), or whose rocker follows its
     crank as asked (a :class:`~._function.FunctionTask`), best first: four-bars, or the
-    slider-cranks of a path or motion task made with ``linkage="slider_crank"``.
+    slider-cranks or six-bars of a path or motion task made with ``linkage="slider_crank"``,
+    ``"stephenson3"`` or ``"watt1"``.
 
     Args:
         task: the path task (linkage, targets, timing, bounds, transmission angle), the motion task
