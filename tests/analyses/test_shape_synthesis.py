@@ -141,17 +141,23 @@ def test_shape_task_refuses_bad_input():
 @pytest.mark.slow  # long: run by CI's slow set (the search's programs compile)
 def test_search_finds_and_places_a_known_shape(tmp_path):
     """40 points of a crank-rocker's coupler curve (even crank steps), scaled by 2, turned by
-    0.7 rad and moved: the best linkage's shape error <= 1e-8, its placed curve within 1e-6
-    (relative) of every point; its written model, run by md.kinematic over the turn from the
-    first point's nearest crank angle, passes the points."""
+    0.7 rad and moved, the transmission angle at least 30 deg: the best linkage's shape error
+    <= 1e-8, its placed curve within 1e-6 (relative) of every point, every kept linkage's
+    crank turning fully with mu >= 30 deg (3600 crank angles); its written model, run by
+    md.kinematic over the turn from the first point's nearest crank angle, passes the
+    points."""
     exact = FourBar.from_vector(jnp.asarray([1.0, *_EXACT, 0.0, 0.0, 0.0]), 1.0)
     theta = np.linspace(0.0, 2 * np.pi, 40, endpoint=False)
     points = 2.0 * np.asarray(coupler_curve(exact, theta)) @ _rot(0.7).T + [3.0, -1.0]
-    task = ShapeTask(points, harmonics=8)
+    task = ShapeTask(points, harmonics=8, min_transmission=np.deg2rad(30))  # its own: 36 deg
     out = synthesize(task, starts=64, chunk=64, seed=0)
     best = out.best
     assert best.error <= 1e-8
     assert best.distance <= 1e-6 * task.size
+    grid = jnp.linspace(0.0, 2 * np.pi, 3600)
+    for c in out.candidates:  # every kept linkage's crank turns fully, mu >= 30 deg
+        cos_mu = np.asarray(jax.vmap(c.linkage.transmission_cosine)(grid))
+        assert np.max(np.abs(cos_mu)) <= np.cos(np.deg2rad(30))
     out.write(tmp_path / "best.yaml")
     loaded = md.load(tmp_path / "best.yaml")
     turns = np.angle(np.exp(1j * (best.angles - best.angles[0]))) % (2 * np.pi)

@@ -20,10 +20,13 @@ its crank pivot at the origin and ``theta0 = 0``; the variables ``u`` are its ot
 (a four-bar's ``r2, r3, r4, rcx, rcy``; a slider-crank's ``r3, e, rcx, rcy``). The search is
 the path search's (:mod:`._solve`): random starts, half on each assembly branch, each solved
 by optimistix' Levenberg-Marquardt through the assembly's implicit derivatives, ``jax.vmap``
-over a chunk of starts; residuals: ``N_c - N_t`` (4H), the closure and transmission angle
-over the turn ``10 relu(|cos mu| - c)`` and the bounds ``10 relu(low - u)``, ``10 relu(u -
-high)``. Outcomes are checked exactly (closure on a fine grid of the whole turn, bounds),
-ranked by the shape error and deduplicated.
+over a chunk of starts (drawn so that most close over the whole turn with the asked
+transmission angle); residuals: ``N_c - N_t`` (4H), the closure and transmission angle over the
+turn ``10 relu(|cos mu| - c)`` with ``c = cos(min_transmission) - 0.001`` and the bounds ``10
+relu(low' - u)``, ``10 relu(u - high')`` with the bounds moved 0.1 % inside (margins, so that
+an outcome held at a penalty's edge still passes the exact check). Outcomes are checked
+exactly (closure on a fine grid of the whole turn, bounds), ranked by the shape error and
+deduplicated.
 
 Each kept linkage is then placed onto the target by the similarity between the two curves'
 descriptors (:func:`~._fourier.similarity`: the ratio of the first harmonics' semi-major
@@ -292,6 +295,29 @@ def _figures(program: _Program, data: dict, u, branches):
     return jax.vmap(one)(u, branches)
 
 
+@functools.partial(jax.jit, static_argnums=0)
+def _worst(linkage: type[Linkage], u):
+    """(C,) the largest ``|cos mu|`` of variables ``u`` (C, size) over 64 crank angles."""
+    angles = jnp.linspace(0.0, 2 * np.pi, 64, endpoint=False)
+
+    def one(u):
+        lk = _make(linkage, u, 1.0)  # the transmission angle is the same on either branch
+        return jnp.max(jnp.abs(jax.vmap(lk.transmission_cosine)(angles)))
+
+    return jax.vmap(one)(u)
+
+
+def _starts(linkage: type[Linkage], count: int, cmax: float, rng) -> np.ndarray:
+    """(count, size) starts drawn uniformly in the linkage's start box (:data:`_STARTS`),
+    those whose crank turns fully with the asked transmission angle first: eight times as
+    many drawn, the ones that close at 64 crank angles with ``|cos mu| <= cmax`` taken, the
+    rest filled with the others."""
+    box = np.array(_STARTS[linkage])
+    u = box[:, 0] + (box[:, 1] - box[:, 0]) * rng.random((8 * count, len(box)))
+    closes = np.asarray(_worst(linkage, u)) <= cmax
+    return np.concatenate([u[closes], u[~closes]])[:count]
+
+
 def place(lk: Linkage, scale, angle, shift) -> Linkage:
     """``lk`` carried by the similarity ``p -> scale R(angle) p + shift``: its lengths times
     ``scale``, its crank pivot moved, its ``theta0`` turned (the branch kept)."""
@@ -413,14 +439,12 @@ def synthesize_shape(
     low, high = task.bounds()
     data = {
         "target": {f.name: np.asarray(getattr(target, f.name)) for f in dataclasses.fields(target)},
-        "low": low,
-        "high": high,
-        "cmax": np.float64(min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)),
+        "low": low + (1.0 - CLOSURE_MARGIN) * np.abs(low),  # the penalties' margins inside
+        "high": high - (1.0 - CLOSURE_MARGIN) * np.abs(high),
+        "cmax": np.float64(float(np.cos(task.min_transmission)) - (1.0 - CLOSURE_MARGIN)),
     }
     program = _Program(task.linkage, task.harmonics, task.samples, int(max_steps))
-    rng = np.random.default_rng(seed)
-    box = np.array(_STARTS[task.linkage])
-    u0 = box[:, 0] + (box[:, 1] - box[:, 0]) * rng.random((int(starts), len(box)))
+    u0 = _starts(task.linkage, int(starts), float(data["cmax"]), np.random.default_rng(seed))
     branches = np.where(np.arange(int(starts)) % 2 == 0, 1.0, -1.0)
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b))
     solve = lambda u, b: _solve_chunk(program, data, u, b)  # noqa: E731
