@@ -2,15 +2,18 @@
 
 Each case file (``fourbar_path_*.txt`` in the project's ``shared/refdata``) holds the targets,
 the timing (free, prescribed up to the start, prescribed from the ground link, or not stated),
-the variables' bounds, the source's constraints (Grashof; a crank; the points in order) and,
+the variables' bounds, the source's constraints (Grashof; a crank; the points in order),
 where the source gives one, a design vector or a published linkage, whose error is computed
-here as the reference (no case file holds a published error: none was readable). Where a
-source states no bounds, ``UNSTATED`` sets them. ``md.synthesize`` gets
-the targets, the timing and the bounds; its best linkage, and its best one that also meets
-the source's constraints, are then measured here by a computation of their own (NumPy; the
-coupler point from the two circles' intersection on the linkage's branch, not mixdyn's
-program): the sum of squared distances from the coupler point at the linkage's input angles to
-the targets, the sources' error.
+here as a reference, and the published errors a case file records (``published ERROR WHO``:
+the error a paper reports for a method, with the paper, its table and the address it was read
+at). Where a source states no bounds, ``UNSTATED`` sets them. ``md.synthesize`` gets the
+targets, the timing, the bounds and, where the source asks for a crank (``grashof_crank``),
+``grashof="crank_rocker"``; its best linkage, and its best one that also meets the source's
+constraints, are then measured here by a computation of their own (NumPy; the coupler point
+from the two circles' intersection on the linkage's branch, not mixdyn's program): the sum of
+squared distances from the coupler point at the linkage's input angles to the targets, the
+sources' error. The table puts the smallest published error beside it ("not found" where the
+case file records none).
 
 What ``PathTask`` cannot state is said in the table, not hidden:
 
@@ -20,10 +23,10 @@ What ``PathTask`` cannot state is said in the table, not hidden:
   prescribes the input angles from the ground link (``timing absolute``), mixdyn's problem is
   wider; the error at the source's own angles is then given too (the linkage re-measured at
   the prescribed angles);
-* the Grashof and crank conditions are not in ``PathTask``: mixdyn's linkages close their loop
-  from the first target to the last (checked on a fine grid); the table says whether the best
-  one is Grashof (with the crank the shortest link where the source asks it) and gives the
-  best candidate that is.
+* ``PathTask`` states Grashof with the crank the shortest (``grashof="crank_rocker"``), asked
+  for where the source asks for a crank; it has no "Grashof with any link the shortest", so
+  a source's plain Grashof condition is checked afterwards: the table says whether the best
+  linkage meets the source's constraints and gives the best candidate that does.
 
 Run: ``python benchmarks/synthesis_cases.py [--starts 2048] [--refdata DIR] [--case NAME]``.
 """
@@ -97,6 +100,8 @@ class Case:
         constraints: ``"grashof"``, ``"grashof_crank"``, ``"order"``.
         design: the source's design vector, if it gives one (the source's variables).
         linkage: (9,) a published linkage in ``NAMES``' order, if the source gives one.
+        published: (error, who) pairs: the errors papers report for this case, each with the
+            method, the paper, its table and the address it was read at.
     """
 
     name: str
@@ -109,6 +114,7 @@ class Case:
     constraints: frozenset
     design: np.ndarray | None
     linkage: np.ndarray | None
+    published: tuple = ()
 
 
 def from_four_bar_rs(p1x, p1y, a, l1, l2, l3, l4, l5, g) -> np.ndarray:
@@ -122,8 +128,12 @@ def read_case(path: pathlib.Path) -> Case:
     """The case in a ``fourbar_path_*.txt`` file."""
     lines = path.read_text(encoding="utf-8").splitlines()
     points, bounds, fixed, constraints = [], {}, {}, set()
-    timing, angles, design, linkage = None, [], None, None
+    timing, angles, design, linkage, published = None, [], None, None, []
     for line in lines:
+        if line.startswith("published "):  # free text after the error: keep its '#'s
+            _, error, who = line.split(maxsplit=2)
+            published.append((number(error), who))
+            continue
         words = line.split("#", 1)[0].split()
         if not words:
             continue
@@ -155,6 +165,7 @@ def read_case(path: pathlib.Path) -> Case:
         constraints=frozenset(constraints),
         design=design,
         linkage=linkage,
+        published=tuple(published),
     )
 
 
@@ -186,7 +197,8 @@ def path_task(case: Case):
         timing = case.angles[0] * np.arange(len(case.points))
     elif case.timing == "absolute":
         timing = case.angles
-    return PathTask(case.points, timing=timing, bounds=bounds)
+    grashof = "crank_rocker" if "grashof_crank" in case.constraints else "any"
+    return PathTask(case.points, timing=timing, bounds=bounds, grashof=grashof)
 
 
 def coupler_points(v, branch: float, theta2) -> tuple[np.ndarray, np.ndarray]:
@@ -334,6 +346,20 @@ def _error(m: dict | None) -> str:
     return _fmt(m["error"])
 
 
+def _published(case: Case, meeting: dict | None) -> str:
+    """The smallest published error with who reported it, and mixdyn's best linkage that meets
+    the source's constraints as a multiple of it (at the source's own input angles where the
+    source prescribes them from the ground link: the error the papers report)."""
+    if not case.published:
+        return "not found"
+    error, who = min(case.published, key=lambda p: p[0])
+    text = f"{_fmt(error)} ({who})"
+    if meeting is not None:
+        ours = meeting.get("error_prescribed", meeting["error"])
+        text += f"; mixdyn / published = {ours / error:.3g}"
+    return text
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=int, default=2048)
@@ -365,8 +391,8 @@ def main():
         else:
             met = "met" if best and best["meets"] else "not met"
         print(
-            f"| {case.name} | {len(case.points)} | {_timing(case)} | not found in the stored "
-            f"corpus | {_fmt(ref)}{f' ({how})' if how else ''} | {_error(best)} | {met} | "
+            f"| {case.name} | {len(case.points)} | {_timing(case)} | {_published(case, meeting)} "
+            f"| {_fmt(ref)}{f' ({how})' if how else ''} | {_error(best)} | {met} | "
             f"{_error(meeting)} | {result['feasible']} / {args.starts} | "
             f"{result['seconds']:.1f} |"
         )
