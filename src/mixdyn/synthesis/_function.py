@@ -36,7 +36,15 @@ import numpy as np
 from ..errors import ModelError
 from ._fourbar import FourBar, link_angles, transmission_cosine
 from ._limits import grashof_gaps, penalty
-from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
+from ._solve import (
+    CHECK_SAMPLES,
+    CLOSURE_MARGIN,
+    PENALTY,
+    Ranked,
+    distinct,
+    levenberg_marquardt,
+    solve_all,
+)
 from ._task import FunctionTask
 
 
@@ -250,21 +258,17 @@ def synthesize_function(
     ok &= np.all((u_all[:, :3] >= lo - slack) & (u_all[:, :3] <= hi + slack), axis=1)
     gaps = grashof_gaps(jax.vmap(_fourbar)(jnp.asarray(u_all), jnp.asarray(branches)), task.grashof)
     ok &= np.all(np.asarray(gaps) <= 1e-9, axis=1)
-    kept, keys = [], []
-    for i in np.argsort(np.where(ok, error, np.inf))[: int(ok.sum())]:
+    starts_at = np.angle(np.exp(1j * u_all[:, 3:5])) if task.free_start else np.zeros((starts, 2))
+    kept = []
+    for i in distinct(ok, error, np.concatenate([u_all[:, :3], starts_at], axis=1), branches, 1e-6):
         u = u_all[i]
-        starts_at = np.angle(np.exp(1j * u[3:5])) if task.free_start else np.zeros(2)
-        key = np.concatenate([u[:3], starts_at])
-        if any(np.max(np.abs(key - k)) < 1e-6 and b == branches[i] for k, b in keys):
-            continue  # the same linkage from another start
-        keys.append((key, branches[i]))
         fb = FourBar(np.float64(1.0), *(np.float64(x) for x in u[:3]), *(np.float64(0.0),) * 5,
                      np.float64(branches[i]))  # fmt: skip
         kept.append(
             FunctionCandidate(
                 fourbar=fb,
-                input_start=float(starts_at[0]),
-                output_start=float(starts_at[1]),
+                input_start=float(starts_at[i, 0]),
+                output_start=float(starts_at[i, 1]),
                 error=float(error[i]),
                 min_transmission=float(np.arccos(min(float(worst[i]), 1.0))),
             )

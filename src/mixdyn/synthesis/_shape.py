@@ -55,7 +55,14 @@ from ._fourier import Normalised, describe, normalise, resample, shape_gap, simi
 from ._linkage import Linkage, coupler_curve
 from ._search import Candidate, Synthesis
 from ._slidercrank import SliderCrank
-from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, levenberg_marquardt, solve_all
+from ._solve import (
+    CHECK_SAMPLES,
+    CLOSURE_MARGIN,
+    PENALTY,
+    distinct,
+    levenberg_marquardt,
+    solve_all,
+)
 from ._task import LINKAGES, RATIO_BOUNDS, Objective
 
 #: The target's samples for its descriptors (at least; more where it has more points).
@@ -454,11 +461,8 @@ def synthesize_shape(
     slack = 1e-9 * high
     ok = np.isfinite(error) & np.isfinite(scores) & (worst <= np.cos(task.min_transmission))
     ok &= np.all((u_all >= low - slack) & (u_all <= high + slack), axis=1)
-    kept, keys = [], []
-    for i in np.argsort(np.where(ok, error, np.inf))[: int(ok.sum())]:
-        if any(np.max(np.abs(u_all[i] - k)) < 1e-4 and b == branches[i] for k, b in keys):
-            continue  # the same linkage from another start
-        keys.append((u_all[i], branches[i]))
+    kept = []
+    for i in distinct(ok, error, u_all, branches, 1e-4):
         norm = jax.tree_util.tree_map(lambda a, i=i: a[i], norms)
         scale, angle, shift = (np.asarray(x) for x in similarity(norm, target, flip[i]))
         lk = place(_make(task.linkage, u_all[i], branches[i]), float(scale), float(angle), shift)

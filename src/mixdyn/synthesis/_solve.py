@@ -1,6 +1,6 @@
 """What the path and the function searches share: their penalties and margins, the batched
-Levenberg-Marquardt solve of many starts, the loop over chunks of starts with progress, and
-the ranked result's best candidate."""
+Levenberg-Marquardt solve of many starts, the loop over chunks of starts with progress, the
+distinct outcomes best first, and the ranked result's best candidate."""
 
 from __future__ import annotations
 
@@ -71,11 +71,25 @@ def solve_all(solve_chunk, u0, branches, chunk, progress):
     return np.concatenate(us), np.concatenate(scores)
 
 
+def distinct(ok, scores, keys, branches, tol: float):
+    """The indices of the feasible outcomes (``ok`` (C,)), least ``scores`` (C,) first, whose
+    ``keys`` (C, k) differ by ``tol`` or more (largest component) from every one before on the
+    same branch: the same linkage reached from two starts is kept once. A generator: a caller
+    stops at its count."""
+    seen = []
+    for i in np.argsort(np.where(ok, scores, np.inf))[: int(np.sum(ok))]:
+        if any(np.max(np.abs(keys[i] - k)) < tol and b == branches[i] for k, b in seen):
+            continue  # the same linkage from another start
+        seen.append((keys[i], branches[i]))
+        yield i
+
+
 __all__ = [
     "CHECK_SAMPLES",
     "CLOSURE_MARGIN",
     "PENALTY",
     "Ranked",
+    "distinct",
     "levenberg_marquardt",
     "solve_all",
 ]
