@@ -164,3 +164,23 @@ def test_search_finds_and_places_a_known_shape(tmp_path):
     kin = md.kinematic(loaded.model, turns / out.objective.speed)
     p, _, _ = kin.point("coupler.P")
     assert np.max(np.linalg.norm(p - points, axis=1)) <= 1e-6 * task.size
+
+
+@pytest.mark.slow  # long: run by CI's slow set (the search's programs compile)
+def test_a_curve_given_against_the_cranks_sense_is_found_with_the_crank_reversed():
+    """The same points in the reverse order: with either sense allowed the best linkage draws
+    them exactly, its crank turning negatively (sense -1); its model, run by md.kinematic
+    with the crank at the negative speed, passes the points at the reported crank angles."""
+    exact = FourBar.from_vector(jnp.asarray([1.0, *_EXACT, 0.0, 0.0, 0.0]), 1.0)
+    theta = np.linspace(0.0, 2 * np.pi, 40, endpoint=False)
+    points = np.asarray(coupler_curve(exact, theta))[::-1] * 0.5 + [1.0, 2.0]
+    task = ShapeTask(points, harmonics=8)
+    out = synthesize(task, starts=64, chunk=64, seed=0)
+    best = out.best
+    assert best.sense == -1.0 and best.error <= 1e-8
+    assert best.distance <= 1e-6 * task.size
+    model = out.model()
+    times = ((best.angles[0] - best.angles) % (2 * np.pi)) / out.objective.speed
+    p, _, _ = md.kinematic(model, times).point("coupler.P")
+    assert np.all(np.diff(times[1:]) > 0)  # the points passed in their order
+    assert np.max(np.linalg.norm(p - points, axis=1)) <= 1e-6 * task.size

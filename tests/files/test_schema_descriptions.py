@@ -77,8 +77,9 @@ PROPERTIES = {
     "SynthesisMotionSpec": "length poses",
     "SynthesisPivotSpec": "x y",
     "SynthesisRunSpec": "bounds function grashof harmonics keep kind linkage masses max_steps "
-    "min_transmission motion name pivots points reaction reaction_weight seed shaking "
-    "shaking_force_weight shaking_moment_weight shape speed starts timing torque torque_weight",
+    "min_transmission motion name pivots points reaction reaction_weight seed sense "
+    "shaking shaking_force_weight shaking_moment_weight shape speed starts timing torque "
+    "torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -101,8 +102,8 @@ PROPERTIES = {
 # and with a synthesis run's linkage and a slider's mass (issue 34); and with a synthesis
 # run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
 # regions (issue 34); and with a synthesis run's six-bar linkages (issue 34); and with a
-# synthesis run's shape-only error (shape, harmonics; issue 34).
-STRIPPED_SHA256 = "41949c1fa276621201fa4cf16d5b3ecb8e80584491905117011f1734ef071ccb"
+# synthesis run's shape-only error (shape, harmonics, sense; issue 34).
+STRIPPED_SHA256 = "d75ff5ac669be40cb545c95cf0b5e779080879f3613dcd408f9775a0516d866f"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

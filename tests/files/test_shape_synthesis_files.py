@@ -49,9 +49,13 @@ def test_a_shape_run_is_checked_and_its_points_read_in_si(tmp_path):
     assert isinstance(task, ShapeTask) and task.harmonics == 6
     np.testing.assert_allclose(task.points, np.round(CURVE, 9) / 1000, rtol=0, atol=1e-16)
     assert task.min_transmission == pytest.approx(np.deg2rad(20), rel=1e-15)
+    assert task.sense == "either"
+    text = TEXT.replace("    harmonics: 6\n", "    harmonics: 6\n    sense: positive\n")
+    assert Runner(mio.reads(text)).plans["loop"].task.sense == "positive"
     (tmp_path / "shape.yaml").write_text(TEXT)
     lines = list(report(tmp_path / "shape.yaml"))
-    assert any("20 points of a closed curve, its shape alone (6 harmonics)" in x for x in lines)
+    words = "20 points of a closed curve, its shape alone (6 harmonics, either sense)"
+    assert any(words in line for line in lines)
 
 
 def _line(text: str, marker: str) -> int:
@@ -68,6 +72,8 @@ def _line(text: str, marker: str) -> int:
         ("    shape: fourier\n    harmonics: 12\n", "      - [", "describe at most 9 harmonics"),
         ("    shape: fourier\n    harmonics: 1\n", "harmonics: 1", "harmonics"),
         ("    shape: circle\n", "shape: circle", "shape"),
+        ("    harmonics: 6\n", "- name: loop", "'harmonics' and 'sense' go with 'shape: fourier'"),
+        (SHAPE + "    sense: backwards\n", "sense: backwards", "sense"),
     ],
 )  # fmt: skip
 def test_bad_shape_input_is_refused_at_its_line(keys, marker, words):
@@ -97,6 +103,7 @@ def test_a_shape_run_finds_and_places_a_known_four_bar(tmp_path):
     assert table["error"].iloc[0] <= 1e-8 and table["distance [m]"].iloc[0] <= 1e-6 * size
     angles = np.asarray(json.loads((folder / "meta.json").read_text())["synthesis"]["angles"])
     best = md.load(folder / "best.yaml")
-    kin = md.kinematic(best.model, (angles - angles[0]) % (2 * np.pi))  # the crank at 1 rad/s
+    sense = table["sense"].iloc[0]  # the crank at 1 rad/s, turning backwards where -1
+    kin = md.kinematic(best.model, (sense * (angles - angles[0])) % (2 * np.pi))
     p, _, _ = kin.point("coupler.P")
     assert np.max(np.linalg.norm(p - points / 1000, axis=1)) <= 1e-6 * size

@@ -1145,6 +1145,10 @@ class SynthesisRunSpec(Spec):
     harmonics: int = Field(default=8, ge=2, le=64)
     """The elliptic Fourier harmonics compared with ``shape: fourier``; more than twice as
     many points needed. Default 8."""
+    sense: Literal["either", "positive"] = "either"
+    """With ``shape: fourier``: ``either`` (default: the points run through in either sense,
+    the crank turning backwards where reversed) or ``positive`` (in their order as the crank
+    turns positively)."""
     function: SynthesisFunctionSpec | None = None
     """Function generation instead of a path: ``{expr: log10(x), x: [1, 2], input: [0 deg,
     60 deg], output: [240 deg, 180 deg]}`` or ``{pairs: [[crank, rocker], ...]}``."""
@@ -1206,6 +1210,12 @@ class SynthesisRunSpec(Spec):
     """Distinct candidates kept and written at most. Default 10."""
     max_steps: int = Field(default=300, ge=1, le=100_000)
     """Levenberg-Marquardt steps per start at most. Default 300."""
+
+    @model_validator(mode="after")
+    def _shape_keys(self):
+        if self.shape != "fourier" and {"harmonics", "sense"} & self.model_fields_set:
+            raise ValueError("'harmonics' and 'sense' go with 'shape: fourier'")
+        return self
 
     @model_validator(mode="after")
     def _one_task(self):

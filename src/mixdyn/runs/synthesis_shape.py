@@ -3,13 +3,16 @@ closed curve's, and the coupler curve over a full crank turn takes its shape
 (:class:`mixdyn.synthesis.ShapeTask`).
 
 The points, the linkage and the least transmission angle are read as a path's; ``harmonics``
-gives the elliptic Fourier harmonics compared. The shape fixes no place, size or orientation,
+gives the elliptic Fourier harmonics compared, ``sense`` whether the points may be run through
+against the crank's positive sense (``either``, the default: the crank then turns backwards)
+or not (``positive``). The shape fixes no place, size or orientation,
 so ``timing``, ``bounds``, ``pivots`` and ``grashof`` are refused beside it (the crank turns
 fully; the linkage is placed onto the points after the search), and so are the torque,
 shaking and reaction weights (the search is for the shape alone; with ``masses`` the motor
 torque and the rest are reported). The run writes what a path's run writes; in
 ``candidates.csv`` the error is the dimensionless shape error, ``distance`` the largest
-distance of a point from the placed coupler curve and ``scale`` the placement's scale.
+distance of a point from the placed coupler curve, ``scale`` the placement's scale and
+``sense`` the crank's (+1, or -1 where it turns backwards).
 """
 
 from __future__ import annotations
@@ -47,7 +50,11 @@ def shape_task(runner, path, r: s.SynthesisRunSpec, points, min_transmission, li
             )
     try:
         return ShapeTask(
-            points, harmonics=r.harmonics, min_transmission=min_transmission, linkage=linkage
+            points,
+            harmonics=r.harmonics,
+            min_transmission=min_transmission,
+            linkage=linkage,
+            sense=r.sense,
         )
     except ModelError as e:
         runner.fail((*path, e.element) if e.element else path, e.message, "")
@@ -55,14 +62,14 @@ def shape_task(runner, path, r: s.SynthesisRunSpec, points, min_transmission, li
 
 def shape_columns(out, names: list, units: dict, rows: list) -> None:
     """A shape synthesis's columns of ``candidates.csv``, added in place: the error
-    dimensionless, ``distance`` [m] and ``scale``."""
+    dimensionless, ``distance`` [m], ``scale`` and ``sense``."""
     if not isinstance(out.task, ShapeTask):
         return
     units["error"] = units["score"] = ""
-    names += ["distance", "scale"]
+    names += ["distance", "scale", "sense"]
     units["distance"] = "m"
     for row, c in zip(rows, out.candidates, strict=True):
-        row += [c.distance, c.scale]
+        row += [c.distance, c.scale, c.sense]
 
 
 def shape_words(task) -> str | None:
@@ -70,7 +77,8 @@ def shape_words(task) -> str | None:
     if not isinstance(task, ShapeTask):
         return None
     n, h = len(task.points), task.harmonics
-    return f"{n} points of a closed curve, its shape alone ({h} harmonics)"
+    sense = "either sense" if task.sense == "either" else "the crank's sense"
+    return f"{n} points of a closed curve, its shape alone ({h} harmonics, {sense})"
 
 
 def figure_options(task) -> dict:

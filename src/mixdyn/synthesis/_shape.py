@@ -10,7 +10,10 @@ error is
     ``e = sum_{n=1..H} |N_n(coupler curve) - N_n(target)|^2``   (dimensionless)
 
 over the four entries of each normalised harmonic, the candidate's nearer normalisation of
-the two (the ends of its first harmonic's major axis). The coupler curve is sampled at
+the two (the ends of its first harmonic's major axis). With ``sense="either"`` (the default)
+the target is compared as given and reversed, the nearer counting: the crank may then turn
+negatively (:attr:`ShapeCandidate.sense`); with ``"positive"`` the coupler point runs through
+the points in their order as the crank turns positively. The coupler curve is sampled at
 ``samples`` even steps of the crank's angle over a full turn, so the crank must turn fully:
 the loop closes (with the least transmission angle) at every crank angle.
 
@@ -102,6 +105,9 @@ class ShapeTask:
             class.
         samples: crank angles over the turn at which the candidate's curve is sampled for
             its descriptors and its closure.
+        sense: ``"either"`` (the default: the curve run through in either sense, the crank
+            turning negatively where reversed) or ``"positive"`` (in the points' order as the
+            crank turns positively).
     """
 
     points: np.ndarray
@@ -110,6 +116,7 @@ class ShapeTask:
     min_transmission: float = 0.0
     linkage: str | type[Linkage] = "four_bar"
     samples: int = 128
+    sense: str = "either"
 
     def __post_init__(self):
         kind = self.linkage
@@ -149,6 +156,8 @@ class ShapeTask:
         if int(self.samples) < 4 * h:
             raise ModelError(f"samples must be at least 4 harmonics ({4 * h})", "samples")
         object.__setattr__(self, "samples", int(self.samples))
+        if self.sense not in ("either", "positive"):
+            raise ModelError(f"sense must be 'either' or 'positive', got {self.sense!r}", "sense")
         norm = normalised(resample(pts, max(TARGET_SAMPLES, 4 * len(pts))), h)
         if not np.all(np.isfinite(np.asarray(norm.coefficients))):
             raise ModelError("the points' curve has no finite descriptors", "points")
@@ -174,9 +183,11 @@ class ShapeTask:
         c = self.points.mean(axis=0)
         return float(np.max(np.linalg.norm(self.points - c, axis=1)))
 
-    def target(self) -> Normalised:
-        """The target curve's normalised descriptors (its trigonometric interpolant's)."""
-        samples = resample(self.points, max(TARGET_SAMPLES, 4 * len(self.points)))
+    def target(self, reverse: bool = False) -> Normalised:
+        """The target curve's normalised descriptors (its trigonometric interpolant's), run
+        through in the points' order or, with ``reverse``, against it."""
+        points = self.points[::-1] if reverse else self.points
+        samples = resample(points, max(TARGET_SAMPLES, 4 * len(points)))
         return normalised(samples, self.harmonics)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -200,19 +211,34 @@ class ShapeCandidate(Candidate):
         scale: the similarity's scale (the placed linkage's first number).
         rotation: the similarity's angle [rad] (the placed linkage's ``theta0``).
         shift: (2,) the similarity's shift [length] (the placed crank pivot).
+        sense: +1 where the coupler point runs through the points in their order as the crank
+            turns positively, -1 where the crank turns negatively (the model's speed is then
+            negative).
     """
 
     distance: float = float("nan")
     scale: float = float("nan")
     rotation: float = float("nan")
     shift: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(2))
+    sense: float = 1.0
 
 
 @dataclasses.dataclass(frozen=True)
 class ShapeSynthesis(Synthesis):
     """The outcome of a shape synthesis (:func:`synthesize_shape`): its candidates are
     :class:`ShapeCandidate`\\ s, their models and files run a full crank turn from the first
-    target's nearest point."""
+    target's nearest point, in the candidate's sense."""
+
+    def model(self, k: int = 0):
+        """The :class:`mixdyn.Model` of candidate ``k``, its crank at the first target's
+        nearest point at t = 0, turning at the objective's speed in the candidate's sense."""
+        from .build import linkage_model
+
+        c = self.candidates[k]
+        speed = c.sense * self.objective.speed
+        return linkage_model(
+            c.fourbar, self.objective.masses, start=float(c.angles[0]), speed=speed
+        )
 
     def model_file(self, k: int = 0) -> str:
         """YAML text of candidate ``k``'s model file: a kinematic and, with masses, an inverse
@@ -233,8 +259,8 @@ class ShapeSynthesis(Synthesis):
             c.fourbar,
             self.objective.masses,
             start=start,
-            end=start + 2 * np.pi,
-            speed=self.objective.speed,
+            end=start + c.sense * 2 * np.pi,
+            speed=c.sense * self.objective.speed,
             header=head + "\n\n  mixdyn run FILE",
             targets=self.task.points,
         )
@@ -255,6 +281,7 @@ class _Program:
     harmonics: int
     samples: int
     max_steps: int
+    either: bool = True
 
 
 def _make(linkage: type[Linkage], u, branch) -> Linkage:
@@ -263,15 +290,34 @@ def _make(linkage: type[Linkage], u, branch) -> Linkage:
     return linkage.from_vector(v, branch)
 
 
+def _targets(data: dict) -> tuple[Normalised, Normalised]:
+    """The target's normalised descriptors as given and reversed, from the data's arrays."""
+    return tuple(
+        Normalised(**{k: jnp.asarray(v) for k, v in data[key].items()})
+        for key in ("target", "reverse")
+    )
+
+
+def _nearest_gap(program: _Program, norm: Normalised, targets):
+    """``(gap (H, 2, 2), flip, reversed)``: :func:`~._fourier.shape_gap` against the target,
+    or against the reversed target where that is nearer and either sense is allowed."""
+    gap, flip = shape_gap(norm, targets[0])
+    if not program.either:
+        return gap, flip, jnp.zeros(())
+    other, other_flip = shape_gap(norm, targets[1])
+    back = jnp.sum(other**2) < jnp.sum(gap**2)
+    return jnp.where(back, other, gap), jnp.where(back, other_flip, flip), back.astype(float)
+
+
 def _residuals(program: _Program, data: dict):
-    target = Normalised(**{k: jnp.asarray(v) for k, v in data["target"].items()})
+    targets = _targets(data)
     angles = jnp.linspace(0.0, 2 * np.pi, program.samples, endpoint=False)
     lo, hi = jnp.asarray(data["low"]), jnp.asarray(data["high"])
 
     def r(u, branch):
         lk = _make(program.linkage, u, branch)
         curve = jax.vmap(lk.coupler_point)(angles)
-        gap, _ = shape_gap(normalise(describe(curve, program.harmonics)), target)
+        gap, _, _ = _nearest_gap(program, normalise(describe(curve, program.harmonics)), targets)
         cos_mu = jax.vmap(lk.transmission_cosine)(angles)
         closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - data["cmax"])
         bounds = PENALTY * jnp.concatenate([jax.nn.relu(lo - u), jax.nn.relu(u - hi)])
@@ -287,17 +333,18 @@ def _solve_chunk(program: _Program, data: dict, u0, branches):
 
 @eqx.filter_jit
 def _figures(program: _Program, data: dict, u, branches):
-    """``(shape error (C,), flip (C,), worst |cos mu| (C,), normalised descriptors)`` of
-    outcomes ``u`` (C, size) on the fine grid (:data:`CHECK_SAMPLES` crank angles)."""
-    target = Normalised(**{k: jnp.asarray(v) for k, v in data["target"].items()})
+    """``(shape error (C,), flip (C,), reversed (C,), worst |cos mu| (C,), normalised
+    descriptors)`` of outcomes ``u`` (C, size) on the fine grid (:data:`CHECK_SAMPLES` crank
+    angles)."""
+    targets = _targets(data)
     angles = jnp.linspace(0.0, 2 * np.pi, CHECK_SAMPLES, endpoint=False)
 
     def one(u, branch):
         lk = _make(program.linkage, u, branch)
         norm = normalise(describe(jax.vmap(lk.coupler_point)(angles), program.harmonics))
-        gap, flip = shape_gap(norm, target)
+        gap, flip, back = _nearest_gap(program, norm, targets)
         worst = jnp.max(jnp.abs(jax.vmap(lk.transmission_cosine)(angles)))
-        return jnp.sum(gap**2), flip, worst, norm
+        return jnp.sum(gap**2), flip, back, worst, norm
 
     return jax.vmap(one)(u, branches)
 
@@ -365,13 +412,13 @@ def fit(lk: Linkage, points) -> tuple[np.ndarray, np.ndarray]:
     return angles, np.linalg.norm(near - points, axis=1)
 
 
-def _dynamics(lk: Linkage, objective: Objective) -> dict:
+def _dynamics(lk: Linkage, objective: Objective, sense: float) -> dict:
     """The motor torque's, the shaking's and the joint reactions' RMS and peak over a full
-    turn (empty without masses)."""
+    turn, the crank turning in ``sense`` (empty without masses)."""
     if objective.masses is None:
         return {}
     grid = np.linspace(0.0, 2 * np.pi, 256)
-    m, w = objective.masses, objective.speed
+    m, w = objective.masses, sense * objective.speed
     tau = np.asarray(motor_torque(lk, m, grid, w))
     force, moment = (np.asarray(a) for a in shaking(lk, m, grid, w))
     size = np.hypot(force[:, 0], force[:, 1])
@@ -442,33 +489,38 @@ def synthesize_shape(
             "masses",
         )
     started = time.perf_counter()
-    target = task.target()
+    targets = (task.target(), task.target(reverse=True))
     low, high = task.bounds()
     data = {
-        "target": {f.name: np.asarray(getattr(target, f.name)) for f in dataclasses.fields(target)},
+        **{
+            key: {f.name: np.asarray(getattr(t, f.name)) for f in dataclasses.fields(t)}
+            for key, t in zip(("target", "reverse"), targets, strict=True)
+        },
         "low": low + (1.0 - CLOSURE_MARGIN) * np.abs(low),  # the penalties' margins inside
         "high": high - (1.0 - CLOSURE_MARGIN) * np.abs(high),
         "cmax": np.float64(float(np.cos(task.min_transmission)) - (1.0 - CLOSURE_MARGIN)),
     }
-    program = _Program(task.linkage, task.harmonics, task.samples, int(max_steps))
+    either = task.sense == "either"
+    program = _Program(task.linkage, task.harmonics, task.samples, int(max_steps), either)
     u0 = _starts(task.linkage, int(starts), float(data["cmax"]), np.random.default_rng(seed))
     branches = np.where(np.arange(int(starts)) % 2 == 0, 1.0, -1.0)
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b))
     solve = lambda u, b: _solve_chunk(program, data, u, b)  # noqa: E731
     u_all, scores = solve_all(solve, u0, branches, min(int(chunk), int(starts)), report)
-    error, flip, worst, norms = _figures(program, data, u_all, branches)
-    error, flip, worst = (np.asarray(a) for a in (error, flip, worst))
+    error, flip, back, worst, norms = _figures(program, data, u_all, branches)
+    error, flip, back, worst = (np.asarray(a) for a in (error, flip, back, worst))
     slack = 1e-9 * high
     ok = np.isfinite(error) & np.isfinite(scores) & (worst <= np.cos(task.min_transmission))
     ok &= np.all((u_all >= low - slack) & (u_all <= high + slack), axis=1)
     kept = []
     for i in distinct(ok, error, u_all, branches, 1e-4):
         norm = jax.tree_util.tree_map(lambda a, i=i: a[i], norms)
+        target, sense = (targets[1], -1.0) if back[i] > 0.5 else (targets[0], 1.0)
         scale, angle, shift = (np.asarray(x) for x in similarity(norm, target, flip[i]))
         lk = place(_make(task.linkage, u_all[i], branches[i]), float(scale), float(angle), shift)
         angles, distances = fit(lk, task.points)
         figures = {"torque_rms": float("nan"), "torque_peak": float("nan")}
-        figures.update(_dynamics(lk, objective))
+        figures.update(_dynamics(lk, objective, sense))
         kept.append(
             ShapeCandidate(
                 fourbar=lk,
@@ -480,6 +532,7 @@ def synthesize_shape(
                 scale=float(scale),
                 rotation=float(angle),
                 shift=shift,
+                sense=sense,
                 **figures,
             )
         )
