@@ -377,8 +377,10 @@ def run(
     member). ``value``: the analysis value, or one per member; ``threads``: unused (the
     program makes the starts; the signature is :func:`._kinematic_members.run`'s);
     ``shared``: the members differ only in masses, inertias and forces (and share one
-    value), member 0's start is every member's; ``seconds``: if given, filled with the wall
-    times of the set-up, the program (``equilibria``) and the finishing [s].
+    value), member 0's start is every member's (``members`` may then be a
+    :class:`VariedModels`: the members' models stacked from its columns, each member's model
+    made only when its result is read); ``seconds``: if given, filled with the wall times of
+    the set-up, the program (``equilibria``) and the finishing [s].
 
     Raises:
         ModelError: a member's input error (with its index in a note).
@@ -438,7 +440,14 @@ def run(
     c0 = first.start.constraints(independent_rows_only=True)
     if c0.m != c0.n_full:
         return None  # a redundant row: the members' rows kept may differ
-    flat = [jax.tree_util.tree_flatten(m) for m in members]  # once a member
+    if shared and isinstance(members, VariedModels):
+        flat, stacked_models = None, members.stacked
+    else:
+        flat = [jax.tree_util.tree_flatten(m) for m in members]  # once a member
+
+        def stacked_models(idx):
+            return stack_leaves(flat[0][1], [flat[i][0] for i in idx])
+
     treedef = jax.tree_util.tree_structure(c0)
     if shared:
         cs = [jax.tree_util.tree_leaves(c0)] * count
@@ -463,7 +472,7 @@ def run(
 
     def program(idx: list[int]) -> tuple:
         q0 = stack_trees([rough[i] for i in idx])
-        model = stack_leaves(flat[0][1], [flat[i][0] for i in idx])
+        model = stacked_models(idx)
         c = stack_leaves(treedef, [cs[i] for i in idx])
         max_iter = jnp.asarray(values[0].max_iter)
         return _equilibria_batch_jit(
@@ -476,6 +485,43 @@ def run(
     done = finished(count, stack.flagged(), _built(stack), errors, on_member)
     seconds["finishing"] = time.perf_counter() - clock - seconds["setup"] - seconds["equilibria"]
     return (stack, *done)
+
+
+class VariedModels(Sequence):
+    """The member models of a sweep that varies some of a model's leaves, made one by one
+    when read (one unflatten a member), and stacked for a batch of members without making
+    them (:meth:`stacked`).
+
+    Args:
+        model: the nominal model.
+        positions: the indices, among ``model``'s leaves, of the varied leaves.
+        values: for each of ``positions``, its (M, ...) values [model units].
+    """
+
+    def __init__(self, model: Model, positions: Sequence[int], values: Sequence[np.ndarray]):
+        self.leaves, self.treedef = jax.tree_util.tree_flatten(model)
+        self.columns = dict(zip(positions, (np.asarray(v) for v in values), strict=True))
+        self.count = len(values[0])
+
+    def __len__(self) -> int:
+        return self.count
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        i = range(self.count)[i]
+        row = [jnp.asarray(self.columns[k][i]) if k in self.columns else leaf
+               for k, leaf in enumerate(self.leaves)]  # fmt: skip
+        return jax.tree_util.tree_unflatten(self.treedef, row)
+
+    def stacked(self, idx: Sequence[int]):
+        """The models of the members ``idx`` (K,) as one model with a leading member axis:
+        the varied leaves' rows, every other leaf broadcast."""
+        n = len(idx)
+        rows = [self.columns[k][np.asarray(idx)] if k in self.columns
+                else np.broadcast_to(np.asarray(leaf), (n, *np.shape(leaf)))
+                for k, leaf in enumerate(self.leaves)]  # fmt: skip
+        return jax.tree_util.tree_unflatten(self.treedef, rows)
 
 
 def _constraint_sets(c0: Constraints, members: Sequence[Model]) -> list | None:
@@ -519,4 +565,4 @@ def _built(stack: StaticStack) -> Callable[[int], Result]:
     return build
 
 
-__all__ = ["StaticStack", "run"]
+__all__ = ["StaticStack", "VariedModels", "run"]

@@ -521,7 +521,10 @@ def sweep(
                          on_member, params, started, driven=True)  # fmt: skip
         if done is not None:
             return done
-    if models is None:
+    shared = value.name == "quasi-static" and models is None and shares_start(model, vary)
+    if shared:  # made when read (no member's start depends on its numbers)
+        members = _static_members.VariedModels(model, positions, values)
+    elif models is None:
         members = vary_models(model, vary)
     if (
         value.name in ("kinematic", "quasi-static")
@@ -533,7 +536,6 @@ def sweep(
         if value.name == "kinematic":
             held = _kinematic_members.run
         else:  # the start of an equilibrium does not see masses, inertias or forces
-            shared = models is None and shares_start(model, vary)
             held = functools.partial(_static_members.run, shared=shared, seconds=seconds)
         made = held(
             members, value, t, threads or os.cpu_count() or 1, on_member,
