@@ -203,7 +203,7 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
     elif r.motion is not None:
         from .synthesis_motion import motion_task
 
-        task = motion_task(runner, path, r, functools.partial(_si, runner), options)
+        task = motion_task(runner, path, r, functools.partial(_si, runner), options, task_element)
     else:
         try:
             task = PathTask(points, timing=timing, **options)

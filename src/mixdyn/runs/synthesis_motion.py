@@ -20,10 +20,11 @@ from ..io import schema as s
 from ..synthesis import MotionTask
 
 
-def motion_task(runner, path, r: s.SynthesisRunSpec, si, options: dict) -> MotionTask:
+def motion_task(runner, path, r: s.SynthesisRunSpec, si, options: dict, place) -> MotionTask:
     """The motion task of run ``r`` at ``path`` (``si``: a number of the file in SI;
     ``options``: the task's ``bounds``, ``min_transmission``, ``linkage``, ``grashof`` and
-    ``pivots``, read as a path's)."""
+    ``pivots``, read as a path's; ``place(path, element, options)``: where a fault of the
+    task's ``element`` lies, as a path's)."""
     if "timing" in r.model_fields_set:
         runner.fail(
             (*path, "timing"),
@@ -42,10 +43,8 @@ def motion_task(runner, path, r: s.SynthesisRunSpec, si, options: dict) -> Motio
     try:
         return MotionTask(np.array(poses), length=length, **options)
     except ModelError as e:
-        from .synthesis import task_element
-
         where = {"poses": mp, "length": (*mp, "length")}.get(e.element)
-        runner.fail(where or task_element(path, e.element, options), e.message, "")
+        runner.fail(where or place(path, e.element, options), e.message, "")
 
 
 def _angle(runner, value, where, si) -> float:

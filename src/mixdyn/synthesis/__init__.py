@@ -19,8 +19,10 @@ that generate a function, searched by gradients, with dynamics in a path's objec
   angle), :class:`FunctionTask` (input-output angle pairs, or a function over a range) and
   :class:`Objective` (path error, motor torque, shaking force and moment, joint reactions by
   weight);
-* :mod:`._search` — :func:`synthesize`: thousands of random starts refined by
-  Levenberg-Marquardt at once, checked, ranked and deduplicated;
+* :mod:`._synthesize` — :func:`synthesize`, the one entry: a task handed to its search;
+* :mod:`._search` — a path or motion task's search (:func:`~._search.synthesize_path`):
+  thousands of random starts refined by Levenberg-Marquardt at once, checked, ranked and
+  deduplicated;
 * :mod:`._motion` — motion generation: :class:`MotionTask` (precision poses of the coupler)
   and its pose error, searched as a timing-free path whose coupler angles count too;
 * :mod:`._fourier` and :mod:`._shape` — shape-only path generation: a closed curve's
@@ -48,11 +50,12 @@ from ._function import FunctionCandidate, FunctionSynthesis
 from ._limits import GRASHOF, grashof_type
 from ._linkage import Linkage
 from ._motion import MotionTask
-from ._search import Candidate, Synthesis, synthesize
+from ._search import Candidate, Synthesis
 from ._shape import ShapeCandidate, ShapeSynthesis, ShapeTask
 from ._sixbar import SixBar
 from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
 from ._stephenson import STEPHENSON_NAMES, StephensonIII
+from ._synthesize import synthesize
 from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
 from ._watt import WATT_NAMES, WattI
 from .build import (

@@ -56,12 +56,12 @@ from ..errors import ModelError
 from ..runtime._programs import cached_jit
 from ._dynamics import DYNAMICS, Masses, motor_torque, reactions, shaking
 from ._fourbar import FourBar
-from ._limits import grashof_gaps, penalty, region_arrays, region_gaps
+from ._limits import LIMIT_MARGIN, grashof_gaps, penalty, region_arrays, region_gaps
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
 from ._slidercrank import SliderCrank
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
-from ._task import FunctionTask, Objective, PathTask
+from ._task import Objective, PathTask
 
 
 @dataclasses.dataclass(frozen=True)
@@ -163,16 +163,23 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
     motion = isinstance(task, MotionTask)
     finite = np.isfinite(box)
     f64 = np.float64
+    # The penalties aim LIMIT_MARGIN inside the bounds and the transmission angle (lengths in
+    # the targets' size, theta0 in rad; at most a quarter of a bound's width): an outcome the
+    # path pulls against a penalty settles a little past its edge, which the exact check of
+    # the ranking refuses.
+    unit = np.where(np.arange(len(box)) == len(box) - 1, 1.0, layout.scale)
+    width = np.where(finite.all(axis=1), box[:, 1] - box[:, 0], np.inf)
+    inside = np.minimum(LIMIT_MARGIN * unit, 0.25 * width)
     return {
         "targets": np.asarray(task.points, dtype=float),
         "timing": np.zeros(layout.n) if task.timing is None else np.asarray(task.timing),
         "scale": f64(layout.scale),
         "centre": np.asarray(layout.centre, dtype=float),
-        "low": np.where(finite[:, 0], box[:, 0], 0.0),
-        "high": np.where(finite[:, 1], box[:, 1], 0.0),
+        "low": np.where(finite[:, 0], box[:, 0] + inside, 0.0),
+        "high": np.where(finite[:, 1], box[:, 1] - inside, 0.0),
         "low_on": finite[:, 0].astype(float),
         "high_on": finite[:, 1].astype(float),
-        "cmax": f64(min(float(np.cos(task.min_transmission)), CLOSURE_MARGIN)),
+        "cmax": f64(min(float(np.cos(task.min_transmission)) - LIMIT_MARGIN, CLOSURE_MARGIN)),
         "weight": f64(objective.torque_weight),
         "force_weight": f64(objective.shaking_force_weight),
         "moment_weight": f64(objective.shaking_moment_weight),
@@ -327,7 +334,7 @@ class Candidate:
 
 @dataclasses.dataclass(frozen=True)
 class Synthesis(Ranked):
-    """The outcome of :func:`synthesize`.
+    """The outcome of :func:`~._synthesize.synthesize`.
 
     Attributes:
         task: the path task, or the motion task.
@@ -457,8 +464,8 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
     return u
 
 
-def synthesize(
-    task: PathTask | MotionTask | FunctionTask,
+def synthesize_path(
+    task: PathTask | MotionTask,
     objective: Objective | None = None,
     *,
     starts: int = 2048,
@@ -469,73 +476,8 @@ def synthesize(
     polish: bool = True,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis:
-    """Linkages whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
-    coupler passes its poses (a :class:`~._motion.MotionTask`), or whose rocker follows its
-    crank as asked (a :class:`~._function.FunctionTask`), best first: four-bars, or the
-    slider-cranks or six-bars of a path or motion task made with ``linkage="slider_crank"``,
-    ``"stephenson3"`` or ``"watt1"``.
-
-    Args:
-        task: the path task (linkage, targets, timing, bounds, transmission angle), the motion task
-            (poses, bounds, transmission angle: a timing-free path task whose coupler angles
-            count too, :mod:`._motion`), or the function task (input-output angle pairs;
-            :func:`~._function.synthesize_function`, which takes ``starts``, ``seed``,
-            ``chunk``, ``max_steps``, ``keep`` and ``progress``), or the shape task (a
-            closed curve's shape, :class:`~._shape.ShapeTask`: :func:`~._shape.synthesize_shape`,
-            ``polish`` unused).
-        objective: the objective (default: the path error alone; a function task's is its
-            angle error, and it takes none).
-        starts: random starts, half on each assembly branch.
-        seed: the random generator's seed (the same seed, the same starts and outcome).
-        chunk: starts solved together (one vectorized program, compiled once).
-        max_steps: Levenberg-Marquardt's steps at most per start.
-        keep: distinct candidates returned at most.
-        polish: with a torque weight, each outcome solved once more for the path (a motion
-            task's poses) alone from where the weighted search left it (the nearest linkage
-            that draws the path as well as it can, at nearly the same torque), then scored by
-            the objective.
-        progress: called after each chunk with ``(stage, starts done, starts, best score so
-            far)``, ``stage`` ``"search"`` or ``"polish"``.
-
-    Returns:
-        A :class:`Synthesis` (a :class:`~._function.FunctionSynthesis` for a function task):
-        for a motion task, its candidates' error is the pose error and their
-        ``coupler_angle`` the carried body's line in the coupler; for a shape task a
-        :class:`~._shape.ShapeSynthesis`, its candidates' error the shape error.
-
-    Raises:
-        ModelError: a bad number of starts, chunk or step count; an objective for a
-            function task; a slider-crank's masses without a slider's mass.
-    """
-    if isinstance(task, FunctionTask):
-        if objective is not None:
-            raise ModelError(
-                "a function task's objective is its angle error: give no objective", "objective"
-            )
-        from ._function import synthesize_function
-
-        return synthesize_function(
-            task,
-            starts=starts,
-            seed=seed,
-            chunk=chunk,
-            max_steps=max_steps,
-            keep=keep,
-            progress=progress,
-        )
-    from ._shape import ShapeTask, synthesize_shape
-
-    if isinstance(task, ShapeTask):
-        return synthesize_shape(
-            task,
-            objective,
-            starts=starts,
-            seed=seed,
-            chunk=chunk,
-            max_steps=max_steps,
-            keep=keep,
-            progress=progress,
-        )
+    """The search of a path or motion task (:func:`~._synthesize.synthesize`'s, whose
+    docstring gives the arguments)."""
     objective = objective or Objective()
     for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
         if int(value) < 1:
@@ -686,4 +628,4 @@ def _rank(layout, task, objective, box, u_all, branches, scores, keep, programs)
     return kept, int(ok.sum())
 
 
-__all__ = ["Candidate", "Synthesis", "synthesize"]
+__all__ = ["Candidate", "Synthesis", "synthesize_path"]
