@@ -528,7 +528,11 @@ def execute(runner: Runner, plan: SweepPlan, progress: Callable[[int], None] | N
             summaries, units = _summaries(runner, plan, sweep)
             seconds = {"build": built - started, "run": done - built}
             return FileSweep(plan, sweep, summaries, units, seconds, runner.output_units)
-        models, kwargs = quick.models, [kw] * plan.members
+        if value.name == "quasi-static":  # each member's model made when read
+            models = _static_members.VariedModels(quick.model, quick.positions, quick.values)
+        else:
+            models = quick.models
+        kwargs = [kw] * plan.members
     built = time.perf_counter()
     try:
 
