@@ -200,7 +200,7 @@ def test_help_is_wrapped_by_the_formatter(monkeypatch):
     summary, current = {}, None
     for row in rows:
         first, _, rest = row.partition(" ")
-        if first in ("show", "check", "run", "plot", "animate", "schema", "dump"):
+        if first in ("show", "check", "run", "plot", "animate", "schema", "dump", "server"):
             current = first
             summary[current] = [rest.strip()]
         elif current is not None and row.strip():
