@@ -12,7 +12,7 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 import mixdyn as md
-from fixtures import EXAMPLES, four_bar, four_bar_pose, pendulum, slider_crank
+from fixtures import EXAMPLES, four_bar, four_bar_pose, pendulum, slider_crank, spring_slider
 
 G = 9.81
 
@@ -91,6 +91,24 @@ def test_an_unbalanced_load_has_no_equilibrium():
     )
     with pytest.raises(md.ConvergenceError, match="no equilibrium"):
         md.statics(model, max_iter=30)
+
+
+def test_loads_that_balance_at_the_start_keep_their_size():
+    """A slider held by a spring (k = 800 N/m, free length 0.5 m) against a push of 20 N,
+    no gravity: from the second time on the start is the equilibrium, where the loads sum
+    to zero; the residual is still measured against the loads' size, so each time rests at
+    x = 0.5 + F/k (closed form) in no Newton step rather than failing."""
+    base = spring_slider(damping=0.0)
+    model = md.Model(
+        bodies=base.bodies,
+        joints=base.joints,
+        forces=[*base.forces, md.PointForce("push", "slider", along=(1, 0), law=md.Constant(20.0))],
+        ground={"O": (0.0, 0.0)},
+        gravity=(0.0, 0.0),
+        units=md.SI,
+    )
+    res = md.quasi_static(model, np.linspace(0.0, 1.0, 4))
+    np.testing.assert_allclose(res["slider.x"], 0.5 + 20.0 / 800.0, rtol=1e-12)
 
 
 def test_the_quasi_static_torque_is_the_energys_slope():

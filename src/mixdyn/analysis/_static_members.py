@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..equations import Constraints, applied_forces
+from ..equations import Constraints, applied_forces, largest_load
 from ..errors import MixdynError, ModelError
 from ..linalg import min_norm_step
 from ..model import Model
@@ -153,7 +153,7 @@ def _equilibria(model, c, q_start, L, ts, tol, max_iter, held=()):
         """The equilibrium at ``t`` from the assembled start ``q``
         (:func:`~.statics._equilibrium`)."""
         Q0 = applied_forces(model, q, jnp.zeros_like(q), t)
-        F0 = jnp.max(jnp.abs(Q0) * D, initial=0.0) / L
+        F0 = largest_load(model, q, t, D) / L
         if m:
             J0 = c.jacobian(q, t).dense()
             rows = jnp.max(jnp.abs(J0) * D, axis=1)

@@ -16,9 +16,10 @@ The residual's measure is the same in every unit system. Each row is taken relat
 own scale: with ``L`` the model's characteristic length (its largest point or body offset) and
 the coordinate scales ``D = diag(L, L, 1, ...)`` (a body's x, y [length] and phi [rad]), a
 force row ``Q_i`` counts as the work ``Q_i D_ii`` relative to ``F L`` (``F`` the largest
-applied force, a moment counting as a force at ``L``), and a constraint row ``Phi_j`` relative
-to ``max_i |dPhi_j/dq_i| D_ii`` at the start, i.e. in its own unit (length for a point on a
-point, rad for an angle driver). The same mechanism written in m or in mm then takes the same
+applied force, a moment counting as a force at ``L``; each load taken alone, gravity and each
+force element, so that loads that balance at the start keep their size), and a constraint
+row ``Phi_j`` relative to ``max_i |dPhi_j/dq_i| D_ii`` at the start, i.e. in its own unit
+(length for a point on a point, rad for an angle driver). The same mechanism written in m or in mm then takes the same
 Newton steps and reaches the same equilibrium.
 
 Stability: the tangent stiffness ``K = -d(Q - Phi_q^T lambda)/dq`` (for conservative loads the
@@ -41,7 +42,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..equations import applied_forces
+from ..equations import applied_forces, largest_load
 from ..equations._reaction_dependent import check_supported
 from ..errors import ConvergenceError, ModelError
 from ..linalg import DenseSolver, LinearSolver
@@ -227,7 +228,7 @@ def _equilibrium(setup: Setup) -> Statics:
     J0 = np.asarray(J0)
     L = length_scale(model)
     D = coordinate_scales(model, L)
-    F0 = float(np.max(np.abs(Q0) * D, initial=0.0)) / L  # the largest load, as a force
+    F0 = float(largest_load(model, jnp.asarray(q), tj, jnp.asarray(D))) / L  # as a force
     rows = np.max(np.abs(J0) * D, axis=1) if m else np.zeros(0)  # each row's own unit
     rows = np.where(rows > 0.0, rows, 1.0)
     # the start's multipliers: the loads balanced in the least-squares sense of virtual work

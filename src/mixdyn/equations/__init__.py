@@ -8,6 +8,7 @@ from ._dynamics import (
     force_outputs,
     gravity_force,
     kinetic_energy,
+    largest_load,
     nonconservative_power,
     potential_energy,
 )
@@ -20,6 +21,7 @@ __all__ = [
     "force_outputs",
     "gravity_force",
     "kinetic_energy",
+    "largest_load",
     "nonconservative_power",
     "potential_energy",
 ]

@@ -33,6 +33,16 @@ def applied_forces(model: Model, q, qd, t, exclude: tuple[str, ...] = ()) -> jax
     return Q
 
 
+def largest_load(model: Model, q, t, D) -> jax.Array:
+    """The largest single load at rest: ``max |Q_e,i| D_i`` over gravity and each force
+    element ``e`` taken alone at ``q`` and ``t`` (``qd = 0``), ``D`` (nq,) the coordinates'
+    scales [force * length, or energy per rad] — unlike the sum ``Q^A``, which vanishes
+    wherever the loads balance (a start at the equilibrium)."""
+    zero = jnp.zeros_like(q)
+    parts = [gravity_force(model)] + [f.generalized(q, zero, t, model.nq) for f in model.forces]
+    return jnp.max(jnp.stack([jnp.max(jnp.abs(p) * D) for p in parts]))
+
+
 def force_outputs(model: Model, q, qd, t, exclude: tuple[str, ...] = ()) -> dict:
     """The known force elements' result columns (those not in ``exclude``): each element's
     :meth:`~mixdyn.model.ForceElement.outputs` (``name``, ``name.length``...) and its power
