@@ -201,3 +201,37 @@ def test_a_second_search_of_the_same_form_runs_the_compiled_programs(monkeypatch
         out = synthesize(PathTask(points, timing=theta), starts=32, chunk=32, seed=2)
         assert out.best.error < 1e-20
     assert len(built) == 1
+
+
+def test_a_timing_from_the_ground_link_is_the_crank_angle_as_given():
+    """``timing_from="ground"``: the input angles are the timing itself (the first point's
+    angle not a variable), whatever the search's ``theta_1``; without a timing it is refused."""
+    from mixdyn.synthesis import _search
+
+    theta = np.linspace(0.3, 4.0, 6)
+    points = np.asarray(coupler_curve(fourbar(1.0), theta))
+    task = PathTask(points, timing=theta, timing_from="ground")
+    layout = _search._Layout(6, task.size, points.mean(axis=0), task.timing, task.linkage, True)
+    u = np.zeros(layout.size)
+    for first in (0.0, 1.7):
+        u[layout.m] = first
+        assert np.array_equal(np.asarray(layout.angles(u)), theta)
+    with pytest.raises(ModelError, match="needs a timing"):
+        PathTask(points, timing_from="ground")
+    with pytest.raises(ModelError, match="timing_from"):
+        PathTask(points, timing=theta, timing_from="start")
+
+
+@pytest.mark.slow  # long: run by CI's slow set (a search compiles)
+def test_a_search_from_the_ground_link_recovers_the_linkage_at_the_given_angles():
+    """Six points of a known four-bar at crank angles from its ground link: the search with
+    ``timing_from="ground"`` passes them exactly, at exactly those angles."""
+    theta = np.linspace(0.3, 4.0, 6)
+    points = np.asarray(coupler_curve(fourbar(1.0), theta))
+    out = synthesize(
+        PathTask(points, timing=theta, timing_from="ground"), starts=128, chunk=128, seed=1
+    )
+    assert out.best.error < 1e-20
+    assert np.array_equal(out.best.angles, theta)
+    again = np.asarray(coupler_curve(out.best.fourbar, theta))
+    assert np.max(np.abs(again - points)) < 1e-9

@@ -78,8 +78,8 @@ PROPERTIES = {
     "SynthesisPivotSpec": "x y",
     "SynthesisRunSpec": "bounds function grashof harmonics keep kind linkage masses max_steps "
     "min_transmission motion name pivots points reaction reaction_weight seed sense "
-    "shaking shaking_force_weight shaking_moment_weight shape speed starts timing torque "
-    "torque_weight",
+    "shaking shaking_force_weight shaking_moment_weight shape speed starts timing timing_from "
+    "torque torque_weight",
     "TimeSpec": "n span step values",
     "UnitsSpec": "length mass time",
 }
@@ -103,7 +103,7 @@ PROPERTIES = {
 # run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
 # regions (issue 34); and with a synthesis run's six-bar linkages (issue 34); and with a
 # synthesis run's shape-only error (shape, harmonics, sense; issue 34).
-STRIPPED_SHA256 = "d75ff5ac669be40cb545c95cf0b5e779080879f3613dcd408f9775a0516d866f"
+STRIPPED_SHA256 = "118ffaf02621dc718ecf876d55242aeb1e749fdd93a8ccbf94e1a08aaf1a1b34"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

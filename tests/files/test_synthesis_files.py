@@ -62,6 +62,12 @@ def _line(text: str, marker: str) -> int:
         (["    min_transmission: 95 deg"], "min_transmission", "pi/2"),
         (["    torque_weight: 1e-4 m^2/(N*m)^2"], "torque_weight", "masses"),
         (["    shaking_force_weight: 1e-4 m^2/N^2"], "shaking_force_weight", "masses"),
+        (["    timing_from: ground"], "timing_from", "needs a timing"),
+        (
+            ["    timing: [0 deg, 50 deg, 90 deg]", "    timing_from: start"],
+            "timing_from",
+            "ground",
+        ),
         (
             ["    masses: {density: 2 kg/m}", "    shaking_moment_weight: 1e-4 m^2/N^2"],
             "shaking_moment_weight",

@@ -19,8 +19,8 @@ force row ``Q_i`` counts as the work ``Q_i D_ii`` relative to ``F L`` (``F`` the
 applied force, a moment counting as a force at ``L``; each load taken alone, gravity and each
 force element, so that loads that balance at the start keep their size), and a constraint
 row ``Phi_j`` relative to ``max_i |dPhi_j/dq_i| D_ii`` at the start, i.e. in its own unit
-(length for a point on a point, rad for an angle driver). The same mechanism written in m or in mm then takes the same
-Newton steps and reaches the same equilibrium.
+(length for a point on a point, rad for an angle driver). The same mechanism written in m or
+in mm then takes the same Newton steps and reaches the same equilibrium.
 
 Stability: the tangent stiffness ``K = -d(Q - Phi_q^T lambda)/dq`` (for conservative loads the
 Hessian of ``V + lambda . Phi``) in the scaled coordinates ``(x/L, y/L, phi)``,

@@ -1162,7 +1162,11 @@ class SynthesisRunSpec(Spec):
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
     turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only
-    their differences count)."""
+    their differences count, unless ``timing_from: ground``)."""
+    timing_from: Literal["first", "ground"] = "first"
+    """``first`` (default: the timing counts from the crank's angle at the first point, which
+    the search finds) or ``ground`` (the timing is the crank's angle from the ground link,
+    a slider-crank's from its slide)."""
     bounds: dict[str, tuple[Scalar, Scalar]] = Field(default_factory=dict)
     """``[low, high]`` of the linkage's numbers: a four-bar's ``r1``-``r4``, a slider-crank's
     ``r2``, ``r3``, ``e`` (offset); ``rcx``, ``rcy`` (coupler point), ``x0``, ``y0`` (crank

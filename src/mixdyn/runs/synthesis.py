@@ -206,7 +206,7 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
         task = motion_task(runner, path, r, functools.partial(_si, runner), options, task_element)
     else:
         try:
-            task = PathTask(points, timing=timing, **options)
+            task = PathTask(points, timing=timing, timing_from=r.timing_from, **options)
         except ModelError as e:
             runner.fail(task_element(path, e.element, options), e.message, "")
     masses = None

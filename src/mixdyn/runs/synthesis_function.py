@@ -24,6 +24,7 @@ from ..synthesis import FunctionSynthesis, FunctionTask
 #: The path generation's keys, refused beside ``function``.
 PATH_KEYS = (
     "timing",
+    "timing_from",
     "bounds",
     "masses",
     "speed",

@@ -25,12 +25,13 @@ def motion_task(runner, path, r: s.SynthesisRunSpec, si, options: dict, place) -
     ``options``: the task's ``bounds``, ``min_transmission``, ``linkage``, ``grashof`` and
     ``pivots``, read as a path's; ``place(path, element, options)``: where a fault of the
     task's ``element`` lies, as a path's)."""
-    if "timing" in r.model_fields_set:
-        runner.fail(
-            (*path, "timing"),
-            "'timing' is for path generation (points), not for a motion",
-            "a motion's crank angles at the poses are found: remove it",
-        )
+    for key in ("timing", "timing_from"):
+        if key in r.model_fields_set:
+            runner.fail(
+                (*path, key),
+                f"{key!r} is for path generation (points), not for a motion",
+                "a motion's crank angles at the poses are found: remove it",
+            )
     mp = (*path, "motion")
     poses = []
     for i, pose in enumerate(r.motion.poses):

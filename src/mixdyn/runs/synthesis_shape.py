@@ -24,6 +24,7 @@ from ..synthesis import ShapeTask
 #: The keys a shape task refuses, each with what to do instead.
 _REFUSED = {
     "timing": "a shape has no timing: remove it",
+    "timing_from": "a shape has no timing: remove it",
     "bounds": "a shape fixes no size or place: remove them (the linkage is placed onto the points)",
     "pivots": "a shape fixes no place: remove them (the linkage is placed onto the points)",
     "grashof": "the crank of a shape turns fully: remove it",

@@ -75,6 +75,7 @@ class _Layout:
     centre: np.ndarray
     timing: np.ndarray | None
     linkage: type[Linkage] = FourBar
+    absolute: bool = False  # the timing is the crank's angle from the ground link
 
     @property
     def m(self) -> int:
@@ -95,6 +96,8 @@ class _Layout:
     def angles(self, u) -> jax.Array:
         """(N,) the input angles at the targets [rad]."""
         m = self.m
+        if self.timing is not None and self.absolute:
+            return jnp.asarray(self.timing) + 0.0 * u[m]  # theta_1 given: u[m] unused
         if self.timing is not None:
             return u[m] + jnp.asarray(self.timing - self.timing[0])
         return u[m] + jnp.concatenate([jnp.zeros(1), jnp.cumsum(u[m + 1 :])])
@@ -123,6 +126,7 @@ class _Program:
         motion: a motion task (the coupler's angles at the points count too).
         grashof: the Grashof type asked for (:mod:`._limits`).
         regions: the ground pivots with a region (their rectangles are data).
+        absolute: the timing is the crank's angle from the ground link (``timing_from``).
     """
 
     n: int
@@ -137,6 +141,7 @@ class _Program:
     reaction: str | None = None
     grashof: str = "any"
     regions: tuple[str, ...] = ()
+    absolute: bool = False
 
 
 def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool) -> _Program:
@@ -155,6 +160,7 @@ def _program(task: PathTask, objective: Objective, max_steps: int, torque: bool)
         reaction=objective.reaction if dynamic and objective.reaction_weight > 0 else None,
         grashof=task.grashof,
         regions=tuple(task.pivots),
+        absolute=getattr(task, "timing_from", "first") == "ground",
     )
 
 
@@ -193,7 +199,9 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
 
 def _layout_of(program: _Program, data: dict) -> _Layout:
     timing = data["timing"] if program.timed else None
-    return _Layout(program.n, data["scale"], data["centre"], timing, program.linkage)
+    return _Layout(
+        program.n, data["scale"], data["centre"], timing, program.linkage, program.absolute
+    )
 
 
 def _residuals(program: _Program, data: dict):
@@ -499,7 +507,12 @@ def synthesize_path(
     chunk = min(int(chunk), int(starts))
     box = task.box()
     layout = _Layout(
-        len(task.points), task.size, task.points.mean(axis=0), task.timing, task.linkage
+        len(task.points),
+        task.size,
+        task.points.mean(axis=0),
+        task.timing,
+        task.linkage,
+        getattr(task, "timing_from", "first") == "ground",  # a motion task's timing is free
     )
     data = _data(layout, task, objective, box)
     weighed = _program(task, objective, max_steps, torque=True)

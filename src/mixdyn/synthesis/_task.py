@@ -46,7 +46,12 @@ class PathTask:
             passes them as the crank turns in the positive sense.
         timing: None (timing-free: the input angles are found too, increasing, within one
             turn) or (N,) prescribed input angles [rad], increasing; only their differences
-            count (the crank's angle at the first point is found).
+            count (the crank's angle at the first point is found) unless ``timing_from`` is
+            ``"ground"``.
+        timing_from: ``"first"`` (the default: the timing counts from the crank's angle at the
+            first point, which the search finds) or ``"ground"`` (the timing is the crank's
+            angle from the ground link, a slider-crank's from its slide, as it is: the
+            literature's prescribed-timing cases).
         bounds: ``name -> (low, high)`` for numbers of the linkage's ``NAMES`` (lengths in
             [length], ``theta0`` in [rad]); by default the link lengths lie within
             ``[0.05, 5]`` times the targets' size, the other lengths (coupler point, a
@@ -76,8 +81,18 @@ class PathTask:
     linkage: str | type[Linkage] = "four_bar"
     grashof: str = "any"
     pivots: dict = dataclasses.field(default_factory=dict)
+    timing_from: str = "first"
 
     def __post_init__(self):
+        if self.timing_from not in ("first", "ground"):
+            raise ModelError(
+                f"timing_from must be 'first' or 'ground', got {self.timing_from!r}", "timing_from"
+            )
+        if self.timing_from == "ground" and self.timing is None:
+            raise ModelError(
+                "timing_from 'ground' needs a timing (the crank's angle at each point)",
+                "timing_from",
+            )
         kind = self.linkage
         if isinstance(kind, str):
             if kind not in LINKAGES:
