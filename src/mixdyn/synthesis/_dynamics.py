@@ -299,11 +299,11 @@ def _centres(lk: Linkage, inertia: dict, theta2) -> jax.Array:
     e2 = jnp.stack([jnp.cos(phi2), jnp.sin(phi2)])
     crank, coupler, third = (v[1] for v in inertia.values())
     if isinstance(lk, SliderCrank):
-        (phi3, _), _, _ = slider_rates(lk, theta2)
+        phi3, _ = rod_and_slider(lk, theta2)  # the angles alone, not their rates
         e3 = jnp.stack([jnp.cos(phi3), jnp.sin(phi3)])
         last = lk.r2 * e2 + lk.r3 * e3  # the slider's pin B
     else:
-        (phi3, phi4), _, _ = link_rates(lk, theta2)
+        phi3, phi4 = link_angles(lk, theta2)
         e1 = jnp.stack([jnp.cos(lk.theta0), jnp.sin(lk.theta0)])
         last = lk.r1 * e1 + _rot(phi4, third)
     return jnp.stack([_rot(phi2, crank), lk.r2 * e2 + _rot(phi3, coupler), last])
