@@ -24,7 +24,7 @@ import pytest
 import mixdyn as md
 from fixtures import ROOT, TESTS, new_traces, paper_mechanism, pendulum, traced_now
 from mixdyn.runs import Runner
-from mixdyn.runtime import _private, _programs, _xla
+from mixdyn.runtime import _programs, _xla
 
 TS = np.linspace(0.0, 0.2, 11)
 HOLD = ("crank.phi", "coupler.phi")
@@ -548,25 +548,6 @@ def test_a_worker_with_nothing_to_draw_is_stopped_not_awaited():
     assert painter.proc is None
     assert proc.returncode is not None and proc.returncode < 0  # ended by a signal
     assert not os.path.exists(folder)
-
-
-def test_programs_are_lowered_with_one_source_line_per_operation():
-    """Under ``short_locations`` (mixdyn's exports and cache-off traces) JAX records no
-    Python traceback per operation (``callsite`` locations), only the operation's line; the
-    program is the same computation: the same value."""
-
-    def make():
-        def inner(x):
-            return jnp.sin(x) * 2.0
-
-        return lambda x: inner(x) + 1.0
-
-    plain = jax.jit(make()).lower(0.5)
-    with _private.short_locations():
-        short = jax.jit(make()).lower(0.5)
-    assert plain.as_text(debug_info=True).count("callsite(") > 0
-    assert short.as_text(debug_info=True).count("callsite(") == 0
-    assert float(short.compile()(0.5)) == float(plain.compile()(0.5)) == np.sin(0.5) * 2.0 + 1.0
 
 
 def test_imports_ahead_run_beside_the_caller_and_leave_failures_to_it():

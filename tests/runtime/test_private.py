@@ -22,22 +22,22 @@ from mixdyn.runtime import _private
 
 def test_hooks_run_only_on_checked_versions(monkeypatch):
     monkeypatch.delenv(_private.PUBLIC_ONLY_ENV, raising=False)
-    first, after = _private.KNOWN["jax"]
-    assert _private.allowed("jax", first)
-    assert not _private.allowed("jax", after)
-    assert not _private.allowed("jax", (0, 4, 30))
+    first, after = _private.KNOWN["diffrax"]
+    assert _private.allowed("diffrax", first)
+    assert not _private.allowed("diffrax", after)
+    assert not _private.allowed("diffrax", (0, 4, 30))
     monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "1")
-    assert not _private.allowed("jax", first)
+    assert not _private.allowed("diffrax", first)
 
 
 def test_public_only_names_hooks_one_by_one(monkeypatch):
     """``$MIXDYN_PUBLIC_ONLY`` given hook names sends those hooks, and only those, to
     their public paths; an unknown word means every hook, as ``1`` does."""
-    first, _ = _private.KNOWN["jax"]
-    monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "short_locations, exit_now")
-    assert not _private.allowed("jax", first, hook="short_locations")
-    assert _private.allowed("jax", first, hook="chained_floor")
-    assert _private.allowed("jax", first)  # no hook named: the version check alone
+    first, _ = _private.KNOWN["diffrax"]
+    monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "roomy, exit_now")
+    assert not _private.allowed("diffrax", first, hook="roomy")
+    assert _private.allowed("diffrax", first, hook="chained_floor")
+    assert _private.allowed("diffrax", first)  # no hook named: the version check alone
     monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "yes")
     assert all(_private.public_only(hook) for hook in _private.HOOKS)
     monkeypatch.setenv(_private.PUBLIC_ONLY_ENV, "0")

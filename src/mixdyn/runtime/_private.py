@@ -4,14 +4,17 @@ mixdyn runs on the public APIs of JAX, diffrax and CPython. A few private hooks 
 shorten the command's runs (tracing, compiling and leaving); each is used only on the
 versions of the library it was checked on (:data:`KNOWN`) and only while
 ``$MIXDYN_PUBLIC_ONLY`` is unset. Otherwise its public fallback runs, which computes the
-same results (tested both ways):
+same results (tested both ways).
+
+A hook is kept only while it saves at least 5% of the run it acts on, measured with
+``$MIXDYN_PUBLIC_ONLY=<hook>`` against all hooks on (``benchmarks/RESULTS.md``): the
+quick exit and the GIF palette act on every run of the command, the floor and the roomy
+frames on a run that traces (an empty cache; a warm run loads stored programs and traces
+nothing).
 
 ===================  ===============================================  ====================
 hook                 private part                                     public fallback
 ===================  ===============================================  ====================
-short locations      JAX's thread-local state                         JAX's default
-                     ``include_full_tracebacks_in_locations``         locations (whole
-                     (:func:`short_locations`)                        tracebacks)
 diffrax's floor      ``diffrax._integrate.eqxi``, swapped while       diffrax as it is
                      mixdyn traces one of its own solves and
                      restored after (:func:`chained_floor`)
@@ -51,7 +54,6 @@ PUBLIC_ONLY_ENV = "MIXDYN_PUBLIC_ONLY"
 #: Versions each hook was checked on: distribution -> (first, first not checked). A version
 #: outside the range takes the public path.
 KNOWN = {
-    "jax": ((0, 6), (0, 13)),  # checked: 0.10.2 (Python 3.11), 0.12.0.1 (Python 3.12, 3.13)
     "diffrax": ((0, 6), (0, 8)),  # checked: 0.7.2
     "python": ((3, 11), (3, 14)),  # CPython 3.11-3.13: frames in chunks of 16 KiB
     "pytest-xdist": ((3, 5), (3, 9)),  # checked: 3.8.0 (mixdyn's test session only)
@@ -73,7 +75,6 @@ def version(distribution: str) -> tuple[int, ...] | None:
 
 #: The hooks by name, as ``$MIXDYN_PUBLIC_ONLY`` may list them.
 HOOKS = (
-    "short_locations",
     "chained_floor",
     "roomy",
     "exit_now",
@@ -105,22 +106,6 @@ def allowed(
     installed = version(distribution) if installed is None else installed
     first, after = KNOWN[distribution]
     return installed is not None and first <= installed < after
-
-
-# --------------------------------------------------------------------------- JAX
-def short_locations():
-    """A context in which JAX records one source line per operation of a program it lowers,
-    in this thread only, not the whole Python traceback (JAX's default: up to 100 frames
-    per operation). What a program computes is unchanged; the paper example's programs
-    export 25% smaller and compile 5-10% faster. Public fallback: JAX's default."""
-    if not allowed("jax", hook="short_locations"):
-        return contextlib.nullcontext()
-    try:
-        from jax._src import config
-    except ImportError:  # pragma: no cover - a JAX laid out otherwise
-        return contextlib.nullcontext()
-    state = getattr(config, "include_full_tracebacks_in_locations", None)
-    return contextlib.nullcontext() if state is None else state(False)
 
 
 # --------------------------------------------------------------------------- diffrax
@@ -305,7 +290,6 @@ __all__ = [
     "public_only",
     "roomy",
     "shared_palette",
-    "short_locations",
     "use_roomy_frames",
     "version",
     "whole_module_scheduler",

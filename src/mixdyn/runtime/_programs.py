@@ -59,7 +59,7 @@ import jax
 from jax import export as _export
 
 from . import _executables, _files, _xla
-from ._private import roomy, short_locations
+from ._private import roomy
 
 #: The environment variable that turns every persistent cache off (``1``).
 NO_CACHE_ENV = "MIXDYN_NO_CACHE"
@@ -506,8 +506,7 @@ class _CachedJit:
             return arrays
 
         try:
-            with short_locations():
-                exported = roomy(_export.export(jax.jit(flat)), *specs)
+            exported = roomy(_export.export(jax.jit(flat)), *specs)
             blob = (bytes(exported.serialize()), out_static["skeleton"], self.options)
             pickle.dumps(blob)
         except Exception:

@@ -36,17 +36,35 @@ RECHOOSE_FACTOR = 0.5
 def _complete(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
     """Full ``(q, qd)`` from independent ``(v, vd)``: the dependent positions by Newton from
     ``q_ref`` (a fixed number of iterations, each skipped once the residual is below ``tol``:
-    a loop of static length, which reverse-mode differentiation goes through), the dependent
+    a loop of static length, which reverse-mode differentiation goes through; a sweep's
+    one program stops once all its members are closed), the dependent
     velocities from ``Phi_q qd = -Phi_t``; also the pivot ratio of the final ``Phi_qD``."""
     c = problem.c
     q = q_ref.at[I].set(v)
 
-    def body(_, q):
-        r = c(q, t)
-        dq = c.jacobian(q, t).partition(D).solve(r)
-        return jnp.where(jnp.max(jnp.abs(r), initial=0.0) > tol, q - dq, q)
+    def newton(q, r):
+        return q - c.jacobian(q, t).partition(D).solve(r)
 
-    q = jax.lax.fori_loop(0, iters, body, q)
+    def far(r):
+        return jnp.max(jnp.abs(r), initial=0.0) > tol
+
+    if c.batched:
+        # A sweep's one program (not differentiated): under ``vmap`` a ``cond`` runs its
+        # branch for every member; this loop stops once every member is closed.
+        def go_on(state):
+            k, q = state
+            return (k < iters) & far(c(q, t))
+
+        _, q = jax.lax.while_loop(go_on, lambda s: (s[0] + 1, newton(s[1], c(s[1], t))), (0, q))
+    else:
+
+        def body(_, q):
+            r = c(q, t)
+            # Once closed, the Jacobian and its solve are skipped (a ``cond``, not a
+            # ``where`` that computes them anyway): most stages close in one or two steps.
+            return jax.lax.cond(far(r), newton, lambda q, r: q, q, r)
+
+        q = jax.lax.fori_loop(0, iters, body, q)
     J = c.jacobian(q, t)
     f = J.partition(D)
     qd_i = jnp.zeros_like(q).at[I].set(vd)
