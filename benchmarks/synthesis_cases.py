@@ -7,8 +7,9 @@ where the source gives one, a design vector or a published linkage, whose error 
 here as a reference, and the published errors a case file records (``published ERROR WHO``:
 the error a paper reports for a method, with the paper, its table and the address it was read
 at). Where a source states no bounds, ``UNSTATED`` sets them. ``md.synthesize`` gets the
-targets, the timing, the bounds and, where the source asks for a crank (``grashof_crank``),
-``grashof="crank_rocker"``; its best linkage, and its best one that also meets the source's
+targets, the timing, the bounds and the source's Grashof condition: ``grashof="grashof"``
+(any link the shortest), or ``grashof="crank_rocker"`` where the source asks for a crank
+(``grashof_crank``); its best linkage, and its best one that also meets the source's
 constraints, are then measured here by a computation of their own (NumPy; the coupler point
 from the two circles' intersection on the linkage's branch, not mixdyn's program): the sum of
 squared distances from the coupler point at the linkage's input angles to the targets, the
@@ -23,10 +24,8 @@ What ``PathTask`` cannot state is said in the table, not hidden:
   prescribes the input angles from the ground link (``timing absolute``), mixdyn's problem is
   wider; the error at the source's own angles is then given too (the linkage re-measured at
   the prescribed angles);
-* ``PathTask`` states Grashof with the crank the shortest (``grashof="crank_rocker"``), asked
-  for where the source asks for a crank; it has no "Grashof with any link the shortest", so
-  a source's plain Grashof condition is checked afterwards: the table says whether the best
-  linkage meets the source's constraints and gives the best candidate that does.
+* the points' order within a turn (``order``) is checked afterwards: the table says whether
+  the best linkage meets the source's constraints and gives the best candidate that does.
 
 Run: ``python benchmarks/synthesis_cases.py [--starts 2048] [--refdata DIR] [--case NAME]``.
 """
@@ -197,7 +196,11 @@ def path_task(case: Case):
         timing = case.angles[0] * np.arange(len(case.points))
     elif case.timing == "absolute":
         timing = case.angles
-    grashof = "crank_rocker" if "grashof_crank" in case.constraints else "any"
+    grashof = "any"
+    if "grashof_crank" in case.constraints:
+        grashof = "crank_rocker"
+    elif "grashof" in case.constraints:
+        grashof = "grashof"
     return PathTask(case.points, timing=timing, bounds=bounds, grashof=grashof)
 
 

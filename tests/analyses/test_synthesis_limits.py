@@ -50,6 +50,39 @@ def test_grashof_type_of_hand_computed_linkages(lengths, kind):
         assert (np.max(gaps) <= 1e-12) == (kind == asked)
 
 
+def _some_link_turns_fully(lengths) -> bool:
+    """Some link turns a full revolution relative to a neighbour: in one of the four
+    inversions (each link as the ground), the loop closes at every angle of one of the
+    ground's two neighbours (turned as the crank)."""
+    L = list(lengths)
+    for k in range(4):
+        for step in (1, -1):
+            if _closes_over_a_turn(*(L[(k + step * j) % 4] for j in range(4))):
+                return True
+    return False
+
+
+@pytest.mark.parametrize("lengths, kind", [*CASES, ((3.0, 4.0, 2.0, 5.5), "triple_rocker")])
+def test_plain_grashof_asks_that_some_link_turns_fully(lengths, kind):
+    """``grashof="grashof"`` (any link the shortest): its one gap ``2 (s + l) - sum`` is
+    <= 0 exactly where some link turns fully relative to another (the loop closing over a
+    whole turn in one of the inversions), and where the type is not a triple rocker."""
+    gap = np.asarray(grashof_gaps(_fourbar(*lengths), "grashof"))
+    assert gap.shape == (1,)
+    s, l = min(lengths), max(lengths)
+    np.testing.assert_allclose(gap, [2 * (s + l) - sum(lengths)], atol=1e-15)
+    assert (gap[0] <= 1e-12) == _some_link_turns_fully(lengths) == (kind != "triple_rocker")
+
+
+def test_plain_grashof_of_a_slider_crank():
+    """A slider-crank's ``grashof`` gap is ``min(r2, r3) + |e| - max(r2, r3)``: the crank's
+    ``r2 + |e| - r3`` where the crank is the shorter, the coupler's where it is (by hand)."""
+    for r2, r3, e, gap in [(1.0, 3.0, 1.5, -0.5), (1.0, 3.0, -2.5, 0.5), (3.0, 1.0, 1.5, -0.5)]:
+        sc = SliderCrank.from_vector(np.array([r2, r3, e, 0, 0, 0, 0, 0]), 1.0)
+        np.testing.assert_allclose(grashof_gaps(sc, "grashof"), [gap], atol=1e-15)
+    PathTask(np.eye(3)[:, :2] * [1.0, 2.0], linkage="slider_crank", grashof="grashof")
+
+
 def test_grashof_gaps_by_hand():
     """The triple rocker (4, 2, 2, 2.5) asked to be a crank-rocker: ``r2 + r_j - r_k - r_l``
     for j = ground, coupler, rocker is 1.5, -2.5, -1.5; as a double crank ``r1 + r_j - r_k -
@@ -144,7 +177,7 @@ def test_a_crank_rocker_search_returns_only_crank_rockers_that_turn_fully():
     """Unconstrained, the best four-bar through the triple rocker's timed points is not a
     crank-rocker (it is the triple rocker, error ~0); asked for crank-rockers, every kept
     candidate is one (Grashof, its crank the shortest link, by hand) and its loop closes at
-    360 crank angles over a whole turn."""
+    360 crank angles over a whole turn; asked for Grashof alone, every kept one is Grashof."""
     points = _targets()
     free = synthesize(PathTask(points, timing=THETA), starts=256, chunk=256)
     best = free.best.fourbar
@@ -159,6 +192,12 @@ def test_a_crank_rocker_search_returns_only_crank_rockers_that_turn_fully():
         assert s[0] + s[3] <= s[1] + s[2] and r[1] == s[0]
         assert _assembles_over_a_turn(c.fourbar)
     assert out.best.error > free.best.error
+    plain = synthesize(PathTask(points, timing=THETA, grashof="grashof"), starts=256, chunk=256)
+    assert len(plain.candidates) >= 2  # Grashof, any link the shortest (s + l <= p + q)
+    for c in plain.candidates:
+        s = np.sort([float(getattr(c.fourbar, n)) for n in ("r1", "r2", "r3", "r4")])
+        assert s[0] + s[3] <= s[1] + s[2] * (1 + 1e-9)
+    assert plain.best.error > free.best.error
 
 
 @pytest.mark.slow  # long: run by CI's slow set (the search compiles its program)

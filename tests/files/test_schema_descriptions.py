@@ -103,7 +103,7 @@ PROPERTIES = {
 # run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
 # regions (issue 34); and with a synthesis run's six-bar linkages (issue 34); and with a
 # synthesis run's shape-only error (shape, harmonics, sense; issue 34).
-STRIPPED_SHA256 = "118ffaf02621dc718ecf876d55242aeb1e749fdd93a8ccbf94e1a08aaf1a1b34"
+STRIPPED_SHA256 = "4c7430c79a984838dd5856fee07e5ac75cf1b2a544ea5ea9ff7a1504cf800ac8"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -54,6 +54,8 @@ def test_a_motion_and_a_function_take_the_grashof_type():
     np.testing.assert_allclose(task.pivots["O4"], [[0.0, 0.3], [-0.2, 0.0]], rtol=1e-15)
     function = _text("    grashof: crank_rocker", points=FUNCTION)
     assert Runner(mio.reads(function, "f.yaml")).plans["path"].task.grashof == "crank_rocker"
+    plain = _text("    linkage: slider_crank", "    grashof: grashof")
+    assert Runner(mio.reads(plain, "p.yaml")).plans["path"].task.grashof == "grashof"
 
 
 @pytest.mark.parametrize(

@@ -1173,11 +1173,10 @@ class SynthesisRunSpec(Spec):
     pivot) [length], ``theta0`` [rad]. Default: lengths 0.05-5 target sizes."""
     min_transmission: Scalar = 0.0
     """The least transmission angle along the motion [rad], e.g. ``40 deg``. Default 0."""
-    grashof: Literal["any", "crank_rocker", "double_crank"] = "any"
-    """The Grashof type: ``crank_rocker`` (the crank the shortest link of a Grashof four-bar:
-    it turns fully; a slider-crank's crank turns fully, ``r2 + |e| <= r3``), ``double_crank``
-    (the ground the shortest; four-bars) or ``any`` (default: the loop closes along the
-    motion)."""
+    grashof: Literal["any", "grashof", "crank_rocker", "double_crank"] = "any"
+    """The Grashof type: ``crank_rocker`` (the crank the shortest link: it turns fully; a
+    slider-crank's ``r2 + |e| <= r3``), ``double_crank`` (the ground the shortest),
+    ``grashof`` (any link the shortest, ``s + l <= p + q``) or ``any`` (default)."""
     pivots: dict[str, SynthesisPivotSpec] = Field(default_factory=dict)
     """Rectangles in which the ground pivots lie: ``O2`` (the crank's) and a four-bar's ``O4``
     (the rocker's), e.g. ``{O4: {x: [400 mm, 600 mm], y: [-100 mm, 0 mm]}}``. Default none."""

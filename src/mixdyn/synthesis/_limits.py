@@ -9,6 +9,8 @@ relative to every other. The types a task may ask for:
   revolution, the rocker oscillates;
 * ``"double_crank"`` (drag link): Grashof with the ground ``r1`` the shortest: crank and rocker
   both turn fully;
+* ``"grashof"``: Grashof with any link the shortest, ``s + l <= p + q`` (the literature's
+  plain Grashof condition): some link turns fully relative to the others;
 * ``"any"`` (the default): no condition; the loop has only to close along the traversed
   motion (the search's closure check).
 
@@ -19,7 +21,9 @@ shortest (a tie, ``s + l = p + q`` or two links equally short, counts as met: a 
 linkage). A slider-crank's crank turns fully where its rod reaches the slide from every crank
 angle, ``r2 + |e| <= r3`` (``r2 + e <= r3`` and ``r2 - e <= r3``): that is what
 ``"crank_rocker"`` asks of it (the slider reciprocates as a rocker would); it has no double
-crank. Each condition is a gap ``g <= 0`` [length] (:func:`grashof_gaps`).
+crank. ``"grashof"`` is one gap, ``2 (s + l) - (r1 + r2 + r3 + r4)``; a slider-crank's is
+``min(r2, r3) + |e| - max(r2, r3)`` (its crank, or its coupler, turns fully). Each condition
+is a gap ``g <= 0`` [length] (:func:`grashof_gaps`).
 
 **Ground-pivot regions** (``pivots=``): rectangles ``{"O2": ((x_lo, x_hi), (y_lo, y_hi)),
 "O4": (...)}`` [length] in which a ground pivot must lie: ``O2 = (x0, y0)``, the crank's pivot
@@ -49,7 +53,7 @@ LIMIT_MARGIN = 1e-3
 LIMIT_PENALTY = 30.0
 
 #: The Grashof types a task may ask for.
-GRASHOF = ("any", "crank_rocker", "double_crank")
+GRASHOF = ("any", "grashof", "crank_rocker", "double_crank")
 
 #: A four-bar's links by name, in the order of the shortest-link types below.
 _LINKS = ("r1", "r2", "r3", "r4")
@@ -76,9 +80,18 @@ def _shortest_gaps(lengths, shortest: int) -> jax.Array:
 def grashof_gaps(lk, grashof: str) -> jax.Array:
     """(..., K) the gaps [length] of ``lk``'s Grashof conditions (``<= 0`` where met; the
     module's documentation): K = 3 for a four-bar's ``"crank_rocker"`` or
-    ``"double_crank"``, 2 for a slider-crank's ``"crank_rocker"``, 0 for ``"any"``."""
+    ``"double_crank"``, 2 for a slider-crank's ``"crank_rocker"``, 1 for ``"grashof"``, 0
+    for ``"any"``."""
     if grashof == "any":
         return jnp.zeros((*jnp.shape(lk.x0), 0))
+    if grashof == "grashof":
+        if isinstance(lk, SliderCrank):
+            gap = jnp.minimum(lk.r2, lk.r3) + jnp.abs(lk.e) - jnp.maximum(lk.r2, lk.r3)
+        else:
+            lengths = jnp.stack([getattr(lk, n) for n in _LINKS], axis=-1)
+            total = jnp.sum(lengths, axis=-1)
+            gap = 2.0 * (jnp.min(lengths, axis=-1) + jnp.max(lengths, axis=-1)) - total
+        return gap[..., None]
     if isinstance(lk, SliderCrank):
         return jnp.stack([lk.r2 + lk.e - lk.r3, lk.r2 - lk.e - lk.r3], axis=-1)
     shortest = "r2" if grashof == "crank_rocker" else "r1"
@@ -149,10 +162,10 @@ def check_grashof(linkage: type, grashof: str) -> None:
         raise ModelError(f"grashof must be one of {', '.join(GRASHOF)}, got {grashof!r}", "grashof")
     if grashof == "any":
         return
-    if issubclass(linkage, SliderCrank) and grashof != "crank_rocker":
+    if issubclass(linkage, SliderCrank) and grashof == "double_crank":
         raise ModelError(
             "a slider-crank has no double crank: give grashof 'crank_rocker' (its crank turns "
-            "fully: r2 + |e| <= r3) or 'any'",
+            "fully: r2 + |e| <= r3), 'grashof' or 'any'",
             "grashof",
         )
     if not issubclass(linkage, FourBar | SliderCrank):

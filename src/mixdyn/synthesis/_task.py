@@ -67,8 +67,9 @@ class PathTask:
         grashof: the Grashof type asked for (:mod:`._limits`): ``"any"`` (the default: the
             loop has only to close along the traversed motion), ``"crank_rocker"`` (the crank
             the shortest link of a Grashof four-bar: it turns a full revolution; a
-            slider-crank's crank turns fully, ``r2 + |e| <= r3``) or ``"double_crank"`` (the
-            ground the shortest; four-bars only).
+            slider-crank's crank turns fully, ``r2 + |e| <= r3``), ``"double_crank"`` (the
+            ground the shortest; four-bars only) or ``"grashof"`` (any link the shortest,
+            ``s + l <= p + q``; a slider-crank's ``min(r2, r3) + |e| <= max(r2, r3)``).
         pivots: ``name -> ((x_lo, x_hi), (y_lo, y_hi))`` [length]: rectangles in which the
             ground pivots lie, ``"O2"`` (the crank's pivot; the bounds of ``x0``, ``y0``,
             which are then not given) and a four-bar's ``"O4"``; held as tuples of floats.
@@ -255,7 +256,7 @@ class FunctionTask:
             ground link (default ``(0.05, 20)``).
         min_transmission: the least transmission angle from the first input to the last [rad].
         grashof: the Grashof type asked for, as for a :class:`PathTask`: ``"any"`` (the
-            default), ``"crank_rocker"`` or ``"double_crank"``.
+            default), ``"grashof"``, ``"crank_rocker"`` or ``"double_crank"``.
     """
 
     inputs: np.ndarray
