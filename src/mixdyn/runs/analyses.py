@@ -377,12 +377,29 @@ def _report(runner, plan: Plan, result, seconds: float, outputs, figures: list):
 # --------------------------------------------------------------------------- figures
 def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
     """Hand the plots and animation a run asks for to ``painter`` (the data is prepared here:
-    columns, references, the scene; the HTML page is written here)."""
+    columns, references, the scene; the HTML player is written here, after). The animation
+    goes first: the longest task, it then has a channel of the worker to itself while the
+    plots share the other."""
     from ..io.quantities import factor
     from ..io.results import in_units
     from ..units import engineering
     from ..viz import html, movie_data, result_columns
 
+    a = plan.spec.animation
+    pages = []  # the player's HTML pages, written here once the worker has its tasks
+    if a is not None:
+        path = folder / a.file
+        if path.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
+            raise ValueError(
+                "writing MP4 needs ffmpeg, which is not installed; write a .gif or .html"
+            )
+        if path.suffix.lower() == ".html":
+            pages.append(path)
+        else:
+            data = movie_data(result, frames=a.frames, trace=a.trace, forces=a.forces)
+            painter.draw("movie", data, path, fps=a.fps)
+        if a.html:
+            pages.append(path.with_suffix(".html"))
     for k, p in enumerate(runner.plots(plan)):
         try:
             cols, units = result_columns(result, [*p.columns, p.x])
@@ -408,40 +425,18 @@ def _figures(runner, plan: Plan, result, folder: pathlib.Path, painter) -> None:
             reference=reference,
             x=p.x,
         )
-    a = plan.spec.animation
-    if a is not None:
-        path = folder / a.file
-        if path.suffix.lower() == ".mp4" and shutil.which("ffmpeg") is None:
-            raise ValueError(
-                "writing MP4 needs ffmpeg, which is not installed; write a .gif or .html"
+    for page in pages:
+        painter.done(
+            html(
+                result,
+                page,
+                fps=a.fps,
+                trace=a.trace,
+                forces=a.forces,
+                columns=a.plot,
+                plot_x=a.plot_x,
             )
-        if path.suffix.lower() == ".html":
-            painter.done(
-                html(
-                    result,
-                    path,
-                    fps=a.fps,
-                    trace=a.trace,
-                    forces=a.forces,
-                    columns=a.plot,
-                    plot_x=a.plot_x,
-                )
-            )
-        else:
-            data = movie_data(result, frames=a.frames, trace=a.trace, forces=a.forces)
-            painter.draw("movie", data, path, fps=a.fps)
-        if a.html:
-            painter.done(
-                html(
-                    result,
-                    path.with_suffix(".html"),
-                    fps=a.fps,
-                    trace=a.trace,
-                    forces=a.forces,
-                    columns=a.plot,
-                    plot_x=a.plot_x,
-                )
-            )
+        )
 
 
 def _check_reference(runner, plot: s.PlotSpec, r, path) -> None:

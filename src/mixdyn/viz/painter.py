@@ -22,9 +22,9 @@ class Painter:
     :meth:`results` waits for all of them in order and raises the first failure.
     """
 
-    #: An animation's drawing time in plots (the paper's example: 81 frames ~0.34 s, a
-    #: plot ~0.11 s).
-    MOVIE_COST = 3
+    #: An animation's drawing time in plots (the paper's example: 81 frames ~0.5 s, a
+    #: plot ~0.1 s, measured in the worker of a warm run).
+    MOVIE_COST = 5
     #: The drawing time of a task of each kind, in plots (1 where not given).
     COSTS: ClassVar[dict[str, int]] = {"movie": MOVIE_COST}
 
