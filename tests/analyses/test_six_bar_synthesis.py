@@ -1,5 +1,5 @@
-"""Six-bar path generation (mixdyn.synthesis, ``linkage="stephenson3"`` and ``"watt1"``)
-against independent truths.
+"""Six-bar path generation (mixdyn.synthesis, ``linkage="stephenson3"``, ``"watt1"`` and
+``"watt2"``) against independent truths.
 
 * the closed-form assembly against its loop-closure equations on every branch (the links'
   lengths, the pins where the angles put them, the sides the branches name, the transmission
@@ -29,6 +29,7 @@ from mixdyn.synthesis import (
     PathTask,
     StephensonIII,
     WattI,
+    WattII,
     coupler_curve,
     motor_torque,
     reactions,
@@ -38,14 +39,16 @@ from mixdyn.synthesis import (
 )
 
 # A Grashof crank-rocker (ground 1, crank 0.3, coupler 1.1, rocker 0.9) with a dyad that
-# closes over the whole turn on every branch [m, rad]: r5, r6, D in the coupler, then O6 in
-# the ground link's frame (Stephenson III) or F in the rocker's (Watt I), the coupler point
-# on the tracer, the crank's pivot and the ground link's angle.
+# closes over the whole turn on every branch [m, rad]: r5, r6, D in the coupler (in the
+# rocker: Watt II), then O6 in the ground link's frame (Stephenson III, Watt II) or F in the
+# rocker's (Watt I), the coupler point on the tracer, the crank's pivot and the ground link's
+# angle.
 HEAD = [1.0, 0.3, 1.1, 0.9, 1.2, 1.0, 0.6, 0.4]
 TAIL = [0.5, 0.2, 0.1, -0.2, 0.3]
 CASES = {
     StephensonIII: np.array([*HEAD, 1.5, 1.2, *TAIL]),
     WattI: np.array([*HEAD, 0.5, 0.3, *TAIL]),
+    WattII: np.array([*HEAD, 1.0, 1.3, *TAIL]),
 }
 
 
@@ -70,7 +73,7 @@ def _assembly(lk, theta):
     return joints, jax.vmap(lk.transmission_cosines)(theta), coupler_curve(lk, theta)
 
 
-@pytest.mark.parametrize("cls", [StephensonIII, WattI])
+@pytest.mark.parametrize("cls", [StephensonIII, WattI, WattII])
 def test_closed_form_closes_both_loops_on_every_branch(cls):
     """Over a crank turn, on each of the four branch codes: |AB| = r3, |O4 B| = r4,
     |DE| = r5, |XE| = r6, each pin where its link's angle puts it (1e-12); D, the
@@ -93,8 +96,11 @@ def test_closed_form_closes_both_loops_on_every_branch(cls):
         np.testing.assert_allclose(j["A"], a, atol=1e-12)
         np.testing.assert_allclose(j["B"], a + n["r3"] * _unit(j["phi3"]), atol=1e-12)
         np.testing.assert_allclose(j["B"], o4 + n["r4"] * _unit(j["phi4"]), atol=1e-12)
-        d = a + _rot(j["phi3"], (n["dx"], n["dy"]))
-        if cls is StephensonIII:
+        if cls is WattII:  # D on the rocker
+            d = o4 + _rot(j["phi4"], (n["dx"], n["dy"]))
+        else:
+            d = a + _rot(j["phi3"], (n["dx"], n["dy"]))
+        if cls in (StephensonIII, WattII):
             x = np.broadcast_to(o2 + _rot(np.array([n["theta0"]]), (n["gx"], n["gy"]))[0], d.shape)
         else:
             x = o4 + _rot(j["phi4"], (n["fx"], n["fy"]))
@@ -130,6 +136,7 @@ def _curve(cls):
         (WattI, False),  # the follower's pivot on the rocker: both loops' rules chained
         pytest.param(WattI, True, marks=pytest.mark.slow),  # long: run by CI's slow set
         pytest.param(StephensonIII, True, marks=pytest.mark.slow),  # long: CI's slow set
+        pytest.param(WattII, False, marks=pytest.mark.slow),  # long: CI's slow set
     ],
 )
 def test_derivatives_are_finite_differences_and_an_open_dyad_is_finite(cls, reverse):
@@ -168,7 +175,7 @@ def test_a_six_bars_task_is_checked_by_its_numbers():
 
 
 @pytest.mark.slow  # long: run by CI's slow set (compiles the model's kinematic analysis)
-@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0)])
+@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0), (WattII, 1.0)])
 def test_closed_form_is_mixdyns_kinematic_analysis(cls, code):
     """Over a crank turn the built model's kinematic analysis (Newton's assembly of the five
     links and seven revolute joints) puts tracer.P where the closed form puts the coupler
@@ -191,7 +198,7 @@ FLOATING = Masses(density=2.0, payload=0.3, gravity=(0.0, 0.0))
 
 
 @pytest.mark.slow  # long: run by CI's slow set (compiles the models' inverse analyses)
-@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0)])
+@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0), (WattII, -3.0)])
 def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
     """The built model with masses run by md.inverse over a crank turn: the motor torque of
     the energy balance and the reactions' torque equal its driver effort, each joint's
@@ -208,7 +215,7 @@ def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
     assert np.max(np.abs(tau)) > 10.0  # a real load
     assert np.max(np.abs(inv["motor"] - tau)) < 1e-9 * np.max(np.abs(tau))
     assert np.max(np.abs(torque - tau)) < 1e-9 * np.max(np.abs(tau))
-    names = ("O2", "A", "B", "O4", "D", "E", "O6" if cls is StephensonIII else "F")
+    names = ("O2", "A", "B", "O4", "D", "E", "F" if cls is WattI else "O6")
     for k, name in enumerate(names):
         want = np.stack([inv[f"{name}.Fx"], inv[f"{name}.Fy"]], axis=1)
         assert np.max(np.abs(forces[:, k] - want)) < 1e-9 * np.max(np.abs(forces))
@@ -226,7 +233,7 @@ def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
 
 
 @pytest.mark.slow  # long: run by CI's slow set (each search compiles its programs, ~10 s)
-@pytest.mark.parametrize("cls", [StephensonIII, WattI])
+@pytest.mark.parametrize("cls", [StephensonIII, WattI, WattII])
 def test_search_recovers_a_known_six_bars_curve(cls, tmp_path):
     """Eight points of the fixture's coupler curve with their input angles, every number
     bounded within 20 % of the fixture's (a designer's box): the best six-bar passes the

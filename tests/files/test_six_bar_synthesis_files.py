@@ -17,7 +17,7 @@ from mixdyn.cli import app
 from mixdyn.io import FileError
 from mixdyn.runs import Runner
 from mixdyn.runs.report import report
-from mixdyn.synthesis import Candidate, StephensonIII, WattI, coupler_curve
+from mixdyn.synthesis import Candidate, StephensonIII, WattI, WattII, coupler_curve
 
 HEAD = "mixdyn: 1\nunits: {length: mm, mass: kg, time: s}\nruns:\n  - name: path\n"
 
@@ -32,9 +32,10 @@ def _line(text: str, marker: str) -> int:
 
 
 @pytest.mark.parametrize("name, cls, number", [("stephenson3", StephensonIII, "gx"),
-                                               ("watt1", WattI, "fx")])  # fmt: skip
+                                               ("watt1", WattI, "fx"),
+                                               ("watt2", WattII, "dy")])  # fmt: skip
 def test_the_linkage_and_its_bounds_are_read_in_si(name, cls, number, tmp_path):
-    """``linkage: stephenson3`` / ``watt1``: the task's linkage, its dyad pivot's bound in SI
+    """``linkage: stephenson3`` / ``watt1`` / ``watt2``: the task's linkage, a bound in SI
     (mm -> m, by hand), its masses and torque weight read; ``mixdyn check`` names the
     linkage."""
     text = _text(

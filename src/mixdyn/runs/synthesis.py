@@ -3,13 +3,12 @@ or carry its coupler through poses, or a four-bar to generate a function
 (:func:`mixdyn.synthesize`).
 
 A ``synthesis`` run describes the task (the linkage, ``four_bar``, ``slider_crank``,
-``stephenson3`` or ``watt1``, the target points, the timing, bounds of the linkage's numbers,
-the least transmission angle), how the links weigh and how the motor torque counts, and the
-search (starts, seed); or, with
-``motion:``, the coupler's poses instead of points (:mod:`.synthesis_motion`); or, with
-``function:``, a function task (:mod:`.synthesis_function`). It needs no mechanism in the
-file: a file whose runs are all synthesis runs may have no bodies (``mixdyn check`` then
-reports no mechanism).
+``stephenson3``, ``watt1`` or ``watt2``, the target points, the timing, bounds of the
+linkage's numbers, the least transmission angle), how the links weigh and how the motor
+torque counts, and the search (starts, seed); or, with ``motion:``, the coupler's poses
+instead of points (:mod:`.synthesis_motion`); or, with ``function:``, a function task
+(:mod:`.synthesis_function`). It needs no mechanism in the file: a file whose runs are all
+synthesis runs may have no bodies (``mixdyn check`` then reports no mechanism).
 Its numbers are read with their units and handed to the search in SI (m, kg, s), the unit
 system of the model file it writes.
 

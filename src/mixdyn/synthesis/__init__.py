@@ -10,7 +10,8 @@ that generate a function, searched by gradients, with dynamics in a path's objec
 * :mod:`._sixbar` — what the six-bars share: a four-bar and a dyad closed by a second
   circle intersection, the coupler point on the dyad; :mod:`._stephenson`
   (:class:`StephensonIII`, ``linkage="stephenson3"``) and :mod:`._watt` (:class:`WattI`,
-  ``linkage="watt1"``), searched for a path or a motion, with their dynamics as a four-bar's;
+  ``linkage="watt1"``; :class:`WattII`, ``linkage="watt2"``), searched for a path or a
+  motion, with their dynamics as a four-bar's;
 * :mod:`._limits` — the Grashof type (:func:`grashof_type`; a task's ``grashof``) and the
   ground pivots' regions (a task's ``pivots``) as gaps: penalties and exact checks;
 * :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque, the shaking
@@ -57,7 +58,7 @@ from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
 from ._stephenson import STEPHENSON_NAMES, StephensonIII
 from ._synthesize import synthesize
 from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
-from ._watt import WATT_NAMES, WattI
+from ._watt import WATT2_NAMES, WATT_NAMES, WattI, WattII
 from .build import (
     four_bar_model,
     linkage_model,
@@ -72,6 +73,7 @@ __all__ = [
     "NAMES",
     "SLIDER_NAMES",
     "STEPHENSON_NAMES",
+    "WATT2_NAMES",
     "WATT_NAMES",
     "Candidate",
     "FourBar",
@@ -91,6 +93,7 @@ __all__ = [
     "StephensonIII",
     "Synthesis",
     "WattI",
+    "WattII",
     "chebyshev",
     "coupler_curve",
     "coupler_point",

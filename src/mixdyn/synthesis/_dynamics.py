@@ -3,9 +3,10 @@
 A candidate's links are bars of one linear density (kg per unit length): the crank ``O2 A``,
 the rocker ``O4 B`` (a four-bar's) and the coupler (a slider-crank's rod), a rigid triangle of
 bars ``A B``, ``A C``, ``B C``, with an optional payload (a point mass) at the coupler point
-``C``; a slider-crank's slider is a point mass at its pin ``B``; a six-bar's coupler is the
-triangle ``A B D``, a Watt I's rocker the triangle ``O4 B F``, its tracer the triangle
-``D E C`` with the payload, its follower a bar. Their masses, centres of mass and inertias
+``C``; a slider-crank's slider is a point mass at its pin ``B``; a six-bar's coupler and
+rocker are the triangles of the points they carry (``A B D`` the coupler where it carries
+``D``, ``O4 B F`` a Watt I's rocker, ``O4 B D`` a Watt II's; a bar otherwise), its tracer the
+triangle ``D E C`` with the payload, its follower a bar. Their masses, centres of mass and inertias
 follow the candidate's dimensions, so that a search can trade length for torque.
 
 The motor torque of a crank turned at a constant speed ``Omega`` without friction is the
@@ -63,7 +64,7 @@ from ._linkage import Linkage, guarded
 from ._sixbar import SixBar
 from ._slidercrank import SliderCrank, rod_and_slider
 from ._stephenson import StephensonIII
-from ._watt import WattI
+from ._watt import WattI, WattII
 
 
 @dataclasses.dataclass(frozen=True)
@@ -139,21 +140,26 @@ def _plate(length, c, density, payload):
 
 
 def _six_bar_inertia(sb: SixBar, masses: Masses, crank) -> dict[str, tuple]:
-    """A six-bar's links (:func:`link_inertia`): the coupler the triangle ``A B D``, a
-    Watt I's rocker the triangle ``O4 B F`` (a Stephenson III's a bar), the tracer the
-    triangle ``D E C`` with the payload at ``C``, the follower a bar; the frames as the
-    model's (:func:`~.build.six_bar_model`: from ``A``, ``O4``, ``D``, ``X`` along their
-    links)."""
+    """A six-bar's links (:func:`link_inertia`): the coupler and the rocker each the triangle
+    of its two pins and the third point it carries (``D``, or a Watt I rocker's ``F``), or a
+    bar where it carries none; the tracer the triangle ``D E C`` with the payload at ``C``,
+    the follower a bar; the frames as the model's (:func:`~.build.six_bar_model`: from
+    ``A``, ``O4``, ``D``, ``X`` along their links)."""
     z, ex = jnp.zeros(2), jnp.array([1.0, 0.0])
     rho = masses.density
-    if isinstance(sb, WattI):
-        rocker = _plate(sb.r4, jnp.stack([sb.fx, sb.fy]), rho, 0.0)
-    else:
-        rocker = _bars([(z, sb.r4 * ex)], rho)
+    third = {sb.DYAD_BODY: jnp.stack([sb.dx, sb.dy])}
+    if sb.PIVOT_BODY == "rocker":
+        third["rocker"] = jnp.stack([sb.fx, sb.fy])
+
+    def link(name, length):
+        if name in third:
+            return _plate(length, third[name], rho, 0.0)
+        return _bars([(z, length * ex)], rho)
+
     return {
         "crank": crank,
-        "coupler": _plate(sb.r3, jnp.stack([sb.dx, sb.dy]), rho, 0.0),
-        "rocker": rocker,
+        "coupler": link("coupler", sb.r3),
+        "rocker": link("rocker", sb.r4),
         "tracer": _plate(sb.r5, jnp.stack([sb.rcx, sb.rcy]), rho, masses.payload),
         "follower": _bars([(z, sb.r6 * ex)], rho),
     }
@@ -284,6 +290,7 @@ _RATES = {
     SliderCrank: _slider_crank_rates,
     StephensonIII: _six_bar_rates,
     WattI: _six_bar_rates,
+    WattII: _six_bar_rates,
 }
 
 #: The linkage types whose dynamics are computed here.
@@ -322,16 +329,28 @@ def _shaking_one(lk: Linkage, inertia: dict, _grav, theta2, speed):
     return force, moment
 
 
-#: A six-bar's joints but the follower's other end (the bodies: crank, coupler, rocker,
-#: tracer, follower).
+#: A six-bar's four-bar joints (the bodies: crank, coupler, rocker, tracer, follower).
 _SIX_BAR_JOINTS = (
     ("O2", -1, 0, False),
     ("A", 0, 1, False),
     ("B", 1, 2, False),
     ("O4", -1, 2, False),
-    ("D", 1, 3, False),
-    ("E", 3, 4, False),
 )
+
+
+def _six_bar_joints(cls: type[SixBar]) -> tuple:
+    """A six-bar type's joints (:data:`JOINTS`): the four-bar's, ``D`` (on the coupler or
+    the rocker), ``E``, and the follower's other end (``O6`` on the ground, ``F`` on the
+    rocker)."""
+    body = {"ground": -1, "coupler": 1, "rocker": 2}
+    end = "O6" if cls.PIVOT_BODY == "ground" else "F"
+    return (
+        *_SIX_BAR_JOINTS,
+        ("D", body[cls.DYAD_BODY], 3, False),
+        ("E", 3, 4, False),
+        (end, body[cls.PIVOT_BODY], 4, False),
+    )
+
 
 #: Each linkage type's joints for :func:`reactions`: ``(name, body before, body after,
 #: slide)`` with the bodies' places in :func:`link_inertia` (-1: the ground) and ``slide``
@@ -344,8 +363,9 @@ JOINTS = {
         ("B", 1, 2, False),
         ("slide", -1, 2, True),
     ),
-    StephensonIII: (*_SIX_BAR_JOINTS, ("O6", -1, 4, False)),
-    WattI: (*_SIX_BAR_JOINTS, ("F", 2, 4, False)),
+    StephensonIII: _six_bar_joints(StephensonIII),
+    WattI: _six_bar_joints(WattI),
+    WattII: _six_bar_joints(WattII),
 }
 
 

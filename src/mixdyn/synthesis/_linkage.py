@@ -12,8 +12,8 @@ coupler point is ``C = A + R(phi3) (rcx, rcy)`` in the coupler's frame (x from t
 ``A`` towards the coupler's other pin ``B``).
 
 Final subclasses: :class:`~._fourbar.FourBar`, :class:`~._slidercrank.SliderCrank`, and the
-six-bars of :mod:`._sixbar` (:class:`~._stephenson.StephensonIII`, :class:`~._watt.WattI`),
-whose coupler is the link that carries the coupler point.
+six-bars of :mod:`._sixbar` (:class:`~._stephenson.StephensonIII`, :class:`~._watt.WattI`,
+:class:`~._watt.WattII`), whose coupler is the link that carries the coupler point.
 """
 
 from __future__ import annotations

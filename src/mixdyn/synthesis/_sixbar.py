@@ -6,10 +6,13 @@ Notation (as :mod:`._fourbar`'s for the four-bar): the ground pivot ``O2 = (x0, 
 ground link ``r1`` at ``theta0`` (``O4 = O2 + r1 e^{i theta0}``), the crank ``r2`` turning by
 ``theta2`` from the ground link, the coupler ``r3`` from ``A`` to ``B``, the rocker ``r4``
 from ``O4`` to ``B``, their angles ``phi3``, ``phi4`` from the four-bar's closed form; the
-coupler's point ``D = A + R(phi3) (dx, dy)`` (the coupler's frame: x from ``A`` towards
-``B``). The dyad's links: the tracer ``r5`` from ``D`` to ``E`` (angle ``phi5``) and the
-follower ``r6`` from ``X`` to ``E`` (angle ``phi6``), ``X`` the subclass's: a ground pivot
-(:class:`~._stephenson.StephensonIII`) or a point of the rocker (:class:`~._watt.WattI`).
+dyad's start ``D`` on the link :attr:`SixBar.DYAD_BODY` names: the coupler's point ``D = A +
+R(phi3) (dx, dy)`` (the coupler's frame: x from ``A`` towards ``B``), or the rocker's ``D =
+O4 + R(phi4) (dx, dy)`` (:class:`~._watt.WattII`; x from ``O4`` towards ``B``). The dyad's
+links: the tracer ``r5`` from ``D`` to ``E`` (angle ``phi5``) and the follower ``r6`` from
+``X`` to ``E`` (angle ``phi6``), ``X`` on the link :attr:`SixBar.PIVOT_BODY` names: a ground
+pivot (:class:`~._stephenson.StephensonIII`, :class:`~._watt.WattII`) or a point of the
+rocker (:class:`~._watt.WattI`).
 The coupler point (the path) rides on the tracer: ``C = D + R(phi5) (rcx, rcy)`` (x from
 ``D`` towards ``E``); :meth:`SixBar.coupler_angle` is the tracer's angle ``phi5``.
 
@@ -57,6 +60,10 @@ class SixBar(Linkage):
 
     #: The branch codes ``b4 + 2 b6`` the search spreads its starts over.
     BRANCHES: ClassVar[tuple[float, ...]] = (3.0, 1.0, -1.0, -3.0)
+    #: The four-bar's link that carries the dyad's start ``D``: ``"coupler"`` or ``"rocker"``.
+    DYAD_BODY: ClassVar[str] = "coupler"
+    #: The link that carries the follower's other end ``X``: ``"ground"`` or ``"rocker"``.
+    PIVOT_BODY: ClassVar[str] = "ground"
 
     def loop_branches(self) -> tuple[jax.Array, jax.Array]:
         """``(b4, b6)``, each +1 or -1: the four-bar's and the dyad's branch."""
@@ -67,6 +74,14 @@ class SixBar(Linkage):
         """The four-bar's ground pivots ``O2`` and ``O4``, each (2,) [length]."""
         o2 = self.crank_pivot()
         return o2, o2 + self.r1 * jnp.stack([jnp.cos(self.theta0), jnp.sin(self.theta0)])
+
+    def dyad_start(self, a, o4, phi3, phi4) -> jax.Array:
+        """``D`` (2,) [length] from the crank pin ``a``, the pivot ``o4`` and the coupler's
+        and rocker's angles: on the link :attr:`DYAD_BODY` names, at ``(dx, dy)`` in its
+        frame."""
+        if self.DYAD_BODY == "rocker":
+            return o4 + _turned(phi4, self.dx, self.dy)
+        return a + _turned(phi3, self.dx, self.dy)
 
     @abc.abstractmethod
     def dyad_pivot(self, phi4) -> jax.Array:
@@ -80,7 +95,7 @@ class SixBar(Linkage):
         b4, b6 = self.loop_branches()
         a = self.crank_pin(theta2)
         phi3, phi4 = _dyad(a, o4, self.r3, self.r4, b4)
-        d = a + _turned(phi3, self.dx, self.dy)
+        d = self.dyad_start(a, o4, phi3, phi4)
         x = self.dyad_pivot(phi4)
         phi5, phi6 = _dyad(d, x, self.r5, self.r6, b6)
         e = d + self.r5 * jnp.stack([jnp.cos(phi5), jnp.sin(phi5)])
@@ -132,4 +147,50 @@ class SixBar(Linkage):
         return jnp.where(jnp.abs(c[0]) >= jnp.abs(c[1]), c[0], c[1])
 
 
-__all__ = ["SixBar"]
+class GroundPivotSixBar(SixBar):
+    """A six-bar whose follower ends at a third ground pivot ``O6 = O2 + R(theta0) (gx, gy)``
+    (abstract: :class:`~._stephenson.StephensonIII`, ``D`` on the coupler, and
+    :class:`~._watt.WattII`, ``D`` on the rocker): its fields, in the order of both types'
+    ``NAMES``.
+
+    Attributes:
+        r1, r2, r3, r4: ground, crank, coupler and rocker lengths [length].
+        r5, r6: the tracer ``D E`` and the follower ``O6 E`` [length].
+        dx, dy: ``D`` in the frame of the link that carries it (:attr:`SixBar.DYAD_BODY`; x
+            along ``A -> B`` on the coupler, ``O4 -> B`` on the rocker) [length].
+        gx, gy: ``O6`` from ``O2`` in the ground link's frame (x along ``O2 -> O4``) [length].
+        rcx, rcy: the coupler point in the tracer's frame (x along ``D -> E``) [length].
+        x0, y0: the crank's ground pivot ``O2`` [length].
+        theta0: the ground link's angle ``O2 -> O4`` [rad].
+        branch: ``b4 + 2 b6`` (3, 1, -1 or -3): the two loops' branches.
+    """
+
+    NAMES: ClassVar[tuple[str, ...]] = (
+        "r1", "r2", "r3", "r4", "r5", "r6", "dx", "dy", "gx", "gy", "rcx", "rcy", "x0", "y0",
+        "theta0",
+    )  # fmt: skip
+    LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4", "r5", "r6")
+
+    r1: jax.Array
+    r2: jax.Array
+    r3: jax.Array
+    r4: jax.Array
+    r5: jax.Array
+    r6: jax.Array
+    dx: jax.Array
+    dy: jax.Array
+    gx: jax.Array
+    gy: jax.Array
+    rcx: jax.Array
+    rcy: jax.Array
+    x0: jax.Array
+    y0: jax.Array
+    theta0: jax.Array
+    branch: jax.Array
+
+    def dyad_pivot(self, phi4) -> jax.Array:
+        """The ground pivot ``O6`` (2,) [length] (fixed: ``phi4`` unused)."""
+        return self.crank_pivot() + _turned(self.theta0, self.gx, self.gy)
+
+
+__all__ = ["GroundPivotSixBar", "SixBar"]

@@ -20,57 +20,19 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import jax
-
-from ._sixbar import SixBar, _turned
+from ._sixbar import GroundPivotSixBar
 
 #: Names of the numbers of a Stephenson III six-bar, in the order of its ``vector``.
-STEPHENSON_NAMES = (
-    "r1", "r2", "r3", "r4", "r5", "r6", "dx", "dy", "gx", "gy", "rcx", "rcy", "x0", "y0",
-    "theta0",
-)  # fmt: skip
+STEPHENSON_NAMES = GroundPivotSixBar.NAMES
 
 
-class StephensonIII(SixBar):
-    """A Stephenson III six-bar's dimensions and placement [length, rad]; every field may
-    carry a batch.
+class StephensonIII(GroundPivotSixBar):
+    """A Stephenson III six-bar's dimensions and placement [length, rad]
+    (:class:`~._sixbar.GroundPivotSixBar`'s fields, ``D`` in the coupler's frame: x along
+    ``A -> B``); every field may carry a batch."""
 
-    Attributes:
-        r1, r2, r3, r4: ground, crank, coupler and rocker lengths [length].
-        r5, r6: the tracer ``D E`` and the follower ``O6 E`` [length].
-        dx, dy: ``D`` in the coupler's frame (x along ``A -> B``) [length].
-        gx, gy: ``O6`` from ``O2`` in the ground link's frame (x along ``O2 -> O4``) [length].
-        rcx, rcy: the coupler point in the tracer's frame (x along ``D -> E``) [length].
-        x0, y0: the crank's ground pivot ``O2`` [length].
-        theta0: the ground link's angle ``O2 -> O4`` [rad].
-        branch: ``b4 + 2 b6`` (3, 1, -1 or -3): the two loops' branches (:mod:`._sixbar`).
-    """
-
-    NAMES: ClassVar[tuple[str, ...]] = STEPHENSON_NAMES
-    LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4", "r5", "r6")
     KIND: ClassVar[str] = "stephenson3"
     TITLE: ClassVar[str] = "Stephenson III six-bar"
-
-    r1: jax.Array
-    r2: jax.Array
-    r3: jax.Array
-    r4: jax.Array
-    r5: jax.Array
-    r6: jax.Array
-    dx: jax.Array
-    dy: jax.Array
-    gx: jax.Array
-    gy: jax.Array
-    rcx: jax.Array
-    rcy: jax.Array
-    x0: jax.Array
-    y0: jax.Array
-    theta0: jax.Array
-    branch: jax.Array
-
-    def dyad_pivot(self, phi4) -> jax.Array:
-        """The ground pivot ``O6`` (2,) [length] (fixed: ``phi4`` unused)."""
-        return self.crank_pivot() + _turned(self.theta0, self.gx, self.gy)
 
 
 __all__ = ["STEPHENSON_NAMES", "StephensonIII"]

@@ -22,7 +22,7 @@ from ._limits import check_grashof, check_pivots
 from ._linkage import Linkage
 from ._slidercrank import SliderCrank
 from ._stephenson import StephensonIII
-from ._watt import WattI
+from ._watt import WattI, WattII
 
 #: The linkage types of a path task by name (``PathTask(linkage=...)``, ``linkage:`` in files).
 LINKAGES: dict[str, type[Linkage]] = {
@@ -30,6 +30,7 @@ LINKAGES: dict[str, type[Linkage]] = {
     "slider_crank": SliderCrank,
     "stephenson3": StephensonIII,
     "watt1": WattI,
+    "watt2": WattII,
 }
 
 
@@ -61,9 +62,9 @@ class PathTask:
             (0: the loop only has to close).
         linkage: the linkage type: ``"four_bar"`` (:class:`~._fourbar.FourBar`, the
             default), ``"slider_crank"`` (:class:`~._slidercrank.SliderCrank`),
-            ``"stephenson3"`` (:class:`~._stephenson.StephensonIII`) or ``"watt1"``
-            (:class:`~._watt.WattI`), or the class itself; held as the class
-            (:data:`LINKAGES`).
+            ``"stephenson3"`` (:class:`~._stephenson.StephensonIII`), ``"watt1"``
+            (:class:`~._watt.WattI`) or ``"watt2"`` (:class:`~._watt.WattII`), or the class
+            itself; held as the class (:data:`LINKAGES`).
         grashof: the Grashof type asked for (:mod:`._limits`): ``"any"`` (the default: the
             loop has only to close along the traversed motion), ``"crank_rocker"`` (the crank
             the shortest link of a Grashof four-bar: it turns a full revolution; a

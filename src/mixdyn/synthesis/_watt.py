@@ -1,5 +1,7 @@
-"""The Watt I six-bar of synthesis: a four-bar whose coupler and rocker are joined by a dyad,
-the coupler point on the dyad's link from the coupler.
+"""The Watt six-bars of synthesis. Watt I: a four-bar whose coupler and rocker are joined by a
+dyad, the coupler point on the dyad's link from the coupler. Watt II: two four-bars in
+series, the first one's rocker the second one's crank, the coupler point on the second one's
+coupler.
 
 Topology: Watt's chain (its two ternary links joined to each other) with a binary link as
 the ground: the coupler ``A B D`` and the rocker ``O4 B F`` are the ternaries, joined at
@@ -14,6 +16,14 @@ Numbers (module :mod:`._sixbar`'s notation): ``r1``..``r4`` the four-bar, ``r5 =
 ``r6 = |F E|``, ``(dx, dy)`` the point ``D`` in the coupler's frame, ``(fx, fy)`` the point
 ``F = O4 + R(phi4) (fx, fy)`` in the rocker's frame (x from ``O4`` towards ``B``),
 ``(rcx, rcy)`` the coupler point on the tracer, ``x0``, ``y0``, ``theta0``.
+
+Watt II (:class:`WattII`): Watt's chain with a ternary link as the ground: the ground ``O2 O4
+O6`` and the rocker ``O4 B D`` are the ternaries, joined at ``O4``; the crank ``O2 A``, the
+coupler ``A B``, the tracer ``D E`` and the follower ``O6 E`` the binaries. The four-bar
+``O2 A B O4`` turns the rocker, which drives the second four-bar ``O4 D E O6`` (the same
+ground). Numbers: ``r1``..``r6`` as above, ``(dx, dy)`` the point ``D`` in the rocker's
+frame (x from ``O4`` towards ``B``), ``(gx, gy)`` the pivot ``O6 = O2 + R(theta0) (gx,
+gy)`` in the ground link's frame, ``(rcx, rcy)``, ``x0``, ``y0``, ``theta0``.
 """
 
 from __future__ import annotations
@@ -22,7 +32,7 @@ from typing import ClassVar
 
 import jax
 
-from ._sixbar import SixBar, _turned
+from ._sixbar import GroundPivotSixBar, SixBar, _turned
 
 #: Names of the numbers of a Watt I six-bar, in the order of its ``vector``.
 WATT_NAMES = (
@@ -68,10 +78,26 @@ class WattI(SixBar):
     theta0: jax.Array
     branch: jax.Array
 
+    PIVOT_BODY: ClassVar[str] = "rocker"
+
     def dyad_pivot(self, phi4) -> jax.Array:
         """The rocker's point ``F`` (2,) [length] with the rocker at ``phi4``."""
         _, o4 = self.pivots()
         return o4 + _turned(phi4, self.fx, self.fy)
 
 
-__all__ = ["WATT_NAMES", "WattI"]
+#: Names of the numbers of a Watt II six-bar, in the order of its ``vector``.
+WATT2_NAMES = GroundPivotSixBar.NAMES
+
+
+class WattII(GroundPivotSixBar):
+    """A Watt II six-bar's dimensions and placement [length, rad] (the module's
+    description; :class:`~._sixbar.GroundPivotSixBar`'s fields, ``D`` in the rocker's frame:
+    x along ``O4 -> B``); every field may carry a batch."""
+
+    KIND: ClassVar[str] = "watt2"
+    TITLE: ClassVar[str] = "Watt II six-bar"
+    DYAD_BODY: ClassVar[str] = "rocker"
+
+
+__all__ = ["WATT2_NAMES", "WATT_NAMES", "WattI", "WattII"]

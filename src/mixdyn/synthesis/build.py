@@ -25,7 +25,7 @@ from ._linkage import Linkage
 from ._sixbar import SixBar
 from ._slidercrank import SliderCrank, rod_and_slider
 from ._stephenson import StephensonIII
-from ._watt import WattI
+from ._watt import WattI, WattII
 
 
 def _numbers(lk: Linkage) -> Linkage:
@@ -220,13 +220,15 @@ def six_bar_model(
     name=None,
     coupler_angle: float = 0.0,
 ):
-    """The mixdyn model of a six-bar (:class:`~._stephenson.StephensonIII` or
-    :class:`~._watt.WattI`), its crank at ``start`` at t = 0 turning at ``speed``.
+    """The mixdyn model of a six-bar (:class:`~._stephenson.StephensonIII`,
+    :class:`~._watt.WattI` or :class:`~._watt.WattII`), its crank at ``start`` at t = 0
+    turning at ``speed``.
 
     Args:
         sb: the six-bar (unbatched), model units.
-        masses: how its links weigh (:func:`~._dynamics.link_inertia`: the coupler, a Watt
-            I's rocker and the tracer triangles of bars, the payload at the coupler point);
+        masses: how its links weigh (:func:`~._dynamics.link_inertia`: the links that carry
+            a third point and the tracer triangles of bars, the payload at the coupler
+            point);
             None: massless links, for kinematics only.
         start: the input angle ``theta2`` at t = 0 [rad].
         speed: the crank's constant speed [rad / time].
@@ -236,11 +238,12 @@ def six_bar_model(
 
     Returns:
         A :class:`mixdyn.Model` in SI units (the numbers read as m, kg, s): the bodies
-        ``crank`` (points ``O``, ``A``), ``coupler`` (``A``, ``B``, ``D``), ``rocker`` (``O``,
-        ``B``, and a Watt I's ``F``), ``tracer`` (``D``, ``E`` and the coupler point ``P``)
-        and ``follower`` (``E``, and ``O`` at a Stephenson III's ground pivot ``O6`` or ``F``
-        at a Watt I's rocker point); the revolute joints ``O2``, ``A``, ``B``, ``O4``, ``D``,
-        ``E`` and ``O6`` (Stephenson III) or ``F`` (Watt I); the driver ``motor``.
+        ``crank`` (points ``O``, ``A``), ``coupler`` (``A``, ``B``, and ``D`` where it
+        carries it), ``rocker`` (``O``, ``B``, and a Watt I's ``F`` or a Watt II's ``D``),
+        ``tracer`` (``D``, ``E`` and the coupler point ``P``) and ``follower`` (``E``, and
+        ``O`` at the ground pivot ``O6`` or ``F`` at a Watt I's rocker point); the revolute
+        joints ``O2``, ``A``, ``B``, ``O4``, ``D``, ``E`` and ``O6`` (Stephenson III, Watt II)
+        or ``F`` (Watt I); the driver ``motor``.
     """
     sb = _numbers(sb)
     j = {k: np.asarray(v, dtype=float) for k, v in sb.joints(start).items()}
@@ -250,14 +253,16 @@ def six_bar_model(
     d = np.array([r["dx"], r["dy"]])
     c = np.array([r["rcx"], r["rcy"]])
     inertia = _inertia(sb, masses)
-    watt = isinstance(sb, WattI)
+    watt = sb.PIVOT_BODY == "rocker"  # the follower's other end F on the rocker
+    coupler = {"A": 0 * ex, "B": r["r3"] * ex}
     rocker = {"O": 0 * ex, "B": r["r4"] * ex}
+    {"coupler": coupler, "rocker": rocker}[sb.DYAD_BODY]["D"] = d
     if watt:
         rocker["F"] = np.array([r["fx"], r["fy"]])
     end = "F" if watt else "O"
     points = {
         "crank": {"O": 0 * ex, "A": r["r2"] * ex},
-        "coupler": {"A": 0 * ex, "B": r["r3"] * ex, "D": d},
+        "coupler": coupler,
         "rocker": rocker,
         "tracer": {"D": 0 * ex, "E": r["r5"] * ex, "P": c},
         "follower": {end: 0 * ex, "E": r["r6"] * ex},
@@ -286,7 +291,7 @@ def six_bar_model(
             Revolute("A", "crank.A", "coupler.A"),
             Revolute("B", "coupler.B", "rocker.B"),
             Revolute("O4", "ground.O4", "rocker.O"),
-            Revolute("D", "coupler.D", "tracer.D"),
+            Revolute("D", f"{sb.DYAD_BODY}.D", "tracer.D"),
             Revolute("E", "tracer.E", "follower.E"),
             last,
         ],
@@ -303,6 +308,7 @@ BUILDERS = {
     SliderCrank: (slider_crank_model, "rod"),
     StephensonIII: (six_bar_model, "tracer"),
     WattI: (six_bar_model, "tracer"),
+    WattII: (six_bar_model, "tracer"),
 }
 
 
