@@ -225,7 +225,11 @@ class _DeclaredSpec(Spec):
         for field, decl, _ in kind.fields():
             value, at = getattr(self, field), (*p, field)
             if isinstance(decl, _decl.Reference):
-                if value is not None and decl.what == "body":
+                if decl.many:
+                    value = tuple(value)
+                    for k, ref in enumerate(value):
+                        b.point(ref, (*at, k))
+                elif value is not None and decl.what == "body":
                     b.body(value, at)
                 elif value is not None and decl.what == "point":
                     b.point(value, at)
@@ -266,7 +270,15 @@ class _DeclaredSpec(Spec):
         values = {}
         for field, decl, _ in cls.declared.fields():
             value = getattr(e, field)
-            if isinstance(decl, _decl.Reference):
+            if isinstance(decl, _decl.Reference) and decl.many:
+                if not all(isinstance(v, str) for v in value):
+                    raise ModelError(
+                        f"{field}: a point given by coordinates cannot be written to a file; "
+                        "name it among its body's points",
+                        e.name,
+                    )
+                value = list(value)
+            elif isinstance(decl, _decl.Reference):
                 if value is not None and not isinstance(value, str):
                     raise ModelError(
                         f"{field}: a point given by coordinates cannot be written to a file; "
@@ -296,7 +308,9 @@ _REFERENCE_TYPES = {"point": Ref, "body": Name, "joint": Name}
 def _declared_field(decl, default):
     """The pydantic annotation and field of a declared field."""
     doc = decl.doc
-    if isinstance(decl, _decl.Reference):
+    if isinstance(decl, _decl.Reference) and decl.many:
+        annotation = list[Ref]
+    elif isinstance(decl, _decl.Reference):
         annotation = _REFERENCE_TYPES[decl.what]
         if default is None:
             annotation = annotation | None

@@ -9,6 +9,7 @@ from ._contact_pairs import (
     JournalBearing,
     SliderInGuide,
 )
+from ._contact_sets import CircleSetContact
 from ._contacts import BeltDrive, GearPair, RackPinion, RollingDisks, RollingOnLine
 from ._declare import ELEMENTS, element
 from ._drivers import (
@@ -81,6 +82,7 @@ __all__ = [
     "CamFollower",
     "CircleContact",
     "CircleLineContact",
+    "CircleSetContact",
     "Constant",
     "CoordinateDriver",
     "Distance",

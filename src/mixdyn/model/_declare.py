@@ -6,6 +6,7 @@ An element class registers its file name with :func:`element` and declares the f
 file gives, each with its doc:
 
 - :func:`reference`: a point or body by name (or another joint, ``what="joint"``);
+  :func:`references`: a list of points;
 - :func:`quantity`: a number of a kind of quantity, or a law (of time, or of another
   variable such as a cam's angle: :class:`Variable`), with its range;
 - :func:`direction`: a direction, two numbers or the name of a body's vector;
@@ -58,10 +59,11 @@ REFERENCES = ("point", "body", "joint")
 @dataclasses.dataclass(frozen=True)
 class Reference:
     """A field naming a point (``"body.point"``, ``"body"``), a body (``what="body"``) or
-    another joint of the model (``what="joint"``)."""
+    another joint of the model (``what="joint"``); with ``many`` a list of points."""
 
     doc: str
     what: str = "point"
+    many: bool = False
 
 
 @dataclasses.dataclass(frozen=True)
@@ -213,6 +215,11 @@ def reference(
     ``what="joint"``); ``default=None``: an optional one."""
     kwargs: dict[str, Any] = {"kw_only": True} if kw_only else {}
     return eqx.field(static=True, default=default, metadata={KEY: Reference(doc, what)}, **kwargs)
+
+
+def references(doc: str):
+    """A static field naming a list of points (``["ball1", "ball2.C"]``), held as a tuple."""
+    return eqx.field(static=True, converter=tuple, metadata={KEY: Reference(doc, "point", True)})
 
 
 def quantity(
