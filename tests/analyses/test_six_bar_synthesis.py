@@ -1,5 +1,5 @@
-"""Six-bar path generation (mixdyn.synthesis, ``linkage="stephenson3"``, ``"watt1"`` and
-``"watt2"``) against independent truths.
+"""Six-bar path generation (mixdyn.synthesis, ``linkage="stephenson1"``, ``"stephenson3"``,
+``"watt1"`` and ``"watt2"``) against independent truths.
 
 * the closed-form assembly against its loop-closure equations on every branch (the links'
   lengths, the pins where the angles put them, the sides the branches name, the transmission
@@ -27,6 +27,7 @@ from mixdyn.errors import ModelError
 from mixdyn.synthesis import (
     Masses,
     PathTask,
+    StephensonI,
     StephensonIII,
     WattI,
     WattII,
@@ -49,6 +50,8 @@ CASES = {
     StephensonIII: np.array([*HEAD, 1.5, 1.2, *TAIL]),
     WattI: np.array([*HEAD, 0.5, 0.3, *TAIL]),
     WattII: np.array([*HEAD, 1.0, 1.3, *TAIL]),
+    # D in the crank's frame, F in the rocker's
+    StephensonI: np.array([*HEAD[:6], 0.2, 0.25, 0.9, 0.6, *TAIL]),
 }
 
 
@@ -73,7 +76,7 @@ def _assembly(lk, theta):
     return joints, jax.vmap(lk.transmission_cosines)(theta), coupler_curve(lk, theta)
 
 
-@pytest.mark.parametrize("cls", [StephensonIII, WattI, WattII])
+@pytest.mark.parametrize("cls", [StephensonIII, WattI, WattII, StephensonI])
 def test_closed_form_closes_both_loops_on_every_branch(cls):
     """Over a crank turn, on each of the four branch codes: |AB| = r3, |O4 B| = r4,
     |DE| = r5, |XE| = r6, each pin where its link's angle puts it (1e-12); D, the
@@ -98,6 +101,8 @@ def test_closed_form_closes_both_loops_on_every_branch(cls):
         np.testing.assert_allclose(j["B"], o4 + n["r4"] * _unit(j["phi4"]), atol=1e-12)
         if cls is WattII:  # D on the rocker
             d = o4 + _rot(j["phi4"], (n["dx"], n["dy"]))
+        elif cls is StephensonI:  # D on the crank
+            d = o2 + _rot(phi2, (n["dx"], n["dy"]))
         else:
             d = a + _rot(j["phi3"], (n["dx"], n["dy"]))
         if cls in (StephensonIII, WattII):
@@ -137,6 +142,7 @@ def _curve(cls):
         pytest.param(WattI, True, marks=pytest.mark.slow),  # long: run by CI's slow set
         pytest.param(StephensonIII, True, marks=pytest.mark.slow),  # long: CI's slow set
         pytest.param(WattII, False, marks=pytest.mark.slow),  # long: CI's slow set
+        pytest.param(StephensonI, False, marks=pytest.mark.slow),  # long: CI's slow set
     ],
 )
 def test_derivatives_are_finite_differences_and_an_open_dyad_is_finite(cls, reverse):
@@ -175,7 +181,9 @@ def test_a_six_bars_task_is_checked_by_its_numbers():
 
 
 @pytest.mark.slow  # long: run by CI's slow set (compiles the model's kinematic analysis)
-@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0), (WattII, 1.0)])
+@pytest.mark.parametrize(
+    "cls, code", [(StephensonIII, 3.0), (WattI, -1.0), (WattII, 1.0), (StephensonI, -3.0)]
+)
 def test_closed_form_is_mixdyns_kinematic_analysis(cls, code):
     """Over a crank turn the built model's kinematic analysis (Newton's assembly of the five
     links and seven revolute joints) puts tracer.P where the closed form puts the coupler
@@ -198,7 +206,9 @@ FLOATING = Masses(density=2.0, payload=0.3, gravity=(0.0, 0.0))
 
 
 @pytest.mark.slow  # long: run by CI's slow set (compiles the models' inverse analyses)
-@pytest.mark.parametrize("cls, code", [(StephensonIII, 3.0), (WattI, -1.0), (WattII, -3.0)])
+@pytest.mark.parametrize(
+    "cls, code", [(StephensonIII, 3.0), (WattI, -1.0), (WattII, -3.0), (StephensonI, 1.0)]
+)
 def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
     """The built model with masses run by md.inverse over a crank turn: the motor torque of
     the energy balance and the reactions' torque equal its driver effort, each joint's
@@ -215,7 +225,7 @@ def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
     assert np.max(np.abs(tau)) > 10.0  # a real load
     assert np.max(np.abs(inv["motor"] - tau)) < 1e-9 * np.max(np.abs(tau))
     assert np.max(np.abs(torque - tau)) < 1e-9 * np.max(np.abs(tau))
-    names = ("O2", "A", "B", "O4", "D", "E", "F" if cls is WattI else "O6")
+    names = ("O2", "A", "B", "O4", "D", "E", "F" if cls.PIVOT_BODY == "rocker" else "O6")
     for k, name in enumerate(names):
         want = np.stack([inv[f"{name}.Fx"], inv[f"{name}.Fy"]], axis=1)
         assert np.max(np.abs(forces[:, k] - want)) < 1e-9 * np.max(np.abs(forces))
@@ -233,15 +243,17 @@ def test_dynamics_are_mixdyns_inverse_dynamics(cls, code):
 
 
 @pytest.mark.slow  # long: run by CI's slow set (each search compiles its programs, ~10 s)
-@pytest.mark.parametrize("cls", [StephensonIII, WattI, WattII])
+@pytest.mark.parametrize("cls", [StephensonIII, WattI, WattII, StephensonI])
 def test_search_recovers_a_known_six_bars_curve(cls, tmp_path):
-    """Eight points of the fixture's coupler curve with their input angles, every number
-    bounded within 20 % of the fixture's (a designer's box): the best six-bar passes the
-    points (error <= 1e-8) and draws the fixture's curve between them (1e-5); its model
-    file, loaded and run by md.kinematic, passes the points."""
+    """Eight points of the fixture's coupler curve with their input angles (a Stephenson
+    I's: twelve), every number bounded within 20 % of the fixture's (a designer's box): the
+    best six-bar passes the points (error <= 1e-8) and draws the fixture's curve between
+    them (1e-5); its model file, loaded and run by md.kinematic, passes the points."""
     v = CASES[cls]
     truth = cls.from_vector(jnp.asarray(v), 3.0)
-    theta = np.linspace(0.3, 4.5, 8)
+    # a Stephenson I's curve through eight timed points is not unique (another of its
+    # numbers draws another curve through them, 4e-4 apart): twelve fix it
+    theta = np.linspace(0.3, 4.5, 12 if cls is StephensonI else 8)
     points = np.asarray(coupler_curve(truth, theta))
     bounds = {
         name: (x - 0.2 * max(abs(x), 0.3), x + 0.2 * max(abs(x), 0.3))

@@ -103,7 +103,7 @@ PROPERTIES = {
 # run's motion generation (issue 34); and with a synthesis run's Grashof type and ground-pivot
 # regions (issue 34); and with a synthesis run's six-bar linkages (issue 34); and with a
 # synthesis run's shape-only error (shape, harmonics, sense; issue 34).
-STRIPPED_SHA256 = "f1b86ad80113f9a9b55108d0741d077897ca973a3007850944d36f844f119018"
+STRIPPED_SHA256 = "d4eac3a8c354db33318c16c11d45e40659bccabf86ea0169d2169055df61a5bf"
 
 
 def _definitions(schema: dict) -> dict[str, dict]:

@@ -17,7 +17,14 @@ from mixdyn.cli import app
 from mixdyn.io import FileError
 from mixdyn.runs import Runner
 from mixdyn.runs.report import report
-from mixdyn.synthesis import Candidate, StephensonIII, WattI, WattII, coupler_curve
+from mixdyn.synthesis import (
+    Candidate,
+    StephensonI,
+    StephensonIII,
+    WattI,
+    WattII,
+    coupler_curve,
+)
 
 HEAD = "mixdyn: 1\nunits: {length: mm, mass: kg, time: s}\nruns:\n  - name: path\n"
 
@@ -33,7 +40,8 @@ def _line(text: str, marker: str) -> int:
 
 @pytest.mark.parametrize("name, cls, number", [("stephenson3", StephensonIII, "gx"),
                                                ("watt1", WattI, "fx"),
-                                               ("watt2", WattII, "dy")])  # fmt: skip
+                                               ("watt2", WattII, "dy"),
+                                               ("stephenson1", StephensonI, "fy")])  # fmt: skip
 def test_the_linkage_and_its_bounds_are_read_in_si(name, cls, number, tmp_path):
     """``linkage: stephenson3`` / ``watt1`` / ``watt2``: the task's linkage, a bound in SI
     (mm -> m, by hand), its masses and torque weight read; ``mixdyn check`` names the

@@ -1169,10 +1169,12 @@ class SynthesisRunSpec(Spec):
     motion: SynthesisMotionSpec | None = None
     """Motion generation instead of a path: ``{poses: [[0 mm, 0 mm, 0 deg], [300 mm, 250 mm,
     40 deg], ...]}`` (the coupler point and angle at each pose)."""
-    linkage: Literal["four_bar", "slider_crank", "stephenson3", "watt1", "watt2"] = "four_bar"
+    linkage: Literal["four_bar", "slider_crank", "stephenson1", "stephenson3", "watt1", "watt2"] = (
+        "four_bar"
+    )
     """The linkage of a path or a motion: ``four_bar`` (default), ``slider_crank`` (an offset
-    slider-crank; its coupler point on the connecting rod), ``stephenson3``, ``watt1`` or
-    ``watt2`` (a six-bar; its coupler point on the dyad's link ``D E``)."""
+    slider-crank; its coupler point on the connecting rod), ``stephenson1``, ``stephenson3``,
+    ``watt1`` or ``watt2`` (a six-bar; its coupler point on the dyad's link ``D E``)."""
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
     turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only

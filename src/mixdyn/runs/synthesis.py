@@ -2,8 +2,8 @@
 or carry its coupler through poses, or a four-bar to generate a function
 (:func:`mixdyn.synthesize`).
 
-A ``synthesis`` run describes the task (the linkage, ``four_bar``, ``slider_crank``,
-``stephenson3``, ``watt1`` or ``watt2``, the target points, the timing, bounds of the
+A ``synthesis`` run describes the task (the linkage, ``four_bar``, ``slider_crank`` or a
+six-bar of :data:`mixdyn.synthesis.LINKAGES`, the target points, the timing, bounds of the
 linkage's numbers, the least transmission angle), how the links weigh and how the motor
 torque counts, and the search (starts, seed); or, with ``motion:``, the coupler's poses
 instead of points (:mod:`.synthesis_motion`); or, with ``function:``, a function task

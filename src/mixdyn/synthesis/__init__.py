@@ -9,7 +9,8 @@ that generate a function, searched by gradients, with dynamics in a path's objec
   path task's ``linkage="slider_crank"``);
 * :mod:`._sixbar` — what the six-bars share: a four-bar and a dyad closed by a second
   circle intersection, the coupler point on the dyad; :mod:`._stephenson`
-  (:class:`StephensonIII`, ``linkage="stephenson3"``) and :mod:`._watt` (:class:`WattI`,
+  (:class:`StephensonIII`, ``linkage="stephenson3"``; :class:`StephensonI`,
+  ``linkage="stephenson1"``) and :mod:`._watt` (:class:`WattI`,
   ``linkage="watt1"``; :class:`WattII`, ``linkage="watt2"``), searched for a path or a
   motion, with their dynamics as a four-bar's;
 * :mod:`._limits` — the Grashof type (:func:`grashof_type`; a task's ``grashof``) and the
@@ -55,7 +56,7 @@ from ._search import Candidate, Synthesis
 from ._shape import ShapeCandidate, ShapeSynthesis, ShapeTask
 from ._sixbar import SixBar
 from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
-from ._stephenson import STEPHENSON_NAMES, StephensonIII
+from ._stephenson import STEPHENSON1_NAMES, STEPHENSON_NAMES, StephensonI, StephensonIII
 from ._synthesize import synthesize
 from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
 from ._watt import WATT2_NAMES, WATT_NAMES, WattI, WattII
@@ -72,6 +73,7 @@ __all__ = [
     "LINKAGES",
     "NAMES",
     "SLIDER_NAMES",
+    "STEPHENSON1_NAMES",
     "STEPHENSON_NAMES",
     "WATT2_NAMES",
     "WATT_NAMES",
@@ -90,6 +92,7 @@ __all__ = [
     "ShapeTask",
     "SixBar",
     "SliderCrank",
+    "StephensonI",
     "StephensonIII",
     "Synthesis",
     "WattI",

@@ -5,7 +5,8 @@ the rocker ``O4 B`` (a four-bar's) and the coupler (a slider-crank's rod), a rig
 bars ``A B``, ``A C``, ``B C``, with an optional payload (a point mass) at the coupler point
 ``C``; a slider-crank's slider is a point mass at its pin ``B``; a six-bar's coupler and
 rocker are the triangles of the points they carry (``A B D`` the coupler where it carries
-``D``, ``O4 B F`` a Watt I's rocker, ``O4 B D`` a Watt II's; a bar otherwise), its tracer the
+``D``, ``O4 B F`` a Watt I's rocker, ``O4 B D`` a Watt II's; a bar otherwise; a Stephenson
+I's crank the triangle ``O2 A D``), its tracer the
 triangle ``D E C`` with the payload, its follower a bar. Their masses, centres of mass and inertias
 follow the candidate's dimensions, so that a search can trade length for torque.
 
@@ -63,7 +64,7 @@ from ._fourbar import FourBar, link_angles
 from ._linkage import Linkage, guarded
 from ._sixbar import SixBar
 from ._slidercrank import SliderCrank, rod_and_slider
-from ._stephenson import StephensonIII
+from ._stephenson import StephensonI, StephensonIII
 from ._watt import WattI, WattII
 
 
@@ -150,6 +151,8 @@ def _six_bar_inertia(sb: SixBar, masses: Masses, crank) -> dict[str, tuple]:
     third = {sb.DYAD_BODY: jnp.stack([sb.dx, sb.dy])}
     if sb.PIVOT_BODY == "rocker":
         third["rocker"] = jnp.stack([sb.fx, sb.fy])
+    if "crank" in third:  # the crank the triangle O2 A D
+        crank = _plate(sb.r2, third["crank"], rho, 0.0)
 
     def link(name, length):
         if name in third:
@@ -288,6 +291,7 @@ def _six_bar_rates(sb: SixBar, inertia: dict, theta2):
 _RATES = {
     FourBar: _four_bar_rates,
     SliderCrank: _slider_crank_rates,
+    StephensonI: _six_bar_rates,
     StephensonIII: _six_bar_rates,
     WattI: _six_bar_rates,
     WattII: _six_bar_rates,
@@ -342,7 +346,7 @@ def _six_bar_joints(cls: type[SixBar]) -> tuple:
     """A six-bar type's joints (:data:`JOINTS`): the four-bar's, ``D`` (on the coupler or
     the rocker), ``E``, and the follower's other end (``O6`` on the ground, ``F`` on the
     rocker)."""
-    body = {"ground": -1, "coupler": 1, "rocker": 2}
+    body = {"ground": -1, "crank": 0, "coupler": 1, "rocker": 2}
     end = "O6" if cls.PIVOT_BODY == "ground" else "F"
     return (
         *_SIX_BAR_JOINTS,
@@ -363,6 +367,7 @@ JOINTS = {
         ("B", 1, 2, False),
         ("slide", -1, 2, True),
     ),
+    StephensonI: _six_bar_joints(StephensonI),
     StephensonIII: _six_bar_joints(StephensonIII),
     WattI: _six_bar_joints(WattI),
     WattII: _six_bar_joints(WattII),

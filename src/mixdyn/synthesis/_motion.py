@@ -66,8 +66,8 @@ class MotionTask:
         length: the characteristic length ``L`` [length] that weighs the angle error (None:
             the poses' size, the largest distance of their points from their centre).
         linkage: the linkage type, as for a :class:`PathTask` (``"four_bar"``, the default,
-            ``"slider_crank"``, or a six-bar, ``"stephenson3"``, ``"watt1"`` or ``"watt2"``,
-            whose carried body is the tracer ``D E``); held as the class.
+            ``"slider_crank"``, or a six-bar of :data:`~._task.LINKAGES`, whose carried body
+            is the tracer ``D E``); held as the class.
         grashof: the Grashof type asked for, as for a :class:`PathTask` (default ``"any"``).
         pivots: the ground pivots' regions, as for a :class:`PathTask` (default none).
         path: the :class:`PathTask` of the poses' points (timing free), made and checked from

@@ -7,12 +7,14 @@ ground link ``r1`` at ``theta0`` (``O4 = O2 + r1 e^{i theta0}``), the crank ``r2
 ``theta2`` from the ground link, the coupler ``r3`` from ``A`` to ``B``, the rocker ``r4``
 from ``O4`` to ``B``, their angles ``phi3``, ``phi4`` from the four-bar's closed form; the
 dyad's start ``D`` on the link :attr:`SixBar.DYAD_BODY` names: the coupler's point ``D = A +
-R(phi3) (dx, dy)`` (the coupler's frame: x from ``A`` towards ``B``), or the rocker's ``D =
-O4 + R(phi4) (dx, dy)`` (:class:`~._watt.WattII`; x from ``O4`` towards ``B``). The dyad's
+R(phi3) (dx, dy)`` (the coupler's frame: x from ``A`` towards ``B``), the rocker's ``D =
+O4 + R(phi4) (dx, dy)`` (:class:`~._watt.WattII`; x from ``O4`` towards ``B``) or the
+crank's ``D = O2 + R(theta0 + theta2) (dx, dy)`` (:class:`~._stephenson.StephensonI`; x from
+``O2`` towards ``A``). The dyad's
 links: the tracer ``r5`` from ``D`` to ``E`` (angle ``phi5``) and the follower ``r6`` from
 ``X`` to ``E`` (angle ``phi6``), ``X`` on the link :attr:`SixBar.PIVOT_BODY` names: a ground
 pivot (:class:`~._stephenson.StephensonIII`, :class:`~._watt.WattII`) or a point of the
-rocker (:class:`~._watt.WattI`).
+rocker (:class:`~._watt.WattI`, :class:`~._stephenson.StephensonI`).
 The coupler point (the path) rides on the tracer: ``C = D + R(phi5) (rcx, rcy)`` (x from
 ``D`` towards ``E``); :meth:`SixBar.coupler_angle` is the tracer's angle ``phi5``.
 
@@ -60,7 +62,8 @@ class SixBar(Linkage):
 
     #: The branch codes ``b4 + 2 b6`` the search spreads its starts over.
     BRANCHES: ClassVar[tuple[float, ...]] = (3.0, 1.0, -1.0, -3.0)
-    #: The four-bar's link that carries the dyad's start ``D``: ``"coupler"`` or ``"rocker"``.
+    #: The four-bar's link that carries the dyad's start ``D``: ``"coupler"``, ``"rocker"``
+    #: or ``"crank"``.
     DYAD_BODY: ClassVar[str] = "coupler"
     #: The link that carries the follower's other end ``X``: ``"ground"`` or ``"rocker"``.
     PIVOT_BODY: ClassVar[str] = "ground"
@@ -75,12 +78,14 @@ class SixBar(Linkage):
         o2 = self.crank_pivot()
         return o2, o2 + self.r1 * jnp.stack([jnp.cos(self.theta0), jnp.sin(self.theta0)])
 
-    def dyad_start(self, a, o4, phi3, phi4) -> jax.Array:
-        """``D`` (2,) [length] from the crank pin ``a``, the pivot ``o4`` and the coupler's
-        and rocker's angles: on the link :attr:`DYAD_BODY` names, at ``(dx, dy)`` in its
-        frame."""
+    def dyad_start(self, theta2, a, o4, phi3, phi4) -> jax.Array:
+        """``D`` (2,) [length] at the input angle ``theta2`` from the crank pin ``a``, the
+        pivot ``o4`` and the coupler's and rocker's angles: on the link :attr:`DYAD_BODY`
+        names, at ``(dx, dy)`` in its frame (the crank's: x from ``O2`` towards ``A``)."""
         if self.DYAD_BODY == "rocker":
             return o4 + _turned(phi4, self.dx, self.dy)
+        if self.DYAD_BODY == "crank":
+            return self.crank_pivot() + _turned(self.theta0 + theta2, self.dx, self.dy)
         return a + _turned(phi3, self.dx, self.dy)
 
     @abc.abstractmethod
@@ -95,7 +100,7 @@ class SixBar(Linkage):
         b4, b6 = self.loop_branches()
         a = self.crank_pin(theta2)
         phi3, phi4 = _dyad(a, o4, self.r3, self.r4, b4)
-        d = self.dyad_start(a, o4, phi3, phi4)
+        d = self.dyad_start(theta2, a, o4, phi3, phi4)
         x = self.dyad_pivot(phi4)
         phi5, phi6 = _dyad(d, x, self.r5, self.r6, b6)
         e = d + self.r5 * jnp.stack([jnp.cos(phi5), jnp.sin(phi5)])
@@ -193,4 +198,52 @@ class GroundPivotSixBar(SixBar):
         return self.crank_pivot() + _turned(self.theta0, self.gx, self.gy)
 
 
-__all__ = ["GroundPivotSixBar", "SixBar"]
+class RockerPivotSixBar(SixBar):
+    """A six-bar whose follower ends at a point ``F = O4 + R(phi4) (fx, fy)`` of the rocker
+    (abstract: :class:`~._watt.WattI`, ``D`` on the coupler, and
+    :class:`~._stephenson.StephensonI`, ``D`` on the crank): its fields, in the order of
+    both types' ``NAMES``.
+
+    Attributes:
+        r1, r2, r3, r4: ground, crank, coupler and rocker lengths [length].
+        r5, r6: the tracer ``D E`` and the follower ``F E`` [length].
+        dx, dy: ``D`` in the frame of the link that carries it (:attr:`SixBar.DYAD_BODY`)
+            [length].
+        fx, fy: ``F`` in the rocker's frame (x along ``O4 -> B``) [length].
+        rcx, rcy: the coupler point in the tracer's frame (x along ``D -> E``) [length].
+        x0, y0: the crank's ground pivot ``O2`` [length].
+        theta0: the ground link's angle ``O2 -> O4`` [rad].
+        branch: ``b4 + 2 b6`` (3, 1, -1 or -3): the two loops' branches.
+    """
+
+    NAMES: ClassVar[tuple[str, ...]] = (
+        "r1", "r2", "r3", "r4", "r5", "r6", "dx", "dy", "fx", "fy", "rcx", "rcy", "x0", "y0",
+        "theta0",
+    )  # fmt: skip
+    LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4", "r5", "r6")
+    PIVOT_BODY: ClassVar[str] = "rocker"
+
+    r1: jax.Array
+    r2: jax.Array
+    r3: jax.Array
+    r4: jax.Array
+    r5: jax.Array
+    r6: jax.Array
+    dx: jax.Array
+    dy: jax.Array
+    fx: jax.Array
+    fy: jax.Array
+    rcx: jax.Array
+    rcy: jax.Array
+    x0: jax.Array
+    y0: jax.Array
+    theta0: jax.Array
+    branch: jax.Array
+
+    def dyad_pivot(self, phi4) -> jax.Array:
+        """The rocker's point ``F`` (2,) [length] with the rocker at ``phi4``."""
+        _, o4 = self.pivots()
+        return o4 + _turned(phi4, self.fx, self.fy)
+
+
+__all__ = ["GroundPivotSixBar", "RockerPivotSixBar", "SixBar"]

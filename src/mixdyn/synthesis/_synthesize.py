@@ -30,7 +30,7 @@ def synthesize(
     coupler passes its poses (a :class:`~._motion.MotionTask`), or whose rocker follows its
     crank as asked (a :class:`~._function.FunctionTask`), best first: four-bars, or the
     slider-cranks or six-bars of a path or motion task made with ``linkage="slider_crank"``,
-    ``"stephenson3"``, ``"watt1"`` or ``"watt2"``.
+    ``"stephenson1"``, ``"stephenson3"``, ``"watt1"`` or ``"watt2"``.
 
     Args:
         task: the path task (linkage, targets, timing, bounds, transmission angle), the motion task

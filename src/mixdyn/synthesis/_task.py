@@ -21,13 +21,14 @@ from ._fourbar import FourBar
 from ._limits import check_grashof, check_pivots
 from ._linkage import Linkage
 from ._slidercrank import SliderCrank
-from ._stephenson import StephensonIII
+from ._stephenson import StephensonI, StephensonIII
 from ._watt import WattI, WattII
 
 #: The linkage types of a path task by name (``PathTask(linkage=...)``, ``linkage:`` in files).
 LINKAGES: dict[str, type[Linkage]] = {
     "four_bar": FourBar,
     "slider_crank": SliderCrank,
+    "stephenson1": StephensonI,
     "stephenson3": StephensonIII,
     "watt1": WattI,
     "watt2": WattII,
@@ -62,7 +63,8 @@ class PathTask:
             (0: the loop only has to close).
         linkage: the linkage type: ``"four_bar"`` (:class:`~._fourbar.FourBar`, the
             default), ``"slider_crank"`` (:class:`~._slidercrank.SliderCrank`),
-            ``"stephenson3"`` (:class:`~._stephenson.StephensonIII`), ``"watt1"``
+            ``"stephenson1"`` (:class:`~._stephenson.StephensonI`), ``"stephenson3"``
+            (:class:`~._stephenson.StephensonIII`), ``"watt1"``
             (:class:`~._watt.WattI`) or ``"watt2"`` (:class:`~._watt.WattII`), or the class
             itself; held as the class (:data:`LINKAGES`).
         grashof: the Grashof type asked for (:mod:`._limits`): ``"any"`` (the default: the

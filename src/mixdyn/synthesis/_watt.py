@@ -30,60 +30,19 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-import jax
-
-from ._sixbar import GroundPivotSixBar, SixBar, _turned
+from ._sixbar import GroundPivotSixBar, RockerPivotSixBar
 
 #: Names of the numbers of a Watt I six-bar, in the order of its ``vector``.
-WATT_NAMES = (
-    "r1", "r2", "r3", "r4", "r5", "r6", "dx", "dy", "fx", "fy", "rcx", "rcy", "x0", "y0",
-    "theta0",
-)  # fmt: skip
+WATT_NAMES = RockerPivotSixBar.NAMES
 
 
-class WattI(SixBar):
-    """A Watt I six-bar's dimensions and placement [length, rad]; every field may carry a
-    batch.
+class WattI(RockerPivotSixBar):
+    """A Watt I six-bar's dimensions and placement [length, rad]
+    (:class:`~._sixbar.RockerPivotSixBar`'s fields, ``D`` in the coupler's frame: x along
+    ``A -> B``); every field may carry a batch."""
 
-    Attributes:
-        r1, r2, r3, r4: ground, crank, coupler and rocker lengths [length].
-        r5, r6: the tracer ``D E`` and the follower ``F E`` [length].
-        dx, dy: ``D`` in the coupler's frame (x along ``A -> B``) [length].
-        fx, fy: ``F`` in the rocker's frame (x along ``O4 -> B``) [length].
-        rcx, rcy: the coupler point in the tracer's frame (x along ``D -> E``) [length].
-        x0, y0: the crank's ground pivot ``O2`` [length].
-        theta0: the ground link's angle ``O2 -> O4`` [rad].
-        branch: ``b4 + 2 b6`` (3, 1, -1 or -3): the two loops' branches (:mod:`._sixbar`).
-    """
-
-    NAMES: ClassVar[tuple[str, ...]] = WATT_NAMES
-    LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4", "r5", "r6")
     KIND: ClassVar[str] = "watt1"
     TITLE: ClassVar[str] = "Watt I six-bar"
-
-    r1: jax.Array
-    r2: jax.Array
-    r3: jax.Array
-    r4: jax.Array
-    r5: jax.Array
-    r6: jax.Array
-    dx: jax.Array
-    dy: jax.Array
-    fx: jax.Array
-    fy: jax.Array
-    rcx: jax.Array
-    rcy: jax.Array
-    x0: jax.Array
-    y0: jax.Array
-    theta0: jax.Array
-    branch: jax.Array
-
-    PIVOT_BODY: ClassVar[str] = "rocker"
-
-    def dyad_pivot(self, phi4) -> jax.Array:
-        """The rocker's point ``F`` (2,) [length] with the rocker at ``phi4``."""
-        _, o4 = self.pivots()
-        return o4 + _turned(phi4, self.fx, self.fy)
 
 
 #: Names of the numbers of a Watt II six-bar, in the order of its ``vector``.

@@ -24,7 +24,7 @@ from ._fourbar import FourBar, link_angles
 from ._linkage import Linkage
 from ._sixbar import SixBar
 from ._slidercrank import SliderCrank, rod_and_slider
-from ._stephenson import StephensonIII
+from ._stephenson import StephensonI, StephensonIII
 from ._watt import WattI, WattII
 
 
@@ -254,14 +254,15 @@ def six_bar_model(
     c = np.array([r["rcx"], r["rcy"]])
     inertia = _inertia(sb, masses)
     watt = sb.PIVOT_BODY == "rocker"  # the follower's other end F on the rocker
+    crank = {"O": 0 * ex, "A": r["r2"] * ex}
     coupler = {"A": 0 * ex, "B": r["r3"] * ex}
     rocker = {"O": 0 * ex, "B": r["r4"] * ex}
-    {"coupler": coupler, "rocker": rocker}[sb.DYAD_BODY]["D"] = d
+    {"crank": crank, "coupler": coupler, "rocker": rocker}[sb.DYAD_BODY]["D"] = d
     if watt:
         rocker["F"] = np.array([r["fx"], r["fy"]])
     end = "F" if watt else "O"
     points = {
-        "crank": {"O": 0 * ex, "A": r["r2"] * ex},
+        "crank": crank,
         "coupler": coupler,
         "rocker": rocker,
         "tracer": {"D": 0 * ex, "E": r["r5"] * ex, "P": c},
@@ -306,6 +307,7 @@ def six_bar_model(
 BUILDERS = {
     FourBar: (four_bar_model, "coupler"),
     SliderCrank: (slider_crank_model, "rod"),
+    StephensonI: (six_bar_model, "tracer"),
     StephensonIII: (six_bar_model, "tracer"),
     WattI: (six_bar_model, "tracer"),
     WattII: (six_bar_model, "tracer"),
