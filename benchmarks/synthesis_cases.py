@@ -1,6 +1,6 @@
-"""mixdyn's path synthesis on the four-bar path-generation cases recorded in shared/refdata.
+"""mixdyn's path synthesis on the four-bar path-generation cases recorded in tests/data.
 
-Each case file (``fourbar_path_*.txt`` in the project's ``shared/refdata``) holds the targets,
+Each case file (``fourbar_path_*.txt`` in the repository's ``tests/data``) holds the targets,
 the timing (free, prescribed up to the start, prescribed from the ground link, or not stated),
 the variables' bounds, the source's constraints (Grashof; a crank; the points in order),
 where the source gives one, a design vector or a published linkage, whose error is computed
@@ -27,7 +27,8 @@ What ``PathTask`` cannot state is said in the table, not hidden:
 * the points' order within a turn (``order``) is checked afterwards: the table says whether
   the best linkage meets the source's constraints and gives the best candidate that does.
 
-Run: ``python benchmarks/synthesis_cases.py [--starts 2048] [--refdata DIR] [--case NAME]``.
+Run: ``python benchmarks/synthesis_cases.py [--starts 2048] [--refdata DIR] [--case NAME]``
+(``--refdata``: the folder of the case files, ``REFDATA`` by default).
 """
 
 from __future__ import annotations
@@ -52,8 +53,8 @@ FIXED_WIDTH = 1e-9
 UNSTATED = {"lengths": (0.01, 10.0), "coupler": 10.0, "pivot": 6.0}
 #: The four-bar's numbers in the order of ``mixdyn.synthesis.NAMES``.
 NAMES = ("r1", "r2", "r3", "r4", "rcx", "rcy", "x0", "y0", "theta0")
-#: The project's shared reference data, beside the repository.
-REFDATA = pathlib.Path(__file__).resolve().parents[2] / "shared" / "refdata"
+#: The folder of the case files: the repository's ``tests/data``.
+REFDATA = pathlib.Path(__file__).resolve().parents[1] / "tests" / "data"
 
 _OPS = {
     ast.Add: operator.add,
@@ -367,14 +368,19 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--starts", type=int, default=2048)
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--refdata", type=pathlib.Path, default=REFDATA)
+    parser.add_argument(
+        "--refdata", type=pathlib.Path, default=REFDATA, help="the case files' folder"
+    )
     parser.add_argument("--case", action="append", help="a file's stem (default: all)")
     args = parser.parse_args()
-    import jax
-
     files = sorted(args.refdata.glob("fourbar_path_*.txt"))
     if args.case:
         files = [f for f in files if f.stem in args.case]
+    if not files:  # a named input error (exit 2) before importing or computing anything
+        which = f" named {', '.join(args.case)}" if args.case else ""
+        parser.error(f"no case file fourbar_path_*.txt{which} in {args.refdata} (see --refdata)")
+    import jax
+
     print(f"{platform.processor() or platform.machine()}, JAX on {jax.devices()[0].platform}, "
           f"{args.starts} starts, seed {args.seed} (times include compiling)\n")  # fmt: skip
     print(
