@@ -1,5 +1,13 @@
-"""Four-bar path generation on cases of the dimensional-synthesis literature, as recorded in the
-project's ``shared/refdata`` (copied to ``tests/data``; each file opens with its source).
+"""Four-bar path generation on cases of the dimensional-synthesis literature, as recorded in
+``tests/data`` (``fourbar_path_*.txt``, each file opening with its source), the cases of
+``benchmarks/synthesis_cases.py``.
+
+* Every case file: the benchmark's parser reads it (targets, timing, bounds) as the small parser
+  here does.
+* ``fourbar_path_mkh2016_case{1,2,3}.txt``: closed paths of Bulatovic et al. (MKH, Mechanism and
+  Machine Theory 95, 2016) with the linkage four-bar-rs records as that paper's. The linkage's
+  error, the nearest coupler point to each target (timing not stated), is computed here and
+  equals the benchmark's and the "reference, computed here" column of ``benchmarks/RESULTS.md``.
 
 * ``fourbar_path_nguyenvan2022_case1.txt``: six points on a line, timing free, with a design
   vector from the companion code of Nguyen-Van et al. (Symmetry 14:381, 2022) that draws them
@@ -16,15 +24,22 @@ The error is the sources' ``sum_i |C(theta2_i) - P_i|^2``.
 
 from __future__ import annotations
 
+import importlib.util
+import sys
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
 
 import mixdyn as md
-from fixtures import DATA
+from fixtures import DATA, ROOT
 from mixdyn.synthesis import FourBar, PathTask, coupler_curve
 
 NAMES = ("r1", "r2", "r3", "r4", "rcx", "rcy", "x0", "y0", "theta0")
+#: The MKH linkages' errors in ``benchmarks/RESULTS.md`` ("reference, computed here").
+MKH_TABLE = {1: 4.96e-3, 2: 1.49e-4, 3: 3.87e-2}
+#: The cases of ``benchmarks/RESULTS.md``: five of Nguyen-Van et al. (2022), three MKH paths.
+CASES = 8
 #: A length's lower bound where the source says 0 (PathTask's lengths are > 0).
 LENGTH_FLOOR = 1e-3
 
@@ -96,6 +111,52 @@ def test_mixdyn_coupler_point_draws_the_published_design():
     assert errors[branch] == pytest.approx(1.31e-11, rel=1e-2)
     ours = np.asarray(coupler_curve(FourBar.from_vector(v, branch), theta2))
     np.testing.assert_allclose(ours, coupler(v, branch, theta2)[0], rtol=0, atol=1e-12 * 45)
+
+
+def _benchmark():
+    """``benchmarks/synthesis_cases.py`` as a module (registered: its dataclass needs that)."""
+    name = "benchmarks_synthesis_cases"
+    if name not in sys.modules:
+        path = ROOT / "benchmarks" / "synthesis_cases.py"
+        spec = importlib.util.spec_from_file_location(name, path)
+        sys.modules[name] = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(sys.modules[name])
+    return sys.modules[name]
+
+
+def test_case_files_parse_and_the_mkh_references_are_the_tables():
+    """The benchmark reads the eight case files of ``tests/data`` by default, its parser finds the
+    same targets, timing and bounds as the parser here; the MKH linkages' errors (the nearest
+    coupler point to each target on 20,000 input angles, the better branch, from the two circles'
+    intersection here) equal the benchmark's and RESULTS' table to its 3 digits."""
+    bench = _benchmark()
+    files = sorted(DATA.glob("fourbar_path_*.txt"))
+    assert bench.REFDATA.resolve() == DATA.resolve()
+    assert len(files) == CASES
+    for path in files:
+        theirs, ours = bench.read_case(path), read_case(path.name)
+        assert theirs.source.startswith("# source: "), path.name
+        np.testing.assert_array_equal(theirs.points, ours["point"], err_msg=path.name)
+        assert theirs.points.shape[0] >= 5 and theirs.points.shape[1] == 2, path.name
+        kind, values = ours["timing"]
+        assert theirs.timing == kind, path.name
+        np.testing.assert_allclose(theirs.angles, values, rtol=1e-15, err_msg=path.name)
+        assert theirs.bounds == ours["bound"], path.name
+    grid = np.linspace(0.0, 2 * np.pi, 20_000, endpoint=False)
+    for k, table in MKH_TABLE.items():
+        name = f"fourbar_path_mkh2016_case{k}.txt"
+        case = read_case(name)
+        v, points = from_four_bar_rs(*case["linkage_fourbar_rs"]), case["point"]
+        errors = []
+        for branch in (1.0, -1.0):
+            c, closes = coupler(v, branch, grid)
+            d2 = np.sum((c[None] - points[:, None]) ** 2, axis=2)
+            errors.append(np.sum(np.min(np.where(closes, d2, np.inf), axis=1)))
+        error = min(errors)
+        assert float(f"{error:.3g}") == table, (name, error)
+        benchs, how = bench.reference_error(bench.read_case(DATA / name))
+        assert how == "nearest points"
+        assert benchs == pytest.approx(error, rel=1e-12), name
 
 
 @pytest.mark.slow  # long: run by CI's slow set
