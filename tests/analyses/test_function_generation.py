@@ -72,10 +72,14 @@ def test_bad_function_tasks_are_named():
 @pytest.mark.slow  # long: run by CI's slow set (the search compiles its program)
 def test_synthesis_finds_freudensteins_linkage():
     """The batched Levenberg-Marquardt search from random ratios finds the closed form's
-    four-bar: its ratios to 1e-9 and its output angles at the three points to 1e-9."""
+    four-bar: its ratios to 1e-9 and its output angles at the three points to 1e-9; the
+    search given as a SearchSettings value finds the same."""
     task = _task()
     out = md.synthesize(task, starts=64, seed=0)
     best = out.best
+    # the same search as one value: the same outcome, bit for bit
+    again = md.synthesize(task, search=md.synthesis.SearchSettings(starts=64, seed=0)).best
+    assert again.error == best.error and float(again.fourbar.r3) == float(best.fourbar.r3)
     a, b, c = freudenstein(task.inputs, task.outputs)
     found = [float(best.fourbar.r2), float(best.fourbar.r3), float(best.fourbar.r4)]
     np.testing.assert_allclose(found, [a, b, c], rtol=1e-9)

@@ -291,18 +291,11 @@ def task_element(path, element: str | None, options: dict) -> tuple:
 
 def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
     """Search (:func:`mixdyn.synthesize`); no feasible linkage is a numerical failure."""
-    from ..synthesis import synthesize
+    from ..synthesis import SearchSettings, synthesize
 
     r: s.SynthesisRunSpec = plan.spec
-    out = synthesize(
-        plan.task,
-        plan.objective,
-        starts=r.starts,
-        seed=r.seed,
-        max_steps=r.max_steps,
-        keep=r.keep,
-        progress=progress,
-    )
+    search = SearchSettings(starts=r.starts, seed=r.seed, max_steps=r.max_steps, keep=r.keep)
+    out = synthesize(plan.task, plan.objective, search, progress=progress)
     if not out.candidates:
         raise NumericalError(
             f"no feasible {_title(plan.task)} among {r.starts} starts (none closes its loop "

@@ -53,6 +53,7 @@ from ._limits import GRASHOF, grashof_type
 from ._linkage import Linkage
 from ._motion import MotionTask
 from ._search import Candidate, Synthesis
+from ._settings import SearchSettings
 from ._shape import ShapeCandidate, ShapeSynthesis, ShapeTask
 from ._sixbar import SixBar
 from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
@@ -87,6 +88,7 @@ __all__ = [
     "MotionTask",
     "Objective",
     "PathTask",
+    "SearchSettings",
     "ShapeCandidate",
     "ShapeSynthesis",
     "ShapeTask",

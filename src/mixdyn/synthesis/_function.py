@@ -33,9 +33,9 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ..errors import ModelError
 from ._fourbar import FourBar, link_angles, transmission_cosine
 from ._limits import grashof_gaps, penalty
+from ._settings import SearchSettings
 from ._solve import (
     CHECK_SAMPLES,
     CLOSURE_MARGIN,
@@ -211,12 +211,8 @@ def _figures(task: FunctionTask):
 
 def synthesize_function(
     task: FunctionTask,
+    search: SearchSettings,
     *,
-    starts: int = 256,
-    seed: int = 0,
-    chunk: int = 512,
-    max_steps: int = 300,
-    keep: int = 10,
     samples: int = 48,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> FunctionSynthesis:
@@ -225,12 +221,9 @@ def synthesize_function(
 
     Args:
         task: the function task.
-        starts: random starts (the ratios log-uniform within the bounds, the start angles
-            uniform over a turn), half on each assembly branch.
-        seed: the random generator's seed.
-        chunk: starts solved together (one vectorized program).
-        max_steps: Levenberg-Marquardt's steps at most per start.
-        keep: distinct candidates returned at most.
+        search: the starts (the ratios log-uniform within the bounds, the start angles
+            uniform over a turn; half on each assembly branch), seed, chunk, steps and
+            candidates kept (:class:`~._settings.SearchSettings`; ``polish`` unused).
         samples: input angles of the closure penalty from the first input to the last.
         progress: called after each chunk with ``("search", starts done, starts, best sum
             of squared residuals so far)``.
@@ -238,11 +231,9 @@ def synthesize_function(
     Returns:
         A :class:`FunctionSynthesis`.
     """
-    for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
-        if int(value) < 1:
-            raise ModelError(f"{label} must be at least 1, got {value!r}", label)
+    starts = search.starts
     started = time.perf_counter()
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(search.seed)
     lo, hi = task.bounds
     u0 = np.exp(rng.uniform(np.log(lo), np.log(hi), (starts, 3)))
     if task.free_start:
@@ -250,8 +241,8 @@ def synthesize_function(
     branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b))
     residuals = _residuals(task, int(samples))
-    solve = jax.jit(levenberg_marquardt(residuals, int(max_steps)))
-    u_all, _ = solve_all(solve, u0, branches, min(int(chunk), starts), report)
+    solve = jax.jit(levenberg_marquardt(residuals, search.max_steps))
+    u_all, _ = solve_all(solve, u0, branches, search.chunk_size, report)
     error, worst = (np.asarray(a) for a in _figures(task)(u_all, branches))
     slack = 1e-9 * hi
     ok = np.isfinite(error) & (worst <= np.cos(task.min_transmission))
@@ -273,14 +264,14 @@ def synthesize_function(
                 min_transmission=float(np.arccos(min(float(worst[i]), 1.0))),
             )
         )
-        if len(kept) == keep:
+        if len(kept) == search.keep:
             break
     return FunctionSynthesis(
         task=task,
         candidates=tuple(kept),
         starts=starts,
         feasible=int(ok.sum()),
-        seed=seed,
+        seed=search.seed,
         seconds=time.perf_counter() - started,
     )
 

@@ -59,6 +59,7 @@ from ._fourbar import FourBar
 from ._limits import LIMIT_MARGIN, grashof_gaps, penalty, region_arrays, region_gaps
 from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
+from ._settings import SearchSettings
 from ._slidercrank import SliderCrank
 from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
 from ._task import Objective, PathTask
@@ -474,22 +475,15 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
 
 def synthesize_path(
     task: PathTask | MotionTask,
-    objective: Objective | None = None,
+    objective: Objective | None,
+    search: SearchSettings,
     *,
-    starts: int = 2048,
-    seed: int = 0,
-    chunk: int = 512,
-    max_steps: int = 300,
-    keep: int = 10,
-    polish: bool = True,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis:
     """The search of a path or motion task (:func:`~._synthesize.synthesize`'s, whose
     docstring gives the arguments)."""
     objective = objective or Objective()
-    for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
-        if int(value) < 1:
-            raise ModelError(f"{label} must be at least 1, got {value!r}", label)
+    starts, max_steps = search.starts, search.max_steps
     masses = objective.masses
     if masses is not None and task.linkage not in DYNAMICS:
         raise ModelError(
@@ -504,7 +498,7 @@ def synthesize_path(
             "masses",
         )
     started = time.perf_counter()
-    chunk = min(int(chunk), int(starts))
+    chunk = search.chunk_size
     box = task.box()
     layout = _Layout(
         len(task.points),
@@ -516,7 +510,7 @@ def synthesize_path(
     )
     data = _data(layout, task, objective, box)
     weighed = _program(task, objective, max_steps, torque=True)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(search.seed)
     u0 = _starts(layout, task, box, starts, rng)
     codes = np.asarray(task.linkage.BRANCHES)
     branches = codes[np.arange(starts) % len(codes)]
@@ -524,7 +518,7 @@ def synthesize_path(
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b * s2))
     solve = functools.partial(_solve_chunk, weighed, data)
     u_all, score_all = solve_all(solve, u0, branches, chunk, report)
-    if polish and objective.dynamic:
+    if search.polish and objective.dynamic:
         path_only = _program(task, objective, max_steps, torque=False)
         report = None if progress is None else (lambda d, n, b: progress("polish", d, n, b * s2))
         solve = functools.partial(_solve_chunk, path_only, data)
@@ -532,7 +526,7 @@ def synthesize_path(
         score_all = np.asarray(_scores(weighed, data, u_all, branches))
     score_all = score_all * s2
     candidates, feasible = _rank(
-        layout, task, objective, box, u_all, branches, score_all, keep, (weighed, data)
+        layout, task, objective, box, u_all, branches, score_all, search.keep, (weighed, data)
     )
     return Synthesis(
         task=task,
@@ -540,7 +534,7 @@ def synthesize_path(
         candidates=tuple(candidates),
         starts=starts,
         feasible=feasible,
-        seed=seed,
+        seed=search.seed,
         seconds=time.perf_counter() - started,
     )
 

@@ -57,6 +57,7 @@ from ._fourbar import FourBar
 from ._fourier import Normalised, describe, normalise, resample, shape_gap, similarity
 from ._linkage import Linkage, coupler_curve
 from ._search import Candidate, Synthesis
+from ._settings import SearchSettings
 from ._slidercrank import SliderCrank
 from ._solve import (
     CHECK_SAMPLES,
@@ -439,13 +440,9 @@ def _dynamics(lk: Linkage, objective: Objective, sense: float) -> dict:
 
 def synthesize_shape(
     task: ShapeTask,
-    objective: Objective | None = None,
+    objective: Objective | None,
+    search: SearchSettings,
     *,
-    starts: int = 2048,
-    seed: int = 0,
-    chunk: int = 512,
-    max_steps: int = 300,
-    keep: int = 10,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> ShapeSynthesis:
     """Linkages whose coupler curve over a full crank turn has the shape of ``task``'s closed
@@ -456,11 +453,8 @@ def synthesize_shape(
         task: the shape task.
         objective: the links' masses and the crank's speed for the reported torques (its
             weights must be 0: the shape error alone is searched).
-        starts: random starts, half on each assembly branch.
-        seed: the random generator's seed.
-        chunk: starts solved together (one vectorized program).
-        max_steps: Levenberg-Marquardt's steps at most per start.
-        keep: distinct candidates returned at most.
+        search: the starts (half on each assembly branch), seed, chunk, steps and
+            candidates kept (:class:`~._settings.SearchSettings`; ``polish`` unused).
         progress: called after each chunk with ``("search", starts done, starts, best sum
             of squared residuals so far)``.
 
@@ -468,8 +462,8 @@ def synthesize_shape(
         A :class:`ShapeSynthesis` of :class:`ShapeCandidate`\\ s.
 
     Raises:
-        ModelError: a dynamic weight in the objective; a bad number of starts, chunk or
-            steps; a slider-crank's masses without a slider's mass.
+        ModelError: a dynamic weight in the objective; a slider-crank's masses without a
+            slider's mass.
     """
     objective = objective or Objective()
     if objective.dynamic:
@@ -478,9 +472,7 @@ def synthesize_shape(
             "shaking or reaction weights (its masses and speed give the reported figures)",
             "objective",
         )
-    for label, value in (("starts", starts), ("chunk", chunk), ("max_steps", max_steps)):
-        if int(value) < 1:
-            raise ModelError(f"{label} must be at least 1, got {value!r}", label)
+    starts = search.starts
     masses = objective.masses
     if masses is not None and task.linkage is SliderCrank and not masses.slider > 0:
         raise ModelError(
@@ -501,12 +493,13 @@ def synthesize_shape(
         "cmax": np.float64(float(np.cos(task.min_transmission)) - (1.0 - CLOSURE_MARGIN)),
     }
     either = task.sense == "either"
-    program = _Program(task.linkage, task.harmonics, task.samples, int(max_steps), either)
-    u0 = _starts(task.linkage, int(starts), float(data["cmax"]), np.random.default_rng(seed))
-    branches = np.where(np.arange(int(starts)) % 2 == 0, 1.0, -1.0)
+    program = _Program(task.linkage, task.harmonics, task.samples, search.max_steps, either)
+    rng = np.random.default_rng(search.seed)
+    u0 = _starts(task.linkage, starts, float(data["cmax"]), rng)
+    branches = np.where(np.arange(starts) % 2 == 0, 1.0, -1.0)
     report = None if progress is None else (lambda d, n, b: progress("search", d, n, b))
     solve = lambda u, b: _solve_chunk(program, data, u, b)  # noqa: E731
-    u_all, scores = solve_all(solve, u0, branches, min(int(chunk), int(starts)), report)
+    u_all, scores = solve_all(solve, u0, branches, search.chunk_size, report)
     error, flip, back, worst, norms = _figures(program, data, u_all, branches)
     error, flip, back, worst = (np.asarray(a) for a in (error, flip, back, worst))
     slack = 1e-9 * high
@@ -536,15 +529,15 @@ def synthesize_shape(
                 **figures,
             )
         )
-        if len(kept) == keep:
+        if len(kept) == search.keep:
             break
     return ShapeSynthesis(
         task=task,
         objective=objective,
         candidates=tuple(kept),
-        starts=int(starts),
+        starts=starts,
         feasible=int(ok.sum()),
-        seed=seed,
+        seed=search.seed,
         seconds=time.perf_counter() - started,
     )
 

@@ -4,12 +4,14 @@ or motion task's :func:`~._search.synthesize_path`, a function task's
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 
 from ..errors import ModelError
 from ._function import FunctionSynthesis, synthesize_function
 from ._motion import MotionTask
 from ._search import Synthesis, synthesize_path
+from ._settings import SearchSettings
 from ._shape import ShapeSynthesis, ShapeTask, synthesize_shape
 from ._task import FunctionTask, Objective, PathTask
 
@@ -17,13 +19,14 @@ from ._task import FunctionTask, Objective, PathTask
 def synthesize(
     task: PathTask | MotionTask | FunctionTask | ShapeTask,
     objective: Objective | None = None,
+    search: SearchSettings | None = None,
     *,
-    starts: int = 2048,
-    seed: int = 0,
-    chunk: int = 512,
-    max_steps: int = 300,
-    keep: int = 10,
-    polish: bool = True,
+    starts: int | None = None,
+    seed: int | None = None,
+    chunk: int | None = None,
+    max_steps: int | None = None,
+    keep: int | None = None,
+    polish: bool | None = None,
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis | FunctionSynthesis | ShapeSynthesis:
     """Linkages whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
@@ -36,21 +39,16 @@ def synthesize(
         task: the path task (linkage, targets, timing, bounds, transmission angle), the motion task
             (poses, bounds, transmission angle: a timing-free path task whose coupler angles
             count too, :mod:`._motion`), or the function task (input-output angle pairs;
-            :func:`~._function.synthesize_function`, which takes ``starts``, ``seed``,
-            ``chunk``, ``max_steps``, ``keep`` and ``progress``), or the shape task (a
-            closed curve's shape, :class:`~._shape.ShapeTask`: :func:`~._shape.synthesize_shape`,
-            ``polish`` unused).
+            :func:`~._function.synthesize_function`), or the shape task (a closed curve's
+            shape, :class:`~._shape.ShapeTask`: :func:`~._shape.synthesize_shape`, ``polish``
+            unused).
         objective: the objective (default: the path error alone; a function task's is its
             angle error, and it takes none).
-        starts: random starts, half on each assembly branch.
-        seed: the random generator's seed (the same seed, the same starts and outcome).
-        chunk: starts solved together (one vectorized program, compiled once).
-        max_steps: Levenberg-Marquardt's steps at most per start.
-        keep: distinct candidates returned at most.
-        polish: with a torque weight, each outcome solved once more for the path (a motion
-            task's poses) alone from where the weighted search left it (the nearest linkage
-            that draws the path as well as it can, at nearly the same torque), then scored by
-            the objective.
+        search: how to search (:class:`~._settings.SearchSettings`: starts, seed, chunk,
+            steps, candidates kept, polish); default ``SearchSettings()``.
+        starts, seed, chunk, max_steps, keep, polish: the same, one by one, each replacing
+            ``search``'s (2048 starts, seed 0, chunks of 512, 300 steps, 10 kept, polished
+            by default).
         progress: called after each chunk with ``(stage, starts done, starts, best score so
             far)``, ``stage`` ``"search"`` or ``"polish"``.
 
@@ -61,45 +59,21 @@ def synthesize(
         :class:`~._shape.ShapeSynthesis`, its candidates' error the shape error.
 
     Raises:
-        ModelError: a bad number of starts, chunk or step count; an objective for a
-            function task; a slider-crank's masses without a slider's mass.
+        ModelError: a bad number of starts, chunk, step count or candidates kept; an
+            objective for a function task; a slider-crank's masses without a slider's mass.
     """
+    given = dict(starts=starts, seed=seed, chunk=chunk, max_steps=max_steps, keep=keep)
+    given = {k: v for k, v in (*given.items(), ("polish", polish)) if v is not None}
+    search = dataclasses.replace(search or SearchSettings(), **given)
     if isinstance(task, FunctionTask):
         if objective is not None:
             raise ModelError(
                 "a function task's objective is its angle error: give no objective", "objective"
             )
-        return synthesize_function(
-            task,
-            starts=starts,
-            seed=seed,
-            chunk=chunk,
-            max_steps=max_steps,
-            keep=keep,
-            progress=progress,
-        )
+        return synthesize_function(task, search, progress=progress)
     if isinstance(task, ShapeTask):
-        return synthesize_shape(
-            task,
-            objective,
-            starts=starts,
-            seed=seed,
-            chunk=chunk,
-            max_steps=max_steps,
-            keep=keep,
-            progress=progress,
-        )
-    return synthesize_path(
-        task,
-        objective,
-        starts=starts,
-        seed=seed,
-        chunk=chunk,
-        max_steps=max_steps,
-        keep=keep,
-        polish=polish,
-        progress=progress,
-    )
+        return synthesize_shape(task, objective, search, progress=progress)
+    return synthesize_path(task, objective, search, progress=progress)
 
 
 __all__ = ["synthesize"]
