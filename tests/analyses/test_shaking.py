@@ -14,7 +14,9 @@ truths:
 * the objective: refused without masses; with the shaking force weighed, a search finds a
   linkage through the same points that shakes less than the kinematics-only optimum, by
   md.inverse's reactions (slow); with a reaction weight the search's last residual is the
-  joints' forces' measure recomputed here (slow).
+  joints' forces' measure recomputed here (slow), and the search finds a linkage through the
+  same points whose largest pin force, by md.inverse, is under half the kinematics-only
+  optimum's (slow).
 """
 
 import jax.numpy as jnp
@@ -223,3 +225,26 @@ def test_a_reaction_weight_scores_the_joint_forces_measure():
     loads = np.linalg.norm(np.asarray(reactions(fb, WEIGHING, grid, SPEED)[0]), axis=2)
     want = 0.2 * np.mean(loads**8) ** (1 / 8) / layout.scale
     assert last == pytest.approx(want, rel=1e-12)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (two searches, ~30 s)
+def test_the_reaction_objective_lowers_the_largest_pin_force_at_the_same_path_error():
+    """Five points, timing-free, gravity on: with the peak joint reaction in the objective
+    the best linkage still passes the points (error ~ 0) and its largest pin force over the
+    motion, from md.inverse's ``{joint}.Fx``, ``.Fy`` of its model, is under half the
+    kinematics-only optimum's (benchmarks/synthesis_reactions.py: 121.6 -> 17.5 N)."""
+    points = np.array([[0.50, 0.30], [0.58, 0.42], [0.48, 0.55], [0.32, 0.50], [0.30, 0.36]])
+    masses, speed = Masses(density=2.0, payload=0.5), 2 * np.pi
+    task = PathTask(points)
+    plain = Objective(masses=masses, speed=speed)
+    weighed = Objective(masses=masses, speed=speed, reaction_weight=1e-6, reaction="peak")
+    largest = []
+    for objective in (plain, weighed):
+        out = synthesize(task, objective, starts=16, seed=3)
+        c = out.best
+        assert c.error < 1e-16
+        t = np.linspace(0.0, (c.angles[-1] - c.angles[0]) / speed, 257)
+        r = md.inverse(out.model(), t)
+        forces = [np.hypot(r[f"{j}.Fx"], r[f"{j}.Fy"]) for j in ("O2", "A", "B", "O4")]
+        largest.append(max(float(np.max(f)) for f in forces))
+    assert largest[1] < largest[0] / 2
