@@ -5,8 +5,9 @@ A set's pairs are enumerated once, at binding: every two of its circles on two d
 bodies (two circles of one body never touch each other). Each evaluation then computes one
 centre distance per pair, all at once (the broad phase: a pair apart costs that distance),
 and the contact forces only while some pair touches (the compliant law's narrow phase,
-:meth:`~mixdyn.model._compliant._Compliant.passive`), as MuJoCo MJX enumerates its
-candidate pairs when its model is made and tests them all in one vectorized pass.
+:meth:`~mixdyn.model._compliant._Compliant.passive`), as MuJoCo MJX's collision driver
+fixes its geometry pairs from the model, so that each collision function runs on static
+shapes over all its pairs at once.
 """
 
 from __future__ import annotations
