@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures import four_bar, slider_crank, spring_slider
+from fixtures import four_bar, pushed_spring_slider, slider_crank
 from mixdyn.analysis import _members, _static_members
 
 SWEEP = sys.modules["mixdyn.analysis.sweep"]
@@ -88,15 +88,7 @@ def test_members_sharing_a_start_rest_where_the_spring_balances_the_push(two_a_c
     each rests at ``x = 0.5 + F / k`` at every time, with its single run's columns and
     stiffness eigenvalues; the member without a spring has no equilibrium and fails as its
     single run does (at the first time)."""
-    base = spring_slider(damping=0.0)
-    model = md.Model(
-        bodies=base.bodies,
-        joints=base.joints,
-        forces=[*base.forces, md.PointForce("push", "slider", along=(1, 0), law=md.Constant(20.0))],
-        ground={"O": (0.0, 0.0)},
-        gravity=(0.0, -9.81),
-        units=md.SI,
-    )
+    model = pushed_spring_slider(gravity=(0.0, -9.81))
     vary = md.grid(**{"spring.stiffness": [0.0, 100.0, 400.0], "push.law.value": [10.0, 30.0]})
     swept = md.sweep(model, T, vary=vary, analysis=VALUE)
     assert isinstance(swept.stacked.models, md.Model)  # one start, shared

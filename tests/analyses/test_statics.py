@@ -12,7 +12,14 @@ import pytest
 from scipy.optimize import minimize_scalar
 
 import mixdyn as md
-from fixtures import EXAMPLES, four_bar, four_bar_pose, pendulum, slider_crank, spring_slider
+from fixtures import (
+    EXAMPLES,
+    four_bar,
+    four_bar_pose,
+    pendulum,
+    pushed_spring_slider,
+    slider_crank,
+)
 
 G = 9.81
 
@@ -98,15 +105,7 @@ def test_loads_that_balance_at_the_start_keep_their_size():
     no gravity: from the second time on the start is the equilibrium, where the loads sum
     to zero; the residual is still measured against the loads' size, so each time rests at
     x = 0.5 + F/k (closed form) in no Newton step rather than failing."""
-    base = spring_slider(damping=0.0)
-    model = md.Model(
-        bodies=base.bodies,
-        joints=base.joints,
-        forces=[*base.forces, md.PointForce("push", "slider", along=(1, 0), law=md.Constant(20.0))],
-        ground={"O": (0.0, 0.0)},
-        gravity=(0.0, 0.0),
-        units=md.SI,
-    )
+    model = pushed_spring_slider()
     res = md.quasi_static(model, np.linspace(0.0, 1.0, 4))
     np.testing.assert_allclose(res["slider.x"], 0.5 + 20.0 / 800.0, rtol=1e-12)
 

@@ -111,9 +111,9 @@ def link_inertia(fb: Linkage, masses: Masses) -> dict[str, tuple]:
     """
     z = jnp.zeros(2)
     ex = jnp.array([1.0, 0.0])
-    crank = _bars([(z, fb.r2 * ex)], masses.density)
     if isinstance(fb, SixBar):
-        return _six_bar_inertia(fb, masses, crank)
+        return _six_bar_inertia(fb, masses)
+    crank = _bars([(z, fb.r2 * ex)], masses.density)
     coupler = _coupler(fb, masses)
     if isinstance(fb, SliderCrank):
         m = jnp.asarray(masses.slider, dtype=jnp.float64)
@@ -140,19 +140,18 @@ def _plate(length, c, density, payload):
     return m3, g3, j3
 
 
-def _six_bar_inertia(sb: SixBar, masses: Masses, crank) -> dict[str, tuple]:
-    """A six-bar's links (:func:`link_inertia`): the coupler and the rocker each the triangle
-    of its two pins and the third point it carries (``D``, or a Watt I rocker's ``F``), or a
-    bar where it carries none; the tracer the triangle ``D E C`` with the payload at ``C``,
-    the follower a bar; the frames as the model's (:func:`~.build.six_bar_model`: from
-    ``A``, ``O4``, ``D``, ``X`` along their links)."""
+def _six_bar_inertia(sb: SixBar, masses: Masses) -> dict[str, tuple]:
+    """A six-bar's links (:func:`link_inertia`): the crank, the coupler and the rocker each
+    the triangle of its two pins and the third point it carries (``D``, or a Watt I rocker's
+    ``F``), or a bar where it carries none; the tracer the triangle ``D E C`` with the
+    payload at ``C``, the follower a bar; the frames as the model's
+    (:func:`~.build.six_bar_model`: from ``O2``, ``A``, ``O4``, ``D``, ``X`` along their
+    links)."""
     z, ex = jnp.zeros(2), jnp.array([1.0, 0.0])
     rho = masses.density
     third = {sb.DYAD_BODY: jnp.stack([sb.dx, sb.dy])}
     if sb.PIVOT_BODY == "rocker":
         third["rocker"] = jnp.stack([sb.fx, sb.fy])
-    if "crank" in third:  # the crank the triangle O2 A D
-        crank = _plate(sb.r2, third["crank"], rho, 0.0)
 
     def link(name, length):
         if name in third:
@@ -160,7 +159,7 @@ def _six_bar_inertia(sb: SixBar, masses: Masses, crank) -> dict[str, tuple]:
         return _bars([(z, length * ex)], rho)
 
     return {
-        "crank": crank,
+        "crank": link("crank", sb.r2),
         "coupler": link("coupler", sb.r3),
         "rocker": link("rocker", sb.r4),
         "tracer": _plate(sb.r5, jnp.stack([sb.rcx, sb.rcy]), rho, masses.payload),

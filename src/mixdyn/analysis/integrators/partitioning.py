@@ -50,12 +50,18 @@ def _complete(problem: Problem, q_ref, D, I, v, vd, t, tol, iters=8):
 
     if c.batched:
         # A sweep's one program (not differentiated): under ``vmap`` a ``cond`` runs its
-        # branch for every member; this loop stops once every member is closed.
+        # branch for every member; this loop stops once every member is closed (the
+        # residual carried, evaluated once per step).
         def go_on(state):
-            k, q = state
-            return (k < iters) & far(c(q, t))
+            k, _, r = state
+            return (k < iters) & far(r)
 
-        _, q = jax.lax.while_loop(go_on, lambda s: (s[0] + 1, newton(s[1], c(s[1], t))), (0, q))
+        def step(state):
+            k, q, r = state
+            q = newton(q, r)
+            return k + 1, q, c(q, t)
+
+        _, q, _ = jax.lax.while_loop(go_on, step, (0, q, c(q, t)))
     else:
 
         def body(_, q):
