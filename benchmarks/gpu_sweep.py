@@ -20,6 +20,9 @@ member: the program before the any-member guard); ``--variant nofallback`` remov
 ``--full 1000 10000`` also times the whole ``md.sweep`` of that many members (set-up,
 integration and finishing into Results, from ``Sweep.seconds``).
 
+``--linear-solver dense`` factors with LAPACK (cuSOLVER on a GPU); ``unrolled:16`` writes the
+factorizations out as straight-line code up to 16 rows (the paper's model has 10).
+
 Run: ``python benchmarks/gpu_sweep.py 1024 10000 [--variant default|nofallback] [--full N]``
 (``MIXDYN_NO_CACHE=1`` for a variant other than the default: programs are cached by structure).
 """
@@ -42,6 +45,9 @@ def main() -> None:
     ap.add_argument("--variant", default="default", choices=["default", "select", "nofallback"])
     ap.add_argument("--batch-size", type=int, default=0, help="0: all members at once")
     ap.add_argument("--method", default="projection")
+    ap.add_argument(
+        "--linear-solver", default="auto", help="auto, dense, or unrolled:N (up to N rows)"
+    )
     ap.add_argument("--full", nargs="*", type=int, default=[], help="whole md.sweep of these")
     a = ap.parse_args()
 
@@ -61,11 +67,14 @@ def main() -> None:
         jac.guarded = lambda f, A, rank=None, batched=False: f
 
     print(f"jax {jax.__version__} on {jax.devices()[0].device_kind} ({jax.default_backend()})")
-    print(f"variant {a.variant}, method {a.method}")
+    print(f"variant {a.variant}, method {a.method}, linear solver {a.linear_solver}")
+    solver = a.linear_solver
+    if solver.startswith("unrolled:"):
+        solver = md.linalg.UnrolledSolver(max_rows=int(solver.split(":")[1]))
     ts = np.linspace(0.0, 2.0, 201)
-    opts = dict(method=a.method, rtol=1e-8)
+    opts = dict(method=a.method, rtol=1e-8, linear_solver=solver)
     if a.method == "baumgarte":
-        opts = dict(method="baumgarte", dt=1e-3)
+        opts = dict(method="baumgarte", dt=1e-3, linear_solver=solver)
     model = paper_under_loads()
     get_m, _ = md.paths.getter(model, "slider.mass")
     get_a, _ = md.paths.getter(model, "F1.law.amplitude")

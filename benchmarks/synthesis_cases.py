@@ -20,10 +20,10 @@ What ``PathTask`` cannot state is said in the table, not hidden:
 
 * a length's lower bound of 0 becomes ``LENGTH_FLOOR`` (``PathTask`` wants lengths > 0);
 * a fixed number (``x0 = y0 = theta0 = 0``) becomes a bound of width ``2 * FIXED_WIDTH``;
-* prescribed timing is prescribed up to a common start in ``PathTask``: where the source
-  prescribes the input angles from the ground link (``timing absolute``), mixdyn's problem is
-  wider; the error at the source's own angles is then given too (the linkage re-measured at
-  the prescribed angles);
+* where the source prescribes the input angles from the ground link (``timing absolute``),
+  ``PathTask`` takes them so (``timing_from="ground"``); the error at the source's own angles
+  is measured here too (the linkage re-measured at the prescribed angles), a check that the
+  search kept them;
 * the points' order within a turn (``order``) is checked afterwards: the table says whether
   the best linkage meets the source's constraints and gives the best candidate that does.
 
@@ -202,7 +202,10 @@ def path_task(case: Case):
         grashof = "crank_rocker"
     elif "grashof" in case.constraints:
         grashof = "grashof"
-    return PathTask(case.points, timing=timing, bounds=bounds, grashof=grashof)
+    timing_from = "ground" if case.timing == "absolute" else "first"
+    return PathTask(
+        case.points, timing=timing, bounds=bounds, grashof=grashof, timing_from=timing_from
+    )
 
 
 def coupler_points(v, branch: float, theta2) -> tuple[np.ndarray, np.ndarray]:

@@ -1,8 +1,8 @@
 """A kinematic sweep held as arrays (:mod:`mixdyn.analysis._kinematic_members`): each member
 prepared like a single run, one vectorized program running the single run's scan, every
 member's result built when read. Truth: ``md.kinematic`` of each member's model (a second
-method, member by member): the members' columns, a point's, the counters, and a failed
-member's named error (its class and time)."""
+method, member by member): the members' columns and a point's to rounding, the counters, and
+a failed member's named error (its class and time)."""
 
 from __future__ import annotations
 
@@ -42,15 +42,22 @@ def _equal_to_single_runs(sw, models, points=("rod.B",)) -> None:
             assert all(np.isnan(v[i]).all() for c, v in cols.items() if c != "t")
             continue
         single = md.kinematic(m, T)
-        assert sw[i].stats == single.stats
+        got = sw[i].stats
+        assert got.keys() == single.stats.keys()
+        for k, v in single.stats.items():  # counters exactly, pivot ratios to rounding
+            assert got[k] == pytest.approx(v, rel=1e-12) if isinstance(v, float) else got[k] == v
         for c, v in single.columns().items():
-            np.testing.assert_array_equal(sw[i][c], v)
-            np.testing.assert_array_equal(cols[c] if c == "t" else cols[c][i], v)
+            # To rounding: the vectorized program's solves are straight-line code, the
+            # single run's LAPACK's (mixdyn.linalg.LinearSolver.vectorized); a column of
+            # rounding noise (a point on the slide's line, y ~ 1e-17 m) against 1 SI unit.
+            scale = max(float(np.max(np.abs(v))), 1.0)
+            for got in (sw[i][c], cols[c] if c == "t" else cols[c][i]):
+                assert float(np.max(np.abs(np.asarray(got) - v))) <= 1e-13 * scale, (i, c)
         for ref in points:
             p, v, a = single.point(ref)
             for arr, pre in ((p, ""), (v, "v"), (a, "a")):
                 for k, axis in enumerate("xy"):
-                    scale = max(float(np.max(np.abs(arr[:, k]))), 1e-300)
+                    scale = max(float(np.max(np.abs(arr[:, k]))), 1.0)
                     got = cols[f"{ref}.{pre}{axis}"][i]
                     assert float(np.max(np.abs(got - arr[:, k]))) <= 1e-13 * scale, (i, ref)
         assert units == {**single.units(), **{c: units[c] for c in units if "rod.B." in c}}
@@ -59,8 +66,8 @@ def _equal_to_single_runs(sw, models, points=("rod.B",)) -> None:
 @pytest.mark.slow  # long: run by CI's slow set (a program compiled, ~5 s)
 def test_kinematic_members_in_one_program_equal_their_single_runs(monkeypatch):
     """Three members, two a call (the last call filled up with a copy of its first member):
-    held as arrays, no result built before it is read, each equal to its single run bit
-    for bit."""
+    held as arrays, no result built before it is read, each equal to its single run to
+    rounding."""
     monkeypatch.setattr(sweep_module, "CHUNK", 2)
     monkeypatch.setattr(_kinematic_members, "CHUNK", 2)
     models = _models(3, np.random.default_rng(1))

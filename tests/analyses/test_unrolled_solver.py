@@ -124,6 +124,38 @@ def test_chosen_once_by_size():
     assert isinstance(c.linear_solver, UnrolledSolver)
 
 
+def test_a_vectorized_program_takes_the_straight_line_path_up_to_more_rows():
+    """10 rows: LAPACK in a single run, straight-line code in a sweep's vectorized program
+    (the choice made at resolve, carried by the dense path); an explicit "dense" stays
+    dense in both, and the two paths' accelerations of a vectorized batch agree to
+    rounding."""
+    auto = AutoSolver()
+    rows = auto.max_unrolled + 4
+    dense = auto.resolve(rows, True, lambda: None)
+    assert isinstance(dense, DenseSolver) and isinstance(dense.vectorized(), UnrolledSolver)
+    big = auto.resolve(auto.max_unrolled_vectorized + 1, False, lambda: None)
+    assert big.vectorized() is big
+    assert DenseSolver().vectorized() == DenseSolver()
+
+    model = pendulum_chain(5)  # 10 rows
+    c = Constraints.of(model).with_linear_solver("auto")
+    assert isinstance(c.linear_solver, DenseSolver) and c.m == 10
+    assert isinstance(c.for_batch().linear_solver, UnrolledSolver)
+    explicit = Constraints.of(model).with_linear_solver("dense").for_batch()
+    assert isinstance(explicit.linear_solver, DenseSolver)
+
+    rng = np.random.default_rng(7)
+    q = jnp.asarray(model.q0) + 1e-3 * jnp.asarray(rng.normal(size=(4, model.nq)))
+    qd = jnp.asarray(rng.normal(size=(4, model.nq)))
+
+    def batch(cs):
+        acc = jax.vmap(lambda q, qd: Problem(model, cs).accelerations(q, qd, 0.3)[:2])
+        return eqx.filter_jit(acc)(q, qd)
+
+    for a, b in zip(batch(c.for_batch()), batch(explicit), strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-11, atol=1e-11)
+
+
 def test_chain_accelerations_equal_the_dense_path():
     model = pendulum_chain(3)
     q = jnp.asarray(model.q0)

@@ -63,8 +63,8 @@ def _default_batch_size() -> int | None:
     every sweep), from a thread per core (measured on the paper's model, 2 cores, 128
     members: 13.4 ms a member so; 8.4 ms in one vectorized program, but that program is
     compiled per number of members, ~10 s the first time); on an accelerator
-    :data:`ACCELERATOR_BATCH` (an H200, the paper's model: 0.45 ms a member in a batch of
-    1,024, 0.10 ms of 10,000, 0.08-0.09 ms of 30,000 to 100,000; ``benchmarks/gpu_sweep.py``)."""
+    :data:`ACCELERATOR_BATCH` (an H200, the paper's model: 0.61 ms a member in a batch of
+    1,024, 0.082 ms of 10,000, 0.062 ms of 30,000; ``benchmarks/gpu_sweep.py``)."""
     return None if jax.default_backend() == "cpu" else ACCELERATOR_BATCH
 
 

@@ -160,9 +160,16 @@ class Constraints(eqx.Module):
         )
 
     def for_batch(self) -> Constraints:
-        """The same set, solved in a sweep's one vectorized program (:attr:`batched`)."""
+        """The same set, solved in a sweep's one vectorized program (:attr:`batched`), by
+        the path its solver takes there (:meth:`~mixdyn.linalg.LinearSolver.vectorized`)."""
         return Constraints(
-            self.joints, self.drivers, self.nq, self.active, self.rank, self.linear_solver, True
+            self.joints,
+            self.drivers,
+            self.nq,
+            self.active,
+            self.rank,
+            self.linear_solver.vectorized(),
+            True,
         )
 
     def solve(self, A, b, extra_rank: int = 0):

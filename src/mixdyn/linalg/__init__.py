@@ -42,11 +42,12 @@ from ._dense import (
     solve_ranked,
 )
 from ._sparse import AUTO_MIN_ROWS, SchurStructure, schur_structure
-from ._unrolled import UNROLLED_MAX_ROWS
+from ._unrolled import UNROLLED_MAX_ROWS, UNROLLED_MAX_ROWS_VECTORIZED
 
 __all__ = [
     "AUTO_MIN_ROWS",
     "UNROLLED_MAX_ROWS",
+    "UNROLLED_MAX_ROWS_VECTORIZED",
     "AutoSolver",
     "BandedSolver",
     "DenseSolver",

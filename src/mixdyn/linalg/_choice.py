@@ -20,7 +20,12 @@ import equinox as eqx
 from ..errors import ModelError
 from ._dense import Factor, lu_factor_checked
 from ._sparse import AUTO_MIN_ROWS, MAX_AUTO_BLOCK, SchurStructure
-from ._unrolled import UNROLLED_MAX_ROWS, cholesky_unrolled, lu_factor_unrolled
+from ._unrolled import (
+    UNROLLED_MAX_ROWS,
+    UNROLLED_MAX_ROWS_VECTORIZED,
+    cholesky_unrolled,
+    lu_factor_unrolled,
+)
 
 
 class LinearSolver(eqx.Module):
@@ -42,6 +47,12 @@ class LinearSolver(eqx.Module):
         definite away from singular positions (``Phi_q W Phi_q^T``)."""
         return lu_factor_checked(A)
 
+    def vectorized(self) -> LinearSolver:
+        """The path of the same solves in a sweep's one vectorized program (``vmap`` over
+        members), where batched LAPACK calls cost more than straight-line code of more rows:
+        this one unless the choice said otherwise at :meth:`resolve`."""
+        return self
+
     @abc.abstractmethod
     def resolve(
         self, rows: int, per_element: bool, structure: Callable[[], SchurStructure]
@@ -60,9 +71,18 @@ class LinearSolver(eqx.Module):
 class DenseSolver(LinearSolver):
     """LU of dense matrices built from ``Phi_q``; a truncated SVD where equations are
     redundant, a damped SVD at singular positions (:mod:`mixdyn.linalg._dense`). The
-    reference path, for any mechanism."""
+    reference path, for any mechanism.
+
+    Attributes:
+        in_batch: the path in a sweep's one vectorized program (:meth:`vectorized`; None:
+            this one). Set by :class:`AutoSolver` only.
+    """
 
     name: ClassVar[str] = "dense"
+    in_batch: LinearSolver | None = eqx.field(default=None, static=True)
+
+    def vectorized(self) -> LinearSolver:
+        return self if self.in_batch is None else self.in_batch
 
     def resolve(self, rows, per_element, structure) -> DenseSolver:
         return self
@@ -109,11 +129,14 @@ class BandedSolver(LinearSolver):
 
 class AutoSolver(LinearSolver):
     """The straight-line path for a few rows, the banded path for large mechanisms of small
-    bandwidth, else the dense one.
+    bandwidth, else the dense one; in a sweep's one vectorized program, the straight-line
+    path up to more rows.
 
     Attributes:
         max_unrolled: most kept rows for the straight-line path (:class:`UnrolledSolver`;
             measured: :data:`~mixdyn.linalg._unrolled.UNROLLED_MAX_ROWS`).
+        max_unrolled_vectorized: most kept rows for it in a vectorized program (measured:
+            :data:`~mixdyn.linalg._unrolled.UNROLLED_MAX_ROWS_VECTORIZED`).
         min_rows: fewest kept rows for the banded path (measured: at 32 rows, a 16-link
             chain, it is 1.7x faster per RK4 step; below, the gain is 10-40%).
         max_block: largest reordered bandwidth of ``Phi_q M^-1 Phi_q^T`` for it.
@@ -121,17 +144,21 @@ class AutoSolver(LinearSolver):
 
     name: ClassVar[str] = "auto"
     max_unrolled: int = eqx.field(default=UNROLLED_MAX_ROWS, static=True)
+    max_unrolled_vectorized: int = eqx.field(default=UNROLLED_MAX_ROWS_VECTORIZED, static=True)
     min_rows: int = eqx.field(default=AUTO_MIN_ROWS, static=True)
     max_block: int = eqx.field(default=MAX_AUTO_BLOCK, static=True)
 
     def resolve(self, rows, per_element, structure) -> DenseSolver | UnrolledSolver | BandedSolver:
         if 0 < rows <= self.max_unrolled:
             return UnrolledSolver(self.max_unrolled)
+        in_batch = None
+        if 0 < rows <= self.max_unrolled_vectorized:
+            in_batch = UnrolledSolver(self.max_unrolled_vectorized)
         if rows == 0 or not per_element or rows < self.min_rows:
-            return DenseSolver()
+            return DenseSolver(in_batch)
         if structure().bandwidth <= self.max_block:
             return BandedSolver()
-        return DenseSolver()
+        return DenseSolver(in_batch)
 
 
 #: The names a file or a keyword may give, and their objects.

@@ -31,6 +31,11 @@ from ._dense import Factor
 #: chains, CPU time per step against the dense path's LAPACK calls.
 UNROLLED_MAX_ROWS = 6
 
+#: The most rows for the straight-line path in a sweep's one vectorized program, where LAPACK's
+#: batched calls loop over members: measured (``benchmarks/gpu_sweep.py --linear-solver``,
+#: ``benchmarks/RESULTS.md``) on the paper's model, 10 rows.
+UNROLLED_MAX_ROWS_VECTORIZED = 16
+
 
 def cholesky_unrolled(A: jax.Array) -> Factor:
     """The Cholesky factorization ``A = L L^T`` of the symmetric positive definite ``A``
