@@ -190,7 +190,8 @@ class Problem(eqx.Module):
         a0 = D.T @ qdd0 + dd
         h_free = jnp.sum(D**2 * self.Minv[:, None], axis=0)
         v_band = v if stopped is None else jnp.where(stopped, 0.0, v)
-        f, stick = rd.solve(elements, pos, v_band, a0, H, mu0, Mu_f, h_free)
+        state_loads = rd.loads(self.model, elements, q, qd, t)
+        f, stick = rd.solve(elements, pos, v_band, a0, H, mu0, Mu_f, h_free, state_loads)
         return f, stick, A, Mu_f, H, v, D
 
     def _with_dependent(self, q, qd, t, solve, qdd0, mu0):
@@ -240,7 +241,8 @@ class Problem(eqx.Module):
         f, v = st.dependent
         elements = self.reaction_dependent
         pos = rd.rows(self.model, self.c, elements)
-        return rd.columns(elements, pos, f, v, st.mu)
+        state_loads = rd.loads(self.model, elements, st.q, st.qd, st.t)
+        return rd.columns(elements, pos, f, v, st.mu, state_loads)
 
     def stages(self, q, qd, t) -> Stages:
         """The state record of ``(q, qd, t)`` filled stage by stage (positions: ``Phi`` and

@@ -62,33 +62,45 @@ def rows(model, c, elements) -> list[tuple[int, ...]]:
     return out
 
 
-def reactions(positions, mu) -> list[jax.Array]:
-    """Per element, its reaction multipliers (k,) from ``mu`` (m,)."""
-    return [jnp.stack([mu[i] for i in pos]) for pos in positions]
+def loads(model, elements, q, qd, t) -> list[jax.Array]:
+    """Per element, its load that is no reaction (j,) at the state
+    (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.state_load`)."""
+    return [f.state_load(model, q, qd, t) for f in elements]
 
 
-def relative_coordinates(model, elements, q) -> jax.Array:
-    """``s(q)`` (nf,): each element's relative coordinate [rad or length]."""
-    return jnp.stack([f.relative_coordinate(model, q) for f in elements])
+def reactions(positions, mu, state_loads=None) -> list[jax.Array]:
+    """Per element, its reaction multipliers (k,) from ``mu`` (m,), followed by its load
+    from the state (``state_loads``, :func:`loads`; none where not given)."""
+    out = []
+    for k, pos in enumerate(positions):
+        r = jnp.stack([mu[i] for i in pos]) if pos else jnp.zeros((0,), mu.dtype)
+        if state_loads is not None:
+            r = jnp.concatenate([r, state_loads[k]])
+        out.append(r)
+    return out
 
 
 def directions(model, elements, q) -> jax.Array:
-    """``D = ds/dq`` (nq, nf)."""
-    return jax.jacfwd(lambda q: relative_coordinates(model, elements, q))(q).T
+    """``D`` (nq, nf): each element's relative speed per unit of ``qd``
+    (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.relative_direction`; the
+    gradient of its relative coordinate)."""
+    return jnp.stack([f.relative_direction(model, q) for f in elements], axis=1)
 
 
-def limits(elements, positions, mu) -> jax.Array:
-    """The holding limits (nf,) [force or torque] from the multipliers ``mu``."""
-    R = reactions(positions, mu)
+def limits(elements, positions, mu, state_loads=None) -> jax.Array:
+    """The holding limits (nf,) [force or torque] from the multipliers ``mu`` and the loads
+    from the state."""
+    R = reactions(positions, mu, state_loads)
     return jnp.stack([f.holding_limit(r) for f, r in zip(elements, R, strict=True)])
 
 
-def columns(elements, positions, f, v, mu) -> dict:
+def columns(elements, positions, f, v, mu, state_loads=None) -> dict:
     """The elements' result columns at one state: ``name`` (the force ``f``), the element's
     own (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.reaction_outputs`),
     ``name.speed`` (``v``) and ``name.power`` (``f v``)."""
     out = {}
-    for k, (e, r) in enumerate(zip(elements, reactions(positions, mu), strict=True)):
+    R = reactions(positions, mu, state_loads)
+    for k, (e, r) in enumerate(zip(elements, R, strict=True)):
         out[e.name] = f[k]
         out.update({f"{e.name}.{key}": x for key, x in e.reaction_outputs(r).items()})
         out[f"{e.name}.speed"] = v[k]
@@ -96,13 +108,14 @@ def columns(elements, positions, f, v, mu) -> dict:
     return out
 
 
-def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free):
+def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
     """The forces ``f`` (nf,) and whether each element sticks, from the relative speeds
     ``v`` (nf,), the relative accelerations without the forces ``a0`` (nf,), ``H`` (nf, nf),
-    and the multipliers ``mu0 + Mu_f f``. ``h_free`` (nf,): ``d_k^T M^-1 d_k``, the scale of
-    ``H_kk`` for an element free to move: one whose ``H_kk`` is below 1e-10 of it cannot be
-    held (its motion is prescribed by the other constraints, as in an inverse analysis): at
-    rest it pushes at its limit against its relative acceleration ``a0``."""
+    the multipliers ``mu0 + Mu_f f`` and the loads from the state (:func:`loads`).
+    ``h_free`` (nf,): ``d_k^T M^-1 d_k``, the scale of ``H_kk`` for an element free to move:
+    one whose ``H_kk`` is below 1e-10 of it cannot be held (its motion is prescribed by the
+    other constraints, as in an inverse analysis): at rest it pushes at its limit against its
+    relative acceleration ``a0``."""
     nf = v.shape[0]
     band = jnp.abs(v) < jnp.stack([f.stick_band() for f in elements])
     free = jnp.diag(H) > 1e-10 * h_free
@@ -110,8 +123,8 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free):
 
     def step(f, stick):
         mu = mu0 + Mu_f @ f
-        lim = limits(elements, positions, mu)
-        R = reactions(positions, mu)
+        lim = limits(elements, positions, mu, state_loads)
+        R = reactions(positions, mu, state_loads)
         slip = jnp.stack(
             [e.slip_force(v[k], r) for k, (e, r) in enumerate(zip(elements, R, strict=True))]
         )
@@ -130,7 +143,7 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free):
     for _ in range(ITERATIONS):
         prev = f
         f, stick = step(f, stick)
-    lim = limits(elements, positions, mu0 + Mu_f @ f)
+    lim = limits(elements, positions, mu0 + Mu_f @ f, state_loads)
     scale = jnp.maximum(jnp.max(jnp.abs(f), initial=0.0), jnp.max(lim, initial=0.0))
     settled = jnp.max(jnp.abs(f - prev), initial=0.0) <= SETTLED * jnp.maximum(scale, 1e-300)
     return jnp.where(settled, f, jnp.nan), stick
@@ -154,8 +167,8 @@ __all__ = [
     "directions",
     "elements",
     "limits",
+    "loads",
     "reactions",
-    "relative_coordinates",
     "rows",
     "solve",
 ]

@@ -302,7 +302,7 @@ def _without_element(error: ModelError, name: str) -> str:
 
 
 #: The annotation of a reference field, by what it names.
-_REFERENCE_TYPES = {"point": Ref, "body": Name, "joint": Name}
+_REFERENCE_TYPES = {"point": Ref, "body": Name, "joint": Name, "force": Name}
 
 
 def _declared_field(decl, default):

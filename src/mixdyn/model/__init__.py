@@ -2,6 +2,7 @@
 
 from ._body import Body, Ground
 from ._cams import CamFollower
+from ._contact_friction import ContactFriction
 from ._contact_pairs import (
     BoxLineContact,
     CircleContact,
@@ -84,6 +85,7 @@ __all__ = [
     "CircleLineContact",
     "CircleSetContact",
     "Constant",
+    "ContactFriction",
     "CoordinateDriver",
     "Distance",
     "DistanceDriver",

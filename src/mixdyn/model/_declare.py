@@ -53,13 +53,14 @@ KEY = "mixdyn"
 GROUPS = ("joints", "drivers", "forces")
 
 #: What a :class:`Reference` may name.
-REFERENCES = ("point", "body", "joint")
+REFERENCES = ("point", "body", "joint", "force")
 
 
 @dataclasses.dataclass(frozen=True)
 class Reference:
-    """A field naming a point (``"body.point"``, ``"body"``), a body (``what="body"``) or
-    another joint of the model (``what="joint"``); with ``many`` a list of points."""
+    """A field naming a point (``"body.point"``, ``"body"``), a body (``what="body"``),
+    another joint (``what="joint"``) or a force element (``what="force"``) of the model; with
+    ``many`` a list of points."""
 
     doc: str
     what: str = "point"
@@ -212,7 +213,8 @@ def reference(
     doc: str, *, what: str = "point", default: Any = dataclasses.MISSING, kw_only: bool = False
 ):
     """A static field naming a point (a body, ``what="body"``; another joint,
-    ``what="joint"``); ``default=None``: an optional one."""
+    ``what="joint"``; a force element, ``what="force"``); ``default=None``: an optional
+    one."""
     kwargs: dict[str, Any] = {"kw_only": True} if kw_only else {}
     return eqx.field(static=True, default=default, metadata={KEY: Reference(doc, what)}, **kwargs)
 

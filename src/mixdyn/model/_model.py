@@ -105,7 +105,12 @@ class Model(eqx.Module):
         self.bodies = bodies
         self.joints = tuple(j.bind(r) for j in joints)
         self.drivers = tuple(d.bind(r) for d in drivers)
-        self.forces = tuple(_bind_force(f, r, self.joints) for f in forces)
+        bound = tuple(_bind_force(f, r, self.joints) for f in forces)
+        # an element acting at another force element (a contact's friction) checked against it
+        self.forces = tuple(
+            f.with_forces(bound, 3 * len(self.bodies)) if hasattr(f, "with_forces") else f
+            for f in bound
+        )
         self.ground = ground
         try:
             g = np.asarray(gravity, dtype=float)

@@ -9,7 +9,11 @@ together with the accelerations and the multipliers, in one place
 (:mod:`mixdyn.equations._reaction_dependent`). The element says:
 
 - which reaction rows it reads (:meth:`ReactionDependent.reaction_rows`) and its relative
-  coordinate (:meth:`~ReactionDependent.relative_coordinate`);
+  coordinate (:meth:`~ReactionDependent.relative_coordinate`), or, where its relative speed
+  integrates to no coordinate (sliding at a contact point), the row ``D(q)`` of that speed
+  ``v = D . qd`` itself (:meth:`~ReactionDependent.relative_direction`);
+- what else loads it, from the state (:meth:`~ReactionDependent.state_load`: a compliant
+  contact's normal force), read after its reactions;
 - its force while it moves (:meth:`~ReactionDependent.slip_force`), from its relative speed
   and its reactions;
 - whether it holds the joint at rest (Karnopp's stick and slip): inside its stick band
@@ -54,6 +58,18 @@ class ReactionDependent(ForceElement):
         generalized force is ``f ds/dq``), of the bound ``model`` at positions ``q`` (nq,)."""
         raise NotImplementedError
 
+    def relative_direction(self, model, q) -> jax.Array:
+        """``D(q)`` (nq,): the relative speed ``v = D . qd`` [velocity or angular velocity]
+        along which the force acts (its generalized force is ``f D``); by default the gradient
+        of :meth:`relative_coordinate`."""
+        return jax.grad(lambda q: self.relative_coordinate(model, q))(q)
+
+    def state_load(self, model, q, qd, t) -> jax.Array:
+        """The element's load that is no reaction (j,) at ``(q, qd, t)`` (a compliant
+        contact's normal force [force]), appended to its reactions in the methods below; by
+        default none."""
+        return jnp.zeros((0,), dtype=jnp.result_type(q, qd))
+
     def slip_force(self, v, reactions) -> jax.Array:
         """The force ``f`` [force or torque] at the relative speed ``v`` outside the stick band
         (positive along ``s``), from ``reactions`` (k,), the multipliers of
@@ -87,8 +103,9 @@ class ReactionDependent(ForceElement):
 
     def arrow(self, model, q):
         """Where the force is drawn, over a motion ``q`` (N, nq) (NumPy): ``(body, point (2,)
-        in its frame, direction (N, 2) [1])``, the force being its column times the
-        direction; None where it has no arrow (:attr:`no_arrow`)."""
+        in its frame, direction (N, 2) [1])`` (a point that moves on its body: body -1, the
+        ground, and its positions (N, 2)), the force being its column times the direction;
+        None where it has no arrow (:attr:`no_arrow`)."""
         return None
 
 

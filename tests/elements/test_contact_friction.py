@@ -1,0 +1,162 @@
+"""Coulomb friction with stick and slip at a compliant contact (``md.ContactFriction``)
+against closed forms.
+
+A disk of radius ``R`` rests on an incline of angle ``theta`` (a ``circle_line_contact``),
+started at the static penetration ``delta`` (Hertz: ``K delta**1.5 = m g cos(theta)``):
+
+- its rotation held (a block): below the friction angle it sticks, not moving at all (a
+  regularized friction creeps at the same slope), its friction ``m g sin(theta)``; above it,
+  it slides at ``g (sin(theta) - mu cos(theta))``;
+- free to turn: it rolls without slipping at ``g sin(theta) / (1 + I / (m r**2))``, ``r = R -
+  delta / 2`` the distance from its centre to the contact point, its sliding speed zero, its
+  friction ``I a / r**2``;
+- bad declarations are refused by name, and the analyses without reaction-dependent forces
+  refuse it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import mixdyn as md
+import mixdyn.io as mio
+
+G = 9.81
+R = 0.02  # disk radius [m]
+M = 0.5  # [kg]
+E = 1e9  # Young's modulus [Pa]
+LAW = dict(young_modulus=E, restitution=0.5, impact_speed=0.1)
+TS = np.linspace(0.0, 0.4, 41)
+
+
+def static_penetration(theta):
+    """Hertz's penetration [m] under the normal load ``m g cos(theta)`` (poisson 0.3)."""
+    K = 4.0 / 3.0 * E / (2 * (1 - 0.3**2)) * math.sqrt(R)
+    return (M * G * math.cos(theta) / K) ** (2.0 / 3.0)
+
+
+def disk_on_incline(theta, mu, held=True, friction="stick"):
+    u = (math.cos(theta), math.sin(theta))
+    n = np.array([-math.sin(theta), math.cos(theta)])  # out of the solid
+    c = n * (R - static_penetration(theta))
+    body = md.Body("disk", M, 0.5 * M * R**2, q0=(c[0], c[1], 0.0))
+    if friction == "stick":
+        forces = [
+            md.CircleLineContact("floor", "disk", R, "ground", axis=u, **LAW),
+            md.ContactFriction("grip", "floor", mu=mu, v_stick=1e-5),
+        ]
+    else:  # the contact's own regularized friction
+        forces = [
+            md.CircleLineContact("floor", "disk", R, "ground", axis=u, mu=mu, v_stick=1e-3, **LAW)
+        ]
+    drivers = [md.CoordinateDriver("hold", "disk", "phi", law=0.0)] if held else []
+    return md.Model([body], drivers=drivers, forces=forces, gravity=(0.0, -G))
+
+
+def down_the_slope(r, theta):
+    """The distance travelled along the incline and the speed along it, over the outputs."""
+    u = np.array([math.cos(theta), math.sin(theta)])
+    x = np.stack([r["disk.x"], r["disk.y"]], axis=1)
+    v = np.stack([r["disk.vx"], r["disk.vy"]], axis=1)
+    return (x - x[0]) @ u, v @ u
+
+
+def test_a_held_disk_sticks_below_the_friction_angle_where_regularized_friction_creeps():
+    theta, mu = math.radians(20.0), 0.5  # tan(theta) = 0.36 < mu
+    r = md.forward(disk_on_incline(theta, mu), TS, rtol=1e-10, atol=1e-12)
+    s, v = down_the_slope(r, theta)
+    assert np.max(np.abs(s)) < 1e-12 and np.max(np.abs(v)) < 1e-12
+    np.testing.assert_allclose(-r["grip"], M * G * math.sin(theta), rtol=1e-9)
+    # the compliant normal force rests within the integrator's tolerance
+    np.testing.assert_allclose(r["grip.normal"], M * G * math.cos(theta), rtol=1e-7)
+    np.testing.assert_allclose(r["grip.limit"], mu * M * G * math.cos(theta), rtol=1e-7)
+    assert r.units()["grip"] == "N" and r.units()["grip.speed"] == "m/s"
+    creep = md.forward(disk_on_incline(theta, mu, friction="tanh"), TS, rtol=1e-10)
+    s_creep, _ = down_the_slope(creep, theta)
+    assert s_creep[-1] < -1e-4  # regularized: it creeps downhill at ~v_stick atanh(tan/mu)
+
+
+def test_a_held_disk_slides_above_the_friction_angle_at_g_sin_minus_mu_cos():
+    theta, mu = math.radians(30.0), 0.3  # tan(theta) = 0.58 > mu
+    r = md.forward(disk_on_incline(theta, mu), TS, rtol=1e-10, atol=1e-12)
+    s, v = down_the_slope(r, theta)
+    a = -G * (math.sin(theta) - mu * math.cos(theta))
+    np.testing.assert_allclose(s[1:], 0.5 * a * TS[1:] ** 2, rtol=1e-7)
+    np.testing.assert_allclose(v[1:], a * TS[1:], rtol=1e-7)
+    # the column is the force on the disk along the tangent z x n = -u: uphill, negative;
+    # mu N, N the compliant normal force (it vibrates by ~2e-6 while the disk slides)
+    np.testing.assert_allclose(-r["grip"][1:], mu * M * G * math.cos(theta), rtol=1e-5)
+    np.testing.assert_allclose(-r["grip"], mu * r["grip.normal"], rtol=1e-12)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_free_disk_rolls_without_slipping():
+    theta, mu = math.radians(30.0), 0.3  # rolls: tan(theta) < 3 mu
+    r = md.forward(disk_on_incline(theta, mu, held=False), TS, rtol=1e-10, atol=1e-12)
+    s, v = down_the_slope(r, theta)
+    rr = R - static_penetration(theta) / 2  # centre to contact point
+    inertia = 0.5 * M * R**2
+    a = -G * math.sin(theta) / (1 + inertia / (M * rr**2))
+    np.testing.assert_allclose(s[1:], 0.5 * a * TS[1:] ** 2, rtol=1e-6)
+    np.testing.assert_allclose(r["disk.omega"][1:], -v[1:] / rr, rtol=1e-9)
+    assert np.max(np.abs(r["grip.speed"])) < 1e-12
+    np.testing.assert_allclose(-r["grip"][1:], inertia * -a / rr**2, rtol=1e-6)
+
+
+@pytest.mark.parametrize(
+    "forces, words",
+    [
+        ([md.ContactFriction("grip", "floor", mu=0.3)], "no force element 'floor'"),
+        (
+            [
+                md.CircleLineContact("floor", "disk", R, "ground", mu=0.2, v_stick=1e-3, **LAW),
+                md.ContactFriction("grip", "floor", mu=0.3),
+            ],
+            "has a friction of its own",
+        ),
+        (
+            [
+                md.BoxLineContact("floor", "disk", 0.04, 0.02, 0.002, "ground", **LAW),
+                md.ContactFriction("grip", "floor", mu=0.3),
+            ],
+            "touches at 4 points",
+        ),
+        (
+            [
+                md.CircleLineContact(
+                    "floor", "disk", R, "ground", contact_model="rigid", restitution=0.5
+                ),
+                md.ContactFriction("grip", "floor", mu=0.3),
+            ],
+            "no compliant contact",
+        ),
+    ],
+    ids=["unknown", "own-mu", "several-points", "rigid"],
+)
+def test_bad_contact_friction_is_refused_by_name(forces, words):
+    body = md.Body("disk", M, 1e-4, q0=(0.0, R, 0.0))
+    with pytest.raises(md.ModelError, match=words) as e:
+        md.Model([body], forces=forces)
+    assert e.value.element == "grip"
+
+
+def test_contact_friction_is_refused_where_it_is_not_modelled_and_read_from_a_file(tmp_path):
+    model = disk_on_incline(0.3, 0.5)
+    with pytest.raises(md.ModelError, match=r"contact friction \(grip\).*generalized-alpha"):
+        md.forward(model, TS, method="generalized-alpha", dt=0.01)
+    path = tmp_path / "disk.yaml"
+    path.write_text(
+        "mixdyn: 1\nunits: {length: m, mass: kg, time: s}\ngravity: [0, -9.81]\n"
+        "bodies:\n  - {name: disk, mass: 0.5 kg, inertia: 1e-4 kg*m^2, q0: [0, 20 mm, 0]}\n"
+        "forces:\n"
+        "  - {type: circle_line_contact, name: floor, center: disk, radius: 20 mm,\n"
+        "     line_point: ground, young_modulus: 1 GPa, restitution: 0.5, impact_speed: 0.1}\n"
+        "  - {type: contact_friction, name: grip, contact: floor, mu: 0.4, v_stick: 1 mm/s}\n"
+    )
+    read = mio.load(path)
+    grip = read.element("grip")
+    assert isinstance(grip, md.ContactFriction) and grip.contact == "floor"
+    assert float(grip.mu) == 0.4 and float(grip.v_stick) == pytest.approx(1e-3)
