@@ -473,6 +473,22 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
     return u
 
 
+def _in_order(layout: _Layout, program, data, u_all, branches, scores):
+    """Free timing: the outcomes at the nearest timing that passes the targets in order
+    (every increment of the input angle >= 0), their scores recomputed there. The order is a
+    penalty in the search, which a start may end leaning on, a target passed a hair before
+    the one ahead of it (-1e-5 rad, where two targets lie close): taken at the angle of the
+    one ahead, the linkage is the same and meets the order exactly."""
+    u_all = np.array(u_all)
+    inc = layout.increments(u_all)
+    behind = np.any(inc < 0.0, axis=1)
+    if not np.any(behind):
+        return u_all, scores
+    u_all[:, layout.m + 1 :] = np.maximum(inc, 0.0)
+    fixed = np.asarray(_scores(program, data, u_all, branches))
+    return u_all, np.where(behind, fixed, scores)
+
+
 def synthesize_path(
     task: PathTask | MotionTask,
     objective: Objective | None,
@@ -524,6 +540,8 @@ def synthesize_path(
         solve = functools.partial(_solve_chunk, path_only, data)
         u_all, _ = solve_all(solve, u_all, branches, chunk, report)
         score_all = np.asarray(_scores(weighed, data, u_all, branches))
+    if layout.timing is None:
+        u_all, score_all = _in_order(layout, weighed, data, u_all, branches, score_all)
     score_all = score_all * s2
     candidates, feasible = _rank(
         layout, task, objective, box, u_all, branches, score_all, search.keep, (weighed, data)
