@@ -189,18 +189,19 @@ def test_torque_objective_lowers_the_torque_at_the_same_path_error():
 @pytest.mark.slow  # long: run by CI's slow set (one search's programs compile)
 def test_a_second_search_of_the_same_form_runs_the_compiled_programs(monkeypatch):
     """Two tasks of one form (four points, timing given) with other targets and timing: the
-    search's programs are traced once (the residuals built once), and each search's best
-    passes its own points exactly."""
+    second search traces nothing (the residuals built by the first search's programs only),
+    and each search's best passes its own points exactly."""
     from mixdyn.synthesis import _search
 
-    built = []
+    built, counts = [], []
     residuals = _search._residuals
     monkeypatch.setattr(_search, "_residuals", lambda *a: built.append(1) or residuals(*a))
     for theta in (np.linspace(0.3, 3.0, 4), np.linspace(1.0, 4.5, 4)):
         points = np.asarray(coupler_curve(fourbar(1.0), theta))
         out = synthesize(PathTask(points, timing=theta), starts=32, chunk=32, seed=2)
         assert out.best.error < 1e-20
-    assert len(built) == 1
+        counts.append(len(built))
+    assert 1 <= counts[0] <= 2 and counts[1] == counts[0]  # the solve's, the scores' program
 
 
 def test_a_timing_from_the_ground_link_is_the_crank_angle_as_given():

@@ -473,20 +473,32 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
     return u
 
 
-def _in_order(layout: _Layout, program, data, u_all, branches, scores):
-    """Free timing: the outcomes at the nearest timing that passes the targets in order
-    (every increment of the input angle >= 0), their scores recomputed there. The order is a
-    penalty in the search, which a start may end leaning on, a target passed a hair before
-    the one ahead of it (-1e-5 rad, where two targets lie close): taken at the angle of the
-    one ahead, the linkage is the same and meets the order exactly."""
+def _kept_within(layout: _Layout, box: np.ndarray, program, data, u_all, branches, scores):
+    """The outcomes at the nearest point within the bounds (each number clipped into its
+    ``box`` row) and, with free timing, passing the targets in order (every increment of the
+    input angle >= 0), their scores recomputed where they moved. Bounds and order are
+    penalties in the search, which a start may end leaning on: a number fixed by a narrow
+    bound left 1e-5 outside it, a target passed a hair before the one ahead of it (-1e-5
+    rad, where two targets lie close). Moved onto the bound or to the angle of the target
+    ahead, the linkage is all but the same and meets them exactly."""
     u_all = np.array(u_all)
-    inc = layout.increments(u_all)
-    behind = np.any(inc < 0.0, axis=1)
-    if not np.any(behind):
+    m, s, c = layout.m, layout.scale, layout.centre
+    v = np.concatenate(
+        [u_all[:, : m - 3] * s, c + s * u_all[:, m - 3 : m - 1], u_all[:, m - 1 : m]], 1
+    )
+    w = np.clip(v, box[:, 0], box[:, 1])
+    moved = np.any(w != v, axis=1)
+    u_all[:, : m - 3] = w[:, : m - 3] / s
+    u_all[:, m - 3 : m - 1] = (w[:, m - 3 : m - 1] - c) / s
+    u_all[:, m - 1] = w[:, m - 1]
+    if layout.timing is None:
+        inc = layout.increments(u_all)
+        moved |= np.any(inc < 0.0, axis=1)
+        u_all[:, m + 1 :] = np.maximum(inc, 0.0)
+    if not np.any(moved):
         return u_all, scores
-    u_all[:, layout.m + 1 :] = np.maximum(inc, 0.0)
     fixed = np.asarray(_scores(program, data, u_all, branches))
-    return u_all, np.where(behind, fixed, scores)
+    return u_all, np.where(moved, fixed, scores)
 
 
 def synthesize_path(
@@ -540,8 +552,7 @@ def synthesize_path(
         solve = functools.partial(_solve_chunk, path_only, data)
         u_all, _ = solve_all(solve, u_all, branches, chunk, report)
         score_all = np.asarray(_scores(weighed, data, u_all, branches))
-    if layout.timing is None:
-        u_all, score_all = _in_order(layout, weighed, data, u_all, branches, score_all)
+    u_all, score_all = _kept_within(layout, box, weighed, data, u_all, branches, score_all)
     score_all = score_all * s2
     candidates, feasible = _rank(
         layout, task, objective, box, u_all, branches, score_all, search.keep, (weighed, data)
