@@ -16,10 +16,10 @@ squared distances from the coupler point at the linkage's input angles to the ta
 sources' error. The table puts the smallest published error beside it ("not found" where the
 case file records none).
 
-What ``PathTask`` cannot state is said in the table, not hidden:
+How the sources' problems are stated in ``PathTask``, and what it cannot state:
 
 * a length's lower bound of 0 becomes ``LENGTH_FLOOR`` (``PathTask`` wants lengths > 0);
-* a fixed number (``x0 = y0 = theta0 = 0``) becomes a bound of width ``2 * FIXED_WIDTH``;
+* a fixed number (``x0 = y0 = theta0 = 0``) is a bound whose ends are equal;
 * where the source prescribes the input angles from the ground link (``timing absolute``),
   ``PathTask`` takes them so (``timing_from="ground"``); the error at the source's own angles
   is measured here too (the linkage re-measured at the prescribed angles), a check that the
@@ -47,8 +47,6 @@ import numpy as np
 
 #: A length's lower bound where the source says 0 (PathTask's lengths are > 0).
 LENGTH_FLOOR = 1e-3
-#: Half the width of the bound that stands for a fixed number.
-FIXED_WIDTH = 1e-9
 #: Bounds where a source states none, in the targets' size (the largest distance from their
 #: centre): lengths, coupler point and ground pivot's distance from the targets' centre (wider
 #: than ``PathTask``'s defaults, 0.05-5, 5 and 3, so that the published linkages lie inside).
@@ -193,7 +191,7 @@ def path_task(case: Case):
             lo = max(lo, LENGTH_FLOOR)
         bounds[name] = (lo, hi)
     for name, v in case.fixed.items():
-        bounds[name] = (v - FIXED_WIDTH, v + FIXED_WIDTH)
+        bounds[name] = (v, v)  # PathTask: equal ends fix the number
     timing = None
     if case.timing == "step":
         timing = case.angles[0] * np.arange(len(case.points))

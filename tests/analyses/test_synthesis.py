@@ -236,3 +236,27 @@ def test_a_search_from_the_ground_link_recovers_the_linkage_at_the_given_angles(
     assert np.array_equal(out.best.angles, theta)
     again = np.asarray(coupler_curve(out.best.fourbar, theta))
     assert np.max(np.abs(again - points)) < 1e-9
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_numbers_fixed_by_equal_bounds_keep_their_values():
+    """The crank's pivot and the ground link's angle fixed (``low == high``, as a literature
+    case fixes them), the timing from the ground link: every kept linkage has those values,
+    and the best passes the targets of the known four-bar it came from (Freudenstein's closed
+    form, the better of its two roots)."""
+    v = V.copy()
+    v[6:] = 0.0  # x0 = y0 = theta0 = 0
+    theta = np.linspace(0.5, 2.0, 5)
+    points = np.asarray(coupler_curve(fourbar(1.0, v), theta))
+    bounds = {name: (0.0, 0.0) for name in ("x0", "y0", "theta0")}
+    bounds.update({name: (0.05, 2.0) for name in ("r1", "r2", "r3", "r4")})  # the arc is short
+    task = PathTask(points, timing=theta, timing_from="ground", bounds=bounds, grashof="grashof")
+    out = synthesize(task, starts=64, chunk=64, seed=0)
+    assert out.feasible >= 1
+    box = task.box()
+    for c in out.candidates:
+        u = np.array([float(getattr(c.fourbar, n)) for n in FourBar.NAMES])
+        assert np.all(u[6:] == 0.0) and np.all(box[6:] == 0.0)
+    best = np.array([float(getattr(out.best.fourbar, n)) for n in FourBar.NAMES])
+    error = min(float(np.sum((freudenstein(best, theta, r) - points) ** 2)) for r in (1, -1))
+    assert error < 1e-16 and out.best.error == pytest.approx(error, abs=1e-16)

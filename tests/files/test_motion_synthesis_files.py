@@ -69,7 +69,7 @@ def _line(text: str, marker: str) -> int:
         ("[300, 250, 40 deg]", "[300, 250]", "[300, 250]", "motion.poses[1]: missing"),
         ("    starts: 8", "    timing: [0 deg, 10 deg, 20 deg]", "timing", "path generation"),
         ("    starts: 8", "      length: -5 mm", "length: -5", "length must be > 0"),
-        ("    starts: 8", "    bounds: {r2: [5 mm, 1 mm]}", "r2", "low < high"),
+        ("    starts: 8", "    bounds: {r2: [5 mm, 1 mm]}", "r2", "low <= high"),
         ("    starts: 8", "    points: [[0, 0], [1, 1]]", "- name: poses", "one of"),
     ],
 )

@@ -57,7 +57,7 @@ def _line(text: str, marker: str) -> int:
     [
         (["    timing: [0 deg, 50 deg, 40 deg]"], "timing", "increase"),
         (["    bounds: {r9: [1, 2]}"], "bounds", "no number 'r9'"),
-        (["    bounds:", "      r2: [50 mm, 10 mm]"], "r2:", "low < high"),
+        (["    bounds:", "      r2: [50 mm, 10 mm]"], "r2:", "low <= high"),
         (["    bounds:", "      r2: [1 kg, 2 kg]"], "r2:", "kg"),
         (["    min_transmission: 95 deg"], "min_transmission", "pi/2"),
         (["    torque_weight: 1e-4 m^2/(N*m)^2"], "torque_weight", "masses"),

@@ -77,6 +77,7 @@ class _Layout:
     timing: np.ndarray | None
     linkage: type[Linkage] = FourBar
     absolute: bool = False  # the timing is the crank's angle from the ground link
+    fixed: np.ndarray | None = None  # (m,) the linkage's numbers fixed (NaN: searched)
 
     @property
     def m(self) -> int:
@@ -92,6 +93,8 @@ class _Layout:
         s, c, m = self.scale, self.centre, self.m
         pivot = jnp.stack([c[0] + s * u[m - 3], c[1] + s * u[m - 2]])
         v = jnp.concatenate([u[: m - 3] * s, pivot, u[m - 1 : m]])
+        if self.fixed is not None:  # a number whose bounds are equal: their value
+            v = jnp.where(jnp.isnan(self.fixed), v, jnp.nan_to_num(self.fixed))
         return self.linkage.from_vector(v, branch)
 
     def angles(self, u) -> jax.Array:
@@ -186,6 +189,7 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
         "high": np.where(finite[:, 1], box[:, 1] - inside, 0.0),
         "low_on": finite[:, 0].astype(float),
         "high_on": finite[:, 1].astype(float),
+        "fixed": _fixed(box),
         "cmax": f64(min(float(np.cos(task.min_transmission)) - LIMIT_MARGIN, CLOSURE_MARGIN)),
         "weight": f64(objective.torque_weight),
         "force_weight": f64(objective.shaking_force_weight),
@@ -198,10 +202,21 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
     }
 
 
+def _fixed(box: np.ndarray) -> np.ndarray:
+    """(m,) the numbers that equal bounds fix, NaN where searched."""
+    return np.where(box[:, 0] == box[:, 1], box[:, 0], np.nan)
+
+
 def _layout_of(program: _Program, data: dict) -> _Layout:
     timing = data["timing"] if program.timed else None
     return _Layout(
-        program.n, data["scale"], data["centre"], timing, program.linkage, program.absolute
+        program.n,
+        data["scale"],
+        data["centre"],
+        timing,
+        program.linkage,
+        program.absolute,
+        data["fixed"],
     )
 
 
@@ -535,6 +550,7 @@ def synthesize_path(
         task.timing,
         task.linkage,
         getattr(task, "timing_from", "first") == "ground",  # a motion task's timing is free
+        _fixed(box),
     )
     data = _data(layout, task, objective, box)
     weighed = _program(task, objective, max_steps, torque=True)

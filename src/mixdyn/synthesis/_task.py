@@ -55,7 +55,8 @@ class PathTask:
             angle from the ground link, a slider-crank's from its slide, as it is: the
             literature's prescribed-timing cases).
         bounds: ``name -> (low, high)`` for numbers of the linkage's ``NAMES`` (lengths in
-            [length], ``theta0`` in [rad]); by default the link lengths lie within
+            [length], ``theta0`` in [rad]; ``low == high`` fixes the number: the crank's
+            pivot at the origin, the ground link along x); by default the link lengths lie within
             ``[0.05, 5]`` times the targets' size, the other lengths (coupler point, a
             slider-crank's offset) within five sizes of zero and the crank's pivot within
             three sizes of the targets' centre.
@@ -125,8 +126,11 @@ class PathTask:
                     "bounds",
                 )
             lo, hi = (float(x) for x in ends)
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-                raise ModelError(f"bounds (low, high) with low < high, got {ends!r}", name)
+            if not (np.isfinite(lo) and np.isfinite(hi) and lo <= hi):
+                raise ModelError(
+                    f"bounds (low, high) with low <= high (equal: the number fixed), got {ends!r}",
+                    name,
+                )
             if name in self.linkage.LENGTHS and lo <= 0:
                 raise ModelError(f"a length's low bound must be > 0, got {lo!r}", name)
         if not 0.0 <= self.min_transmission < np.pi / 2:
