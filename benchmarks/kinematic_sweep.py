@@ -21,8 +21,11 @@ single run (Newton's method driven from Python, a few compiled calls an iteratio
 geometries. The array path's set-up, program and finishing are printed too (its
 ``Sweep.seconds``, wall).
 
+``--arrays-only``: the array path alone (no member-by-member run), its CPU and wall times and
+their parts.
+
 Run: ``python benchmarks/kinematic_sweep.py [M] [--repeat 3] [--threads T] [--statics
-[--shared] [--outputs N]]``.
+[--shared] [--outputs N]] [--arrays-only]``.
 """
 
 from __future__ import annotations
@@ -107,6 +110,7 @@ def main() -> None:
     ap.add_argument("--statics", action="store_true")
     ap.add_argument("--shared", action="store_true")
     ap.add_argument("--outputs", type=int, default=None)
+    ap.add_argument("--arrays-only", action="store_true", help="the array path alone")
     a = ap.parse_args()
     if a.statics:
         value = md.analyses.QuasiStatic()
@@ -119,6 +123,15 @@ def main() -> None:
     else:
         case = (models(a.members, a.statics), None)
     few = (case[0][:CHUNK], None) if case[1] is None else (case[0], shared_vary(CHUNK))
+    if a.arrays_only:
+        as_arrays(few, value, t, a.threads)  # warm-up
+        for k in range(a.repeat):
+            ca, wa, (_, parts) = timed(as_arrays, case, value, t, a.threads)
+            split = ", ".join(f"{p} {parts[p]:.3f}" for p in ("setup", "equilibria", "finishing")
+                              if p in parts)  # fmt: skip
+            print(f"{a.members} members, array path, repeat {k + 1}: CPU {ca:.2f} s, wall "
+                  f"{wa:.2f} s ({split} s wall), load {os.getloadavg()[0]:.1f}")  # fmt: skip
+        return
     as_arrays(few, value, t, a.threads), member_by_member(few, value, t, a.threads)  # warm-up
     rows, diff = [], 0.0
     for _ in range(a.repeat):
