@@ -168,6 +168,7 @@ def test_a_quick_program_is_compiled_so_with_the_cache_on_and_off(cache):
         np.testing.assert_allclose(np.asarray(a), np.asarray(o), rtol=1e-11, atol=1e-13)
 
 
+@pytest.mark.slow  # long: run by CI's slow set (the README's command within 6 min)
 def test_a_program_prepared_ahead_is_the_one_called(cache):
     """``ahead`` prepares a program in a second thread from arguments of the same structure
     and shapes (zeros): the call with the real arguments then traces nothing more and gives
@@ -352,6 +353,7 @@ EARLY_SCRIPT = textwrap.dedent(
 )
 
 
+@pytest.mark.slow  # long: run by CI's slow set (the README's command within 6 min)
 def test_the_run_command_reads_its_programs_from_the_import_on(tmp_path):
     """``mixdyn run FILE`` queues the programs its last run of the file used (its manifest)
     while mixdyn is imported, before the command line is parsed (``_command.job_tag``): all of

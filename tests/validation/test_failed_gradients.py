@@ -60,7 +60,10 @@ def test_a_good_runs_derivatives_agree_with_finite_differences(runs):
     assert np.all(np.isfinite(J))
 
 
-@pytest.mark.parametrize("mode", ["reverse", "forward"])
+@pytest.mark.parametrize(
+    "mode",
+    ["reverse", pytest.param("forward", marks=pytest.mark.slow)],  # slow: CI's slow set
+)
 def test_a_failed_run_gives_nan_value_and_nan_derivatives(runs, mode):
     """A million times stiffer: the run hits max_steps; value, jax.grad and jax.jacfwd of
     every output are NaN (they were exactly 0.0)."""
