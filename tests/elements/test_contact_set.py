@@ -68,7 +68,7 @@ def test_pairs_penetrations_and_frames_by_hand():
     assert delta[0] == pytest.approx(5e-4, abs=1e-15)  # a and b overlap by 0.5 mm
 
 
-@pytest.mark.parametrize("mu", [None, 0.3])
+@pytest.mark.parametrize("mu", [None, pytest.param(0.3, marks=pytest.mark.slow)])  # slow: CI's
 def test_the_set_is_its_pairs_declared_one_by_one(mu):
     """The set's generalized force, elastic energy and columns equal those of its pairs
     declared as CircleContact elements (summed), at a state where a touches b and the

@@ -47,7 +47,7 @@ def test_a_block_sticks_below_the_friction_angle():
     np.testing.assert_allclose(tab["friction.limit"], mu * m * G * math.cos(theta), rtol=1e-12)
 
 
-@pytest.mark.parametrize("mu", [0.0, 0.3])
+@pytest.mark.parametrize("mu", [pytest.param(0.0, marks=pytest.mark.slow), 0.3])  # slow: CI's
 def test_a_block_slides_above_the_friction_angle_at_g_sin_minus_mu_cos(mu):
     theta, m = 0.5, 2.0
     r = md.forward(incline(theta, mu, m), TS, rtol=1e-10, atol=1e-12)

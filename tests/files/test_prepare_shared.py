@@ -106,6 +106,7 @@ def test_antonya_each_run_is_assembled_and_analysed_once(counts):
     _same(res["mixed"], mx, ["F1", "A.Fx"])
 
 
+@pytest.mark.slow  # long: run by CI's slow set (the README's command within 6 min)
 def test_mixed_runs_by_law_share_the_checks_set_up(counts):
     """Mixed runs whose motion is a law are checked (counts, solvability) on the set-up they
     run from: one assembly and one analysis each, none in the run (before: 7 assemblies and

@@ -85,6 +85,7 @@ def test_progress_registry_is_emptied():
 
 
 # ------------------------------------------------------------------ in one process
+@pytest.mark.slow  # long: run by CI's slow set (the README's command within 6 min)
 def test_the_same_structure_traces_nothing_again(cache):
     """A second run of the same structure, and a run with other numbers (loads, a mass, the
     tolerances), traces none of the cached functions; the numbers are those of a fresh run."""
