@@ -23,7 +23,6 @@ circle, a journal in its bearing), with no ``mu`` of its own.
 
 from __future__ import annotations
 
-import dataclasses
 from typing import ClassVar
 
 import jax
@@ -106,7 +105,7 @@ class ContactFriction(ReactionDependent):
                     self.name,
                     field="contact",
                 )
-            return dataclasses.replace(self)
+            return self
         known = ", ".join(f.name for f in forces if f is not self) or "(none)"
         raise ModelError(
             f"no force element {self.contact!r}; forces: {known}", self.name, field="contact"

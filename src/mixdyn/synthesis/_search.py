@@ -88,11 +88,26 @@ class _Layout:
     def size(self) -> int:
         return self.m + 1 + (0 if self.timing is not None else self.n - 1)
 
+    def numbers(self, u, xp=np):
+        """The linkage's ``m`` numbers (..., m) of variables ``u`` (..., size) (``xp``: NumPy
+        or ``jax.numpy``): lengths in the targets' size, the pivot in sizes from their
+        centre, ``theta0`` as it is; a fixed number's variable as it stands."""
+        s, c, m = self.scale, self.centre, self.m
+        return xp.concatenate(
+            [u[..., : m - 3] * s, c + s * u[..., m - 3 : m - 1], u[..., m - 1 : m]], axis=-1
+        )
+
+    def variables(self, v) -> np.ndarray:
+        """The first ``m`` variables (..., m) of the linkage's numbers ``v`` (..., m)
+        (:meth:`numbers`' inverse; NumPy)."""
+        s, c, m = self.scale, self.centre, self.m
+        return np.concatenate(
+            [v[..., : m - 3] / s, (v[..., m - 3 : m - 1] - c) / s, v[..., m - 1 :]], axis=-1
+        )
+
     def make(self, u, branch) -> Linkage:
         """The linkage of variables ``u`` on ``branch``."""
-        s, c, m = self.scale, self.centre, self.m
-        pivot = jnp.stack([c[0] + s * u[m - 3], c[1] + s * u[m - 2]])
-        v = jnp.concatenate([u[: m - 3] * s, pivot, u[m - 1 : m]])
+        v = self.numbers(u, jnp)
         if self.fixed is not None:  # a number whose bounds are equal: their value
             v = jnp.where(jnp.isnan(self.fixed), v, jnp.nan_to_num(self.fixed))
         return self.linkage.from_vector(v, branch)
@@ -189,7 +204,7 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
         "high": np.where(finite[:, 1], box[:, 1] - inside, 0.0),
         "low_on": finite[:, 0].astype(float),
         "high_on": finite[:, 1].astype(float),
-        "fixed": _fixed(box),
+        "fixed": layout.fixed,
         "cmax": f64(min(float(np.cos(task.min_transmission)) - LIMIT_MARGIN, CLOSURE_MARGIN)),
         "weight": f64(objective.torque_weight),
         "force_weight": f64(objective.shaking_force_weight),
@@ -464,7 +479,6 @@ class Synthesis(Ranked):
 def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -> np.ndarray:
     """(count, size) random starts within the bounds (``theta0`` over a turn where unbounded),
     the input angles spread over up to a turn."""
-    s, c = layout.scale, layout.centre
     lo, hi = box[:, 0].copy(), box[:, 1].copy()
     m = layout.m  # theta0 last, after the pivot (m - 3, m - 2)
     if not (np.isfinite(lo[m - 1]) and np.isfinite(hi[m - 1])):
@@ -477,9 +491,7 @@ def _starts(layout: _Layout, task: PathTask, box: np.ndarray, count: int, rng) -
         v[:, r1] = np.clip(np.hypot(d[:, 0], d[:, 1]), box[r1, 0], box[r1, 1])
         v[:, -1] = np.clip(np.arctan2(d[:, 1], d[:, 0]), box[-1, 0], box[-1, 1])
     first = 2 * np.pi * rng.random((count, 1))
-    u = np.concatenate(
-        [v[:, : m - 3] / s, (v[:, m - 3 : m - 1] - c) / s, v[:, m - 1 :], first], axis=1
-    )
+    u = np.concatenate([layout.variables(v), first], axis=1)
     if layout.timing is None:
         n = layout.n
         total = rng.uniform(0.25, 1.0, (count, 1)) * 2 * np.pi
@@ -496,16 +508,11 @@ def _kept_within(layout: _Layout, box: np.ndarray, program, data, u_all, branche
     bound left 1e-5 outside it, a target passed a hair before the one ahead of it (-1e-5
     rad, where two targets lie close). Moved onto the bound or to the angle of the target
     ahead, the linkage is all but the same and meets them exactly."""
-    u_all = np.array(u_all)
-    m, s, c = layout.m, layout.scale, layout.centre
-    v = np.concatenate(
-        [u_all[:, : m - 3] * s, c + s * u_all[:, m - 3 : m - 1], u_all[:, m - 1 : m]], 1
-    )
+    u_all, m = np.array(u_all), layout.m
+    v = layout.numbers(u_all)
     w = np.clip(v, box[:, 0], box[:, 1])
     moved = np.any(w != v, axis=1)
-    u_all[:, : m - 3] = w[:, : m - 3] / s
-    u_all[:, m - 3 : m - 1] = (w[:, m - 3 : m - 1] - c) / s
-    u_all[:, m - 1] = w[:, m - 1]
+    u_all[:, :m] = layout.variables(w)
     if layout.timing is None:
         inc = layout.increments(u_all)
         moved |= np.any(inc < 0.0, axis=1)
