@@ -1081,12 +1081,16 @@ class SynthesisMassesSpec(Spec):
 
 
 class SynthesisFunctionSpec(Spec):
-    """Function generation: the rocker's angle as a function of the crank's, as angle pairs
-    or as ``y = f(x)`` over a range mapped onto the crank's and the rocker's angles."""
+    """Function generation: the linkage's output (the run's ``linkage``: a four-bar's rocker
+    angle, a slider-crank's slider position, a six-bar's follower angle) as a function of the
+    crank's angle, as pairs or as ``y = f(x)`` over a range mapped onto the crank's angles
+    and the outputs."""
 
     pairs: list[tuple[Scalar, Scalar]] | None = Field(default=None, min_length=2)
-    """``[crank angle, rocker angle]`` pairs [rad] from the ground link, e.g. ``[[0 deg,
-    240 deg], ...]``."""
+    """``[crank angle, output]`` pairs from the ground link: the output an angle [rad] (a
+    four-bar's rocker, a six-bar's follower), e.g. ``[[0 deg, 240 deg], ...]``, or a
+    slider-crank's slider position along its slide [length], e.g. ``[[0 deg, 120 mm],
+    ...]``."""
     expr: Text | None = None
     """``f`` as an expression of ``x`` (and the file's parameters), e.g. ``log10(x)``."""
     x: tuple[Scalar, Scalar] | None = None
@@ -1094,15 +1098,18 @@ class SynthesisFunctionSpec(Spec):
     input: tuple[Scalar, Scalar] | None = None
     """The crank's angles at ``x0`` and ``x1`` [rad], e.g. ``[0 deg, 60 deg]``."""
     output: tuple[Scalar, Scalar] | None = None
-    """The rocker's angles at ``f(x0)`` and ``f(x1)`` [rad], e.g. ``[240 deg, 180 deg]``."""
+    """The outputs at ``f(x0)`` and ``f(x1)``: angles [rad], e.g. ``[240 deg, 180 deg]``, or a
+    slider-crank's positions [length], e.g. ``[100 mm, 160 mm]``."""
     points: int = Field(default=3, ge=2, le=1000)
     """Precision points of ``f``. Default 3."""
     spacing: Literal["chebyshev", "even"] = "chebyshev"
     """The precision points' spacing: ``chebyshev`` (default) or ``even``."""
     free_start: bool = False
-    """The angles count from start angles found too (only differences count). Default false."""
+    """The inputs and outputs count from starts found too (only differences count). Default
+    false."""
     ratios: tuple[Scalar, Scalar] = (0.05, 20.0)
-    """Bounds of the crank, coupler and rocker as multiples of the ground link. Default
+    """Bounds of the link lengths as multiples of the ground link (a slider-crank's crank and
+    rod: of the outputs' span; its offset, a six-bar's dyad points within ``±high``). Default
     ``[0.05, 20]``."""
 
     @model_validator(mode="after")
@@ -1172,9 +1179,10 @@ class SynthesisRunSpec(Spec):
     linkage: Literal["four_bar", "slider_crank", "stephenson1", "stephenson3", "watt1", "watt2"] = (
         "four_bar"
     )
-    """The linkage of a path or a motion: ``four_bar`` (default), ``slider_crank`` (an offset
-    slider-crank; its coupler point on the connecting rod), ``stephenson1``, ``stephenson3``,
-    ``watt1`` or ``watt2`` (a six-bar; its coupler point on the dyad's link ``D E``)."""
+    """``four_bar`` (default), ``slider_crank`` (its coupler point on the rod),
+    ``stephenson1``, ``stephenson3``, ``watt1`` or ``watt2`` (a six-bar; its coupler point on
+    ``D E``). A function's output: a four-bar's rocker angle, a slider's position, a
+    ``stephenson3``'s or ``watt2``'s follower angle."""
     timing: Literal["free"] | list[Scalar] = "free"
     """``free`` (default: the crank's angles at the points are found, increasing within a
     turn) or the crank's angle at each point [rad], e.g. ``[0 deg, 40 deg, ...]`` (only

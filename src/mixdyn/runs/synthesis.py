@@ -1,6 +1,5 @@
-"""Synthesis runs of a model file: a four-bar, a slider-crank or a six-bar made to draw a path
-or carry its coupler through poses, or a four-bar to generate a function
-(:func:`mixdyn.synthesize`).
+"""Synthesis runs of a model file: a four-bar, a slider-crank or a six-bar made to draw a path,
+carry its coupler through poses or generate a function (:func:`mixdyn.synthesize`).
 
 A ``synthesis`` run describes the task (the linkage, ``four_bar``, ``slider_crank`` or a
 six-bar of :data:`mixdyn.synthesis.LINKAGES`, the target points, the timing, bounds of the
@@ -153,12 +152,6 @@ def plan(runner, index: int, r: s.SynthesisRunSpec) -> SynthesisPlan:
     """Check a synthesis run: its numbers read with their units, the task and objective built
     (every fault an input error at its line)."""
     path = ("runs", index)
-    if r.function is not None and r.linkage != "four_bar":
-        runner.fail(
-            (*path, "linkage"),
-            f"function generation is a four-bar's, not a {LINKAGES[r.linkage].TITLE}'s",
-            "leave linkage out, or give points (a path)",
-        )
     if r.function is not None:
         from .synthesis_function import function_task
 
@@ -306,7 +299,7 @@ def execute(runner, plan: SynthesisPlan, progress) -> FileSynthesis:
 
 
 def _title(task) -> str:
-    """The task's linkage in words (a function task's: a four-bar)."""
+    """The task's linkage in words."""
     return getattr(task, "linkage", FourBar).TITLE
 
 
@@ -450,8 +443,8 @@ def _log(plan: SynthesisPlan, every: float = PROGRESS_LOG_EVERY):
 
 @register
 class SynthesisKind(RunKind):
-    """A synthesis: a four-bar or a slider-crank searched to draw a path, with the motor
-    torque by weight, or a four-bar to generate a function."""
+    """A synthesis: a four-bar, a slider-crank or a six-bar searched to draw a path, with the
+    motor torque by weight, or to generate a function."""
 
     name = "synthesis"
     needs_mechanism = False
@@ -517,9 +510,7 @@ class SynthesisKind(RunKind):
             title = f"{plan.name}: {len(out.candidates)} {_title(out.task)}s, best first"
             errors = [cand.error for cand in drawn]
             if function:
-                asked = np.rad2deg(np.column_stack([out.task.inputs, out.task.outputs]))
-                curves, options = fn.curves(out, DRAWN), {"unit": "deg", "equal": False}
-                options.update(axes=("crank angle", "rocker angle"), error_unit="rad²")
+                asked, curves, options = fn.figure(out, DRAWN)
             else:
                 asked, curves, options = out.task.points, [_curves(c) for c in drawn], {}
                 from .synthesis_shape import figure_options
@@ -540,8 +531,9 @@ class SynthesisKind(RunKind):
             if plan.task.grashof != "any":
                 start += f", {plan.task.grashof.replace('_', '-')}"
             return (
-                f"run [bold]{esc(r.name)}[/bold] (synthesis): a four-bar generating a function "
-                f"at {len(plan.task.inputs)} points{start}, {r.starts} starts, seed {r.seed}"
+                f"run [bold]{esc(r.name)}[/bold] (synthesis): a {_title(plan.task)} generating "
+                f"a function at {len(plan.task.inputs)} points{start}, {r.starts} starts, seed "
+                f"{r.seed}"
             )
         timing = "timing free" if plan.task.timing is None else "timing given"
         what = f", torque ({r.torque}) weight {o.torque_weight:.3g}" if o.torque_weight else ""
@@ -588,7 +580,9 @@ class SynthesisKind(RunKind):
         out = result.synthesis
         c = out.best
         if isinstance(out, FunctionSynthesis):
-            best = f"best angle error {c.error:.3g} rad²"
+            from .synthesis_function import error_words
+
+            best = f"best {error_words(out.task)[0]} {c.error:.3g} {error_words(out.task)[1]}"
         else:
             best = f"best {_task_name(out.task).replace('motion', 'pose')} error {c.error:.3g} m²"
             if hasattr(c, "distance"):  # a shape's (mixdyn.synthesis.ShapeCandidate)

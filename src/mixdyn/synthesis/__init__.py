@@ -1,8 +1,8 @@
-"""Linkage synthesis: four-bars, slider-cranks and six-bars that draw a given path, four-bars
-that generate a function, searched by gradients, with dynamics in a path's objective.
+"""Linkage synthesis: four-bars, slider-cranks and six-bars that draw a given path or
+generate a function, searched by gradients, with dynamics in a path's objective.
 
 * :mod:`._linkage` — what the linkages share (:class:`Linkage`): the crank, the coupler
-  point and curve, the transmission angle's contract;
+  point and curve, the output a function follows, the transmission angle's contract;
 * :mod:`._fourbar` — a four-bar's numbers, its closed-form assembly on a fixed branch with
   implicit derivatives, its transmission angle;
 * :mod:`._slidercrank` — the same for an offset slider-crank (:class:`SliderCrank`; the
@@ -18,7 +18,8 @@ that generate a function, searched by gradients, with dynamics in a path's objec
 * :mod:`._dynamics` — the links' inertia from the dimensions, the motor torque, the shaking
   force and moment and the joint reactions;
 * :mod:`._task` — what is asked: :class:`PathTask` (targets, timing, bounds, transmission
-  angle), :class:`FunctionTask` (input-output angle pairs, or a function over a range) and
+  angle), :class:`FunctionTask` (input-output pairs of a four-bar, a slider-crank, a
+  Stephenson III or a Watt II, or a function over a range) and
   :class:`Objective` (path error, motor torque, shaking force and moment, joint reactions by
   weight);
 * :mod:`._synthesize` — :func:`synthesize`, the one entry: a task handed to its search;
@@ -59,7 +60,7 @@ from ._sixbar import SixBar
 from ._slidercrank import SLIDER_NAMES, SliderCrank, rod_and_slider
 from ._stephenson import STEPHENSON1_NAMES, STEPHENSON_NAMES, StephensonI, StephensonIII
 from ._synthesize import synthesize
-from ._task import LINKAGES, FunctionTask, Objective, PathTask, chebyshev
+from ._task import FUNCTION_LINKAGES, LINKAGES, FunctionTask, Objective, PathTask, chebyshev
 from ._watt import WATT2_NAMES, WATT_NAMES, WattI, WattII
 from .build import (
     four_bar_model,
@@ -70,6 +71,7 @@ from .build import (
 )
 
 __all__ = [
+    "FUNCTION_LINKAGES",
     "GRASHOF",
     "LINKAGES",
     "NAMES",

@@ -58,6 +58,7 @@ class FourBar(Linkage):
     LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4")
     KIND: ClassVar[str] = "four_bar"
     TITLE: ClassVar[str] = "four-bar"
+    OUTPUT: ClassVar[str | None] = "angle"
 
     r1: jax.Array
     r2: jax.Array
@@ -79,6 +80,11 @@ class FourBar(Linkage):
     def coupler_angle(self, theta2) -> jax.Array:
         """The coupler's angle ``phi3`` [rad] at ``theta2`` (:func:`link_angles`)."""
         return link_angles(self, theta2)[0]
+
+    def output(self, theta2) -> jax.Array:
+        """The rocker's angle ``phi4 - theta0`` [rad] from the ground link at ``theta2``
+        (:func:`link_angles`)."""
+        return link_angles(self, theta2)[1] - self.theta0
 
     def transmission_cosine(self, theta2) -> jax.Array:
         """``cos mu`` of the transmission angle ``mu`` (between coupler and rocker) at

@@ -47,6 +47,9 @@ class Linkage(eqx.Module):
         TITLE: its name in messages (``"four-bar"``, ``"slider-crank"``).
         BRANCHES: the values of ``branch`` the search spreads its starts over (one assembly
             branch each; a six-bar's code both loops', :mod:`._sixbar`).
+        OUTPUT: what :meth:`output` gives, the quantity a function generation follows:
+            ``"angle"`` [rad], ``"length"`` [length], or None where the linkage has no
+            grounded output of its own (:meth:`output` then refuses).
     """
 
     NAMES: ClassVar[tuple[str, ...]]
@@ -54,6 +57,7 @@ class Linkage(eqx.Module):
     KIND: ClassVar[str]
     TITLE: ClassVar[str]
     BRANCHES: ClassVar[tuple[float, ...]] = (1.0, -1.0)
+    OUTPUT: ClassVar[str | None] = None
 
     @classmethod
     def from_vector(cls, v, branch):
@@ -84,6 +88,18 @@ class Linkage(eqx.Module):
     def transmission_cosine(self, theta2) -> jax.Array:
         """``cos mu`` of the transmission angle at ``theta2`` [rad]: within ±1 where the loop
         closes, beyond where it does not (smooth in every number)."""
+
+    def output(self, theta2) -> jax.Array:
+        """() the output at ``theta2`` [rad] (scalar), the quantity a function generation
+        follows (:attr:`OUTPUT` says whether an angle [rad] or a length [length]): a link
+        pivoted at the ground, its angle counted from the ground link, or a slider's position
+        along its slide; differentiable implicitly.
+
+        Raises:
+            NotImplementedError: a linkage without a grounded output of its own
+                (:attr:`OUTPUT` None).
+        """
+        raise NotImplementedError(f"a {self.TITLE} has no grounded output of its own")
 
     def coupler_point(self, theta2) -> jax.Array:
         """The coupler point ``C`` (2,) [length] at ``theta2`` [rad]."""

@@ -175,6 +175,7 @@ class GroundPivotSixBar(SixBar):
         "theta0",
     )  # fmt: skip
     LENGTHS: ClassVar[tuple[str, ...]] = ("r1", "r2", "r3", "r4", "r5", "r6")
+    OUTPUT: ClassVar[str | None] = "angle"
 
     r1: jax.Array
     r2: jax.Array
@@ -196,6 +197,11 @@ class GroundPivotSixBar(SixBar):
     def dyad_pivot(self, phi4) -> jax.Array:
         """The ground pivot ``O6`` (2,) [length] (fixed: ``phi4`` unused)."""
         return self.crank_pivot() + _turned(self.theta0, self.gx, self.gy)
+
+    def output(self, theta2) -> jax.Array:
+        """The follower's angle ``phi6 - theta0`` [rad] (the link ``O6 -> E``, pivoted at the
+        third ground pivot) from the ground link at ``theta2``."""
+        return self.joints(theta2)["phi6"] - self.theta0
 
 
 class RockerPivotSixBar(SixBar):

@@ -57,6 +57,7 @@ class SliderCrank(Linkage):
     LENGTHS: ClassVar[tuple[str, ...]] = ("r2", "r3")
     KIND: ClassVar[str] = "slider_crank"
     TITLE: ClassVar[str] = "slider-crank"
+    OUTPUT: ClassVar[str | None] = "length"
 
     r2: jax.Array
     r3: jax.Array
@@ -77,6 +78,11 @@ class SliderCrank(Linkage):
     def coupler_angle(self, theta2) -> jax.Array:
         """The rod's angle ``phi3`` [rad] at ``theta2`` (:func:`rod_and_slider`)."""
         return rod_and_slider(self, theta2)[0]
+
+    def output(self, theta2) -> jax.Array:
+        """The slider's position ``s`` [length] along the slide from ``P0`` at ``theta2``
+        (:func:`rod_and_slider`)."""
+        return rod_and_slider(self, theta2)[1]
 
     def transmission_cosine(self, theta2) -> jax.Array:
         """``cos mu = h / r3``: ``mu`` between the rod and the slide's normal, ``h`` the crank

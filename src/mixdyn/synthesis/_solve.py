@@ -25,8 +25,9 @@ class Ranked:
     def best(self):
         """The best candidate; a :class:`~mixdyn.errors.ModelError` where none is feasible."""
         if not self.candidates:
+            title = getattr(getattr(self.task, "linkage", None), "TITLE", "four-bar")
             raise ModelError(
-                f"no feasible four-bar among {self.starts} starts: give more starts, wider "
+                f"no feasible {title} among {self.starts} starts: give more starts, wider "
                 "bounds or a smaller min_transmission",
                 "synthesize",
             )

@@ -30,20 +30,22 @@ def synthesize(
     progress: Callable[[str, int, int, float], None] | None = None,
 ) -> Synthesis | FunctionSynthesis | ShapeSynthesis:
     """Linkages whose coupler point passes ``task``'s targets (a :class:`PathTask`), whose
-    coupler passes its poses (a :class:`~._motion.MotionTask`), or whose rocker follows its
-    crank as asked (a :class:`~._function.FunctionTask`), best first: four-bars, or the
-    slider-cranks or six-bars of a path or motion task made with ``linkage="slider_crank"``,
-    ``"stephenson1"``, ``"stephenson3"``, ``"watt1"`` or ``"watt2"``.
+    coupler passes its poses (a :class:`~._motion.MotionTask`), or whose output follows its
+    crank as asked (a :class:`~._task.FunctionTask`: a four-bar's rocker angle, a
+    slider-crank's slider position, a Stephenson III's or a Watt II's follower angle), best
+    first: four-bars, or the slider-cranks or six-bars of a task made with
+    ``linkage="slider_crank"``, ``"stephenson1"``, ``"stephenson3"``, ``"watt1"`` or
+    ``"watt2"`` (a function task's: ``"slider_crank"``, ``"stephenson3"``, ``"watt2"``).
 
     Args:
         task: the path task (linkage, targets, timing, bounds, transmission angle), the motion task
             (poses, bounds, transmission angle: a timing-free path task whose coupler angles
-            count too, :mod:`._motion`), or the function task (input-output angle pairs;
+            count too, :mod:`._motion`), or the function task (input-output pairs;
             :func:`~._function.synthesize_function`), or the shape task (a closed curve's
             shape, :class:`~._shape.ShapeTask`: :func:`~._shape.synthesize_shape`, ``polish``
             unused).
         objective: the objective (default: the path error alone; a function task's is its
-            angle error, and it takes none).
+            output error, and it takes none).
         search: how to search (:class:`~._settings.SearchSettings`: starts, seed, chunk,
             steps, candidates kept, polish); default ``SearchSettings()``.
         starts, seed, chunk, max_steps, keep, polish: the same, one by one, each replacing
@@ -68,7 +70,7 @@ def synthesize(
     if isinstance(task, FunctionTask):
         if objective is not None:
             raise ModelError(
-                "a function task's objective is its angle error: give no objective", "objective"
+                "a function task's objective is its output error: give no objective", "objective"
             )
         return synthesize_function(task, search, progress=progress)
     if isinstance(task, ShapeTask):

@@ -239,6 +239,32 @@ class Objective:
 #: The default bounds of the crank, coupler and rocker as multiples of the ground link.
 RATIO_BOUNDS = (0.05, 20.0)
 
+#: The linkage types of a function task by name (``FunctionTask(linkage=...)``): those with
+#: a grounded output (:attr:`~._linkage.Linkage.OUTPUT`).
+FUNCTION_LINKAGES: dict[str, type[Linkage]] = {
+    k: v for k, v in LINKAGES.items() if v.OUTPUT is not None
+}
+
+
+def function_linkage(kind: str | type[Linkage]) -> type[Linkage]:
+    """The linkage type of a function task named ``kind`` (or the type itself); a
+    :class:`~mixdyn.errors.ModelError` at ``linkage`` for a linkage without a grounded output
+    of its own (a Watt I, a Stephenson I) or an unknown one, saying the choices."""
+    cls = LINKAGES.get(kind) if isinstance(kind, str) else kind
+    if cls in FUNCTION_LINKAGES.values():
+        return cls
+    if cls in LINKAGES.values():
+        raise ModelError(
+            f"a {cls.TITLE} cannot generate a function: its follower ends on the rocker, so "
+            "its only grounded output is the rocker, which the four-bar alone sets: give "
+            "linkage 'four_bar'",
+            "linkage",
+        )
+    raise ModelError(
+        f"no function-generating linkage {kind!r}; one of {', '.join(FUNCTION_LINKAGES)}",
+        "linkage",
+    )
+
 
 def chebyshev(low: float, high: float, n: int) -> np.ndarray:
     """Chebyshev's ``n`` precision points over ``[low, high]``, increasing:
@@ -249,21 +275,38 @@ def chebyshev(low: float, high: float, n: int) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class FunctionTask:
-    """Function generation: the rocker's angle at given crank angles.
+    """Function generation: a linkage's output at given crank angles.
+
+    The output (:meth:`~._linkage.Linkage.output`) is, by ``linkage``: a four-bar's rocker
+    angle, a slider-crank's slider position along its slide, a Stephenson III's or a Watt
+    II's follower angle (the link pivoted at the third ground pivot ``O6``); the angles
+    count from the ground link (the slide's direction for a slider-crank's crank).
 
     Attributes:
         inputs: (N,) the crank's angles ``theta2`` [rad], N >= 2, strictly monotone, within
             a turn: from the ground link, or with ``free_start`` from the crank's unknown
             start angle.
-        outputs: (N,) the rocker's angles ``theta4`` [rad] at them (from the ground link, or
-            with ``free_start`` from the rocker's unknown start angle).
-        free_start: the angles count from start angles found by the search (two more
-            unknowns) instead of from the ground link.
-        bounds: ``(low, high)`` of the crank, coupler and rocker lengths as multiples of the
-            ground link (default ``(0.05, 20)``).
-        min_transmission: the least transmission angle from the first input to the last [rad].
+        outputs: (N,) the outputs at them: angles [rad] from the ground link, or a
+            slider-crank's positions [length] along the slide from its point ``P0`` nearest
+            the crank's pivot; with ``free_start`` from the output's unknown start (an angle,
+            or a slider's position).
+        free_start: the inputs and outputs count from starts found by the search (two more
+            unknowns) instead of from the ground link (the slide's ``P0``).
+        bounds: ``(low, high)`` of the link lengths as multiples of the ground link (a
+            four-bar's crank, coupler and rocker, a six-bar's ``r2``..``r6``; default ``(0.05,
+            20)``), or of a slider-crank's crank and rod as multiples of the outputs' span
+            (:attr:`scale`). A six-bar's points ``dx, dy, gx, gy`` and a slider-crank's offset
+            ``e`` lie within ``±high`` of zero (in the same measure).
+        min_transmission: the least transmission angle from the first input to the last [rad]
+            (a six-bar's: both loops').
         grashof: the Grashof type asked for, as for a :class:`PathTask`: ``"any"`` (the
-            default), ``"grashof"``, ``"crank_rocker"`` or ``"double_crank"``.
+            default), ``"grashof"``, ``"crank_rocker"`` or ``"double_crank"`` (a four-bar's;
+            a slider-crank's as a path task's: ``"crank_rocker"``, ``r2 + |e| <= r3``, or
+            ``"grashof"``; a six-bar's ``"any"`` only).
+        linkage: ``"four_bar"`` (the default), ``"slider_crank"``, ``"stephenson3"`` or
+            ``"watt2"`` (:data:`FUNCTION_LINKAGES`), or the class itself; held as the class.
+            A Watt I's and a Stephenson I's follower ends on the rocker: their only grounded
+            output is the rocker's, which the four-bar alone sets, and they are refused.
     """
 
     inputs: np.ndarray
@@ -272,8 +315,10 @@ class FunctionTask:
     bounds: tuple[float, float] = RATIO_BOUNDS
     min_transmission: float = 0.0
     grashof: str = "any"
+    linkage: str | type[Linkage] = "four_bar"
 
     def __post_init__(self):
+        object.__setattr__(self, "linkage", function_linkage(self.linkage))
         x = np.asarray(self.inputs, dtype=float)
         y = np.asarray(self.outputs, dtype=float)
         if x.ndim != 1 or len(x) < 2 or y.shape != x.shape:
@@ -283,7 +328,7 @@ class FunctionTask:
                 "inputs",
             )
         if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
-            raise ModelError("inputs and outputs must be finite angles [rad]", "inputs")
+            raise ModelError("inputs and outputs must be finite numbers", "inputs")
         steps = np.diff(x)
         if not (np.all(steps > 0) or np.all(steps < 0)) or abs(x[-1] - x[0]) >= 2 * np.pi:
             raise ModelError("inputs must increase (or decrease) within one turn", "inputs")
@@ -292,10 +337,22 @@ class FunctionTask:
             raise ModelError(f"bounds must be 0 < low < high, got {self.bounds!r}", "bounds")
         if not 0.0 <= self.min_transmission < np.pi / 2:
             raise ModelError("min_transmission must lie in [0, pi/2) rad", "min_transmission")
-        check_grashof(FourBar, self.grashof)
+        if self.linkage.OUTPUT == "length" and not np.ptp(y) > 0:
+            raise ModelError(
+                f"a {self.linkage.TITLE}'s outputs are positions [length]: give two or more "
+                "different ones (their span sets the linkage's size)",
+                "outputs",
+            )
+        check_grashof(self.linkage, self.grashof)
         object.__setattr__(self, "inputs", x)
         object.__setattr__(self, "outputs", y)
         object.__setattr__(self, "bounds", (lo, hi))
+
+    @property
+    def scale(self) -> float:
+        """The unit of the linkage's lengths in the search: 1 (the ground link) where the
+        output is an angle, the outputs' span ``max - min`` [length] where it is a length."""
+        return float(np.ptp(self.outputs)) if self.linkage.OUTPUT == "length" else 1.0
 
     @classmethod
     def from_function(
@@ -312,10 +369,12 @@ class FunctionTask:
         **options,
     ) -> FunctionTask:
         """The task of generating ``y = f(x)`` over ``x_range``: ``x`` mapped linearly onto
-        the crank's angles ``input_start + input_span (x - x0) / (x1 - x0)`` and ``y`` onto
-        the rocker's ``output_start + output_span (y - f(x0)) / (f(x1) - f(x0))`` [rad], at
+        the crank's angles ``input_start + input_span (x - x0) / (x1 - x0)`` [rad] and ``y``
+        onto the outputs ``output_start + output_span (y - f(x0)) / (f(x1) - f(x0))``, at
         ``points`` precision points (``"chebyshev"`` or ``"even"`` spacing, ends excluded
-        for Chebyshev's). ``options``: the other attributes (``free_start``...)."""
+        for Chebyshev's). ``output_start`` and ``output_span`` are angles [rad], or lengths
+        [length] for a slider-crank (``linkage="slider_crank"``: the slider's positions).
+        ``options``: the other attributes (``free_start``, ``linkage``...)."""
         x0, x1 = (float(v) for v in x_range)
         if not (np.isfinite(x0) and np.isfinite(x1) and x1 > x0):
             raise ModelError(f"x_range must be (low, high), low < high, got {x_range!r}", "x")
@@ -336,4 +395,13 @@ class FunctionTask:
         return cls(inputs, outputs, **options)
 
 
-__all__ = ["LINKAGES", "RATIO_BOUNDS", "FunctionTask", "Objective", "PathTask", "chebyshev"]
+__all__ = [
+    "FUNCTION_LINKAGES",
+    "LINKAGES",
+    "RATIO_BOUNDS",
+    "FunctionTask",
+    "Objective",
+    "PathTask",
+    "chebyshev",
+    "function_linkage",
+]

@@ -314,6 +314,18 @@ BUILDERS = {
 }
 
 
+#: The model's column of each function-generating linkage's output
+#: (:meth:`~._linkage.Linkage.output`), its crank's pivot at the origin and its ground link
+#: (slide) along x: the rocker's angle, the slider's position (its pin's x: the slide's point
+#: ``P0`` at x = 0), the follower's angle.
+FUNCTION_OUTPUTS = {
+    FourBar: "rocker.phi",
+    SliderCrank: "slider.x",
+    StephensonIII: "follower.phi",
+    WattII: "follower.phi",
+}
+
+
 def linkage_model(lk: Linkage, masses: Masses | None = None, **options):
     """The mixdyn model of ``lk`` by its type (:func:`four_bar_model`,
     :func:`slider_crank_model` or :func:`six_bar_model`, which take the ``options``:
@@ -391,6 +403,7 @@ def model_file_text(
 
 __all__ = [
     "BUILDERS",
+    "FUNCTION_OUTPUTS",
     "four_bar_model",
     "linkage_model",
     "model_file_text",

@@ -18,7 +18,7 @@ def plot_synthesis(
     errors: list,
     path,
     *,
-    unit: str = "m",
+    unit: str | tuple[str, str] = "m",
     axes: tuple[str, str] = ("x", "y"),
     error_unit: str | None = None,
     equal: bool = True,
@@ -36,9 +36,9 @@ def plot_synthesis(
             loop does not close).
         errors: each candidate's path error [``unit``**2], in the legend.
         path: the figure's file.
-        unit: the unit of the axes.
-        axes: the axes' names (a path: ``x``, ``y``; a function: the crank's and the
-            rocker's angle).
+        unit: the unit of the axes, or of each (a function's crank angle and its output).
+        axes: the axes' names (a path: ``x``, ``y``; a function: the crank's angle and the
+            output).
         error_unit: the errors' unit (default ``unit``²).
         equal: equal scales on both axes (a path).
         title: the figure's title.
@@ -53,7 +53,8 @@ def plot_synthesis(
     path = pathlib.Path(path)
     if path.suffix.lower() not in (".png", ".svg", ".pdf"):
         raise ValueError(f"cannot write a plot to {path.name!r}; use .png, .svg or .pdf")
-    error_unit = error_unit or f"{unit}²"
+    units = (unit, unit) if isinstance(unit, str) else tuple(unit)
+    error_unit = error_unit or f"{units[0]}²"
     fig = Figure(figsize=(6.4, 5.6), layout="constrained")
     FigureCanvasAgg(fig)
     ax = fig.subplots()
@@ -78,8 +79,8 @@ def plot_synthesis(
             ax.plot(*np.column_stack([p, q]), "-", lw=2.0, color="tab:red")
     if equal:
         ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(f"{axes[0]} [{unit}]")
-    ax.set_ylabel(f"{axes[1]} [{unit}]")
+    ax.set_xlabel(f"{axes[0]} [{units[0]}]")
+    ax.set_ylabel(f"{axes[1]} [{units[1]}]")
     ax.grid(True, alpha=0.35)
     ax.legend(fontsize="small", loc="best")
     if title:
