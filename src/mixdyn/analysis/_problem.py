@@ -172,10 +172,11 @@ class Problem(eqx.Module):
     def _dependent_solve(self, q, qd, t, solve, qdd0, mu0, stopped=None):
         """The reaction-dependent forces at one state from the KKT solve factorized once
         (:mod:`mixdyn.equations._reaction_dependent`): ``(f, stick, A, Mu_f, H, v, D)``, the
-        forces (nf,), which elements stick (nf,), the constrained responses to a unit force
-        along each element ``A`` (nq, nf) and ``Mu_f`` (m, nf), ``H = D^T A`` (nf, nf), the
-        relative speeds ``v`` (nf,) and the directions ``D`` (nq, nf). ``stopped`` (nf,),
-        bool: elements taken as inside the stick band whatever their speed (default none)."""
+        forces of the elements' ``nf`` rows (nf,), which rows stick (nf,), the constrained
+        responses to a unit force along each row ``A`` (nq, nf) and ``Mu_f`` (m, nf),
+        ``H = D^T A`` (nf, nf), the relative speeds ``v`` (nf,) and the directions ``D``
+        (nq, nf). ``stopped`` (nf,), bool: rows taken as inside the stick band whatever their
+        speed (default none)."""
         elements = self.reaction_dependent
         pos = rd.rows(self.model, self.c, elements)
         # D (nq, nf) and its rate along the motion, in one pass: dd = qd^T (dD/dq) qd
@@ -209,12 +210,13 @@ class Problem(eqx.Module):
         stopped within the step), and it holds within its limit
         (:func:`~mixdyn.equations._reaction_dependent.solve`). The sticking elements get the
         impulse ``A y`` along their directions that makes their relative speeds exactly 0
-        (``H_ss y_s = -v_s``), the constraints' velocities kept (``C A = 0``). The stick
-        force then holds their relative accelerations at 0, so that a stopped element stays
-        where it stopped instead of creeping on at the speed it was left with (up to its
-        stick band, a step's worth of deceleration past a reversal). The kinetic energy the
-        impulse takes out, the elements' work in the stop, is added to the nonconservative
-        work ``w[0]``. ``(qd, w)`` themselves without reaction-dependent elements."""
+        (``H_ss y_s = -v_s``, least-norm where their rows depend on each other:
+        :func:`~mixdyn.equations._reaction_dependent.held`), the constraints' velocities
+        kept (``C A = 0``). The stick force then holds their relative accelerations at 0,
+        so that a stopped element stays where it stopped instead of creeping on at the speed
+        it was left with (up to its stick band, a step's worth of deceleration past a
+        reversal). The kinetic energy the impulse takes out, the elements' work in the stop,
+        is added to the nonconservative work ``w[0]``. ``(qd, w)`` themselves without reaction-dependent elements."""
         if not self.reaction_dependent:
             return qd, w
         elements = self.reaction_dependent
@@ -225,8 +227,7 @@ class Problem(eqx.Module):
         qdd0, mu0 = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
         reversed_ = v_start * v_end < 0.0
         _, stick, A, _, H, v, _ = self._dependent_solve(q, qd, t, solve, qdd0, mu0, reversed_)
-        both = stick[:, None] & stick[None, :]
-        y = jnp.linalg.solve(jnp.where(both, H, jnp.eye(H.shape[0])), jnp.where(stick, -v, 0.0))
+        y = rd.held(H, stick, jnp.where(stick, -v, 0.0))
         halted = qd + A @ jnp.where(stick, y, 0.0)
         mass = self.model.mass_diagonal
         work = 0.5 * (jnp.dot(mass * halted, halted) - jnp.dot(mass * qd, qd))

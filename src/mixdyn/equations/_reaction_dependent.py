@@ -1,8 +1,11 @@
 """Reaction-dependent forces in the equations of motion, solved with the accelerations
 (:class:`~mixdyn.model._reaction_dependent.ReactionDependent`: the elements' contract).
 
-For the ``nf`` reaction-dependent elements of a model, with ``s_k(q)`` the relative
-coordinate of element ``k``, ``D = ds/dq`` (nq, nf) and the forces ``f`` (nf,) along them:
+For the reaction-dependent elements of a model, with ``nf`` their rows in all (an element
+acts along one relative speed, or along ``w`` of them: a contact's friction, one a contact
+point, :attr:`~mixdyn.model._reaction_dependent.ReactionDependent.width`), ``D`` (nq, nf) the
+rows' relative speeds per unit of ``qd`` (``ds/dq`` for a relative coordinate ``s(q)``) and the
+forces ``f`` (nf,) along them:
 
     M qdd + G mu = Q + D f,     C qdd = gamma
 
@@ -12,9 +15,12 @@ The KKT matrix does not depend on ``f``: factorized once, it gives ``qdd = qdd0 
 
 - moving (``|v_k|`` at or above its stick band): its slip force ``f_k(v_k, R_k(mu))``;
 - sticking (``|v_k|`` inside the band): ``f_k`` such that ``a_k = 0``, solved jointly for the
-  sticking elements; one whose force would exceed its holding limit ``L_k(R_k(mu))`` pushes
-  at the limit, in the direction of the force it needed. The integrators bring a sticking
-  element's speed to exactly 0 after each step
+  sticking rows (:func:`held`: the least-norm forces where rows depend on each other, as the
+  two corners of a block flat on the ground, whose split the rigid bodies leave open); one
+  whose force would exceed its holding limit ``L_k(R_k(mu))`` pushes at the limit, in the
+  direction of the force it needed, and the others take the rest; a row whose limit is 0 (a
+  contact point that does not touch) never sticks. The integrators bring a sticking row's
+  speed to exactly 0 after each step
   (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`), so that ``a_k = 0`` holds it
   where it stopped.
 
@@ -35,6 +41,11 @@ from ..errors import ModelError
 ITERATIONS = 12
 #: Relative change of the forces in the last step above which they have not settled.
 SETTLED = 1e-8
+#: Sticking rows count as dependent along the directions in which their matrix, scaled to a
+#: unit diagonal, has a singular value below this fraction of its largest (rows at an angle
+#: of about 1e-3 rad or less in the metric of the mass: a block's corners on a line, its tilt
+#: from the contact's compliance).
+DEPENDENT = 1e-6
 
 
 def elements(model) -> tuple:
@@ -80,65 +91,113 @@ def reactions(positions, mu, state_loads=None) -> list[jax.Array]:
     return out
 
 
-def directions(model, elements, q) -> jax.Array:
-    """``D`` (nq, nf): each element's relative speed per unit of ``qd``
-    (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.relative_direction`; the
-    gradient of its relative coordinate)."""
-    return jnp.stack([f.relative_direction(model, q) for f in elements], axis=1)
-
-
-def limits(elements, positions, mu, state_loads=None) -> jax.Array:
-    """The holding limits (nf,) [force or torque] from the multipliers ``mu`` and the loads
-    from the state."""
-    R = reactions(positions, mu, state_loads)
-    return jnp.stack([f.holding_limit(r) for f, r in zip(elements, R, strict=True)])
-
-
-def columns(elements, positions, f, v, mu, state_loads=None) -> dict:
-    """The elements' result columns at one state: ``name`` (the force ``f``), the element's
-    own (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.reaction_outputs`),
-    ``name.speed`` (``v``) and ``name.power`` (``f v``)."""
-    out = {}
-    R = reactions(positions, mu, state_loads)
-    for k, (e, r) in enumerate(zip(elements, R, strict=True)):
-        out[e.name] = f[k]
-        out.update({f"{e.name}.{key}": x for key, x in e.reaction_outputs(r).items()})
-        out[f"{e.name}.speed"] = v[k]
-        out[f"{e.name}.power"] = f[k] * v[k]
+def spans(elements) -> list[slice]:
+    """Per element, its rows among the ``nf`` (static): ``width`` rows each, in order."""
+    out, start = [], 0
+    for f in elements:
+        out.append(slice(start, start + f.width))
+        start += f.width
     return out
 
 
+def _own(e, x, span: slice):
+    """Element ``e``'s share of a row quantity ``x`` (nf,): a scalar for one row, else (w,)."""
+    return x[span.start] if e.width == 1 else x[span]
+
+
+def _rows(e, x) -> jax.Array:
+    """An element's row quantity (a scalar or (w,)) as (w,)."""
+    return jnp.broadcast_to(jnp.reshape(x, (-1,)), (e.width,))
+
+
+def directions(model, elements, q) -> jax.Array:
+    """``D`` (nq, nf): each row's relative speed per unit of ``qd``
+    (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.relative_direction`; the
+    gradient of the element's relative coordinate)."""
+    nq = q.shape[0]
+    return jnp.concatenate(
+        [jnp.reshape(f.relative_direction(model, q), (nq, f.width)) for f in elements], axis=1
+    )
+
+
+def bands(elements) -> jax.Array:
+    """The rows' stick bands (nf,) [velocity or angular velocity]."""
+    return jnp.concatenate([_rows(f, f.stick_band()) for f in elements])
+
+
+def limits(elements, positions, mu, state_loads=None) -> jax.Array:
+    """The rows' holding limits (nf,) [force or torque] from the multipliers ``mu`` and the
+    loads from the state."""
+    R = reactions(positions, mu, state_loads)
+    return jnp.concatenate([_rows(f, f.holding_limit(r)) for f, r in zip(elements, R, strict=True)])
+
+
+def columns(elements, positions, f, v, mu, state_loads=None) -> dict:
+    """The elements' result columns at one state, from the rows' forces ``f`` and speeds
+    ``v`` (nf,): ``name`` (the element's force, its rows' summed), the element's own
+    (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.reaction_outputs`),
+    ``name.speed`` (:meth:`~mixdyn.model._reaction_dependent.ReactionDependent.speed_output`:
+    its row's speed for one row) and ``name.power`` (``sum f_k v_k``)."""
+    out = {}
+    R = reactions(positions, mu, state_loads)
+    for e, r, span in zip(elements, R, spans(elements), strict=True):
+        out[e.name] = jnp.sum(f[span])
+        out.update({f"{e.name}.{key}": x for key, x in e.reaction_outputs(r).items()})
+        out[f"{e.name}.speed"] = e.speed_output(_own(e, v, span), r)
+        out[f"{e.name}.power"] = jnp.sum(f[span] * v[span])
+    return out
+
+
+def held(H, stick, rhs) -> jax.Array:
+    """``x`` (nf,) with ``H_ss x_s = rhs_s`` over the sticking rows ``s`` (``stick`` (nf,),
+    bool) and ``x = rhs`` elsewhere, from ``H`` (nf, nf): the stick forces (or, after a step,
+    the impulses that halt the sticking rows).
+
+    Rows that depend on each other (a block's two corners on a line, their sliding speeds
+    the same) leave ``x_s`` open along their null space: the solve takes the least-norm
+    ``x_s`` of ``H_ss`` scaled to a unit diagonal (its pseudo-inverse, singular values below
+    :data:`DEPENDENT` of the largest taken as 0), finite and shared among the rows; for
+    independent rows it is the solution. The sticking rows' ``H_kk`` are positive (the rows
+    are free to move, :func:`solve`)."""
+    n = H.shape[0]
+    both = stick[:, None] & stick[None, :]
+    scale = 1.0 / jnp.sqrt(jnp.where(stick, jnp.diag(H), 1.0))
+    B = jnp.where(both, scale[:, None] * H * scale[None, :], jnp.eye(n))
+    x = scale * (jnp.linalg.pinv(B, rtol=DEPENDENT) @ (scale * rhs))
+    return jnp.where(stick, x, rhs)
+
+
 def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
-    """The forces ``f`` (nf,) and whether each element sticks, from the relative speeds
+    """The rows' forces ``f`` (nf,) and whether each row sticks, from the relative speeds
     ``v`` (nf,), the relative accelerations without the forces ``a0`` (nf,), ``H`` (nf, nf),
     the multipliers ``mu0 + Mu_f f`` and the loads from the state (:func:`loads`).
-    ``h_free`` (nf,): ``d_k^T M^-1 d_k``, the scale of ``H_kk`` for an element free to move:
-    one whose ``H_kk`` is below 1e-10 of it cannot be held (its motion is prescribed by the
-    other constraints, as in an inverse analysis): at rest it pushes at its limit against its
+    ``h_free`` (nf,): ``d_k^T M^-1 d_k``, the scale of ``H_kk`` for a row free to move: one
+    whose ``H_kk`` is below 1e-10 of it cannot be held (its motion is prescribed by the other
+    constraints, as in an inverse analysis): at rest it pushes at its limit against its
     relative acceleration ``a0``."""
-    nf = v.shape[0]
-    band = jnp.abs(v) < jnp.stack([f.stick_band() for f in elements])
+    band = jnp.abs(v) < bands(elements)
     free = jnp.diag(H) > 1e-10 * h_free
-    eye = jnp.eye(nf)
+    where = spans(elements)
 
     def step(f, stick):
         mu = mu0 + Mu_f @ f
         lim = limits(elements, positions, mu, state_loads)
         R = reactions(positions, mu, state_loads)
-        slip = jnp.stack(
-            [e.slip_force(v[k], r) for k, (e, r) in enumerate(zip(elements, R, strict=True))]
+        slip = jnp.concatenate(
+            [
+                _rows(e, e.slip_force(_own(e, v, span), r))
+                for e, r, span in zip(elements, R, where, strict=True)
+            ]
         )
-        # elements not sticking: their slip force (outside the band), or at the limit in the
+        # rows not sticking: their slip force (outside the band), or at the limit in the
         # direction of the force they needed to stick (released inside the band)
         fixed = jnp.where(band, jnp.where(free, lim * jnp.sign(f), -lim * jnp.sign(a0)), slip)
         fixed = jnp.where(stick, 0.0, fixed)
-        A = jnp.where(stick[:, None] & stick[None, :], H, 0.0) + jnp.where(stick, 0.0, 1.0) * eye
-        rhs = jnp.where(stick, -(a0 + H @ fixed), fixed)
-        need = jnp.linalg.solve(A, rhs)
-        over = stick & (jnp.abs(need) > lim)
+        need = held(H, stick, jnp.where(stick, -(a0 + H @ fixed), fixed))
+        over = stick & ((jnp.abs(need) > lim) | (lim <= 0.0))
         return jnp.where(over, lim * jnp.sign(need), need), stick & ~over
 
-    f, stick = jnp.zeros(nf), band & free
+    f, stick = jnp.zeros(v.shape[0]), band & free
     prev = f
     for _ in range(ITERATIONS):
         prev = f
@@ -162,13 +221,16 @@ def check_supported(model, analysis: str, hint: str = "remove it for this analys
 
 
 __all__ = [
+    "bands",
     "check_supported",
     "columns",
     "directions",
     "elements",
+    "held",
     "limits",
     "loads",
     "reactions",
     "rows",
     "solve",
+    "spans",
 ]

@@ -27,6 +27,11 @@ together with the accelerations and the multipliers, in one place
 - its result columns from its reactions (:meth:`~ReactionDependent.reaction_outputs`; the
   analysis adds the force itself, ``.speed`` and ``.power``) and, in an animation, its arrow
   (:meth:`~ReactionDependent.arrow`, or why it has none: :attr:`~ReactionDependent.no_arrow`).
+
+An element may act along several relative speeds at once, its :attr:`~ReactionDependent.width`
+``w`` rows (a contact's friction at each of its contact points): its direction is then
+(nq, w), its slip force, holding limit and stick band (w,) (or one for all), each row
+sticking or slipping on its own, and its force column the sum of its rows' forces.
 """
 
 from __future__ import annotations
@@ -48,6 +53,13 @@ class ReactionDependent(ForceElement):
     #: What the element is, in messages (``"pin drag"``).
     kind_name: ClassVar[str] = "reaction-dependent force"
 
+    @property
+    def width(self) -> int:
+        """The number of relative speeds (rows) the element acts along, each with its own
+        force, stick and limit (static); 1 by default. With ``w > 1`` the methods below take
+        and give (w,) where they take and give a scalar for one row."""
+        return 1
+
     def reaction_rows(self) -> tuple[str, ...]:
         """The labels of the constraint rows whose multipliers the element reads
         (``("pin.x", "pin.y")``; a joint's rows are named ``joint.label``)."""
@@ -59,9 +71,9 @@ class ReactionDependent(ForceElement):
         raise NotImplementedError
 
     def relative_direction(self, model, q) -> jax.Array:
-        """``D(q)`` (nq,): the relative speed ``v = D . qd`` [velocity or angular velocity]
-        along which the force acts (its generalized force is ``f D``); by default the gradient
-        of :meth:`relative_coordinate`."""
+        """``D(q)`` (nq,), or (nq, w) for ``w`` rows: the relative speed ``v = D^T qd``
+        [velocity or angular velocity] along which the force acts (its generalized force is
+        ``D f``); by default the gradient of :meth:`relative_coordinate`."""
         return jax.grad(lambda q: self.relative_coordinate(model, q))(q)
 
     def state_load(self, model, q, qd, t) -> jax.Array:
@@ -72,8 +84,8 @@ class ReactionDependent(ForceElement):
 
     def slip_force(self, v, reactions) -> jax.Array:
         """The force ``f`` [force or torque] at the relative speed ``v`` outside the stick band
-        (positive along ``s``), from ``reactions`` (k,), the multipliers of
-        :meth:`reaction_rows` in their order."""
+        (positive along ``s``; (w,) at ``v`` (w,) for ``w`` rows), from ``reactions`` (k,),
+        the multipliers of :meth:`reaction_rows` in their order."""
         raise NotImplementedError
 
     def stick_band(self) -> jax.Array:
@@ -83,8 +95,14 @@ class ReactionDependent(ForceElement):
 
     def holding_limit(self, reactions) -> jax.Array:
         """The largest force magnitude with which the element holds its joint at rest
-        [force or torque], from ``reactions`` (k,); 0 for an element that never sticks."""
+        [force or torque] ((w,) for ``w`` rows), from ``reactions`` (k,); 0 for an element
+        that never sticks (a row with limit 0 never sticks)."""
         return jnp.zeros(())
+
+    def speed_output(self, v, reactions) -> jax.Array:
+        """The element's ``.speed`` column from its rows' relative speeds ``v`` (a scalar, or
+        (w,)) and ``reactions``; by default ``v`` (one row)."""
+        return v
 
     def reaction_outputs(self, reactions) -> dict[str, jax.Array]:
         """The element's own result columns by suffix from ``reactions`` (k,) (the analysis
