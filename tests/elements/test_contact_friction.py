@@ -228,7 +228,9 @@ def block_along(r, theta):
 @pytest.mark.slow  # long: run by CI's slow set
 def test_a_block_on_two_corners_sticks_on_an_incline_below_the_friction_angle():
     theta, mu = math.radians(20.0), 0.5
-    r = md.forward(block_on_incline(theta, mu, False), np.linspace(0, 0.6, 31), rtol=1e-10)
+    r = md.forward(
+        block_on_incline(theta, mu, False), np.linspace(0, 0.6, 31), rtol=1e-10, atol=1e-12
+    )
     s, v = block_along(r, theta)
     assert np.max(np.abs(s)) < 1e-10 and np.max(np.abs(v)) < 1e-10
     np.testing.assert_allclose(-r["grip"], BM * G * math.sin(theta), rtol=1e-9)
@@ -240,7 +242,7 @@ def test_a_block_on_two_corners_sticks_on_an_incline_below_the_friction_angle():
 def test_a_block_on_two_corners_slides_above_the_friction_angle_at_g_sin_minus_mu_cos():
     theta, mu = math.radians(30.0), 0.3
     TS = np.linspace(0, 0.4, 21)
-    r = md.forward(block_on_incline(theta, mu, True), TS, rtol=1e-10)
+    r = md.forward(block_on_incline(theta, mu, True), TS, rtol=1e-10, atol=1e-12)
     s, v = block_along(r, theta)
     a = -G * (math.sin(theta) - mu * math.cos(theta))
     np.testing.assert_allclose(s[1:], 0.5 * a * TS[1:] ** 2, rtol=1e-9)
