@@ -50,7 +50,7 @@ def main() -> None:
     three = task(3, "chebyshev")
     out = md.synthesize(three, starts=256, seed=0)
     best = out.best
-    found = [float(best.fourbar.r2), float(best.fourbar.r3), float(best.fourbar.r4)]
+    found = [float(best.linkage.r2), float(best.linkage.r3), float(best.linkage.r4)]
     print("three Chebyshev points, crank, coupler, rocker (ground 1):")
     print("  Freudenstein:", np.round(freudenstein(three.inputs, three.outputs), 10))
     print("  synthesized: ", np.round(found, 10), f"({out.seconds:.1f} s)")

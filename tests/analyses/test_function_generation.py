@@ -79,9 +79,9 @@ def test_synthesis_finds_freudensteins_linkage():
     best = out.best
     # the same search as one value: the same outcome, bit for bit
     again = md.synthesize(task, search=md.synthesis.SearchSettings(starts=64, seed=0)).best
-    assert again.error == best.error and float(again.fourbar.r3) == float(best.fourbar.r3)
+    assert again.error == best.error and float(again.linkage.r3) == float(best.linkage.r3)
     a, b, c = freudenstein(task.inputs, task.outputs)
-    found = [float(best.fourbar.r2), float(best.fourbar.r3), float(best.fourbar.r4)]
+    found = [float(best.linkage.r2), float(best.linkage.r3), float(best.linkage.r4)]
     np.testing.assert_allclose(found, [a, b, c], rtol=1e-9)
     np.testing.assert_allclose(best.output(task.inputs, task.outputs[0]), task.outputs, atol=1e-9)
     assert best.error < 1e-18
@@ -96,7 +96,7 @@ def test_free_start_angles_are_found():
     rocker = FunctionCandidate(fb, 0.0, 0.0, 0.0, 0.0).output(theta)
     task = FunctionTask(theta - theta[0], rocker - rocker[0], free_start=True)
     best = md.synthesize(task, starts=256, seed=0).best
-    found = [float(best.fourbar.r2), float(best.fourbar.r3), float(best.fourbar.r4)]
+    found = [float(best.linkage.r2), float(best.linkage.r3), float(best.linkage.r4)]
     np.testing.assert_allclose(found, [0.45, 0.9, 0.7], rtol=1e-8)
     assert best.input_start == pytest.approx(theta[0], abs=1e-8)
     assert np.angle(np.exp(1j * (best.output_start - rocker[0]))) == pytest.approx(0, abs=1e-8)

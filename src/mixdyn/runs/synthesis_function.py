@@ -24,6 +24,7 @@ from ..errors import ModelError
 from ..io import schema as s
 from ..io._errors import FileError
 from ..synthesis import FunctionSynthesis, FunctionTask
+from ..synthesis._limits import check_grashof
 from ..synthesis._task import function_linkage
 from ..synthesis.build import FUNCTION_OUTPUTS
 
@@ -58,6 +59,10 @@ def function_task(runner, path, r: s.SynthesisRunSpec, si) -> FunctionTask:
         linkage = function_linkage(r.linkage)
     except ModelError as e:
         runner.fail((*path, "linkage"), e.message, "")
+    try:
+        check_grashof(linkage, r.grashof)
+    except ModelError as e:
+        runner.fail((*path, "grashof"), e.message, "")
     f = r.function
     fp = (*path, "function")
     ratios = tuple(si(v, "dimensionless", (*fp, "ratios", k)) for k, v in enumerate(f.ratios))
