@@ -102,8 +102,8 @@ class _Layout:
 
     @property
     def screen(self) -> int:
-        """Random draws per start: a two-loop linkage's (a six-bar's, :attr:`BRANCHES` of
-        four) random numbers seldom close both loops, and most of its solves would end
+        """Random draws per start: a two-loop linkage's (a six-bar's,
+        :attr:`~._linkage.Linkage.BRANCHES` of four) random numbers seldom close both loops, and most of its solves would end
         stuck against the closure; it draws :data:`SCREEN` times the starts and solves those
         of the least residuals (one draw per start for the others)."""
         return SCREEN if len(self.linkage.BRANCHES) > 2 else 1
@@ -137,12 +137,13 @@ class _Layout:
         unit), or zeros without ``free_start``."""
         if not self.free:
             return 0.0, 0.0
-        return u[self.n], u[self.n + 1] * (1.0 if self.angle else self.scale)
+        beta = u[self.n + 1]
+        return u[self.n], beta if self.angle else beta * self.scale
 
     def starts(self, rng, count: int) -> tuple[np.ndarray, np.ndarray]:
         """``(u0 (count, size), branches (count,))``: the lengths log-uniform within the
         bounds, the signed numbers uniform within ``±min(high, 1)``, the starts uniform over
-        a turn (a length's over ``±1``), the branches in turn."""
+        a turn (a length's over ``±1`` in the task's scale), the branches in turn."""
         u0 = np.exp(rng.uniform(np.log(self.low), np.log(self.high), (count, len(self.positive))))
         if self.signed:
             reach = min(self.high, 1.0)

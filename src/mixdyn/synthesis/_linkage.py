@@ -9,7 +9,9 @@ scales them by the targets' size). The crank ``r2`` turns about ``O2`` by the in
 ``theta2`` (its absolute angle ``phi2 = theta0 + theta2``); the coupler's angle ``phi3``
 comes from the subclass's closed-form assembly (:meth:`Linkage.coupler_angle`), and the
 coupler point is ``C = A + R(phi3) (rcx, rcy)`` in the coupler's frame (x from the crank pin
-``A`` towards the coupler's other pin ``B``).
+``A`` towards the coupler's other pin ``B``). A linkage with a grounded output of its own says
+what it is (:meth:`Linkage.output`, :attr:`Linkage.OUTPUT`): the quantity a function
+generation follows.
 
 Final subclasses: :class:`~._fourbar.FourBar`, :class:`~._slidercrank.SliderCrank`, and the
 six-bars of :mod:`._sixbar` (:class:`~._stephenson.StephensonIII`, :class:`~._watt.WattI`,
