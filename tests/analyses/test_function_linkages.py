@@ -90,7 +90,9 @@ def test_the_outputs_are_the_closed_forms():
     Stephenson III's the follower angle of the two circle intersections (1e-12)."""
     r2, r3, e = SLIDER
     sc = SliderCrank(*np.array([r2, r3, e, 0, 0, 0, 0, 0]), np.float64(1.0))
-    got = FunctionCandidate(sc, 0.0, 0.0, 0.0, 0.0).output(SLIDER_INPUTS)
+    candidate = FunctionCandidate(sc, 0.0, 0.0, 0.0, 0.0)
+    assert candidate.fourbar is candidate.linkage is sc  # the field's other name
+    got = candidate.output(SLIDER_INPUTS)
     np.testing.assert_allclose(got, slider_position(SLIDER_INPUTS, *SLIDER), atol=1e-15)
     assert SliderCrank.OUTPUT == "length" and WattII.OUTPUT == StephensonIII.OUTPUT == "angle"
     for kind, (numbers, code) in SIX_BARS.items():
