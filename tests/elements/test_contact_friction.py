@@ -19,7 +19,9 @@ A block (a ``box_line_contact``, friction at each corner) rests on two of its co
   with each corner at its limit ``mu m g / 2``; a sliding speed inside the band is halted;
 - on an incline, started at rest on its corners' static penetrations: below the friction angle
   it stays (no creep), its friction ``m g sin(theta)`` and normal force ``m g cos(theta)``;
-  above, it slides at ``g (sin(theta) - mu cos(theta))``; the energy balance holds.
+  above, it slides at ``g (sin(theta) - mu cos(theta))``; the energy balance holds;
+- dropped on a corner with a sideways speed, it lands, rocks and comes to rest without creep
+  (its energy balance held).
 
 Bad declarations are refused by name, and the analyses without reaction-dependent forces
 refuse it.
@@ -249,6 +251,26 @@ def test_a_block_on_two_corners_slides_above_the_friction_angle_at_g_sin_minus_m
     np.testing.assert_allclose(v[1:], a * TS[1:], rtol=1e-9)
     np.testing.assert_allclose(-r["grip"], mu * BM * G * math.cos(theta), rtol=1e-9)
     assert r.stats["energy_balance_error"] < 1e-9
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_block_dropped_on_a_corner_rocks_and_comes_to_rest_where_its_friction_stops_it():
+    """Landing on one corner, then on two, it rocks on its corners while the friction holds
+    them, slipping where it cannot (the corner in the air takes nothing); the run's energy
+    balance holds, and once the rocking has died out it does not creep."""
+    body = md.Body("block", BM, BLOCK_INERTIA, q0=(0.0, 0.035, math.radians(5.0)))
+    forces = [
+        md.BoxLineContact("floor", "block", BW, BH, BR, "ground", **LAW),
+        md.ContactFriction("grip", "floor", mu=0.5, v_stick=1e-4),
+    ]
+    model = md.Model([body], forces=forces, gravity=(0.0, -G))
+    TS = np.linspace(0.0, 0.5, 51)
+    r = md.forward(model, TS, rtol=1e-8, atol=1e-10, qd0=np.array([0.2, 0.0, 0.0]))
+    assert r.stats["energy_balance_error"] < 1e-6
+    late = TS >= 0.35
+    assert np.max(np.abs(r["grip.speed"][late])) < 1e-9
+    assert np.ptp(r["block.x"][late]) < 1e-8
+    assert 0.005 < r["block.x"][-1] < 0.02  # it slid while it landed (at 0.2 m/s for ~0.05 s)
 
 
 @pytest.mark.parametrize(

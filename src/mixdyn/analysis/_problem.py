@@ -216,7 +216,8 @@ class Problem(eqx.Module):
         so that a stopped element stays where it stopped instead of creeping on at the speed
         it was left with (up to its stick band, a step's worth of deceleration past a
         reversal). The kinetic energy the impulse takes out, the elements' work in the stop,
-        is added to the nonconservative work ``w[0]``. ``(qd, w)`` themselves without reaction-dependent elements."""
+        is added to the nonconservative work ``w[0]``. ``(qd, w)`` themselves without
+        reaction-dependent elements."""
         if not self.reaction_dependent:
             return qd, w
         elements = self.reaction_dependent

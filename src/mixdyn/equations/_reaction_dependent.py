@@ -197,7 +197,9 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
         over = stick & ((jnp.abs(need) > lim) | (lim <= 0.0))
         return jnp.where(over, lim * jnp.sign(need), need), stick & ~over
 
-    f, stick = jnp.zeros(v.shape[0]), band & free
+    # a row that holds with nothing (a contact point apart) takes no part in the stick solve
+    holds = limits(elements, positions, mu0, state_loads) > 0.0
+    f, stick = jnp.zeros(v.shape[0]), band & free & holds
     prev = f
     for _ in range(ITERATIONS):
         prev = f
