@@ -91,6 +91,7 @@ def test_statics_pin_reaction_is_the_whole_tooth_force():
     assert abs(eq["motor"] + 3.0 * R1 / R2) <= 1e-12  # as in inverse dynamics at rest
 
 
+@pytest.mark.slow  # long: run by CI's slow set (its own gear pair's programs compiled)
 def test_an_internal_pair_pushes_the_pinion_towards_the_rings_centre():
     """Ring (R2) and pinion (R1) inside it, the pinion's centre at (R2 - R1, 0): the pitch
     point at (R2, 0). The ring's pin carries |Fn| = T / (R2 cos alpha), holding the ring
@@ -104,6 +105,7 @@ def test_an_internal_pair_pushes_the_pinion_towards_the_rings_centre():
     np.testing.assert_allclose(abs(T1), T * R1 / R2, rtol=1e-12)
 
 
+@pytest.mark.slow  # long: run by CI's slow set (its own gear pair's programs compiled)
 def test_a_rack_and_pinion_loads_the_pin_and_the_guide_with_the_tooth_force():
     """A pinion (R) on a pin drives a rack on a horizontal guide below it against a force P
     along the rack: the pin carries |Fn| = P / cos(alpha), the guide the radial part
