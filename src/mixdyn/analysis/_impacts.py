@@ -283,6 +283,41 @@ def _impact_state(problem: Problem, contacts, q, qd, t, tol):
     return q, qd, J, D, phit, g, G, Gt
 
 
+@cached_jit(optimize=False)  # once per segment of a run with friction
+def _slidings_at(contacts, Q, QD):
+    """The sliding speeds (n, k) [velocity] of every rigid contact point at the states
+    ``(Q, QD)`` (n, nq) (:func:`_slidings`, row by row)."""
+    return jax.vmap(lambda q, qd: _slidings(contacts, q, qd))(Q, QD)
+
+
+def _refuse_resting_slide(contacts, rough, times, Q, QD, checked, limit, owner, fail) -> None:
+    """End the run (``fail``) where a resting contact point with a friction coefficient
+    (``rough``: the indices of the resting points whose ``mu > 0``) slides: its sliding
+    speed ``|v_t| = |G_t qd|`` [velocity] above ``limit`` (the rest speed) at one of the
+    ``checked`` (n,) bool states ``(Q, QD)`` (n, nq) at ``times`` (n,) [time], in order. A
+    resting point's row holds its gap only, so that it slides freely: a Coulomb-wrong
+    motion wherever it slides. The states checked are a segment's start, its output
+    samples and its end: a slide between two of them shows at the next, as nothing stops a
+    frictionless slide that started unless the motion turns it back."""
+    vt = np.abs(np.asarray(_slidings_at(contacts, jnp.asarray(Q), jnp.asarray(QD))))[:, rough]
+    over = np.argwhere((vt > limit) & np.asarray(checked)[:, None])
+    if not over.size:
+        return
+    row, col = over[0]
+    i = rough[col]
+    fail(
+        NumericalError(
+            f"the resting contact point of {owner[i].name} slides on its pair (sliding speed "
+            f"{vt[row, col]:.3g} [velocity], above the rest speed {limit:.3g}): resting "
+            "friction at a rigid contact is not modelled: use a compliant contact with a "
+            "contact_friction element (stick and slip), or mu: 0 if the contact may slide "
+            "freely",
+            float(times[row]),
+            (owner[i].name,),
+        )
+    )
+
+
 @cached_jit(optimize=False)  # a few times per run
 def _normals(problem: Problem, q, qd, t):
     """The normal forces (k,) [force] of the contact points ``problem`` holds at rest."""
@@ -734,6 +769,14 @@ def simulate_impacts(case, progress=None) -> Result:
             fail(StepSizeError(f"more than max_steps = {options.max_steps} steps", t_end))
         if not np.all(np.isfinite(np.asarray(y_end[1]))):
             fail(NumericalError("the velocities are not finite", t_end))
+        rough = [i for i in resting if mu_point[i] > 0.0]
+        if rough:  # a resting point with friction must not slide (its row is frictionless)
+            _refuse_resting_slide(
+                contacts, rough, np.r_[t0, ts, t_end],
+                np.vstack([np.asarray(y[0])[None], np.asarray(ys[0]), np.asarray(y_end[0])[None]]),
+                np.vstack([np.asarray(y[1])[None], np.asarray(ys[1]), np.asarray(y_end[1])[None]]),
+                np.r_[True, take, True], rest, owner, fail,
+            )  # fmt: skip
         if last:
             break
         if t_end <= t0 and not hit.any():
