@@ -37,7 +37,13 @@ of the sticking impulse). Newton's law with friction can give energy where the n
 tangential motions are coupled: an impact whose contact impulses would do positive work,
 or whose sliding normal impulse would pull (jamming), ends the run as a
 :class:`~mixdyn.errors.NumericalError`. The multi-point plastic impacts of :func:`settle`
-and the resting points are frictionless.
+and the resting points are frictionless: a resting point of a contact with ``mu > 0`` must
+not slide. Its sliding speed ``|G_t qd|`` is checked at each segment's start, output
+samples and end against the rest speed (below); above it the run ends as a
+:class:`~mixdyn.errors.NumericalError` naming the contact (resting friction at a rigid
+contact is not modelled: a compliant contact with a ``contact_friction`` element sticks and
+slips). A slide between two checked states shows at the next, as nothing stops a
+frictionless slide unless the motion turns it back.
 
 In a mixed run (:mod:`.mixed`: ``p`` unknown forces of directions ``B`` (nq, p), ``p``
 prescribed motions ``Psi``) a prescribed motion's velocity cannot jump: its unknown force

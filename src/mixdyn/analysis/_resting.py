@@ -11,7 +11,9 @@ constrained equations of motion of the projection method are integrated as they 
 with ``delta_q = d delta / dq`` (1, nq) and its multiplier ``N`` the contact's normal force
 [force]: the row's force on the bodies, ``-delta_q^T N``, pushes them apart along the
 gap's gradient (as a compliant contact's ``-F grad(delta)``) while ``N >= 0``. The row's
-velocity ``delta_q qd = 0`` makes its power zero: a resting contact does no work. One
+velocity ``delta_q qd = 0`` makes its power zero: a resting contact does no work. The
+row holds the gap alone, so that a held point slides freely along its pair; a contact
+with a friction coefficient whose held point slides ends the run (:mod:`._impacts`). One
 problem per set of held points (:func:`holding`), each compiled once.
 """
 
