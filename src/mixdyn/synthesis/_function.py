@@ -103,9 +103,10 @@ class _Layout:
     @property
     def screen(self) -> int:
         """Random draws per start: a two-loop linkage's (a six-bar's,
-        :attr:`~._linkage.Linkage.BRANCHES` of four) random numbers seldom close both loops, and most of its solves would end
-        stuck against the closure; it draws :data:`SCREEN` times the starts and solves those
-        of the least residuals (one draw per start for the others)."""
+        :attr:`~._linkage.Linkage.BRANCHES` of four) random numbers seldom close both
+        loops, and most of its solves would end stuck against the closure; it draws
+        :data:`SCREEN` times the starts and solves those of the least residuals (one draw
+        per start for the others)."""
         return SCREEN if len(self.linkage.BRANCHES) > 2 else 1
 
     @property
