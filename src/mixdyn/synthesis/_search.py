@@ -11,7 +11,9 @@ angle at the first point ``theta_1`` and, where the timing is free, the incremen
   angles from the first point to the last, the points' arc only: a candidate whose loop opens
   between two points has a circuit defect and pays for it): ``10 relu(|cos mu| - c)`` with
   ``c = cos(min_transmission)`` (at most 0.999);
-* the bounds: ``10 relu(low - x)``, ``10 relu(x - high)``;
+* the bounds: ``1000 relu(low - x)``, ``1000 relu(x - high)`` (a length over the targets'
+  size; :data:`~._solve.BOUND_PENALTY`: an outcome the path pulls past a bound stops a
+  hair beyond it and is then taken onto it);
 * the Grashof type and the ground pivots' regions (:mod:`._limits`): ``30 relu(g / s + 0.001)``
   of each gap ``g`` [length] (a linear condition on the lengths, a rectangle's side: met
   where ``g <= 0``; the margin keeps a search that leans on it inside);
@@ -61,7 +63,15 @@ from ._linkage import Linkage, coupler_point, transmission_cosine
 from ._motion import MotionTask, angle_residuals, body_angles, offset, turn_gaps
 from ._settings import SearchSettings
 from ._slidercrank import SliderCrank
-from ._solve import CHECK_SAMPLES, CLOSURE_MARGIN, PENALTY, Ranked, levenberg_marquardt, solve_all
+from ._solve import (
+    BOUND_PENALTY,
+    CHECK_SAMPLES,
+    CLOSURE_MARGIN,
+    PENALTY,
+    Ranked,
+    levenberg_marquardt,
+    solve_all,
+)
 from ._task import Objective, PathTask
 
 
@@ -188,20 +198,17 @@ def _data(layout: _Layout, task: PathTask, objective: Objective, box: np.ndarray
     motion = isinstance(task, MotionTask)
     finite = np.isfinite(box)
     f64 = np.float64
-    # The penalties aim LIMIT_MARGIN inside the bounds and the transmission angle (lengths in
-    # the targets' size, theta0 in rad; at most a quarter of a bound's width): an outcome the
-    # path pulls against a penalty settles a little past its edge, which the exact check of
-    # the ranking refuses.
-    unit = np.where(np.arange(len(box)) == len(box) - 1, 1.0, layout.scale)
-    width = np.where(finite.all(axis=1), box[:, 1] - box[:, 0], np.inf)
-    inside = np.minimum(LIMIT_MARGIN * unit, 0.25 * width)
+    # The bounds' penalties start at the bounds themselves, with a weight that leaves an
+    # outcome leaning on one a hair past it, where it is taken onto it (_kept_within): a
+    # linkage whose best lies on a bound reaches it. The transmission angle's and the
+    # closure's, which no clip can meet, aim LIMIT_MARGIN inside.
     return {
         "targets": np.asarray(task.points, dtype=float),
         "timing": np.zeros(layout.n) if task.timing is None else np.asarray(task.timing),
         "scale": f64(layout.scale),
         "centre": np.asarray(layout.centre, dtype=float),
-        "low": np.where(finite[:, 0], box[:, 0] + inside, 0.0),
-        "high": np.where(finite[:, 1], box[:, 1] - inside, 0.0),
+        "low": np.where(finite[:, 0], box[:, 0], 0.0),
+        "high": np.where(finite[:, 1], box[:, 1], 0.0),
         "low_on": finite[:, 0].astype(float),
         "high_on": finite[:, 1].astype(float),
         "fixed": layout.fixed,
@@ -253,7 +260,7 @@ def _residuals(program: _Program, data: dict):
         cos_mu = jax.vmap(lambda t: transmission_cosine(fb, t))(grid)
         closure = PENALTY * jax.nn.relu(jnp.abs(cos_mu) - data["cmax"])
         v = fb.vector()
-        bounds = PENALTY * jnp.concatenate(
+        bounds = BOUND_PENALTY * jnp.concatenate(
             [lo_on * jax.nn.relu(lo - v) / scale_of, hi_on * jax.nn.relu(v - hi) / scale_of]
         )
         limits = jnp.concatenate([grashof_gaps(fb, program.grashof), region_gaps(

@@ -12,6 +12,10 @@ from ..errors import ModelError
 
 #: The penalties' weight (residuals of infeasibility times this).
 PENALTY = 10.0
+#: The weight of a path search's penalties on its numbers' bounds: an outcome whose best
+#: lies past a bound settles this much more closely against it (its overshoot ~ 1 /
+#: weight^2), and is then taken onto it exactly (``_search._kept_within``).
+BOUND_PENALTY = 1e3
 #: The largest |cos mu| a search aims at (a margin inside the loop's closure).
 CLOSURE_MARGIN = 0.999
 #: Input angles of the exact check of closure along the traversed motion.
@@ -86,6 +90,7 @@ def distinct(ok, scores, keys, branches, tol: float):
 
 
 __all__ = [
+    "BOUND_PENALTY",
     "CHECK_SAMPLES",
     "CLOSURE_MARGIN",
     "PENALTY",
