@@ -408,6 +408,19 @@ def test_the_early_figure_worker_ends_with_the_command(tmp_path):
         assert _processes_with(token) == []
 
 
+def _environ_of(pid: int) -> list[bytes]:
+    """``/proc/PID/environ``'s entries, read again while it is empty: the kernel shows an
+    empty environment for a moment after ``exec`` (the new program's stack not yet laid out),
+    which is when ``Popen`` returns."""
+    path = pathlib.Path(f"/proc/{pid}/environ")
+    for _ in range(200):
+        entries = [e for e in path.read_bytes().split(b"\0") if e]
+        if entries:
+            return entries
+        time.sleep(0.01)
+    return []
+
+
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
 @pytest.mark.parametrize("user", [None, "2"])
 def test_the_figure_worker_runs_blas_on_one_thread_unless_told(monkeypatch, user):
@@ -423,7 +436,7 @@ def test_the_figure_worker_runs_blas_on_one_thread_unless_told(monkeypatch, user
     if proc is None:
         pytest.skip("no worker process here")
     try:
-        environ = pathlib.Path(f"/proc/{proc.pid}/environ").read_bytes().split(b"\0")
+        environ = _environ_of(proc.pid)
     finally:
         _command.stop(proc)
         for fd in second or ():
