@@ -228,7 +228,7 @@ class Problem(eqx.Module):
         qdd0, mu0 = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
         reversed_ = v_start * v_end < 0.0
         _, stick, A, _, H, v, _ = self._dependent_solve(q, qd, t, solve, qdd0, mu0, reversed_)
-        y = rd.held(H, stick, jnp.where(stick, -v, 0.0))
+        y = rd.held(H, stick, jnp.where(stick, -v, 0.0), rd.may_depend(elements))
         halted = qd + A @ jnp.where(stick, y, 0.0)
         mass = self.model.mass_diagonal
         work = 0.5 * (jnp.dot(mass * halted, halted) - jnp.dot(mass * qd, qd))

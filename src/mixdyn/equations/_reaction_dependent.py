@@ -148,19 +148,29 @@ def columns(elements, positions, f, v, mu, state_loads=None) -> dict:
     return out
 
 
-def held(H, stick, rhs) -> jax.Array:
+def may_depend(elements) -> bool:
+    """Whether the rows of ``elements`` may depend on each other (static): where an element
+    acts along several rows (a contact's friction at its points). One row an element (joint
+    frictions) keeps the plain solve."""
+    return any(e.width > 1 for e in elements)
+
+
+def held(H, stick, rhs, dependent: bool = True) -> jax.Array:
     """``x`` (nf,) with ``H_ss x_s = rhs_s`` over the sticking rows ``s`` (``stick`` (nf,),
     bool) and ``x = rhs`` elsewhere, from ``H`` (nf, nf): the stick forces (or, after a step,
     the impulses that halt the sticking rows).
 
-    Rows that depend on each other (a block's two corners on a line, their sliding speeds
-    the same) leave ``x_s`` open along their null space: the solve takes the least-norm
-    ``x_s`` of ``H_ss`` scaled to a unit diagonal (its pseudo-inverse, singular values below
-    :data:`DEPENDENT` of the largest taken as 0), finite and shared among the rows; for
-    independent rows it is the solution. The sticking rows' ``H_kk`` are positive (the rows
-    are free to move, :func:`solve`)."""
+    Rows that depend on each other (``dependent``, static: :func:`may_depend`; a block's two
+    corners on a line, their sliding speeds the same) leave ``x_s`` open along their null
+    space: the solve takes the least-norm ``x_s`` of ``H_ss`` scaled to a unit diagonal (its
+    pseudo-inverse, singular values below :data:`DEPENDENT` of the largest taken as 0),
+    finite and shared among the rows; for independent rows it is the solution, which
+    ``dependent=False`` finds by a plain solve. The sticking rows' ``H_kk`` are positive
+    (the rows are free to move, :func:`solve`)."""
     n = H.shape[0]
     both = stick[:, None] & stick[None, :]
+    if not dependent:
+        return jnp.linalg.solve(jnp.where(both, H, jnp.eye(n)), rhs)
     scale = 1.0 / jnp.sqrt(jnp.where(stick, jnp.diag(H), 1.0))
     B = jnp.where(both, scale[:, None] * H * scale[None, :], jnp.eye(n))
     x = scale * (jnp.linalg.pinv(B, rtol=DEPENDENT) @ (scale * rhs))
@@ -178,6 +188,7 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
     band = jnp.abs(v) < bands(elements)
     free = jnp.diag(H) > 1e-10 * h_free
     where = spans(elements)
+    dependent = may_depend(elements)
 
     def step(f, stick):
         mu = mu0 + Mu_f @ f
@@ -193,7 +204,7 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
         # direction of the force they needed to stick (released inside the band)
         fixed = jnp.where(band, jnp.where(free, lim * jnp.sign(f), -lim * jnp.sign(a0)), slip)
         fixed = jnp.where(stick, 0.0, fixed)
-        need = held(H, stick, jnp.where(stick, -(a0 + H @ fixed), fixed))
+        need = held(H, stick, jnp.where(stick, -(a0 + H @ fixed), fixed), dependent)
         over = stick & ((jnp.abs(need) > lim) | (lim <= 0.0))
         return jnp.where(over, lim * jnp.sign(need), need), stick & ~over
 
@@ -231,6 +242,7 @@ __all__ = [
     "held",
     "limits",
     "loads",
+    "may_depend",
     "reactions",
     "rows",
     "solve",
