@@ -1,56 +1,138 @@
-"""A resting rigid contact point with a friction coefficient must not slide: its held row is
-frictionless, so that a slide would be a Coulomb-wrong motion (``mu`` acts in impacts only).
+"""Coulomb friction at a resting rigid contact, with stick and slip, against closed forms.
 
-A disc dropped with ``e = 0.1`` on a rigid line bounces until the bounces accumulate at
-``t_inf = t_1 (1 + e) / (1 - e)`` (``t_1 = sqrt(2 h / (g cos(theta)))``, ``h`` its gap along
-the normal: Newton's law fixes the normal velocities whatever the friction does), then rests.
+A resting point's normal force ``N`` is its held row's multiplier; its friction is
+``-mu N sign(v_t)`` while it slides and holds it still up to ``mu N``
+(:class:`~mixdyn.analysis._resting.RestFriction`).
 
-- On a rough incline of 20 degrees it rests and would slide down: the run ends as a named
-  numerical failure after ``t_inf``, at the next output, naming the contact, the sliding
-  speed and the compliant contact to use; the states before it lie on the incline (slow).
-  The check alone (fast): at a disc's states on the incline, rolling passes and sliding
-  fails at the first state past the limit, with the closed form's sliding speed.
-- With ``mu = 0`` the same run goes on: the frictionless impulses act along the normal, so
-  that the centre moves along the incline as ``g sin(theta) t^2 / 2`` throughout, resting on
-  it after ``t_inf`` with the normal force ``m g cos(theta)`` (slow).
+- The equations alone (fast), at a state resting on an incline of angle ``theta``: a block
+  held by ``mu >= tan(theta)`` has no acceleration, its friction ``m g sin(theta)`` and normal
+  force ``m g cos(theta)``; one on a steeper incline slides at
+  ``g (sin(theta) - mu cos(theta))``; a disc rolls at ``2/3 g sin(theta)`` (``J = m R^2 / 2``)
+  with ``mu >= tan(theta) / 3`` and otherwise slides at ``g (sin(theta) - mu cos(theta))``
+  while it spins up at ``mu m g cos(theta) R / J``.
+- A disc dropped with ``e = 0.1`` on a rough incline bounces until the bounces accumulate at
+  ``t_inf = t_1 (1 + e) / (1 - e)`` (``t_1 = sqrt(2 h / (g cos(theta)))``: Newton's law fixes
+  the normal velocities whatever the friction does), then rests and rolls on at
+  ``2/3 g sin(theta)``, its contact point still (slow).
+- A block thrown on rough flat ground slides to a stop at ``v0^2 / (2 mu g)`` at
+  ``t = v0 / (mu g)`` and stays there; on inclines it stays put or slides as the closed forms
+  say; its energy balance closes with the friction's work (slow).
+- With ``mu = 0`` the disc slides down at ``g sin(theta) t^2 / 2`` throughout (slow).
 - On rough flat ground a disc dropped rests with ``m g``; one thrown level sticks at its
-  first impact (the angular momentum about the contact point kept:
-  ``v_x+ = m R^2 v_x / (m R^2 + J)``) and rolls on at that speed through its bounces and
-  its rest: no false alarm (slow).
-- ``mixdyn run`` of a model file with the rough incline exits 1 with the message (slow).
+  first impact (its angular momentum about the contact point kept:
+  ``v_x+ = m R^2 v_x / (m R^2 + J)``) and rolls on at that speed (slow).
+- ``mixdyn run`` of a model file with the rough incline writes the friction column (slow).
 """
 
 from __future__ import annotations
 
 import math
 
+import equinox as eqx
+import jax.numpy as jnp
 import numpy as np
+import pandas as pd
 import pytest
 from typer.testing import CliRunner
 
 import mixdyn as md
-from mixdyn.analysis._impacts import _refuse_resting_slide
+from mixdyn.analysis._problem import Problem
+from mixdyn.analysis._resting import friction_at, hold, holding
 from mixdyn.cli import app
+from mixdyn.equations import Constraints
 from mixdyn.model._compliant import rigid_contacts
 
 G_ACC, M, R, H, E = 9.81, 2.0, 0.05, 0.1, 0.1
 J = 0.5 * M * R**2
 THETA = math.radians(20.0)
-DOWN = np.array([math.cos(THETA), -math.sin(THETA)])  # down the incline
-NORMAL = np.array([math.sin(THETA), math.cos(THETA)])  # the incline's outward normal
+W_BOX, H_BOX, R_CORNER = 0.2, 0.1, 0.01
+J_BOX = M * (W_BOX**2 + H_BOX**2) / 12
 
 
-def _on_incline(mu, theta=THETA):
-    """A disc whose centre is ``H + R`` above the incline through the origin (along its
-    normal), released at rest: a rigid contact with ``e = 0``."""
-    c = (H + R) * NORMAL if theta else np.array([0.0, H + R])
-    axis = DOWN if theta else np.array([1.0, 0.0])
+def _axes(theta):
+    """The incline's direction down it and its outward normal (2,), (2,)."""
+    return (
+        np.array([math.cos(theta), -math.sin(theta)]),
+        np.array([math.sin(theta), math.cos(theta)]),
+    )
+
+
+def _disc(mu, theta=THETA, h=H):
+    """A disc whose centre is ``h + R`` above the incline through the origin (along its
+    normal), released at rest: a rigid contact with ``e = 0.1``."""
+    down, normal = _axes(theta)
+    c = (h + R) * normal
     disc = md.Body("disc", M, J, q0=(c[0], c[1], 0.0))
     incline = md.CircleLineContact(
-        "incline", "disc", R, ("ground", (0.0, 0.0)), axis=tuple(axis), contact_model="rigid",
+        "incline", "disc", R, ("ground", (0.0, 0.0)), axis=tuple(down), contact_model="rigid",
         restitution=E, mu=mu,
     )  # fmt: skip
     return md.Model([disc], forces=[incline], gravity=(0, -G_ACC))
+
+
+def _block(mu, theta):
+    """A block ``W_BOX`` by ``H_BOX`` (rounded corners) lying on the incline, its long side
+    along it: a rigid contact at its four corners, two of which touch."""
+    down, normal = _axes(theta)
+    c = 0.5 * H_BOX * normal
+    block = md.Body("block", M, J_BOX, q0=(c[0], c[1], -theta))
+    floor = md.BoxLineContact(
+        "floor", "block", W_BOX, H_BOX, R_CORNER, ("ground", (0.0, 0.0)), axis=tuple(down),
+        contact_model="rigid", restitution=0.5, mu=mu,
+    )  # fmt: skip
+    return md.Model([block], forces=[floor], gravity=(0, -G_ACC))
+
+
+def _resting(model, points, band=1e-7):
+    """The forward problem of ``model`` with ``points`` of its contact held, with friction."""
+    (c,) = rigid_contacts(model)
+    n = int(np.size(np.asarray(c.penetration(model.q0))))
+    holds = tuple(hold(c, k, n) for k in points)
+    frictions = (friction_at(c, tuple(points), n, band),)
+    return holding(Problem(model, Constraints.of(model)), holds, frictions)
+
+
+@eqx.filter_jit
+def _solved(problem, q, qd):
+    return problem.accelerations(q, qd, jnp.zeros(()))[:2]
+
+
+def _accelerations(problem, q, qd):
+    qdd, mu = _solved(problem, jnp.asarray(q), jnp.asarray(qd, dtype=jnp.float64))
+    return np.asarray(qdd), np.asarray(mu)
+
+
+@pytest.mark.parametrize(("theta_deg", "mu"), [(20.0, 0.5), (30.0, 0.3)], ids=["holds", "slides"])
+def test_a_block_resting_on_an_incline_holds_or_slides_as_coulomb_says(theta_deg, mu):
+    theta = math.radians(theta_deg)
+    down, normal = _axes(theta)
+    model = _block(mu, theta)
+    problem = _resting(model, (2, 3))  # the two lower corners
+    qdd, lam = _accelerations(problem, model.q0, np.zeros(3))
+    a = max(G_ACC * (math.sin(theta) - mu * math.cos(theta)), 0.0)
+    np.testing.assert_allclose(qdd[:2] @ down, a, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(qdd[:2] @ normal, 0.0, atol=1e-12)
+    np.testing.assert_allclose(qdd[2], 0.0, atol=1e-11)
+    np.testing.assert_allclose(lam.sum(), M * G_ACC * math.cos(theta), rtol=1e-12)
+
+
+@pytest.mark.parametrize("mu", [0.5, 0.05], ids=["rolls", "slides-and-spins"])
+def test_a_disc_resting_on_an_incline_rolls_or_slides_as_coulomb_says(mu):
+    down, _ = _axes(THETA)
+    model = _disc(mu, h=0.0)
+    problem = _resting(model, (0,))
+    qdd, lam = _accelerations(problem, model.q0, np.zeros(3))
+    if mu >= math.tan(THETA) / 3:
+        a, alpha = 2 / 3 * G_ACC * math.sin(THETA), -2 / 3 * G_ACC * math.sin(THETA) / R
+    else:
+        a = G_ACC * (math.sin(THETA) - mu * math.cos(THETA))
+        alpha = -mu * M * G_ACC * math.cos(THETA) * R / J  # clockwise, rolling down
+    np.testing.assert_allclose(qdd[:2] @ down, a, rtol=1e-12)
+    np.testing.assert_allclose(qdd[2], alpha, rtol=1e-12)
+    np.testing.assert_allclose(lam, [M * G_ACC * math.cos(THETA)], rtol=1e-12)
+
+
+TS = np.linspace(0.0, 0.3, 7)
 
 
 def _t_land(theta=THETA):
@@ -64,73 +146,83 @@ def _t_rest(theta=THETA):
     return _t_land(theta) * (1 + E) / (1 - E)
 
 
-TS = np.linspace(0.0, 0.3, 7)
-
-
-def test_a_resting_point_sliding_past_the_rest_speed_is_a_named_failure():
-    """The check alone, at states of a disc touching the incline: rolling down it (its
-    contact point still: ``v + w R = 0`` along it) passes; sliding (no spin) fails at the
-    first state past the limit, with the sliding speed ``|v|`` of the closed form."""
-    model = _on_incline(0.5)
-    contacts = rigid_contacts(model)
-    q = np.r_[R * NORMAL, 0.0]
-    v = np.array([0.0, 0.2, 0.3])  # speeds down the incline [m/s]
-    rolling = np.stack([np.r_[u * DOWN, -u / R] for u in v])  # clockwise: w = -v / R
-    sliding = np.stack([np.r_[u * DOWN, 0.0] for u in v])
-    times, Q, limit = np.array([1.0, 2.0, 3.0]), np.tile(q, (3, 1)), 0.1
-    errors = []
-
-    def fail(err):
-        errors.append(err)
-        raise err
-
-    check = np.ones(3, bool)
-    _refuse_resting_slide(contacts, [0], times, Q, rolling, check, limit, [contacts[0]], fail)
-    assert not errors
-    with pytest.raises(md.NumericalError, match="resting friction at a rigid contact") as err:
-        _refuse_resting_slide(contacts, [0], times, Q, sliding, check, limit, [contacts[0]], fail)
-    assert err.value.time == 2.0 and err.value.elements == ("incline",)
-    assert "sliding speed 0.2 [velocity]" in str(err.value)
-    unchecked = np.array([True, False, False])  # only the states the run checks count
-    _refuse_resting_slide(contacts, [0], times, Q, sliding, unchecked, limit, [contacts[0]], fail)
-    assert len(errors) == 1
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_disc_dropped_on_a_rough_rigid_incline_rests_and_rolls():
+    down, normal = _axes(THETA)
+    r = md.forward(_disc(0.5), TS)
+    t_rest = _t_rest()
+    assert r.stats["rests"]["start"][0] == pytest.approx(t_rest, abs=1e-6)
+    after = t_rest < TS
+    a = 2 / 3 * G_ACC * math.sin(THETA)
+    np.testing.assert_allclose(r.qdd[after, :2] @ down, a, rtol=1e-9)
+    v = r.qd[:, :2] @ down
+    np.testing.assert_allclose(v[after] + R * r.qd[after, 2], 0.0, atol=1e-9)  # rolling
+    np.testing.assert_allclose(r.q[after, :2] @ normal, R, rtol=0, atol=1e-9)
+    friction = M * G_ACC * math.sin(THETA) / 3  # on the disc, up the incline (along z x n)
+    np.testing.assert_allclose(np.abs(r["incline.friction"][after]), friction, rtol=1e-9)
+    np.testing.assert_allclose(r["incline.friction"][~after], 0.0)
+    np.testing.assert_allclose(r["incline.normal"][after], M * G_ACC * math.cos(THETA), rtol=1e-9)
+    assert r.stats["energy_balance_error"] < 1e-9
 
 
 @pytest.mark.slow  # long: run by CI's slow set
-def test_a_disc_resting_on_a_rough_rigid_incline_is_a_named_failure():
-    with pytest.raises(md.NumericalError, match="resting friction at a rigid contact") as err:
-        md.forward(_on_incline(0.5), TS)
-    t_rest = _t_rest()
-    assert err.value.elements == ("incline",)
-    assert t_rest - 1e-6 < err.value.time <= TS[t_rest < TS][0] + 1e-12
-    assert "[velocity]" in str(err.value) and "contact_friction" in str(err.value)
-    done = err.value.partial  # the states up to the failure: on the incline after resting
-    on = done.t > t_rest
-    np.testing.assert_allclose(done.q[on, :2] @ NORMAL, R, rtol=0, atol=1e-9)
+def test_a_block_thrown_on_rough_flat_ground_slides_to_a_stop_and_stays():
+    mu, v0 = 0.4, 1.0
+    ts = np.linspace(0.0, 0.5, 11)
+    r = md.forward(_block(mu, 0.0), ts, qd0=np.array([v0, 0.0, 0.0]))
+    t_stop = v0 / (mu * G_ACC)
+    x = np.where(ts < t_stop, v0 * ts - 0.5 * mu * G_ACC * ts**2, v0**2 / (2 * mu * G_ACC))
+    np.testing.assert_allclose(r.q[:, 0], x, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(r.qd[ts > t_stop], 0.0, atol=1e-12)
+    moving = ts < t_stop
+    np.testing.assert_allclose(np.abs(r["floor.friction"][moving]), mu * M * G_ACC, rtol=1e-12)
+    np.testing.assert_allclose(r["floor.friction"][~moving], 0.0, atol=1e-9)
+    # the friction took the kinetic energy: m v0^2 / 2 of nonconservative work at the stop
+    np.testing.assert_allclose(r["work.nonconservative"][-1], -0.5 * M * v0**2, rtol=1e-9)
+    assert r.stats["energy_balance_error"] < 1e-9
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+@pytest.mark.parametrize(("theta_deg", "mu"), [(20.0, 0.5), (30.0, 0.3)], ids=["stays", "slides"])
+def test_a_block_resting_on_a_rough_rigid_incline_stays_or_slides(theta_deg, mu):
+    theta = math.radians(theta_deg)
+    down, _ = _axes(theta)
+    ts = np.linspace(0.0, 0.5, 6)
+    r = md.forward(_block(mu, theta), ts)
+    a = max(G_ACC * (math.sin(theta) - mu * math.cos(theta)), 0.0)
+    s = (r.q[:, :2] - r.q[0, :2]) @ down
+    np.testing.assert_allclose(s, 0.5 * a * ts**2, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(r.q[:, 2], -theta, atol=1e-12)
+    limit = mu * M * G_ACC * math.cos(theta)
+    friction = M * G_ACC * math.sin(theta) if a == 0.0 else limit
+    np.testing.assert_allclose(np.abs(r["floor.friction"]), friction, rtol=1e-12)
+    np.testing.assert_allclose(r["floor.normal"], M * G_ACC * math.cos(theta), rtol=1e-12)
 
 
 @pytest.mark.slow  # long: run by CI's slow set
 def test_a_disc_on_a_frictionless_rigid_incline_slides_at_g_sin_theta():
-    r = md.forward(_on_incline(0.0), TS, rtol=1e-10, atol=1e-12)
+    down, normal = _axes(THETA)
+    r = md.forward(_disc(0.0), TS, rtol=1e-10, atol=1e-12)
     t_rest = _t_rest()
     assert r.stats["rests"]["start"][0] == pytest.approx(t_rest, abs=1e-6)
     s = 0.5 * G_ACC * math.sin(THETA) * TS**2
-    np.testing.assert_allclose(r.q[:, :2] @ DOWN, s, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(r.q[:, :2] @ down, s, rtol=0, atol=1e-8)
     after = t_rest < TS
-    np.testing.assert_allclose(r.q[after, :2] @ NORMAL, R, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(r.q[after, :2] @ normal, R, rtol=0, atol=1e-9)
     np.testing.assert_allclose(r["incline.normal"][after], M * G_ACC * math.cos(THETA), rtol=1e-7)
 
 
 @pytest.mark.slow  # long: run by CI's slow set
 def test_a_disc_resting_or_rolling_on_rough_flat_ground_runs():
-    r = md.forward(_on_incline(0.5, theta=0.0), TS)
+    r = md.forward(_disc(0.5, theta=0.0), TS)
     t_land, t_rest = _t_land(0.0), _t_rest(0.0)
     assert r.stats["rests"]["start"][0] == pytest.approx(t_rest, abs=1e-6)
     after = t_rest < TS
     np.testing.assert_allclose(r.q[after, 1], R, rtol=0, atol=1e-9)
     np.testing.assert_allclose(r["incline.normal"][after], M * G_ACC, rtol=1e-9)
+    np.testing.assert_allclose(r["incline.friction"], 0.0, atol=1e-9)
     vx = 1.0  # thrown level: sticks at the landing and rolls
-    rolled = md.forward(_on_incline(1.0, theta=0.0), TS, qd0=np.array([vx, 0.0, 0.0]))
+    rolled = md.forward(_disc(1.0, theta=0.0), TS, qd0=np.array([vx, 0.0, 0.0]))
     v_roll = M * R**2 * vx / (M * R**2 + J)
     assert bool(rolled.stats["impacts"]["sticks"][0])
     assert rolled.stats["rests"]["start"][0] == pytest.approx(t_rest, abs=1e-6)
@@ -140,6 +232,7 @@ def test_a_disc_resting_or_rolling_on_rough_flat_ground_runs():
     np.testing.assert_allclose(rolled.qd[later, 2], -v_roll / R, rtol=1e-9)
 
 
+DOWN, NORMAL = _axes(THETA)
 X0, Y0 = (H + R) * NORMAL
 FILE = f"""\
 mixdyn: 1
@@ -161,10 +254,15 @@ runs:
 
 
 @pytest.mark.slow  # long: run by CI's slow set
-def test_mixdyn_run_of_a_rough_rigid_incline_exits_1(tmp_path):
+def test_mixdyn_run_of_a_rough_rigid_incline_writes_the_resting_friction(tmp_path):
     path = tmp_path / "incline.yaml"
     path.write_text(FILE)
     out = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
-    assert out.exit_code == 1, out.output
-    assert "resting friction at a rigid contact is not modelled" in out.output
-    assert "incline" in out.output
+    assert out.exit_code == 0, out.output
+    (table,) = (tmp_path / "out").rglob("*.csv")
+    frame = pd.read_csv(table)
+    (column,) = [c for c in frame.columns if c.startswith("incline.friction ")]
+    assert "[N]" in column
+    after = frame.filter(like="t ").iloc[:, 0].to_numpy() > _t_rest()
+    friction = M * G_ACC * math.sin(THETA) / 3
+    np.testing.assert_allclose(np.abs(frame[column].to_numpy()[after]), friction, rtol=1e-9)

@@ -37,13 +37,12 @@ of the sticking impulse). Newton's law with friction can give energy where the n
 tangential motions are coupled: an impact whose contact impulses would do positive work,
 or whose sliding normal impulse would pull (jamming), ends the run as a
 :class:`~mixdyn.errors.NumericalError`. The multi-point plastic impacts of :func:`settle`
-and the resting points are frictionless: a resting point of a contact with ``mu > 0`` must
-not slide. Its sliding speed ``|G_t qd|`` is checked at each segment's start, output
-samples and end against the rest speed (below); above it the run ends as a
-:class:`~mixdyn.errors.NumericalError` naming the contact (resting friction at a rigid
-contact is not modelled: a compliant contact with a ``contact_friction`` element sticks and
-slips). A slide between two checked states shows at the next, as nothing stops a
-frictionless slide unless the motion turns it back.
+are frictionless. A resting point of a contact with ``mu > 0`` takes Coulomb's friction
+with stick and slip (:class:`~._resting.RestFriction`: its normal force the held row's
+multiplier, its stick band the rest speed, below). A segment also ends where a sliding
+friction row (a resting point's, a joint's) slows into its stick band, and the next
+segment starts with the rows that stick brought to rest (:func:`_halt`), so that a body
+that its friction stops stays where it stopped.
 
 In a mixed run (:mod:`.mixed`: ``p`` unknown forces of directions ``B`` (nq, p), ``p``
 prescribed motions ``Psi``) a prescribed motion's velocity cannot jump: its unknown force
@@ -95,6 +94,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from ..equations import _reaction_dependent as rd
 from ..equations import force_directions
 from ..errors import (
     ImpactAccumulationError,
@@ -108,7 +108,7 @@ from ..runtime._programs import cached_jit
 from ._assembly import length_scale
 from ._impact_friction import coulomb_impulse
 from ._problem import Problem
-from ._resting import hold, hold_positions, holding, n_holds, normal_forces
+from ._resting import friction_at, hold, hold_positions, holding, n_holds, normal_forces
 from .methods import Projection
 from .result import Partial, Result
 
@@ -125,7 +125,7 @@ MISSED = 1e-6
 #: The impact instant's tolerance, relative to the run's span.
 TIME_TOL = 1e-14
 #: An impact whose normal velocity after misses Newton's law by more than this part of the
-#: approach speed is singular (the constraints fix the normal velocity).
+#: approach speed (at least the rest speed) is singular (the constraints fix the normal velocity).
 IMPULSE_TOL = 1e-6
 #: The first step of a segment, relative to the run's span (at most the first output
 #: interval, and shorter after an impact: see :func:`_first_step`).
@@ -163,15 +163,58 @@ def _least_normal(problem, t, y):
     return jnp.min(forces, initial=jnp.inf)
 
 
-def _contact_event(problem, contacts, watched, origin, length, force, t, y, args, **kwargs):
-    """The event's condition: the smaller of the watched contact points' smallest gap
-    (from ``origin``, :func:`_origins`) relative to ``length`` [length] and the held points'
-    smallest normal force relative to ``force`` [force] (the one at the segment's start); it
-    falls to zero at an impact or at a lift-off."""
-    gap = _nearest_gap(contacts, watched, origin, t, y, args) / length
-    if n_holds(problem) == 0:
-        return gap
-    return jnp.minimum(gap, _least_normal(problem, t, y) / force)
+def _slowest(problem, sliding, t, y):
+    """How far the reaction-dependent rows moving at the segment's start are from their
+    stick bands: the smallest over them of ``(sign(v0) v - b) / |v0|`` (``v0``: a row's
+    speed at the start, ``b`` its stick band, ``sliding`` (nf,): the rows' ``v0``, 0 for
+    those inside their bands at the start). It falls to zero where a row slows into its
+    band (where its stick force would hold its speed), and the next segment's start halts
+    it (:func:`_halt`). Infinite where no row moves."""
+    elements = problem.reaction_dependent
+    v = rd.directions(problem.model, elements, y[0]).T @ y[1]
+    moving = sliding != 0.0
+    speed = jnp.where(moving, jnp.abs(sliding), 1.0)
+    ahead = (jnp.sign(sliding) * v - rd.bands(elements)) / speed
+    return jnp.min(jnp.where(moving, ahead, jnp.inf), initial=jnp.inf)
+
+
+def _sliding_rows(problem, y):
+    """The speeds (nf,) of the reaction-dependent rows outside their stick bands in the
+    state ``y``, 0 for the rows inside (see :func:`_slowest`)."""
+    elements = problem.reaction_dependent
+    v = rd.directions(problem.model, elements, y[0]).T @ y[1]
+    return jnp.where(jnp.abs(v) < rd.bands(elements), 0.0, v)
+
+
+@cached_jit(optimize=False)  # once a segment of a run with reaction-dependent forces
+def _halt(problem: Problem, q, qd, w, t):
+    """The velocities and works ``(qd, w)`` with the reaction-dependent rows that stick at
+    ``(q, qd, t)`` (within twice their stick bands, the event's tolerance on a row that
+    slowed into its band at a segment's end, :func:`_slowest`; within their limits)
+    brought to rest (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`), so that a
+    row stays where it stopped."""
+    elements = problem.reaction_dependent
+    v = rd.directions(problem.model, elements, q).T @ qd
+    return problem.halt_sticking(q, qd, w, t, q, qd, jnp.abs(v) <= 2.0 * rd.bands(elements))
+
+
+def _event_terms(problem, contacts, watched, origin, length, force, sliding, t, y):
+    """The event's terms (3,): the watched contact points' smallest gap (from ``origin``,
+    :func:`_origins`) relative to ``length`` [length], the held points' smallest normal
+    force relative to ``force`` [force] (the one at the segment's start) and the moving
+    reaction-dependent rows' smallest relative speed (:func:`_slowest`); each falls to zero
+    at its event: an impact, a lift-off, a stop."""
+    gap = _nearest_gap(contacts, watched, origin, t, y, None) / length
+    lift = _least_normal(problem, t, y) / force if n_holds(problem) else jnp.inf
+    stop = _slowest(problem, sliding, t, y) if problem.reaction_dependent else jnp.inf
+    return jnp.stack([gap, jnp.asarray(lift, gap.dtype), jnp.asarray(stop, gap.dtype)])
+
+
+def _contact_event(problem, contacts, watched, origin, length, force, sliding, t, y, args,
+                   **kwargs):  # fmt: skip
+    """The event's condition: the smallest of :func:`_event_terms`."""
+    terms = _event_terms(problem, contacts, watched, origin, length, force, sliding, t, y)
+    return jnp.min(terms)
 
 
 def _origins(contacts, q0, length):
@@ -232,7 +275,9 @@ def _segment(
     span = t1 - t0
     force = jnp.maximum(_least_normal(problem, t0, y0), jnp.finfo(y0[0].dtype).tiny)
     origin = _origins(contacts, y0[0], length)
-    condition = functools.partial(_contact_event, problem, contacts, watched, origin, length, force)
+    sliding = _sliding_rows(problem, y0) if problem.reaction_dependent else jnp.zeros(0)
+    terms = (problem, contacts, watched, origin, length, force, sliding)
+    condition = functools.partial(_contact_event, *terms)
     event = diffrax.Event(
         condition,
         root_finder=optx.Bisection(rtol=0.0, atol=TIME_TOL * jnp.maximum(span, 1.0)),
@@ -255,9 +300,8 @@ def _segment(
     y_end = jax.tree.map(lambda a: a[-1], sol.ys)
     inside = jnp.clip(ts, t0, t_end)
     ys = jax.vmap(sol.evaluate)(inside)
-    gap_end = _nearest_gap(contacts, watched, origin, t_end, y_end, None) / length
-    lift = (_least_normal(problem, t_end, y_end) / force) < gap_end
-    hit = jnp.asarray(sol.event_mask) & jnp.stack([~lift, lift])
+    which = jnp.argmin(_event_terms(*terms, t_end, y_end))
+    hit = jnp.asarray(sol.event_mask) & (jnp.arange(3) == which)
     ran_out = sol.result == diffrax.RESULTS.max_steps_reached
     ended = (sol.result == diffrax.RESULTS.successful) | (
         sol.result == diffrax.RESULTS.event_occurred
@@ -287,41 +331,6 @@ def _impact_state(problem: Problem, contacts, q, qd, t, tol):
     G = jax.jacfwd(lambda x: _gaps(contacts, x))(q)
     Gt = jax.jacfwd(lambda v: _slidings(contacts, q, v))(qd)
     return q, qd, J, D, phit, g, G, Gt
-
-
-@cached_jit(optimize=False)  # once per segment of a run with friction
-def _slidings_at(contacts, Q, QD):
-    """The sliding speeds (n, k) [velocity] of every rigid contact point at the states
-    ``(Q, QD)`` (n, nq) (:func:`_slidings`, row by row)."""
-    return jax.vmap(lambda q, qd: _slidings(contacts, q, qd))(Q, QD)
-
-
-def _refuse_resting_slide(contacts, rough, times, Q, QD, checked, limit, owner, fail) -> None:
-    """End the run (``fail``) where a resting contact point with a friction coefficient
-    (``rough``: the indices of the resting points whose ``mu > 0``) slides: its sliding
-    speed ``|v_t| = |G_t qd|`` [velocity] above ``limit`` (the rest speed) at one of the
-    ``checked`` (n,) bool states ``(Q, QD)`` (n, nq) at ``times`` (n,) [time], in order. A
-    resting point's row holds its gap only, so that it slides freely: a Coulomb-wrong
-    motion wherever it slides. The states checked are a segment's start, its output
-    samples and its end: a slide between two of them shows at the next, as nothing stops a
-    frictionless slide that started unless the motion turns it back."""
-    vt = np.abs(np.asarray(_slidings_at(contacts, jnp.asarray(Q), jnp.asarray(QD))))[:, rough]
-    over = np.argwhere((vt > limit) & np.asarray(checked)[:, None])
-    if not over.size:
-        return
-    row, col = over[0]
-    i = rough[col]
-    fail(
-        NumericalError(
-            f"the resting contact point of {owner[i].name} slides on its pair (sliding speed "
-            f"{vt[row, col]:.3g} [velocity], above the rest speed {limit:.3g}): resting "
-            "friction at a rigid contact is not modelled: use a compliant contact with a "
-            "contact_friction element (stick and slip), or mu: 0 if the contact may slide "
-            "freely",
-            float(times[row]),
-            (owner[i].name,),
-        )
-    )
 
 
 @cached_jit(optimize=False)  # a few times per run
@@ -528,12 +537,25 @@ def simulate_impacts(case, progress=None) -> Result:
     sizes = [int(np.size(np.asarray(c.penetration(case.q0)))) for c in contacts]
     owner = [c for c, n in zip(contacts, sizes, strict=True) for _ in range(n)]
     holds = [hold(c, k, n) for c, n in zip(contacts, sizes, strict=True) for k in range(n)]
+    index = {(c.name, k): i for i, (c, k) in enumerate(
+        (c, k) for c, n in zip(contacts, sizes, strict=True) for k in range(n))}  # fmt: skip
     problems = {(): problem}
 
     def held_problem(resting):
         if resting not in problems:
-            problems[resting] = holding(problem, tuple(holds[i] for i in resting))
+            problems[resting] = holding(
+                problem, tuple(holds[i] for i in resting), frictions(resting)
+            )
         return problems[resting]
+
+    def frictions(resting):
+        """The held points' frictions: one element a contact with ``mu > 0``."""
+        out = []
+        for c, n in zip(contacts, sizes, strict=True):
+            points = tuple(k for k in range(n) if index[c.name, k] in resting)
+            if points and c.mu is not None and float(c.mu) > 0.0:
+                out.append(friction_at(c, points, n, rest))
+        return tuple(out)
 
     e_point = np.array([float(c.restitution) for c in owner])
     mu_point = np.array([np.nan if c.mu is None else float(c.mu) for c in owner])
@@ -700,7 +722,7 @@ def simulate_impacts(case, progress=None) -> Result:
             comes_to_rest = -v[i] < rest
             e_i = 0.0 if comes_to_rest else e_point[i]
             T, sticks = 0.0, False
-            if np.isnan(mu_point[i]):
+            if np.isnan(mu_point[i]) or comes_to_rest:  # friction at rest: RestFriction
                 qd_new, lam, P = impulse(Minv, J, phit, G[i], qd, e_i, D)
             else:
                 found = coulomb_impulse(Minv, J, phit, G[i], Gt[i], qd, e_i, mu_point[i], D)
@@ -711,7 +733,7 @@ def simulate_impacts(case, progress=None) -> Result:
                 release(pulled[0], t0)
                 q, qd, J, D, phit, g, G, Gt = state_at(q, qd)
                 continue
-            if abs(G[i] @ qd_new + e_i * v[i]) > IMPULSE_TOL * abs(v[i]):
+            if abs(G[i] @ qd_new + e_i * v[i]) > IMPULSE_TOL * max(abs(v[i]), rest):
                 fail(
                     SingularityError(
                         f"the impact at {owner[i].name} cannot reverse its normal velocity: "
@@ -743,6 +765,9 @@ def simulate_impacts(case, progress=None) -> Result:
             release(resting[k], t0, watch=bool(forces[k] < -pressed))
         current, pressing = held_problem(resting), float(np.max(forces, initial=0.0))
         y = (jnp.asarray(q), jnp.asarray(qd), y[2])
+        if current.reaction_dependent:  # the rows that stopped held where they stopped
+            y = (y[0], *_halt(current, *y, jnp.asarray(t0)))
+            qd = np.asarray(y[1])
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
         dt0 = _first_step(current, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
         dtmax = _longest_step(model, contacts, qd, dt_out, scale)
@@ -775,14 +800,6 @@ def simulate_impacts(case, progress=None) -> Result:
             fail(StepSizeError(f"more than max_steps = {options.max_steps} steps", t_end))
         if not np.all(np.isfinite(np.asarray(y_end[1]))):
             fail(NumericalError("the velocities are not finite", t_end))
-        rough = [i for i in resting if mu_point[i] > 0.0]
-        if rough:  # a resting point with friction must not slide (its row is frictionless)
-            _refuse_resting_slide(
-                contacts, rough, np.r_[t0, ts, t_end],
-                np.vstack([np.asarray(y[0])[None], np.asarray(ys[0]), np.asarray(y_end[0])[None]]),
-                np.vstack([np.asarray(y[1])[None], np.asarray(ys[1]), np.asarray(y_end[1])[None]]),
-                np.r_[True, take, True], rest, owner, fail,
-            )  # fmt: skip
         if last:
             break
         if t_end <= t0 and not hit.any():
@@ -806,6 +823,7 @@ def simulate_impacts(case, progress=None) -> Result:
     qdd, ratio = np.array(qdd), np.array(ratio)
     extra = {k: np.array(v) for k, v in cols.items()}
     normals = {c.name: np.zeros(N) for c in contacts}
+    rubbed = {c.name: np.zeros(N) for c in contacts if c.mu is not None and float(c.mu) > 0}
     for held, rows in held_at.items():  # the resting times: their own constrained problem
         rows = np.asarray(rows, int)
         hp = held_problem(held)
@@ -817,6 +835,9 @@ def simulate_impacts(case, progress=None) -> Result:
                 col[rows] = np.asarray(cols_h[key])
         for pos, i in zip(hold_positions(hp), held, strict=True):
             normals[owner[i].name][rows] += np.asarray(mu_h)[:, pos]
+        for name in rubbed:
+            if f"{name}.friction" in cols_h:
+                rubbed[name][rows] = np.asarray(cols_h[f"{name}.friction"])
     extra["work.nonconservative"], extra["work.constraints"] = W[:, 0], W[:, 1] + W_unk
     extra["work.impacts"] = W_imp
     for name, acc in P_acc.items():
@@ -824,6 +845,8 @@ def simulate_impacts(case, progress=None) -> Result:
         extra[f"{name}.normal"] = normals[name]
     for name, acc in T_acc.items():
         extra[f"{name}.friction_impulse"] = acc
+    for name, col in rubbed.items():
+        extra[f"{name}.friction"] = col
     for name, acc in F_acc.items():
         extra[f"{name}.impulse"] = acc
     balance_cols = dict(extra, **{"work.nonconservative": W[:, 0] + W_imp})
@@ -835,6 +858,7 @@ def simulate_impacts(case, progress=None) -> Result:
     kinds.update({f"{name}.friction_impulse": "impulse" for name in T_acc})
     kinds.update({f"{name}.impulse": "impulse" for name in unknown})
     kinds.update({f"{c.name}.normal": "force" for c in contacts})
+    kinds.update({f"{name}.friction": "force" for name in rubbed})
     stats = {
         "method": options.method,
         "options": dict(options.recorded() if case.recorded is None else case.recorded),

@@ -201,7 +201,7 @@ class Problem(eqx.Module):
         f, _, A, Mu_f, _, v, _ = self._dependent_solve(q, qd, t, solve, qdd0, mu0)
         return qdd0 + A @ f, mu0 + Mu_f @ f, (f, v)
 
-    def halt_sticking(self, q, qd, w, t, q_start, qd_start):
+    def halt_sticking(self, q, qd, w, t, q_start, qd_start, stopped=None):
         """The velocities ``qd`` (nq,) and works ``w`` (2,) at the end of a step with every
         sticking reaction-dependent element brought to rest.
 
@@ -216,7 +216,8 @@ class Problem(eqx.Module):
         so that a stopped element stays where it stopped instead of creeping on at the speed
         it was left with (up to its stick band, a step's worth of deceleration past a
         reversal). The kinetic energy the impulse takes out, the elements' work in the stop,
-        is added to the nonconservative work ``w[0]``. ``(qd, w)`` themselves without
+        is added to the nonconservative work ``w[0]``. ``stopped`` (nf,), bool: rows taken
+        as stopped besides (default none). ``(qd, w)`` themselves without
         reaction-dependent elements."""
         if not self.reaction_dependent:
             return qd, w
@@ -227,6 +228,8 @@ class Problem(eqx.Module):
         solve, _ = self.kkt(q, qd, t, J)
         qdd0, mu0 = solve(self.known_forces(q, qd, t), self.c.gamma(q, qd, t))
         reversed_ = v_start * v_end < 0.0
+        if stopped is not None:
+            reversed_ = reversed_ | stopped
         _, stick, A, _, H, v, _ = self._dependent_solve(q, qd, t, solve, qdd0, mu0, reversed_)
         y = rd.held(H, stick, jnp.where(stick, -v, 0.0), rd.may_depend(elements))
         halted = qd + A @ jnp.where(stick, y, 0.0)

@@ -11,15 +11,22 @@ constrained equations of motion of the projection method are integrated as they 
 with ``delta_q = d delta / dq`` (1, nq) and its multiplier ``N`` the contact's normal force
 [force]: the row's force on the bodies, ``-delta_q^T N``, pushes them apart along the
 gap's gradient (as a compliant contact's ``-F grad(delta)``) while ``N >= 0``. The row's
-velocity ``delta_q qd = 0`` makes its power zero: a resting contact does no work. The
-row holds the gap alone, so that a held point slides freely along its pair; a contact
-with a friction coefficient whose held point slides ends the run (:mod:`._impacts`). One
-problem per set of held points (:func:`holding`), each compiled once.
+velocity ``delta_q qd = 0`` makes its power zero: a resting contact does no work.
+
+A contact with a friction coefficient ``mu`` adds Coulomb's friction at its held points
+(:class:`RestFriction`, a reaction-dependent force as a joint's friction, Karnopp's stick
+and slip): along each held point's sliding speed ``v_k = G_t,k qd`` (along ``z x n``), the
+force ``-mu N_k sign(v_k)`` while it slides, and while it is still (``|v_k|`` inside the
+stick band, the impacts' rest speed) the force that keeps it still, up to ``mu N_k``; its
+load ``N_k`` is the held row's multiplier, solved with the accelerations
+(:mod:`mixdyn.equations._reaction_dependent`). One problem per set of held points
+(:func:`holding`), each compiled once.
 """
 
 from __future__ import annotations
 
 import dataclasses
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -30,6 +37,7 @@ from ..linalg import DenseSolver
 from ..model import Polynomial
 from ..model._drivers import Driver
 from ..model._element import moving
+from ..model._reaction_dependent import ReactionDependent
 from ._problem import Problem
 
 
@@ -67,6 +75,77 @@ def _on_bodies(contact, bi: int, bj: int):
     return out
 
 
+class RestFriction(ReactionDependent):
+    """Coulomb friction at the held points of one rigid contact with ``mu`` (the module's
+    description), one row a held point.
+
+    Attributes:
+        contact: the rigid contact pair (a bound compliant-contact element).
+        points: the held points among the pair's contact points (w,), static.
+        holds: the held points' row labels (w,) (:func:`hold`'s names), static.
+        mu: the contact's friction coefficient [1].
+        v_stick: the stick band [velocity]: the run's rest speed.
+    """
+
+    contact: eqx.Module
+    points: tuple[int, ...] = eqx.field(static=True)
+    holds: tuple[str, ...] = eqx.field(static=True)
+    mu: jax.Array
+    v_stick: jax.Array
+    kind_name: ClassVar[str] = "resting friction"
+
+    @property
+    def width(self) -> int:
+        """One row a held point."""
+        return len(self.points)
+
+    def body_indices(self):
+        return ()
+
+    def reaction_rows(self) -> tuple[str, ...]:
+        """The held points' rows: their multipliers are the normal forces ``N_k``."""
+        return self.holds
+
+    def relative_direction(self, model, q):
+        """``D`` (nq, w): the held points' sliding speeds (body j on body i, along
+        ``z x n``) per unit of ``qd``."""
+        idx = jnp.asarray(self.points)
+        return jax.jacfwd(lambda qd: self.contact.sliding(q, qd)[idx])(jnp.zeros_like(q)).T
+
+    def holding_limit(self, reactions):
+        """``mu N_k`` (w,) (0 where a row pulls: it lifts off)."""
+        return self.mu * jnp.maximum(reactions, 0.0)
+
+    def slip_force(self, v, reactions):
+        """``-mu N_k sign(v_k)`` (w,)."""
+        return -self.holding_limit(reactions) * jnp.sign(v)
+
+    def stick_band(self):
+        return self.v_stick
+
+    def speed_output(self, v, reactions):
+        """The sliding speed at the held point of the largest normal force."""
+        return jnp.atleast_1d(v)[jnp.argmax(reactions)]
+
+    @property
+    def magnitude_kind(self):
+        return "force"
+
+
+def friction_at(contact, points: tuple[int, ...], count: int, v_stick) -> RestFriction:
+    """The :class:`RestFriction` of rigid ``contact`` (with ``mu``) at its held ``points``
+    (of ``count``), named ``{contact}.friction``, sticking below ``v_stick`` [velocity]."""
+    holds = tuple(hold(contact, k, count).name for k in points)
+    return RestFriction(
+        f"{contact.name}.friction",
+        contact,
+        tuple(int(k) for k in points),
+        holds,
+        jnp.asarray(contact.mu, jnp.float64),
+        jnp.asarray(v_stick, jnp.float64),
+    )
+
+
 def hold(contact, point: int, count: int) -> Hold:
     """The :class:`Hold` of ``contact``'s contact point ``point`` (of ``count``), named
     ``{contact}.rest`` (``{contact}.rest{point}`` for a pair with several points)."""
@@ -74,11 +153,12 @@ def hold(contact, point: int, count: int) -> Hold:
     return Hold(name, contact, int(point), law=Polynomial([0.0]), bi=contact.bi, bj=contact.bj)
 
 
-def holding(problem: Problem, holds: tuple[Hold, ...]) -> Problem:
+def holding(problem: Problem, holds: tuple[Hold, ...], frictions=()) -> Problem:
     """``problem`` with the rows of ``holds`` inserted after its joints' and drivers' kept
     rows and before its ``p`` prescribed motions (a mixed problem's last rows, whose
     multipliers are its unknown forces): the ``len(holds)`` multipliers before the last
-    ``p`` are the held points' normal forces [force]; solved densely."""
+    ``p`` are the held points' normal forces [force]; solved densely. ``frictions``: the
+    held points' :class:`RestFriction` elements, added to the model's forces."""
     if not holds:
         return problem
     c, p, k = problem.c, problem.p, len(holds)
@@ -92,8 +172,11 @@ def holding(problem: Problem, holds: tuple[Hold, ...]) -> Problem:
         None if c.rank is None else c.rank + k,
         linear_solver=DenseSolver(),
     )
+    model = problem.model
+    if frictions:
+        model = eqx.tree_at(lambda m: m.forces, model, (*model.forces, *frictions))
     return Problem(
-        problem.model,
+        model,
         held,
         problem.unknown,
         problem.solver,
@@ -125,4 +208,13 @@ def normal_forces(problem: Problem, q, qd, t) -> jax.Array:
     return mu[rows.start : rows.stop]
 
 
-__all__ = ["Hold", "hold", "hold_positions", "holding", "n_holds", "normal_forces"]
+__all__ = [
+    "Hold",
+    "RestFriction",
+    "friction_at",
+    "hold",
+    "hold_positions",
+    "holding",
+    "n_holds",
+    "normal_forces",
+]

@@ -350,20 +350,24 @@ class _Compliant(ForceElement):
         [(ground point, direction)] (lines on the ground)."""
         return {}
 
-    def arrow(self, q, qd, normal=None) -> tuple[np.ndarray, np.ndarray]:
+    def arrow(self, q, qd, normal=None, friction=None) -> tuple[np.ndarray, np.ndarray]:
         """The contact's force on body j as an arrow: ``(at, F)``, the contact point (N, 2)
         [length] (of the largest force, where the pair touches at several) and the force
         (N, 2) [force] (normal and friction, summed over the contact points), from the
         coordinates ``q`` and velocities ``qd`` (N, nq). A rigid contact: its normal force
-        ``normal`` (N,) [force] (the run's ``{name}.normal``, nonzero while it rests; zero
-        where not given) along the normal at its deepest point."""
-        normal = np.zeros(np.shape(q)[0]) if normal is None else np.asarray(normal, float)
+        ``normal`` (N,) [force] (the run's ``{name}.normal``, nonzero while it rests) along
+        the normal at its deepest point, and its resting friction ``friction`` (N,) [force]
+        (the run's ``{name}.friction``) along the tangent ``z x n`` there; zero where not
+        given."""
+        none = np.zeros(np.shape(q)[0])
+        normal = none if normal is None else np.asarray(normal, float)
+        friction = none if friction is None else np.asarray(friction, float)
 
-        def one(q, qd, N):
+        def one(q, qd, N, T):
             if self.rigid:
                 P, n = (jnp.atleast_2d(x) for x in self.frame(q))
                 k = jnp.argmax(self._delta(q))
-                return P[k], N * n[k]
+                return P[k], N * n[k] + T * jnp.stack([-n[k, 1], n[k, 0]])
             _, _, F, Ft = self._state(q, qd)
             P, n = (jnp.atleast_2d(x) for x in self.frame(q))
             force = F[:, None] * n
@@ -371,7 +375,9 @@ class _Compliant(ForceElement):
                 force = force + Ft[:, None] * jnp.stack([-n[:, 1], n[:, 0]], axis=1)
             return P[jnp.argmax(F)], jnp.sum(force, axis=0)
 
-        at, F = jax.vmap(one)(jnp.asarray(q), jnp.asarray(qd), jnp.asarray(normal))
+        at, F = jax.vmap(one)(
+            jnp.asarray(q), jnp.asarray(qd), jnp.asarray(normal), jnp.asarray(friction)
+        )
         return np.asarray(at), np.asarray(F)
 
     @property

@@ -85,7 +85,9 @@ def force_arrows(result, names=True) -> list[dict]:
             )
             continue
         if name in touching:  # a compliant contact's force on body j, at its contact point
-            at, F = touching[name].arrow(q, np.asarray(result.qd), cols.get(f"{name}.normal"))
+            at, F = touching[name].arrow(
+                q, np.asarray(result.qd), cols.get(f"{name}.normal"), cols.get(f"{name}.friction")
+            )
             out.append(
                 {
                     "name": name,
