@@ -44,6 +44,7 @@ from ._laws import (
     as_law,
 )
 from ._model import Model
+from ._polygon_sets import PolygonSetContact
 from ._reaction_dependent import ReactionDependent
 
 #: The element registries that :data:`ELEMENTS` replaced, by their old names and the section
@@ -105,6 +106,7 @@ __all__ = [
     "PinInSlot",
     "PointDriver",
     "PointForce",
+    "PolygonSetContact",
     "Polynomial",
     "QuinticHermite",
     "RackPinion",

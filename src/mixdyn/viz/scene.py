@@ -124,6 +124,8 @@ class Scene:
             for p0, u in d.get("guides", ()):
                 p0, u = np.asarray(p0, dtype=float), np.asarray(u, dtype=float)
                 guides.append([p0 - 2 * span * u, p0 + 2 * span * u])
+            for a, b in d.get("edges", ()):  # sides on the ground (a fixed shape's outline)
+                guides.append([np.asarray(a, dtype=float), np.asarray(b, dtype=float)])
         for c in rings:  # drawn as its chords
             guides += [[c[k], c[(k + 1) % len(c)]] for k in range(len(c))]
         self.guides = np.array(guides).reshape(-1, 2, 2)
