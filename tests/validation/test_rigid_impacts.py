@@ -32,7 +32,7 @@ import pytest
 
 import mixdyn as md
 from fixtures import four_bar_pose
-from mixdyn.analysis._impacts import impulse
+from mixdyn.analysis._impacts import HORIZON, PASS_FRACTION, _longest_step, impulse
 
 A_, B_, C_, D_ = 0.2, 0.55, 0.4, 0.6  # crank, coupler, rocker, ground [m]
 MASS = np.array([1.0, 2.0, 1.5])  # crank, coupler, rocker [kg]
@@ -128,6 +128,27 @@ def test_four_bar_impulse_keeps_the_joints_and_matches_the_hand_derivation():
     np.testing.assert_allclose(P, -(1 + e) * inertia * w / (G @ v), rtol=1e-12)
     assert P > 0
     np.testing.assert_allclose(M * (qd_after - qd), J.T @ lam + G * P, atol=1e-12 * P)
+
+
+def test_the_longest_step_keeps_up_with_a_falling_body():
+    """A body falling from rest (``a0 = g``) over a contact of effective radius ``rho``: by
+    the segment's horizon ``T`` it falls at ``g T``, and a step of the bound then moves it
+    ``PASS_FRACTION rho`` at most; thrown at ``v0`` without acceleration the step is
+    ``PASS_FRACTION rho / v0`` and the horizon infinite; at rest, the output interval."""
+    g, rho, dt_out = 9.81, 0.5e-3, 0.05
+
+    class Contact:
+        def effective_radius(self):
+            return rho
+
+    d = PASS_FRACTION * rho
+    h, horizon = _longest_step([Contact()], np.zeros(3), np.array([0.0, -g, 0.0]), dt_out, 1.0)
+    assert horizon == pytest.approx(HORIZON * h, rel=1e-15)
+    assert (g * horizon) * h == pytest.approx(d, rel=1e-12)  # the speed reached, one step
+    h, horizon = _longest_step([Contact()], np.array([2.0, 0.0, 0.0]), np.zeros(3), dt_out, 1.0)
+    assert h == pytest.approx(d / 2.0, rel=1e-15) and horizon == math.inf
+    h, horizon = _longest_step([Contact()], np.zeros(3), np.zeros(3), dt_out, 1.0)
+    assert (h, horizon) == (dt_out, math.inf)
 
 
 def test_rigid_contact_refusals():

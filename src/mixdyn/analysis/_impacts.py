@@ -89,6 +89,7 @@ computed up to its time.
 from __future__ import annotations
 
 import functools
+import math
 
 import jax
 import jax.numpy as jnp
@@ -132,6 +133,9 @@ IMPULSE_TOL = 1e-6
 FIRST_STEP = 1e-4
 #: The part of the smallest contact radius a body point may move within one step.
 PASS_FRACTION = 0.5
+#: The steps of the longest length over which a segment's bound on the step holds as its
+#: points accelerate (:func:`_longest_step`): the segment ends there.
+HORIZON = 64
 #: A contact point touching at rest is held only where its normal force exceeds this
 #: many times the model's mass times its length over the run's span squared (a point that
 #: nothing presses on its contact, as two balls touching in Newton's cradle, is apart).
@@ -344,7 +348,8 @@ def _first_step(problem: Problem, contacts, q, qd, t, h, tol):
     """The first step [time] of a segment from ``(q, qd)`` at ``t``: ``h``, or shorter where
     a contact point that touches (gap within ``tol``) separates and will close again: at
     most the time ``g' / |g''|`` to the apex of its gap, so that the step's end sees the gap
-    open (an event is a gap that falls to zero from above, seen at the ends of steps)."""
+    open (an event is a gap that falls to zero from above, seen at the ends of steps). And
+    the accelerations ``qdd`` (nq,) at the start (:func:`_longest_step`)."""
     qdd = problem.accelerations(q, qd, t)[0]
 
     def gaps(s):
@@ -355,22 +360,33 @@ def _first_step(problem: Problem, contacts, q, qd, t, h, tol):
     accel = jax.jacfwd(jax.jacfwd(gaps))(s0)
     closing = (gaps(s0) <= tol) & (rate > 0.0) & (accel < 0.0)
     apex = jnp.where(closing, rate / jnp.where(closing, -accel, 1.0), h)
-    return jnp.minimum(h, jnp.min(apex))
+    return jnp.minimum(h, jnp.min(apex)), qdd
 
 
-def _longest_step(model, contacts, qd, dt_out, scale) -> float:
-    """The longest step [time] of a segment starting at the velocities ``qd``: the shortest
-    output interval, and the time in which the fastest body point (its centre's speed plus
-    its angular speed times the model's length) moves :data:`PASS_FRACTION` of the
-    smallest contact's effective radius, so that no pair passes through the other within a
-    step (a pair seen apart at both ends of a step whose gap closed and opened again inside
-    it would be missed)."""
-    v = np.asarray(qd).reshape(-1, 3)
-    speed = float(np.max(np.hypot(v[:, 0], v[:, 1]) + np.abs(v[:, 2]) * scale)) if v.size else 0.0
-    size = min(float(np.min(np.asarray(c.effective_radius()))) for c in contacts)
-    if speed <= 0.0:
-        return dt_out
-    return min(dt_out, PASS_FRACTION * size / speed)
+def _point_rates(x, scale) -> float:
+    """The largest rate of a body point (NumPy): of the (nq,) ``x`` (velocities or
+    accelerations), its centre's plus its angular rate times the model's length ``scale``."""
+    v = np.asarray(x).reshape(-1, 3)
+    return float(np.max(np.hypot(v[:, 0], v[:, 1]) + np.abs(v[:, 2]) * scale)) if v.size else 0.0
+
+
+def _longest_step(contacts, qd, qdd, dt_out, scale) -> tuple[float, float]:
+    """The longest step [time] of a segment starting at the velocities ``qd`` and
+    accelerations ``qdd`` (nq,), and the segment's horizon [time]: no step longer than the
+    shortest output interval, nor than the time in which the fastest body point moves
+    :data:`PASS_FRACTION` of the smallest contact's effective radius ``d``, so that no pair
+    passes through the other within a step (a pair seen apart at both ends of a step whose
+    gap closed and opened again inside it would be missed; a thin shape, a segment, would be
+    passed through). The point's speed may grow: with ``v0`` and ``a0`` its largest speed
+    and acceleration at the start, the step ``h`` holds for a horizon of :data:`HORIZON`
+    steps, ``(v0 + a0 HORIZON h) h = d``; the segment ends there (infinite where nothing
+    accelerates) and the next takes the speed it reached."""
+    v0, a0 = _point_rates(qd, scale), _point_rates(qdd, scale)
+    d = PASS_FRACTION * min(float(np.min(np.asarray(c.effective_radius()))) for c in contacts)
+    if v0 <= 0.0 and a0 <= 0.0:
+        return dt_out, math.inf
+    h = 2.0 * d / (v0 + math.sqrt(v0 * v0 + 4.0 * a0 * HORIZON * d))
+    return min(dt_out, h), (HORIZON * h if a0 > 0.0 else math.inf)
 
 
 def impulse(Minv, J, phit, G, qd, e, D=None):
@@ -769,13 +785,15 @@ def simulate_impacts(case, progress=None) -> Result:
             y = (y[0], *_halt(current, *y, jnp.asarray(t0)))
             qd = np.asarray(y[1])
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
-        dt0 = _first_step(current, contacts, y[0], y[1], jnp.asarray(t0), h, GAP_TOL * scale)
-        dtmax = _longest_step(model, contacts, qd, dt_out, scale)
+        dt0, qdd0 = _first_step(current, contacts, y[0], y[1], jnp.asarray(t0), h,
+                                GAP_TOL * scale)  # fmt: skip
+        dtmax, horizon = _longest_step(contacts, qd, np.asarray(qdd0), dt_out, scale)
+        t1 = min(float(ts[-1]), t0 + horizon)
         apart = (g > GAP_TOL * scale) | (G @ qd > 0.0) | released
         watched = apart & ~np.isin(np.arange(len(owner)), resting)
         ys, t_end, y_end, hit, failed, n, code = _segment(
             current, contacts, jnp.asarray(watched), jnp.asarray(scale), jnp.asarray(t0),
-            jnp.asarray(ts[-1]), y, jnp.asarray(ts), dt0, jnp.asarray(dtmax),
+            jnp.asarray(t1), y, jnp.asarray(ts), dt0, jnp.asarray(dtmax),
             jnp.asarray(options.rtol, float),
             jnp.asarray(options.atol, float), options.solver,
             min(SEGMENT_STEPS, int(options.max_steps)),
