@@ -331,24 +331,29 @@ def test_two_squares_colliding_face_on_compliant():
 
 
 @pytest.mark.slow  # long: run by CI's slow set (a run with a rigid impact)
-def test_a_rigid_central_impact_follows_newtons_law():
-    """A square standing on a corner (turned 45 degrees) strikes an equal square's face
-    at 1 m/s along the line of both centres (no gravity), rigid with e = 0.6: one impact at
-    the closed-form instant ``gap / V``, after which ``v_A = (1 - e) V / 2``,
-    ``v_B = (1 + e) V / 2`` and neither turns."""
+@pytest.mark.parametrize("face_on", [False, True], ids=["corner", "face-on"])
+def test_a_rigid_central_impact_follows_newtons_law(face_on):
+    """A square strikes an equal square's face at 1 m/s along the line of both centres (no
+    gravity), rigid with e = 0.6: standing on a corner (turned 45 degrees), one impact;
+    face on, its two corners and the other's two struck at once (Newton's law at each,
+    solved together); at the closed-form instant ``gap / V``, after which
+    ``v_A = (1 - e) V / 2``, ``v_B = (1 + e) V / 2`` and neither turns."""
     m, V, e = 2.0, 1.0, 0.6
-    d = H * math.sqrt(2)
+    d = H if face_on else H * math.sqrt(2)
     diamond = [("A", (0.0, -d)), ("A", (d, 0.0)), ("A", (0.0, d)), ("A", (-d, 0.0))]
     A = md.Body("A", m, m * (2 * H) ** 2 / 6, q0=(-0.2, 0.0, 0.0))
     B = md.Body("B", m, m * (2 * H) ** 2 / 6, q0=(0.0, 0.0, 0.0))
-    rigid = md.PolygonSetContact("c", [*diamond, *_square("B")], R, contact_model="rigid",
+    shape = _square("A") if face_on else diamond
+    rigid = md.PolygonSetContact("c", [*shape, *_square("B")], R, contact_model="rigid",
                                  restitution=e)  # fmt: skip
     model = md.Model([A, B], gravity=(0.0, 0.0), forces=[rigid])
     qd0 = np.array([V, 0.0, 0.0, 0.0, 0.0, 0.0])
     r = md.forward(model, np.linspace(0.0, 0.2, 11), qd0=qd0, rtol=1e-10, atol=1e-12)
     imp = r.stats["impacts"]
-    gap = (0.2 - d) - H - 2 * R  # the corner to the rounded face
-    np.testing.assert_allclose(imp["t"], [gap / V], atol=1e-12)
+    gap = (0.2 - d) - H - 2 * R  # the corner (or face) to the rounded face
+    points = 4 if face_on else 1
+    np.testing.assert_allclose(imp["t"], [gap / V] * points, atol=1e-12)
+    np.testing.assert_allclose(np.sum(imp["impulse"]), m * (1 + e) * V / 2, rtol=1e-12)
     np.testing.assert_allclose([r["A.vx"][-1], r["B.vx"][-1]], [(1 - e) * V / 2, (1 + e) * V / 2],
                                atol=1e-12)  # fmt: skip
     assert np.max(np.abs(np.r_[r["A.phi"], r["B.phi"], r["A.vy"], r["B.vy"]])) < 1e-12

@@ -247,6 +247,27 @@ def test_a_tilted_box_dropped_on_the_ground_settles_flat_on_two_corners():
 
 
 @pytest.mark.slow  # long: run by CI's slow set
+def test_a_box_dropped_flat_bounces_level_at_e_times_its_speed():
+    """A box dropped flat strikes with both bottom corners at once, Newton's law at each
+    (solved together): it bounces level, ``v+ = e sqrt(2 g h0)`` at ``t_1 = sqrt(2 h0 / g)``
+    and strikes again at ``t_1 + 2 v+ / g``, never turning."""
+    m, w, h, rc, e, h0 = 1.0, 0.2, 0.1, 0.005, 0.4, 0.1
+    box = md.Body("box", m, m * (w**2 + h**2) / 12, q0=(0.0, h / 2 + h0, 0.0))
+    floor = md.BoxLineContact("floor", "box", w, h, rc, ("ground", (0.0, 0.0)),
+                              contact_model="rigid", restitution=e)  # fmt: skip
+    model = md.Model([box], forces=[floor], gravity=(0, -G_))
+    r = md.forward(model, np.linspace(0.0, 0.4, 9), rtol=1e-10, atol=1e-12)
+    imp = r.stats["impacts"]
+    t1 = math.sqrt(2 * h0 / G_)
+    v1 = e * G_ * t1
+    np.testing.assert_allclose(imp["t"][:4], [t1, t1, t1 + 2 * v1 / G_, t1 + 2 * v1 / G_],
+                               rtol=0, atol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(imp["normal_velocity_after"][:2], [v1, v1], rtol=1e-9)
+    np.testing.assert_allclose(np.sum(imp["impulse"][:2]), m * (1 + e) * G_ * t1, rtol=1e-9)
+    assert np.max(np.abs(r["box.phi"])) < 1e-12 and np.max(np.abs(r["box.x"])) < 1e-12
+
+
+@pytest.mark.slow  # long: run by CI's slow set
 def test_a_block_pulled_up_by_a_ramp_lifts_off_both_corners_at_m_g_over_k():
     """A block resting flat on two corners, pulled up at its centre by ``F = k t``: each
     corner presses with ``(m g - k t) / 2``, both leave at ``t = m g / k`` (1e-9) and the

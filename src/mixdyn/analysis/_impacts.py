@@ -62,7 +62,11 @@ of the kinetic energy's jump with the impacts' (``work.impacts``).
 Several contact points touching at one instant (a row of balls, Newton's cradle) are
 resolved one after the other (sequential impacts): the point approaching fastest first,
 then again while any point within the gap tolerance approaches; each pairwise impact keeps
-momentum and, at ``e = 1``, energy.
+momentum and, at ``e = 1``, energy. Points that approach at one instant, frictionless,
+strike together (a box landing flat, two blocks meeting face on: :func:`impulses`, Newton's
+law at each, solved with the joints), where every impulse pushes and the constraints leave
+each point's law to it; otherwise one after the other. A point touching without
+approaching (the next ball of the cradle, at rest against the one struck) takes no part.
 
 Zeno: a ball coming to rest bounces infinitely often in a finite time (for a ball dropped
 with ``e < 1``, at the sum of the geometric series ``t_inf = t_1 + 2 e v0 / (g (1 - e))``).
@@ -414,6 +418,32 @@ def impulse(Minv, J, phit, G, qd, e, D=None):
     return qd + dqd, x[:-1], float(x[-1])
 
 
+def impulses(Minv, J, phit, G, qd, e, D=None):
+    """The velocity jump of simultaneous impacts at ``k`` contact points, Newton's law at
+    each (``G_k qd+ = -e_k G_k qd-``, the joints kept), where every normal impulse pushes.
+
+    Args:
+        Minv: (nq,) inverse mass diagonal; J (m, nq), phit (m,): the constraints.
+        G: (k, nq) the points' gaps' gradients; qd: (nq,) velocities before; e: (k,) their
+            restitutions.
+        D: (m, nq) the rows along which the constraints' impulses act (:func:`impulse`).
+
+    Returns:
+        ``(qd+ (nq,), Lambda (m,), P (k,))``, or None where an impulse would pull or the
+        constraints keep a point from Newton's law (then the points strike one by one).
+    """
+    v = G @ qd
+    rows = np.vstack([J, G[:-1]])
+    along = None if D is None else np.vstack([D, G[:-1]])
+    rhs = np.concatenate([phit, e[:-1] * v[:-1]])  # G_k qd+ = -e_k v_k, as J's rows' form
+    after, lam, P_last = impulse(Minv, rows, rhs, G[-1], qd, float(e[-1]), along)
+    P = np.concatenate([lam[len(phit) :], [P_last]])
+    met = np.abs(G @ after + e * v) <= IMPULSE_TOL * np.abs(v)
+    if P.min() < 0.0 or not met.all():
+        return None
+    return after, lam[: len(phit)], P
+
+
 def settle(Minv, J, phit, G, qd, touching, tol, D=None):
     """A perfectly plastic impact at several contact points at once: the set ``A`` of the
     ``touching`` points (k,) whose normal velocities are all brought to zero with
@@ -734,6 +764,22 @@ def simulate_impacts(case, progress=None) -> Result:
                     q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                     struck.clear()
                     continue
+            # the points approaching at this instant, frictionless, struck together
+            # (a box landing flat, two blocks meeting face on): Newton's law at each
+            together = np.flatnonzero(near & (v < -rest) & np.isnan(mu_point))
+            together = together[~np.isin(together, list(struck))]
+            if i in together and len(together) > 1:
+                found = impulses(Minv, J, phit, G[together], qd, e_point[together], D)
+                if found is not None:
+                    qd_new, lam, P = found
+                    if all(lam[first_hold + k] >= 0.0 for k in range(len(resting))):
+                        F = jump(qd, qd_new, lam, D)
+                        labels = held_problem(resting).c.active_labels
+                        for j, P_j in zip(together, P, strict=True):
+                            record(j, P_j, lam, labels, q, qd, qd_new, G[j], F, Gt[j])
+                        struck.update(together.tolist())
+                        q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
+                        continue
             struck.add(i)
             comes_to_rest = -v[i] < rest
             e_i = 0.0 if comes_to_rest else e_point[i]
