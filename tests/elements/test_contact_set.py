@@ -196,3 +196,30 @@ def test_a_rigid_set_passes_the_momentum_along():
     vx = np.stack([r[f"b{k}.vx"] for k in range(3)], axis=1)
     np.testing.assert_allclose(vx[-1], [0.0, 0.0, V], atol=1e-12)
     np.testing.assert_allclose(r["energy.kinetic"], 0.5 * m * V**2, rtol=1e-12)
+
+
+@pytest.mark.slow  # long: run by CI's slow set (a run with rigid impacts until rest)
+def test_two_balls_of_a_rigid_set_come_to_rest_stacked_on_a_fixed_one():
+    """Ball a dropped on a fixed ball, ball b dropped on a (a pendulum hanging still
+    elsewhere, so that the set's bodies are not the model's first): both pairs come to rest,
+    a's centre at ``2 R`` above the fixed one's and b's at ``4 R``; the set's normal column
+    is the pairs' ``(m_a + m_b) g + m_b g``; the pendulum's pin carries its weight."""
+    R_, g, m_a, m_b = 0.05, 9.81, 1.0, 2.0
+    bodies = [
+        md.Body("p", 1.0, 0.01, q0=(1.0, 0.0, 0.0)),
+        md.Body("a", m_a, 0.5 * m_a * R_**2, q0=(0.0, 2 * R_ + 0.01, 0.0)),
+        md.Body("b", m_b, 0.5 * m_b * R_**2, q0=(0.0, 4 * R_ + 0.03, 0.0)),
+    ]
+    balls = md.CircleSetContact("balls", ["ground.O", "a", "b"], R_, contact_model="rigid",
+                                restitution=0.3)  # fmt: skip
+    pin = md.Revolute("pin", "ground.Q", "p")
+    model = md.Model(bodies, joints=[pin], forces=[balls], gravity=(0, -g),
+                     ground={"O": (0.0, 0.0), "Q": (1.0, 0.0)})  # fmt: skip
+    r = md.forward(model, np.linspace(0.0, 1.0, 11))
+    assert sorted(r.stats["rests"]["end"]) == [1.0, 1.0]
+    last = r.t > max(r.stats["rests"]["start"])
+    np.testing.assert_allclose(r["a.y"][last], 2 * R_, atol=1e-9)
+    np.testing.assert_allclose(r["b.y"][last], 4 * R_, atol=1e-9)
+    np.testing.assert_allclose(np.r_[r["a.x"][last], r["b.x"][last]], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["balls.normal"][last], (m_a + 2 * m_b) * g, rtol=1e-9)
+    np.testing.assert_allclose(r["pin.Fy"][last], g, rtol=1e-9)
