@@ -577,3 +577,25 @@ def test_imports_ahead_run_beside_the_caller_and_leave_failures_to_it():
     )
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["True", "False"]
+
+
+@pytest.mark.slow  # long: run by CI's slow set (a run with rigid impacts and resting friction)
+def test_a_run_with_rigid_contacts_exports_every_program(cache):
+    """A block thrown on rough rigid ground (impacts' events, its corners held at rest, their
+    friction sliding to a stop): every program of the run is exported to the cache (none
+    falls back to tracing in each process: the segments' solve holds no host callback)."""
+    from mixdyn.analysis import _impacts
+
+    for name in ("_segment", "_impact_state", "_normals", "_halt", "_first_step"):
+        getattr(_impacts, name).programs.clear()  # as in a new process
+    box = md.Body("box", 2.0, 2.0 * (0.2**2 + 0.1**2) / 12, q0=(0.0, 0.05, 0.0))
+    floor = md.BoxLineContact("floor", "box", 0.2, 0.1, 0.01, ("ground", (0.0, 0.0)),
+                              contact_model="rigid", restitution=0.5, mu=0.4)  # fmt: skip
+    model = md.Model([box], forces=[floor], gravity=(0.0, -9.81))
+    exported, fallback = _programs.stats["exported"], _programs.stats["fallback"]
+    r = md.forward(model, np.linspace(0.0, 0.5, 6), qd0=np.array([1.0, 0.0, 0.0]))
+    assert r.stats["segments"] > 1  # the stop ends a segment
+    assert _programs.stats["fallback"] == fallback
+    assert _programs.stats["exported"] > exported
+    names = {p.name.split("-")[0] for p in (cache / _programs.EXPORTED).iterdir()}
+    assert {"_segment", "_halt", "_normals"} <= names

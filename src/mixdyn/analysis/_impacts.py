@@ -288,7 +288,9 @@ def _segment(
     condition = functools.partial(_contact_event, *terms)
     event = diffrax.Event(
         condition,
-        root_finder=optx.Bisection(rtol=0.0, atol=TIME_TOL * jnp.maximum(span, 1.0)),
+        # flip: the condition falls within the step (a downcrossing), so that the bisection
+        # need not evaluate both ends to find out (nor check it by a host callback)
+        root_finder=optx.Bisection(rtol=0.0, atol=TIME_TOL * jnp.maximum(span, 1.0), flip=True),
         direction=False,
     )
     sol = diffrax.diffeqsolve(
@@ -296,9 +298,9 @@ def _segment(
         cs.runge_kutta(solver),
         t0,
         t1,
-        dt0,
+        None,
         y0,
-        stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol, dtmax=dtmax),
+        stepsize_controller=cs.FirstStep(rtol=rtol, atol=atol, dtmax=dtmax, first=dt0),
         saveat=diffrax.SaveAt(t1=True, dense=True),
         event=event,
         max_steps=steps,

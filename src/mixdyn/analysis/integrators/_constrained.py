@@ -62,6 +62,17 @@ class RK4(diffrax.AbstractERK):
         return 4
 
 
+class FirstStep(diffrax.PIDController):
+    """diffrax's PID controller whose first step is ``first`` [time], for a ``diffeqsolve``
+    given no ``dt0``: diffrax checks a traced ``dt0``'s sign by a host callback, which keeps
+    the program from being exported to the persistent cache."""
+
+    first: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def init(self, terms, t0, t1, y0, dt0, args, func, error_order):
+        return super().init(terms, t0, t1, y0, self.first, args, func, error_order)
+
+
 def equations_of_motion(problem, *stabilization):
     """The vector field of the whole state ``(q, qd, w)``: ``(qd, qdd, work rates)``
     (``stabilization``: Baumgarte's ``alpha, beta``), jitted so that diffrax's repeated traces
