@@ -350,12 +350,14 @@ def _normals(problem: Problem, q, qd, t):
 
 
 @cached_jit(optimize=False)  # a few times per run
-def _first_step(problem: Problem, contacts, q, qd, t, h, tol):
+def _first_step(problem: Problem, contacts, watched, q, qd, t, h, tol):
     """The first step [time] of a segment from ``(q, qd)`` at ``t``: ``h``, or shorter where
-    a contact point that touches (gap within ``tol``) separates and will close again: at
-    most the time ``g' / |g''|`` to the apex of its gap, so that the step's end sees the gap
-    open (an event is a gap that falls to zero from above, seen at the ends of steps). And
-    the accelerations ``qdd`` (nq,) at the start (:func:`_longest_step`)."""
+    a ``watched`` contact point (k,) (apart or separating; not one held at rest) that touches
+    (gap within ``tol``) separates and will close again: at most the time ``g' / |g''|`` to
+    the apex of its gap, so that the step's end sees the gap open (an event is a gap that
+    falls to zero from above, seen at the ends of steps), and at least ``1e-10 h`` (and 16
+    rounding units of ``t``: a step that leaves the time as it is never ends). And the
+    accelerations ``qdd`` (nq,) at the start (:func:`_longest_step`)."""
     qdd = problem.accelerations(q, qd, t)[0]
 
     def gaps(s):
@@ -364,9 +366,10 @@ def _first_step(problem: Problem, contacts, q, qd, t, h, tol):
     s0 = jnp.zeros((), q.dtype)
     rate = jax.jacfwd(gaps)(s0)
     accel = jax.jacfwd(jax.jacfwd(gaps))(s0)
-    closing = (gaps(s0) <= tol) & (rate > 0.0) & (accel < 0.0)
+    closing = watched & (gaps(s0) <= tol) & (rate > 0.0) & (accel < 0.0)
     apex = jnp.where(closing, rate / jnp.where(closing, -accel, 1.0), h)
-    return jnp.minimum(h, jnp.min(apex)), qdd
+    floor = jnp.maximum(1e-10 * h, 16.0 * jnp.finfo(q.dtype).eps * jnp.abs(t))
+    return jnp.clip(jnp.min(apex), floor, h), qdd
 
 
 def _point_rates(x, scale) -> float:
@@ -833,12 +836,12 @@ def simulate_impacts(case, progress=None) -> Result:
             y = (y[0], *_halt(current, *y, jnp.asarray(t0)))
             qd = np.asarray(y[1])
         h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
-        dt0, qdd0 = _first_step(current, contacts, y[0], y[1], jnp.asarray(t0), h,
-                                GAP_TOL * scale)  # fmt: skip
-        dtmax, horizon = _longest_step(contacts, qd, np.asarray(qdd0), dt_out, scale)
-        t1 = min(float(ts[-1]), t0 + horizon)
         apart = (g > GAP_TOL * scale) | (G @ qd > 0.0) | released
         watched = apart & ~np.isin(np.arange(len(owner)), resting)
+        dt0, qdd0 = _first_step(current, contacts, jnp.asarray(watched), y[0], y[1],
+                                jnp.asarray(t0), h, GAP_TOL * scale)  # fmt: skip
+        dtmax, horizon = _longest_step(contacts, qd, np.asarray(qdd0), dt_out, scale)
+        t1 = min(float(ts[-1]), t0 + horizon)
         ys, t_end, y_end, hit, failed, n, code = _segment(
             current, contacts, jnp.asarray(watched), jnp.asarray(scale), jnp.asarray(t0),
             jnp.asarray(t1), y, jnp.asarray(ts), dt0, jnp.asarray(dtmax),
