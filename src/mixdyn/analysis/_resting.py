@@ -35,9 +35,9 @@ import jax.numpy as jnp
 from ..equations import Constraints
 from ..linalg import DenseSolver
 from ..model import Polynomial
+from ..model._contact_friction import CoulombAtPoints
 from ..model._drivers import Driver
 from ..model._element import moving
-from ..model._reaction_dependent import ReactionDependent
 from ._problem import Problem
 
 
@@ -75,7 +75,7 @@ def _on_bodies(contact, bi: int, bj: int):
     return out
 
 
-class RestFriction(ReactionDependent):
+class RestFriction(CoulombAtPoints):
     """Coulomb friction at the held points of one rigid contact with ``mu`` (the module's
     description), one row a held point.
 
@@ -111,21 +111,6 @@ class RestFriction(ReactionDependent):
         ``z x n``) per unit of ``qd``."""
         idx = jnp.asarray(self.points)
         return jax.jacfwd(lambda qd: self.contact.sliding(q, qd)[idx])(jnp.zeros_like(q)).T
-
-    def holding_limit(self, reactions):
-        """``mu N_k`` (w,) (0 where a row pulls: it lifts off)."""
-        return self.mu * jnp.maximum(reactions, 0.0)
-
-    def slip_force(self, v, reactions):
-        """``-mu N_k sign(v_k)`` (w,)."""
-        return -self.holding_limit(reactions) * jnp.sign(v)
-
-    def stick_band(self):
-        return self.v_stick
-
-    def speed_output(self, v, reactions):
-        """The sliding speed at the held point of the largest normal force."""
-        return jnp.atleast_1d(v)[jnp.argmax(reactions)]
 
     @property
     def magnitude_kind(self):

@@ -45,8 +45,30 @@ from ._geometry import GROUND
 from ._reaction_dependent import ReactionDependent
 
 
+class CoulombAtPoints(ReactionDependent):
+    """Coulomb's law with stick and slip at contact points, one row a point, its load the
+    point's normal force ``N_k`` [force] (the element's ``mu`` and ``v_stick``): sliding,
+    ``-mu N_k sign(v_k)``; inside the stick band, holding up to ``mu N_k`` (0 where ``N_k``
+    pulls: the point leaves)."""
+
+    def holding_limit(self, reactions):
+        """``mu N_k`` (k,)."""
+        return self.mu * jnp.maximum(reactions, 0.0)
+
+    def slip_force(self, v, reactions):
+        """The limits against the sliding, ``-mu N_k sign(v_k)`` (k,)."""
+        return -self.holding_limit(reactions) * jnp.sign(v)
+
+    def stick_band(self):
+        return self.v_stick
+
+    def speed_output(self, v, reactions):
+        """The sliding speed at the point of the largest normal force."""
+        return jnp.atleast_1d(v)[jnp.argmax(reactions)]
+
+
 @element("contact_friction", "forces")
-class ContactFriction(ReactionDependent):
+class ContactFriction(CoulombAtPoints):
     """Coulomb friction, with stick and slip, at the compliant contact named ``contact``, at
     each of its contact points.
 
@@ -139,21 +161,6 @@ class ContactFriction(ReactionDependent):
         c = model.element(self.contact)
         return c._state(q, qd)[2]
 
-    def holding_limit(self, reactions):
-        """``mu N_k`` (k,)."""
-        return self.mu * reactions
-
-    def slip_force(self, v, reactions):
-        """The limits against the sliding, ``-mu N_k sign(v_k)`` (k,)."""
-        return -self.holding_limit(reactions) * jnp.sign(v)
-
-    def stick_band(self):
-        return self.v_stick
-
-    def speed_output(self, v, reactions):
-        """The sliding speed at the point of the largest normal force."""
-        return jnp.atleast_1d(v)[jnp.argmax(reactions)]
-
     def reaction_outputs(self, reactions):
         """``normal``: the points' normal forces summed; ``limit``: ``mu`` times it."""
         return {"normal": jnp.sum(reactions), "limit": jnp.sum(self.holding_limit(reactions))}
@@ -184,4 +191,4 @@ class ContactFriction(ReactionDependent):
         return {"": "force", "normal": "force", "limit": "force", "speed": "velocity"}
 
 
-__all__ = ["ContactFriction"]
+__all__ = ["ContactFriction", "CoulombAtPoints"]

@@ -28,6 +28,24 @@ from ._forces import _f64
 from ._geometry import GROUND, point
 
 
+def pairs_on_bodies(bodies, shape: str, name: str, field: str) -> tuple[tuple[int, int], ...]:
+    """The pairs of a set's shapes on two different ``bodies`` (one a shape), every two in
+    order (``(0, 1), (0, 2), ..., (1, 2), ...``); a set with none (every ``shape`` on one
+    body) is refused at ``field`` of element ``name``."""
+    pairs = tuple(
+        (a, b) for a, b in itertools.combinations(range(len(bodies)), 2)
+        if bodies[a] != bodies[b]
+    )  # fmt: skip
+    if not pairs:
+        raise ModelError(
+            f"every {shape} of the set is on one body: no two can touch; put them on two "
+            "bodies or more",
+            name,
+            field=field,
+        )
+    return pairs
+
+
 @element("circle_set_contact", "forces")
 class CircleSetContact(_Compliant):
     """Circles of one radius on several bodies (balls, rollers, the balls of Newton's cradle),
@@ -61,17 +79,7 @@ class CircleSetContact(_Compliant):
             raise ModelError("a contact set needs two circles or more", self.name, field="centers")
         located = [r.point(c, self.name) for c in self.centers]
         bodies = tuple(int(b) for b, _ in located)
-        pairs = tuple(
-            (a, b) for a, b in itertools.combinations(range(len(bodies)), 2)
-            if bodies[a] != bodies[b]
-        )  # fmt: skip
-        if not pairs:
-            raise ModelError(
-                "every circle of the set is on one body: no two can touch; put them on two "
-                "bodies or more",
-                self.name,
-                field="centers",
-            )
+        pairs = pairs_on_bodies(bodies, "circle", self.name, "centers")
         local = jnp.stack([jnp.asarray(s, dtype=jnp.float64) for _, s in located])
         return dataclasses.replace(self, bodies=bodies, local=local, pairs=pairs)
 

@@ -41,6 +41,7 @@ import numpy as np
 from ..errors import ModelError
 from ._compliant import _Compliant, _safe_norm, _unit
 from ._contact_law import friction_force, normal_force
+from ._contact_sets import pairs_on_bodies
 from ._declare import KEY, Reference, element, option, quantity
 from ._element import Resolver, body_name
 from ._forces import _f64
@@ -252,17 +253,7 @@ class PolygonSetContact(_Compliant):
             cores.append(V)
         if len(groups) < 2:
             raise ModelError("a contact set needs two shapes or more", self.name, field="vertices")
-        pairs = tuple(
-            (a, b) for a, b in itertools.combinations(range(len(bodies)), 2)
-            if bodies[a] != bodies[b]
-        )  # fmt: skip
-        if not pairs:
-            raise ModelError(
-                "every shape of the set is on one body: no two can touch; put them on two "
-                "bodies or more",
-                self.name,
-                field="vertices",
-            )
+        pairs = pairs_on_bodies(bodies, "shape", self.name, "vertices")
         first = np.cumsum([0, *[len(V) for V in cores]])
         shape_of = tuple(s for s, V in enumerate(cores) for _ in V)
         points = tuple(
