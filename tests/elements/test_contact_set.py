@@ -198,6 +198,37 @@ def test_a_rigid_set_passes_the_momentum_along():
     np.testing.assert_allclose(r["energy.kinetic"], 0.5 * m * V**2, rtol=1e-12)
 
 
+def test_a_sets_held_points_are_rows_of_their_own_bodies():
+    """The rows holding a rigid set's points at rest (a ball on a fixed one, a ball on that
+    ball; a pendulum first, so that the set's bodies are not the model's first), evaluated
+    per element on each row's own bodies, equal the whole vector's Jacobian."""
+    from mixdyn.analysis._problem import Problem
+    from mixdyn.analysis._resting import hold, holding
+    from mixdyn.equations import Constraints
+    from mixdyn.model._compliant import rigid_contacts
+
+    R_ = 0.05
+    bodies = [
+        md.Body("p", 1.0, 0.01, q0=(1.0, 0.0, 0.0)),
+        md.Body("a", 1.0, 1e-3, q0=(0.01, 2 * R_, 0.0)),
+        md.Body("b", 2.0, 2e-3, q0=(0.03, 4 * R_, 0.0)),
+    ]
+    balls = md.CircleSetContact("balls", ["ground.O", "a", "b"], R_, contact_model="rigid",
+                                restitution=0.3)  # fmt: skip
+    model = md.Model(bodies, joints=[md.Revolute("pin", "ground.Q", "p")], forces=[balls],
+                     ground={"O": (0.0, 0.0), "Q": (1.0, 0.0)})  # fmt: skip
+    (contact,) = rigid_contacts(model)
+    held = holding(Problem(model, Constraints.of(model)),
+                   tuple(hold(contact, k, 3) for k in (0, 2)))  # fmt: skip
+    q = jnp.asarray(model.q0)
+    dense = np.asarray(held.c.phi_q(q, 0.0))
+    rows, cols = held.c.coo()
+    local = np.zeros_like(dense)
+    np.add.at(local, (rows, cols), np.asarray(held.c.jacobian_values(q, 0.0)))
+    np.testing.assert_allclose(local, dense, rtol=0, atol=1e-15)
+    assert np.abs(dense[2:, 3:]).max() > 0.5 and not dense[2:, :3].any()  # a and b, not p
+
+
 @pytest.mark.slow  # long: run by CI's slow set (a run with rigid impacts until rest)
 def test_two_balls_of_a_rigid_set_come_to_rest_stacked_on_a_fixed_one():
     """Ball a dropped on a fixed ball, ball b dropped on a (a pendulum hanging still

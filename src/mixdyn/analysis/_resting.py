@@ -46,32 +46,37 @@ class Hold(Driver):
 
     Attributes:
         contact: the rigid contact pair (a bound compliant-contact element).
-        point: which of the pair's contact points (0 for a pair with one).
+        index: which of the pair's contact points (0 for a pair with one; not ``point``,
+            a name the constraint set clears as naming a body point).
     """
 
     contact: eqx.Module
-    point: int = eqx.field(static=True)
+    index: int = eqx.field(static=True)
     bi: int = eqx.field(static=True, kw_only=True)
     bj: int = eqx.field(static=True, kw_only=True)
+    #: A contact set's shapes' bodies (its ``bodies``); () for a pair (its ``bi``, ``bj``).
+    bodies: tuple[int, ...] = eqx.field(static=True, default=(), kw_only=True)
+    body_fields: ClassVar[tuple[str, ...]] = ("bi", "bj", "bodies")
 
     def measure(self, q):
         """The point's penetration ``delta(q)`` [length] (0 while it rests)."""
-        return jnp.atleast_1d(_on_bodies(self.contact, self.bi, self.bj).penetration(q))[self.point]
+        contact = _on_bodies(self.contact, self.bi, self.bj, self.bodies)
+        return jnp.atleast_1d(contact.penetration(q))[self.index]
 
     def body_indices(self):
-        return moving(self.bi, self.bj)
+        return moving(*self.bodies) if self.bodies else moving(self.bi, self.bj)
 
 
-def _on_bodies(contact, bi: int, bj: int):
-    """``contact`` reading its bodies ``bi``, ``bj`` (the hold's: the model's, or a local
-    vector's where the constraint set evaluates it per element), copied field by field (it
-    is bound and checked already)."""
-    if contact.bi == bi and contact.bj == bj:
+def _on_bodies(contact, bi: int, bj: int, bodies: tuple[int, ...] = ()):
+    """``contact`` reading its bodies ``bi``, ``bj`` (a set's: ``bodies``) as the hold's
+    (the model's, or a local vector's where the constraint set evaluates it per element),
+    copied field by field (it is bound and checked already)."""
+    changes = {"bi": bi, "bj": bj, **({"bodies": bodies} if bodies else {})}
+    if all(getattr(contact, k) == v for k, v in changes.items()):
         return contact
     out = object.__new__(type(contact))
     for f in dataclasses.fields(contact):
-        value = {"bi": bi, "bj": bj}.get(f.name, getattr(contact, f.name))
-        object.__setattr__(out, f.name, value)
+        object.__setattr__(out, f.name, changes.get(f.name, getattr(contact, f.name)))
     return out
 
 
@@ -135,7 +140,11 @@ def hold(contact, point: int, count: int) -> Hold:
     """The :class:`Hold` of ``contact``'s contact point ``point`` (of ``count``), named
     ``{contact}.rest`` (``{contact}.rest{point}`` for a pair with several points)."""
     name = f"{contact.name}.rest" + (str(point) if count > 1 else "")
-    return Hold(name, contact, int(point), law=Polynomial([0.0]), bi=contact.bi, bj=contact.bj)
+    bodies = getattr(contact, "bodies", ())
+    return Hold(
+        name, contact, int(point), law=Polynomial([0.0]), bi=contact.bi, bj=contact.bj,
+        bodies=tuple(bodies) if isinstance(bodies, tuple) else (),
+    )  # fmt: skip
 
 
 def holding(problem: Problem, holds: tuple[Hold, ...], frictions=()) -> Problem:

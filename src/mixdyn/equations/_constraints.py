@@ -614,6 +614,15 @@ class Packed(eqx.Module):
         return _local_eval(self.key.static, self.groups, _phi_t, q, t, None, self.c.active)
 
 
+def _relabel(body, where):
+    """A body field's value read through ``where`` (global index -> local): one index, or a
+    tuple of them (a contact set's bodies); indices not in ``where`` (the ground) as they
+    are."""
+    if isinstance(body, tuple):
+        return tuple(where.get(b, b) for b in body)
+    return where.get(body, body)
+
+
 def _localize(e):
     """A copy of element ``e`` reading its bodies from a local vector ``[q_b0, q_b1, ...]``
     (its ``body_indices()`` in order), with its naming fields cleared."""
@@ -623,7 +632,7 @@ def _localize(e):
     fields = [f for f in type(e).body_fields if f in names]
     if not fields and bodies:
         raise ValueError(f"{type(e).__name__} names no body_fields")
-    repl = {f: where.get(getattr(e, f), getattr(e, f)) for f in fields}
+    repl = {f: _relabel(getattr(e, f), where) for f in fields}
     repl.update({f: "" for f in _NAME_FIELDS if f in names})
     # A field-by-field copy: the element is already bound and checked, and
     # ``dataclasses.replace`` (through ``__init__``) costs several times more, per element and
