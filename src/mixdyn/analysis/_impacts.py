@@ -171,6 +171,11 @@ def _least_normal(problem, t, y):
     return jnp.min(forces, initial=jnp.inf)
 
 
+def _row_speeds(problem, q, qd):
+    """The relative speeds (nf,) of ``problem``'s reaction-dependent rows at ``(q, qd)``."""
+    return rd.directions(problem.model, problem.reaction_dependent, q).T @ qd
+
+
 def _slowest(problem, sliding, t, y):
     """How far the reaction-dependent rows moving at the segment's start are from their
     stick bands: the smallest over them of ``(sign(v0) v - b) / |v0|`` (``v0``: a row's
@@ -179,7 +184,7 @@ def _slowest(problem, sliding, t, y):
     band (where its stick force would hold its speed), and the next segment's start halts
     it (:func:`_halt`). Infinite where no row moves."""
     elements = problem.reaction_dependent
-    v = rd.directions(problem.model, elements, y[0]).T @ y[1]
+    v = _row_speeds(problem, y[0], y[1])
     moving = sliding != 0.0
     speed = jnp.where(moving, jnp.abs(sliding), 1.0)
     ahead = (jnp.sign(sliding) * v - rd.bands(elements)) / speed
@@ -189,9 +194,8 @@ def _slowest(problem, sliding, t, y):
 def _sliding_rows(problem, y):
     """The speeds (nf,) of the reaction-dependent rows outside their stick bands in the
     state ``y``, 0 for the rows inside (see :func:`_slowest`)."""
-    elements = problem.reaction_dependent
-    v = rd.directions(problem.model, elements, y[0]).T @ y[1]
-    return jnp.where(jnp.abs(v) < rd.bands(elements), 0.0, v)
+    v = _row_speeds(problem, y[0], y[1])
+    return jnp.where(jnp.abs(v) < rd.bands(problem.reaction_dependent), 0.0, v)
 
 
 @cached_jit(optimize=False)  # once a segment of a run with reaction-dependent forces
@@ -201,9 +205,8 @@ def _halt(problem: Problem, q, qd, w, t):
     slowed into its band at a segment's end, :func:`_slowest`; within their limits)
     brought to rest (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`), so that a
     row stays where it stopped."""
-    elements = problem.reaction_dependent
-    v = rd.directions(problem.model, elements, q).T @ qd
-    return problem.halt_sticking(q, qd, w, t, q, qd, jnp.abs(v) <= 2.0 * rd.bands(elements))
+    stopped = jnp.abs(_row_speeds(problem, q, qd)) <= 2.0 * rd.bands(problem.reaction_dependent)
+    return problem.halt_sticking(q, qd, w, t, q, qd, stopped)
 
 
 def _event_terms(problem, contacts, watched, origin, length, force, sliding, t, y):
