@@ -204,17 +204,20 @@ def memory_mappings() -> tuple[int, int]:
 
 @pytest.fixture(autouse=True, scope="module")
 def _release_compiled_programs():
-    """Drop JAX's compiled programs after a test module once the process holds more than
-    half the memory mappings it may: every compiled program keeps a few mappings (its code),
-    a whole session compiles thousands of them, and at the system's limit (65530) the XLA CPU
-    compiler cannot map the next one and crashes (segmentation fault; measured: 16,000
-    mappings after two of the heavier modules, the crash late in a session that kept every
-    program). Below that the programs are kept, so that later modules reuse what they share
-    (clearing after every module cost minutes of recompiling)."""
+    """Drop the compiled programs held in memory (mixdyn's and JAX's:
+    :func:`mixdyn.runtime._programs.release`) after a test module once the process holds more
+    than half the memory mappings it may: every compiled program keeps a few dozen mappings
+    (its code), a whole session compiles thousands of them, and at the system's limit (65530)
+    XLA cannot map the next one and crashes (segmentation faults in XLA's compiler, in JAX's
+    cache write and in loading a stored executable). JAX's programs alone are not enough:
+    mixdyn's own, kept by each :func:`~mixdyn.runtime.cached_jit` function, stayed (measured
+    in the slow set: 32,000 mappings cleared only to 14,000-25,000, the crash late in the
+    set). Below the threshold the programs are kept, so that later modules reuse what they
+    share (clearing after every module cost minutes of recompiling)."""
     yield
     mappings, limit = memory_mappings()
     if mappings > CLEAR_CACHES_AT_MAPPINGS * limit:
-        jax.clear_caches()
+        _programs.release()
 
 
 @pytest.hookimpl(wrapper=True)

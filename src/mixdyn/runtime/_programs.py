@@ -73,6 +73,8 @@ QUICK = {"xla_backend_optimization_level": 0}
 
 _state = {"folder": None}
 _lock = threading.Lock()
+#: Every :func:`cached_jit` function of this process (their programs: :func:`release`).
+_cached: list[_CachedJit] = []
 
 #: Modules whose functions and classes may appear (by name) in a key: their code is covered
 #: by the versions in the key. Anything else (a user's ``__main__``) is not keyed.
@@ -351,6 +353,7 @@ class _CachedJit:
         self.nested = eqx.filter_jit(self.fn)  # inside another program: that one's options
         self.programs: dict = {}
         functools.update_wrapper(self, fn, updated=())
+        _cached.append(self)
 
     def __get__(self, obj, objtype=None):  # pragma: no cover - used on plain functions
         return self if obj is None else types.MethodType(self, obj)
@@ -667,6 +670,28 @@ def job(tag: str):
     remember(tag, since)
 
 
+def release() -> int:
+    """Drop the compiled programs this process holds in memory: those of every
+    :func:`cached_jit` function (read again from the cache folder at their next call, in
+    ~0.02 s each) and JAX's own (:func:`jax.clear_caches`: traced and compiled again).
+
+    Each compiled XLA CPU program keeps its code in a few dozen memory mappings, and a
+    process may hold at most ``vm.max_map_count`` of them (65530 by default on Linux); at
+    that limit XLA cannot map the next program and the process crashes. A long process
+    that compiles thousands of programs (a test session, a study over many models) calls
+    this now and then. Programs being prepared in the background are kept. Returns how
+    many of mixdyn's programs were dropped."""
+    dropped = 0
+    with _lock:
+        for fn in _cached:
+            for key, program in list(fn.programs.items()):
+                if not isinstance(program, _Pending):
+                    del fn.programs[key]
+                    dropped += 1
+    jax.clear_caches()
+    return dropped
+
+
 def cached_jit(fn: Callable | None = None, *, optimize: bool = True) -> Callable:
     """``equinox.filter_jit`` whose traced programs persist in the cache folder.
 
@@ -690,6 +715,7 @@ __all__ = [
     "prefetch",
     "reading_ahead",
     "register_key",
+    "release",
     "remember",
     "set_cache",
     "skeleton",
