@@ -22,6 +22,16 @@
 - The same in a mixed run (slow): a pendulum on a slider whose x is prescribed strikes a
   rough wall; its ``w+``, the wall's impulses and the unknown force's impulse from the x
   momentum, the balance closed.
+- A box landing flat on a rough floor, both bottom corners struck at once (contact points
+  ``(-+a, -b)`` from its centre): Newton's law at each corner keeps it from turning
+  (``w+ = 0``, ``v_y+ = e v``), so the friction's moment is balanced by the corners' normal
+  impulses, ``a (P_2 - P_1) = b (T_1 + T_2)``; sliding, ``T_k = mu P_k`` and
+  ``u+ = u - mu (1 + e) v``, the leading corner taking ``(1 + b mu / a) / 2`` of
+  ``m (1 + e) v``; below ``u = mu (1 + e) v`` it stops, ``u+ = 0`` with ``T_1 + T_2 = m u``
+  within ``mu P_k`` at each corner (fast, the rows by hand). In a run (slow) the box thrown
+  flat bounces level, losing ``mu (1 + e) v_n`` of its speed at each bounce, comes to rest on
+  both corners at ``t_inf`` with ``u_inf = u0 - mu (1 + e) v1 / (1 - e)`` and skids to a
+  stop ``u_inf^2 / (2 mu g)`` further on, where it stays.
 - A model file with ``mu`` on a rigid contact (slow): ``mixdyn run`` writes the friction
   impulse column ``floor.friction_impulse`` (the disc's sliding impulse).
 """
@@ -37,7 +47,7 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn as md
-from mixdyn.analysis._impact_friction import coulomb_impulse
+from mixdyn.analysis._impact_friction import coulomb_impulse, coulomb_impulses
 from mixdyn.cli import app
 
 R_DISC, M_DISC, E_DISC, G_ACC, H_DROP = 0.05, 2.0, 0.5, 9.81, 0.2
@@ -294,3 +304,77 @@ def test_a_model_file_with_friction_on_a_rigid_contact_writes_the_friction_impul
     impacts = meta["stats"]["impacts"]
     np.testing.assert_allclose(impacts["friction_impulse"], [T], rtol=1e-9)
     assert impacts["sticks"] == [False]
+
+
+# ------------------------------------------------------------- a box landing flat, rough
+BOX_M, BOX_W, BOX_H, BOX_RC, BOX_E, BOX_MU = 1.0, 0.2, 0.1, 0.005, 0.4, 0.5
+BOX_J = BOX_M * (BOX_W**2 + BOX_H**2) / 12
+BOX_A, BOX_B = BOX_W / 2 - BOX_RC, BOX_H / 2  # the corners' contact points (-+a, -b)
+
+
+@pytest.mark.parametrize("u", [2.0, 0.3, 0.9], ids=["slides", "sticks", "trailing-slides"])
+def test_a_rough_box_landing_flat_skids_or_stops_level_by_the_closed_forms(u):
+    m, a, b, e, mu, v = BOX_M, BOX_A, BOX_B, BOX_E, BOX_MU, 1.4
+    Minv = 1.0 / np.array([m, m, BOX_J])
+    G = np.array([[0.0, 1.0, -a], [0.0, 1.0, a]])  # the gaps' rows at phi = 0
+    Gt = np.array([[-1.0, 0.0, -b], [-1.0, 0.0, -b]])  # the slips along z x n = (-1, 0)
+    qd = np.array([u, -v, 0.0])
+    found = coulomb_impulses(Minv, NONE, np.zeros(0), G, Gt, qd, np.full(2, e), np.full(2, mu))
+    assert found is not None
+    P, T = found.P, found.T
+    np.testing.assert_allclose(found.qd[1:], [e * v, 0.0], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(P.sum(), m * (1 + e) * v, rtol=1e-12)
+    np.testing.assert_allclose(a * (P[1] - P[0]), b * T.sum(), rtol=1e-12)  # no turning
+    np.testing.assert_allclose(m * (found.qd[0] - u), -T.sum(), rtol=1e-12, atol=1e-12)
+    if u > mu * (1 + e) * v:
+        np.testing.assert_allclose(found.qd[0], u - mu * (1 + e) * v, rtol=1e-12)
+        np.testing.assert_allclose(T, mu * P, rtol=1e-12)
+        np.testing.assert_allclose(P[1] / P.sum(), (1 + b * mu / a) / 2, rtol=1e-12)
+        assert not found.sticks.any()
+    else:
+        np.testing.assert_allclose(found.qd[0], 0.0, atol=1e-12)
+        assert np.all(np.abs(T) <= mu * P * (1 + 1e-12)) and found.sticks.any()
+    assert found.work < 0.0  # the impulses take energy: 1/2 m (u+^2 - u^2) + 1/2 m (e^2 - 1) v^2
+    np.testing.assert_allclose(
+        found.work, 0.5 * m * (found.qd[0] ** 2 - u**2) + 0.5 * m * (e**2 - 1) * v**2, rtol=1e-12
+    )
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_rough_box_thrown_flat_bounces_level_and_skids_to_the_closed_form_stop():
+    m, e, mu, h0, u0 = BOX_M, BOX_E, BOX_MU, 0.1, 2.0
+    box = md.Body("box", m, BOX_J, q0=(0.0, BOX_H / 2 + h0, 0.0))
+    floor = md.BoxLineContact("floor", "box", BOX_W, BOX_H, BOX_RC, ("ground", (0.0, 0.0)),
+                              contact_model="rigid", restitution=e, mu=mu)  # fmt: skip
+    model = md.Model([box], forces=[floor], gravity=(0, -G_ACC))
+    r = md.forward(model, np.linspace(0.0, 1.0, 11), qd0=np.array([u0, 0.0, 0.0]), rtol=1e-10,
+                   atol=1e-12)  # fmt: skip
+    imp = r.stats["impacts"]
+    t1, v1 = math.sqrt(2 * h0 / G_ACC), math.sqrt(2 * G_ACC * h0)
+    # the first three bounces: both corners at once, sliding, level
+    n = np.arange(3)
+    t_n = t1 + 2 * v1 / G_ACC * (e - e ** (n + 1)) / (1 - e)
+    u_n = u0 - mu * (1 + e) * v1 * (1 - e**n) / (1 - e)  # before bounce n
+    np.testing.assert_allclose(imp["t"][:6], np.repeat(t_n, 2), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.asarray(imp["qd_after"])[:6:2, 0],
+                               u_n - mu * (1 + e) * v1 * e**n, rtol=1e-9)  # fmt: skip
+    np.testing.assert_allclose(imp["friction_impulse"][:6], mu * np.asarray(imp["impulse"][:6]),
+                               rtol=1e-9)  # fmt: skip
+    assert np.max(np.abs(r["box.phi"])) < 1e-9
+    # the rest: skidding on both corners from t_inf at u_inf, stopping u_inf^2 / (2 mu g) on
+    k = np.arange(1, 400)
+    u_inf = u0 - mu * (1 + e) * v1 / (1 - e)
+    u_k = u0 - mu * (1 + e) * v1 * (1 - e**k) / (1 - e)  # in the flight after bounce k
+    x_inf = u0 * t1 + np.sum(u_k * 2 * e**k * v1 / G_ACC)
+    t_inf = t1 + 2 * e * v1 / (G_ACC * (1 - e))
+    t_stop = t_inf + u_inf / (mu * G_ACC)
+    x_stop = x_inf + u_inf**2 / (2 * mu * G_ACC)
+    assert t_stop < 0.5
+    stopped = r.t > t_stop + 1e-3
+    np.testing.assert_allclose(r["box.x"][stopped], x_stop, rtol=0, atol=1e-6)
+    np.testing.assert_allclose(r["box.y"][stopped], BOX_H / 2, rtol=1e-9)
+    np.testing.assert_allclose(r["box.vx"][stopped], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["floor.normal"][stopped], m * G_ACC, rtol=1e-9)
+    E = r["energy.kinetic"] + r["energy.potential"]  # the impacts' and the skid's losses
+    np.testing.assert_allclose(E - E[0], r["work.impacts"] + r["work.nonconservative"],
+                               atol=1e-9 * m * G_ACC * h0)  # fmt: skip

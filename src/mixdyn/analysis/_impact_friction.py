@@ -124,4 +124,86 @@ def coulomb_impulse(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Frictional:
     return Frictional(after, x[:-1], P, T, False, float(work))
 
 
-__all__ = ["Frictional", "coulomb_impulse"]
+class Simultaneous(NamedTuple):
+    """The outcome of impacts at ``k`` contact points at one instant.
+
+    Attributes:
+        qd: (nq,) the velocities after.
+        lam: (m,) the constraints' impulses, along the rows ``D``.
+        P: (k,) the normal impulses [force * time].
+        T: (k,) the tangential (friction) impulses, each on its body j along ``z x n``
+            [force * time] (zero at a frictionless point).
+        sticks: (k,) whether each point leaves without sliding (``|T| <= mu P``).
+        work: the contact impulses' work, summed over the points as in :class:`Frictional`
+            [energy].
+    """
+
+    qd: np.ndarray
+    lam: np.ndarray
+    P: np.ndarray
+    T: np.ndarray
+    sticks: np.ndarray
+    work: float
+
+
+def coulomb_impulses(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Simultaneous | None:
+    """The velocity jump of impacts at ``k`` contact points at one instant (a box landing
+    flat on a rough floor): Newton's law at each point (``G_k qd+ = -e_k G_k qd-``), the
+    joints kept, and Coulomb's law at each point with ``mu_k > 0``, each sticking or
+    sliding as at one point (see the module), all solved together.
+
+    The points' states are found by an active set: every rough point tried sticking; the
+    sticking point whose friction most exceeds ``mu P`` slides (in the direction of its
+    sticking impulse); a sliding point that its friction turns past the end of its slip
+    (``s G_t qd+ > 0``, ``T = s mu P``) sticks again; at most ``4 k + 4`` solves.
+
+    Args:
+        Minv: (nq,) inverse mass diagonal; J (m, nq), phit (m,): the constraints.
+        G, Gt: (k, nq) the points' gaps' gradients and tangential velocities' rows.
+        qd: (nq,) velocities before; e: (k,) restitutions; mu: (k,) friction coefficients
+            (0 or NaN: frictionless).
+        D: (m, nq) the rows along which the constraints' impulses act (default ``J``).
+
+    Returns:
+        :class:`Simultaneous`, or None where no state of the points meets both laws with
+        pushing normal impulses (an impulse would pull, the constraints fix a point's
+        normal or tangential velocity, or the states cycle): then the points are struck
+        one by one.
+    """
+    D = J if D is None else D
+    k, m = len(G), len(phit)
+    v, vt = G @ qd, Gt @ qd
+    mu = np.nan_to_num(np.asarray(mu, float), nan=0.0)
+    kept = -(J @ qd + phit)
+    speed = max(float(np.max(np.abs(v))), float(np.max(np.abs(vt))),
+                float(np.max(np.abs(kept), initial=0.0)))  # fmt: skip
+    stick = mu > 0.0
+    s = np.zeros(k)  # a sliding point's direction of friction impulse (0: frictionless)
+    for _ in range(4 * k + 4):
+        along = G + (s * mu)[:, None] * Gt
+        A = np.vstack([J, G, Gt[stick]])
+        Dg = np.vstack([D, along, Gt[stick]])
+        b = np.concatenate([kept, -(1.0 + e) * v, -vt[stick]])
+        after, x, residual = _solve(Minv, A, Dg, b, qd)
+        if residual > FEASIBLE_TOL * speed:
+            return None
+        P = x[m : m + k]
+        T = s * mu * P
+        T[stick] = x[m + k :]
+        excess = np.where(stick, np.abs(T) - mu * P, -np.inf)
+        overshoot = np.where(~stick & (s != 0.0), s * (Gt @ after), -np.inf)
+        if excess.max() > FEASIBLE_TOL * np.abs(P).max():
+            j = int(np.argmax(excess))
+            stick[j], s[j] = False, float(np.sign(T[j]))
+        elif overshoot.max() > FEASIBLE_TOL * speed:
+            j = int(np.argmax(overshoot))
+            stick[j], s[j] = True, 0.0
+        else:
+            if P.min() < 0.0:
+                return None
+            work = 0.5 * (P @ (v + G @ after) + T @ (vt + Gt @ after))
+            return Simultaneous(after, x[:m], P, T, stick.copy(), float(work))
+    return None
+
+
+__all__ = ["Frictional", "Simultaneous", "coulomb_impulse", "coulomb_impulses"]

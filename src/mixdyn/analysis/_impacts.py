@@ -36,13 +36,13 @@ A contact with a friction coefficient ``mu`` adds Coulomb's law on the impulses
 of the sticking impulse). Newton's law with friction can give energy where the normal and
 tangential motions are coupled: an impact whose contact impulses would do positive work,
 or whose sliding normal impulse would pull (jamming), ends the run as a
-:class:`~mixdyn.errors.NumericalError`. The multi-point plastic impacts of :func:`settle`
-are frictionless. A resting point of a contact with ``mu > 0`` takes Coulomb's friction
-with stick and slip (:class:`~._resting.RestFriction`: its normal force the held row's
-multiplier, its stick band the rest speed, below). A segment also ends where a sliding
-friction row (a resting point's, a joint's) slows into its stick band, and the next
-segment starts with the rows that stick brought to rest (:func:`_halt`), so that a body
-that its friction stops stays where it stopped.
+:class:`~mixdyn.errors.NumericalError`. The multi-point plastic impacts of :func:`settle` (a
+point struck again at one instant) are frictionless. A resting point of a contact with
+``mu > 0`` takes Coulomb's friction with stick and slip (:class:`~._resting.RestFriction`: its
+normal force the held row's multiplier, its stick band the rest speed, below). A segment
+also ends where a sliding friction row (a resting point's, a joint's) slows into its stick
+band, and the next segment starts with the rows that stick brought to rest (:func:`_halt`),
+so that a body that its friction stops stays where it stopped.
 
 In a mixed run (:mod:`.mixed`: ``p`` unknown forces of directions ``B`` (nq, p), ``p``
 prescribed motions ``Psi``) a prescribed motion's velocity cannot jump: its unknown force
@@ -62,10 +62,11 @@ of the kinetic energy's jump with the impacts' (``work.impacts``).
 Several contact points touching at one instant (a row of balls, Newton's cradle) are
 resolved one after the other (sequential impacts): the point approaching fastest first,
 then again while any point within the gap tolerance approaches; each pairwise impact keeps
-momentum and, at ``e = 1``, energy. Points that approach at one instant, frictionless,
-strike together (a box landing flat, two blocks meeting face on: :func:`impulses`, Newton's
-law at each, solved with the joints), where every impulse pushes and the constraints leave
-each point's law to it; otherwise one after the other. A point touching without
+momentum and, at ``e = 1``, energy. Points that approach at one instant strike together
+(a box landing flat, two blocks meeting face on:
+:func:`~._impact_friction.coulomb_impulses`, Newton's law at each and Coulomb's at each rough
+one, solved with the joints), where every impulse pushes, the constraints leave each point's
+laws to it and the impulses take energy; otherwise one after the other. A point touching without
 approaching (the next ball of the cradle, at rest against the one struck) takes no part.
 
 Zeno: a ball coming to rest bounces infinitely often in a finite time (for a ball dropped
@@ -111,7 +112,7 @@ from ..errors import (
 from ..model._compliant import rigid_contacts
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
-from ._impact_friction import coulomb_impulse
+from ._impact_friction import coulomb_impulse, coulomb_impulses
 from ._problem import Problem
 from ._resting import friction_at, hold, hold_positions, holding, n_holds, normal_forces
 from .methods import Projection
@@ -426,30 +427,12 @@ def impulse(Minv, J, phit, G, qd, e, D=None):
     return qd + dqd, x[:-1], float(x[-1])
 
 
-def impulses(Minv, J, phit, G, qd, e, D=None):
-    """The velocity jump of simultaneous impacts at ``k`` contact points, Newton's law at
-    each (``G_k qd+ = -e_k G_k qd-``, the joints kept), where every normal impulse pushes.
-
-    Args:
-        Minv: (nq,) inverse mass diagonal; J (m, nq), phit (m,): the constraints.
-        G: (k, nq) the points' gaps' gradients; qd: (nq,) velocities before; e: (k,) their
-            restitutions.
-        D: (m, nq) the rows along which the constraints' impulses act (:func:`impulse`).
-
-    Returns:
-        ``(qd+ (nq,), Lambda (m,), P (k,))``, or None where an impulse would pull or the
-        constraints keep a point from Newton's law (then the points strike one by one).
-    """
-    v = G @ qd
-    rows = np.vstack([J, G[:-1]])
-    along = None if D is None else np.vstack([D, G[:-1]])
-    rhs = np.concatenate([phit, e[:-1] * v[:-1]])  # G_k qd+ = -e_k v_k, as J's rows' form
-    after, lam, P_last = impulse(Minv, rows, rhs, G[-1], qd, float(e[-1]), along)
-    P = np.concatenate([lam[len(phit) :], [P_last]])
-    met = np.abs(G @ after + e * v) <= IMPULSE_TOL * np.abs(v)
-    if P.min() < 0.0 or not met.all():
-        return None
-    return after, lam[: len(phit)], P
+def _consistent(found, G, Gt, qd) -> bool:
+    """Whether simultaneous impacts (:func:`~._impact_friction.coulomb_impulses`' outcome at
+    points of rows ``G``, ``Gt``) take energy from the bodies (within :data:`ENERGY_TOL` of
+    their impulses' scale): otherwise they are struck one by one, each checked on its own."""
+    scale = np.abs(found.P) @ np.abs(G @ qd) + np.abs(found.T) @ np.abs(Gt @ qd)
+    return found.work <= ENERGY_TOL * scale
 
 
 def settle(Minv, J, phit, G, qd, touching, tol, D=None):
@@ -772,19 +755,22 @@ def simulate_impacts(case, progress=None) -> Result:
                     q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                     struck.clear()
                     continue
-            # the points approaching at this instant, frictionless, struck together
-            # (a box landing flat, two blocks meeting face on): Newton's law at each
-            together = np.flatnonzero(near & (v < -rest) & np.isnan(mu_point))
+            # the points approaching at this instant struck together (a box landing flat,
+            # two blocks meeting face on): Newton's and Coulomb's laws at each
+            together = np.flatnonzero(near & (v < -rest))
             together = together[~np.isin(together, list(struck))]
             if i in together and len(together) > 1:
-                found = impulses(Minv, J, phit, G[together], qd, e_point[together], D)
-                if found is not None:
-                    qd_new, lam, P = found
+                found = coulomb_impulses(Minv, J, phit, G[together], Gt[together], qd,
+                                         e_point[together], mu_point[together], D)  # fmt: skip
+                if found is not None and _consistent(found, G[together], Gt[together], qd):
+                    qd_new, lam = found.qd, found.lam
                     if all(lam[first_hold + k] >= 0.0 for k in range(len(resting))):
                         F = jump(qd, qd_new, lam, D)
                         labels = held_problem(resting).c.active_labels
-                        for j, P_j in zip(together, P, strict=True):
-                            record(j, P_j, lam, labels, q, qd, qd_new, G[j], F, Gt[j])
+                        for j, P_j, T_j, stuck in zip(together, found.P, found.T, found.sticks,
+                                                      strict=True):  # fmt: skip
+                            record(j, P_j, lam, labels, q, qd, qd_new, G[j], F, Gt[j], T_j,
+                                   bool(stuck and mu_point[j] > 0.0))  # fmt: skip
                         struck.update(together.tolist())
                         q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                         continue
