@@ -378,3 +378,35 @@ def test_a_rough_box_thrown_flat_bounces_level_and_skids_to_the_closed_form_stop
     E = r["energy.kinetic"] + r["energy.potential"]  # the impacts' and the skid's losses
     np.testing.assert_allclose(E - E[0], r["work.impacts"] + r["work.nonconservative"],
                                atol=1e-9 * m * G_ACC * h0)  # fmt: skip
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_rough_box_dropped_tilted_and_thrown_settles_flat_and_stays():
+    """A box dropped tilted (0.1 rad) and thrown sideways at 1 m/s onto a rough floor
+    (``mu = 0.5``, ``e = 0.4``): it strikes on one corner, bounces on it until it rests on
+    it, slides on that corner and rocks flat onto both, where it stops and stays
+    (``y = h / 2``, ``phi = 0``, the corners carrying ``m g``); the energy it lost is the
+    impacts' and the friction's work. On the way: the forces of a corner sliding with
+    friction, where ``mu dN/dF`` is 0.23 (:mod:`mixdyn.equations._reaction_dependent`), and
+    a corner that stops sliding but that its friction cannot hold (it slides on the other
+    way, not watched for the stop it has just made)."""
+    m, e, mu = BOX_M, BOX_E, BOX_MU
+    box = md.Body("box", m, BOX_J, q0=(0.0, 0.15, 0.1))
+    floor = md.BoxLineContact("floor", "box", BOX_W, BOX_H, BOX_RC, ("ground", (0.0, 0.0)),
+                              contact_model="rigid", restitution=e, mu=mu)  # fmt: skip
+    model = md.Model([box], forces=[floor], gravity=(0, -G_ACC))
+    r = md.forward(model, np.linspace(0.0, 0.4, 5), qd0=np.array([1.0, 0.0, 0.0]), rtol=1e-10,
+                   atol=1e-12)  # fmt: skip
+    rests = r.stats["rests"]
+    assert sorted(rests["end"])[-2:] == [0.4, 0.4]  # two corners rest to the end
+    after = r.t > max(rests["start"])
+    assert after.sum() >= 2
+    np.testing.assert_allclose(r["box.y"][after], BOX_H / 2, rtol=1e-9)
+    np.testing.assert_allclose(r["box.phi"][after], 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["box.vx"][after], 0.0, atol=1e-9)
+    np.testing.assert_allclose(np.diff(r["box.x"][after]), 0.0, atol=1e-9)
+    np.testing.assert_allclose(r["floor.normal"][after], m * G_ACC, rtol=1e-9)
+    assert np.any(r.stats["impacts"]["friction_impulse"])
+    E = r["energy.kinetic"] + r["energy.potential"]
+    np.testing.assert_allclose(E - E[0], r["work.impacts"] + r["work.nonconservative"],
+                               atol=1e-9 * m * G_ACC * 0.15)  # fmt: skip

@@ -67,17 +67,45 @@ def test_points_touching_at_once_settle_with_pushing_impulses():
     G = np.stack([np.zeros(2), np.ones(2), x], axis=1)  # d(gap)/d(x, y, phi) at phi = 0
     none = np.zeros((0, 3)), np.zeros(0)
     v = 1.5
-    after, points, P, _ = settle(Minv, *none, G, np.array([0.0, -v, 0.0]), np.ones(2, bool), 0.0)
+    after, points, P = settle(Minv, *none, G, np.array([0.0, -v, 0.0]), np.ones(2, bool), 0.0)[:3]
     assert sorted(points) == [0, 1]
     np.testing.assert_allclose(P, [m * v / 2] * 2, rtol=1e-12)
     np.testing.assert_allclose(after, 0.0, atol=1e-12)
     spin = 40.0  # corner 1 leaves at -v + spin w / 2 > 0
     qd = np.array([0.0, -v, spin])
-    after, points, P, _ = settle(Minv, *none, G, qd, np.ones(2, bool), 0.0)
+    after, points, P = settle(Minv, *none, G, qd, np.ones(2, bool), 0.0)[:3]
     v1 = G[0] @ qd
     assert points == [0] and G[1] @ after > 0.0
     np.testing.assert_allclose(P, [-v1 / (1 / m + x[0] ** 2 / J)], rtol=1e-12)
     assert abs(G[0] @ after) < 1e-12
+
+
+@pytest.mark.parametrize("u", [2.0, 0.3], ids=["slides", "sticks"])
+def test_a_rough_box_settling_flat_skids_by_mu_v_or_stops(u):
+    """Settling flat (a plastic impact at both bottom corners, ``(-+a, -b)`` from the
+    centre) on a rough floor, a box moving sideways at ``u`` loses ``mu m v`` of its momentum
+    to the corners' friction impulses, ``T_k = mu P_k`` (sliding), or stops (``mu v > u``),
+    without turning: the corners' normal impulses balance the friction's moment,
+    ``a (P_2 - P_1) = b (T_1 + T_2)``."""
+    m, J, a, b, mu, v = 2.0, 0.01, 0.1, 0.05, 0.4, 1.5
+    Minv = 1.0 / np.array([m, m, J])
+    G = np.array([[0.0, 1.0, -a], [0.0, 1.0, a]])
+    Gt = np.array([[-1.0, 0.0, -b], [-1.0, 0.0, -b]])  # the slips along z x n = (-1, 0)
+    none = np.zeros((0, 3)), np.zeros(0)
+    qd = np.array([u, -v, 0.0])
+    found = settle(Minv, *none, G, qd, np.ones(2, bool), 0.0, None, Gt, np.full(2, mu))
+    assert sorted(found.points) == [0, 1]
+    np.testing.assert_allclose(found.qd[1:], 0.0, atol=1e-12)
+    np.testing.assert_allclose(found.P.sum(), m * v, rtol=1e-12)
+    P, T = found.P[np.argsort(found.points)], found.T[np.argsort(found.points)]
+    np.testing.assert_allclose(a * (P[1] - P[0]), b * T.sum(), rtol=1e-12)
+    np.testing.assert_allclose(found.qd[0], max(u - mu * v, 0.0), atol=1e-12)
+    if u > mu * v:
+        np.testing.assert_allclose(T, mu * P, rtol=1e-12)
+    else:
+        assert np.all(np.abs(T) <= mu * P * (1 + 1e-12)) and found.sticks.any()
+    frictionless = settle(Minv, *none, G, qd, np.ones(2, bool), 0.0)
+    np.testing.assert_allclose(frictionless.qd, [u, 0.0, 0.0], atol=1e-12)  # keeps sliding
 
 
 @pytest.mark.slow  # long: run by CI's slow set

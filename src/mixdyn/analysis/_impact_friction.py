@@ -165,10 +165,9 @@ def coulomb_impulses(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Simultaneous | 
         D: (m, nq) the rows along which the constraints' impulses act (default ``J``).
 
     Returns:
-        :class:`Simultaneous`, or None where no state of the points meets both laws with
-        pushing normal impulses (an impulse would pull, the constraints fix a point's
-        normal or tangential velocity, or the states cycle): then the points are struck
-        one by one.
+        :class:`Simultaneous` (a normal impulse may pull: the caller decides), or None where
+        no state of the points meets both laws (the constraints fix a point's normal or
+        tangential velocity, or the states cycle).
     """
     D = J if D is None else D
     k, m = len(G), len(phit)
@@ -199,8 +198,6 @@ def coulomb_impulses(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Simultaneous | 
             j = int(np.argmax(overshoot))
             stick[j], s[j] = True, 0.0
         else:
-            if P.min() < 0.0:
-                return None
             work = 0.5 * (P @ (v + G @ after) + T @ (vt + Gt @ after))
             return Simultaneous(after, x[:m], P, T, stick.copy(), float(work))
     return None

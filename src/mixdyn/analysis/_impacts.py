@@ -95,6 +95,7 @@ from __future__ import annotations
 
 import functools
 import math
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -193,10 +194,12 @@ def _slowest(problem, sliding, t, y):
 
 
 def _sliding_rows(problem, y):
-    """The speeds (nf,) of the reaction-dependent rows outside their stick bands in the
-    state ``y``, 0 for the rows inside (see :func:`_slowest`)."""
+    """The speeds (nf,) of the reaction-dependent rows beyond twice their stick bands in
+    the state ``y`` (the tolerance of :func:`_halt`), 0 for the rows within (see
+    :func:`_slowest`): a row that stopped but that its limit cannot hold (it slides on the
+    other way) is not watched for a stop it has just made."""
     v = _row_speeds(problem, y[0], y[1])
-    return jnp.where(jnp.abs(v) < rd.bands(problem.reaction_dependent), 0.0, v)
+    return jnp.where(jnp.abs(v) <= 2.0 * rd.bands(problem.reaction_dependent), 0.0, v)
 
 
 @cached_jit(optimize=False)  # once a segment of a run with reaction-dependent forces
@@ -435,12 +438,34 @@ def _consistent(found, G, Gt, qd) -> bool:
     return found.work <= ENERGY_TOL * scale
 
 
-def settle(Minv, J, phit, G, qd, touching, tol, D=None):
+class Settled(NamedTuple):
+    """A plastic impact at several points (:func:`settle`).
+
+    Attributes:
+        qd: (nq,) the velocities after.
+        points: the indices of the points that took an impulse (and rest).
+        P: (len(points),) their normal impulses [force * time].
+        lam: (m,) the constraints' impulses, along the rows ``D``.
+        T: (len(points),) their friction impulses along ``z x n`` [force * time].
+        sticks: (len(points),) whether each leaves without sliding (false if frictionless).
+    """
+
+    qd: np.ndarray
+    points: list
+    P: np.ndarray
+    lam: np.ndarray
+    T: np.ndarray
+    sticks: np.ndarray
+
+
+def settle(Minv, J, phit, G, qd, touching, tol, D=None, Gt=None, mu=None) -> Settled | None:
     """A perfectly plastic impact at several contact points at once: the set ``A`` of the
     ``touching`` points (k,) whose normal velocities are all brought to zero with
     non-negative impulses while every other touching point leaves (a linear
     complementarity problem, solved by adding the most approaching point and dropping the
-    most pulling one, at most ``4 k`` times).
+    most pulling one, at most ``4 k`` times), with Coulomb's law at each point of ``A``
+    where ``mu > 0`` (:func:`~._impact_friction.coulomb_impulses`; frictionless where the
+    frictional impulses find no state or would give energy).
 
     Args:
         Minv: (nq,) inverse mass diagonal; J (m, nq), phit (m,): the constraints.
@@ -448,20 +473,34 @@ def settle(Minv, J, phit, G, qd, touching, tol, D=None):
         touching: (k,) bool, the points that may take an impulse; tol: the normal velocity
             [velocity] below which a point counts as approaching.
         D: (m, nq) the rows along which the constraints' impulses act (:func:`impulse`).
+        Gt: (k, nq) the points' tangential velocities' rows; mu: (k,) their friction
+            coefficients (NaN or 0: frictionless; both None: all frictionless).
 
     Returns:
-        ``(qd+ (nq,), A (indices), impulses (len(A),), Lambda (m,))`` (``Lambda`` the
-        constraints' impulses), or None where no set is found.
+        :class:`Settled`, or None where no set is found.
     """
+    k, m = len(G), len(phit)
+    rough = mu is not None and bool(np.any(np.nan_to_num(mu) > 0.0))
     active: list[int] = []
-    after, lam = qd, np.zeros(len(phit))
-    for _ in range(4 * len(touching) + 4):
+    after, lam = qd, np.zeros(m)
+    T, sticks = np.zeros(0), np.zeros(0, bool)
+    for _ in range(4 * k + 4):
         if active:
-            rows = np.vstack([J, G[active[:-1]]])
-            along = None if D is None else np.vstack([D, G[active[:-1]]])
-            rhs = np.concatenate([phit, np.zeros(len(active) - 1)])
-            after, lam, P = impulse(Minv, rows, rhs, G[active[-1]], qd, 0.0, along)
-            push = np.concatenate([lam[len(phit) :], [P]])
+            found = None
+            if rough:
+                found = coulomb_impulses(Minv, J, phit, G[active], Gt[active], qd,
+                                         np.zeros(len(active)), mu[active], D)  # fmt: skip
+                if found is not None and not _consistent(found, G[active], Gt[active], qd):
+                    found = None
+            if found is not None:
+                after, lam, push, T, sticks = found.qd, found.lam, found.P, found.T, found.sticks
+            else:
+                rows = np.vstack([J, G[active[:-1]]])
+                along = None if D is None else np.vstack([D, G[active[:-1]]])
+                rhs = np.concatenate([phit, np.zeros(len(active) - 1)])
+                after, lam, P = impulse(Minv, rows, rhs, G[active[-1]], qd, 0.0, along)
+                push, lam = np.concatenate([lam[m:], [P]]), lam[:m]
+                T, sticks = np.zeros(len(active)), np.zeros(len(active), bool)
             if push.min() < 0.0:  # pulling: that point leaves
                 active.pop(int(np.argmin(push)))
                 continue
@@ -469,8 +508,8 @@ def settle(Minv, J, phit, G, qd, touching, tol, D=None):
         v[active] = np.inf
         if v.min() >= -tol:
             if not active:
-                return after, active, np.zeros(0), lam
-            return after, active, push, lam[: len(phit)]
+                return Settled(after, active, np.zeros(0), lam, T, sticks)
+            return Settled(after, active, push, lam, T, sticks)
         active.append(int(np.argmin(v)))
     return None
 
@@ -741,14 +780,17 @@ def simulate_impacts(case, progress=None) -> Result:
                 touching = (g <= GAP_TOL * scale) & ((v < rest) | held)
                 # the joints', drivers' and prescribed motions' rows (not the held points')
                 keep = np.r_[0:first_hold, first_hold + len(resting) : len(phit)]
-                found = settle(Minv, J[keep], phit[keep], G, qd, touching, rest, D[keep])
+                found = settle(Minv, J[keep], phit[keep], G, qd, touching, rest, D[keep],
+                               Gt, mu_point)  # fmt: skip
                 if found is not None:
-                    qd_new, settled, pushes, lam = found
+                    qd_new, settled, lam = found.qd, found.points, found.lam
                     F = jump(qd, qd_new, lam, D[keep])
                     labels = problem.c.active_labels
-                    for j, push in zip(settled, pushes, strict=True):
+                    for j, push, T_j, stuck in zip(settled, found.P, found.T, found.sticks,
+                                                   strict=True):  # fmt: skip
                         started.setdefault(j, t0)
-                        record(j, push, lam, labels, q, qd, qd_new, G[j], F, Gt[j])
+                        record(j, push, lam, labels, q, qd, qd_new, G[j], F, Gt[j], T_j,
+                               bool(stuck))  # fmt: skip
                     for j in set(resting) - set(settled):
                         release(j, t0)
                     resting = tuple(sorted(settled))
@@ -762,7 +804,11 @@ def simulate_impacts(case, progress=None) -> Result:
             if i in together and len(together) > 1:
                 found = coulomb_impulses(Minv, J, phit, G[together], Gt[together], qd,
                                          e_point[together], mu_point[together], D)  # fmt: skip
-                if found is not None and _consistent(found, G[together], Gt[together], qd):
+                if (
+                    found is not None
+                    and found.P.min() >= 0.0
+                    and _consistent(found, G[together], Gt[together], qd)
+                ):
                     qd_new, lam = found.qd, found.lam
                     if all(lam[first_hold + k] >= 0.0 for k in range(len(resting))):
                         F = jump(qd, qd_new, lam, D)
@@ -815,6 +861,15 @@ def simulate_impacts(case, progress=None) -> Result:
         while resting:
             forces = np.asarray(_normals(held_problem(resting), jnp.asarray(q),
                                          jnp.asarray(qd), jnp.asarray(t0)))  # fmt: skip
+            if not np.all(np.isfinite(forces)):
+                fail(
+                    NumericalError(
+                        "the resting points' normal forces are not finite: the frictions "
+                        "at them and at the joints find no forces (self-locking)",
+                        t0,
+                        tuple(sorted({owner[j].name for j in resting})),
+                    )
+                )
             if forces.min() > pressed:
                 break
             k = int(np.argmin(forces))  # pulled away (N < 0), or touching without a force
