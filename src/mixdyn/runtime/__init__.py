@@ -5,7 +5,10 @@ Its public face is small:
 - :func:`set_cache` and :func:`cache_folder`: mixdyn's persistent caches (exported traces and
   compiled executables of its own programs, in ``$MIXDYN_CACHE_DIR``, else
   ``~/.cache/mixdyn/jax``); ``MIXDYN_NO_CACHE=1`` turns them off at import;
-- :func:`cached_jit`: ``equinox.filter_jit`` whose programs persist in that folder.
+- :func:`cached_jit`: ``equinox.filter_jit`` whose programs persist in that folder;
+- :func:`release`: give back the compiled programs held in memory (a long process that
+  compiles thousands of them, a study over many models: each keeps memory mappings, of
+  which Linux allows a process 65530 by default).
 
 Behind it, one module a job: ``_programs`` (export, keys, read-ahead), ``_executables``
 (stored executables), ``_files`` (atomic writes), ``_xla`` (the XLA CPU options of its
@@ -20,7 +23,7 @@ start-up (``_command``) runs before JAX is imported.
 
 from __future__ import annotations
 
-_PUBLIC = {"set_cache", "cache_folder", "cached_jit"}
+_PUBLIC = {"set_cache", "cache_folder", "cached_jit", "release"}
 
 
 def __getattr__(name: str):
@@ -35,4 +38,4 @@ def __dir__() -> list[str]:
     return sorted(_PUBLIC)
 
 
-__all__ = ["cache_folder", "cached_jit", "set_cache"]
+__all__ = ["cache_folder", "cached_jit", "release", "set_cache"]
