@@ -29,8 +29,9 @@ rows' states found by a fixed-point iteration of :data:`ITERATIONS` steps (each 
 ``nf x nf`` solve; the factorization is reused), then one step of Newton's method with those
 states (``dF/df`` by ``jax.jacfwd``), exact for Coulomb's law, which is affine in the
 reactions (the iteration alone converges only as fast as ``|dF/df|``: for a box sliding on
-one corner, ``mu dN/df`` = 0.23, not to 1e-8 in 12 steps). Forces whose residual
-``F(f) - f`` stays above :data:`SETTLED` of their scale (self-locking: a force that would
+one corner, ``mu dN/df`` = 0.23, not to 1e-8 in 12 steps); where no element's load is a
+reaction (a compliant contact's friction) there is no Newton step. Forces whose last step
+changes them by more than :data:`SETTLED` of their scale (self-locking: a force that would
 lock its joint whatever the load, no fixed point) are returned as NaN, which ends a run
 with a named numerical error.
 """
@@ -44,7 +45,8 @@ from ..errors import ModelError
 
 #: Fixed-point steps for the forces' dependence on the reactions (then one Newton step).
 ITERATIONS = 12
-#: Relative residual ``F(f) - f`` of the forces above which they have not settled.
+#: Relative change of the forces in their last step (``F(f) - f``) above which they have not
+#: settled.
 SETTLED = 1e-8
 #: Sticking rows count as dependent along the directions in which their matrix, scaled to a
 #: unit diagonal, has a singular value below this fraction of its largest (rows at an angle
@@ -216,20 +218,24 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
     # a row that holds with nothing (a contact point apart) takes no part in the stick solve
     holds = limits(elements, positions, mu0, state_loads) > 0.0
     f, stick = jnp.zeros(v.shape[0]), band & free & holds
+    prev = f
     for _ in range(ITERATIONS):
+        prev = f
         f, stick = step(f, stick)
-    # Newton's step on f = F(f) with the rows' states found (exact for Coulomb's law, affine
-    # in the reactions; a pin's is smooth): the iteration above converges only as fast as
-    # |dF/df| (a box sliding on one corner: 0.23, 2e-8 after 12 steps)
-    g, after = step(f, stick)
-    dF = jax.jacfwd(lambda x: step(x, stick)[0])(f)
-    polished = f + jnp.linalg.solve(jnp.eye(f.shape[0]) - dF, g - f)
-    keep = jnp.all(after == stick) & jnp.all(jnp.isfinite(polished))
-    f = jnp.where(keep, polished, g)
-    g, stick = step(f, stick)  # the residual: settled where f = F(f)
+    if any(positions):
+        # Newton's step on f = F(f) with the rows' states found (exact for Coulomb's law,
+        # affine in the reactions; a pin's is smooth): the iteration above converges only as
+        # fast as |dF/df| (a box sliding on one corner: 0.23, 2e-8 after 12 steps). Forces
+        # of loads from the state alone (a compliant contact's) settle in the iteration.
+        g, after = step(f, stick)
+        dF = jax.jacfwd(lambda x: step(x, stick)[0])(f)
+        polished = f + jnp.linalg.solve(jnp.eye(f.shape[0]) - dF, g - f)
+        keep = jnp.all(after == stick) & jnp.all(jnp.isfinite(polished))
+        prev = jnp.where(keep, polished, g)
+        f, stick = step(prev, stick)  # settled where f = F(f)
     lim = limits(elements, positions, mu0 + Mu_f @ f, state_loads)
     scale = jnp.maximum(jnp.max(jnp.abs(f), initial=0.0), jnp.max(lim, initial=0.0))
-    settled = jnp.max(jnp.abs(g - f), initial=0.0) <= SETTLED * jnp.maximum(scale, 1e-300)
+    settled = jnp.max(jnp.abs(f - prev), initial=0.0) <= SETTLED * jnp.maximum(scale, 1e-300)
     return jnp.where(settled, f, jnp.nan), stick
 
 
