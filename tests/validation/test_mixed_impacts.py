@@ -32,7 +32,7 @@ import pytest
 from typer.testing import CliRunner
 
 import mixdyn as md
-from mixdyn.analysis._impacts import impulse
+from mixdyn.analysis._impulses import impulse
 from mixdyn.cli import app
 
 L, M_ROD, M_SLIDER, R, V = 0.4, 0.5, 2.0, 0.01, 0.5  # [m, kg, kg, m, m/s]

@@ -36,7 +36,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from mixdyn.analysis._impacts import settle
+from mixdyn.analysis._impulses import settle
 from mixdyn.analysis._problem import Problem
 from mixdyn.analysis._resting import hold, holding, normal_forces
 from mixdyn.equations import Constraints

@@ -32,7 +32,8 @@ import pytest
 
 import mixdyn as md
 from fixtures import four_bar_pose
-from mixdyn.analysis._impacts import HORIZON, PASS_FRACTION, _longest_step, impulse
+from mixdyn.analysis._impacts import HORIZON, PASS_FRACTION, _longest_step
+from mixdyn.analysis._impulses import impulse
 
 A_, B_, C_, D_ = 0.2, 0.55, 0.4, 0.6  # crank, coupler, rocker, ground [m]
 MASS = np.array([1.0, 2.0, 1.5])  # crank, coupler, rocker [kg]

@@ -14,13 +14,13 @@ body j (the opposite on body i) [force * time]::
 with one of (the standard one-point algorithm, stick tried first):
 
 - **stick**: ``G_t qd+ = 0`` (the contact point leaves without sliding), the system of
-  :func:`~._impacts.impulse` with the row ``G_t`` beside ``G``; valid where
+  :func:`~._impulses.impulse` with the row ``G_t`` beside ``G``; valid where
   ``|T| <= mu P``;
 - **slip**: ``T = s mu P``, the impulse acting along ``G + s mu G_t``, ``s`` the sign of
   the stick impulse ``T`` (where the constraints leave no sticking solution, as for a
   pendulum whose contact point moves on a circle: ``s = -sign(v_t-)``).
 
-The constraints' impulses ``Lambda`` act along the rows ``D`` (:func:`~._impacts.impulse`:
+The constraints' impulses ``Lambda`` act along the rows ``D`` (:func:`~._impulses.impulse`:
 the Jacobian's, a mixed problem's prescribed motions along the unknown forces'
 directions).
 
@@ -71,7 +71,7 @@ class Frictional(NamedTuple):
     work: float
 
 
-def _solve(Minv, A, Dg, b, qd):
+def solve_rows(Minv, A, Dg, b, qd):
     """The velocities after ``qd + M^-1 Dg^T x`` and the impulses ``x`` meeting the rows
     ``A`` (``A M^-1 Dg^T x = b``, least squares where rows are redundant), and the rows'
     largest residual."""
@@ -100,7 +100,7 @@ def coulomb_impulse(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Frictional:
     kept = -(J @ qd + phit)
     speed = max(abs(v), abs(vt), float(np.max(np.abs(kept), initial=0.0)))
     A = np.vstack([J, G[None, :], Gt[None, :]])
-    after, x, residual = _solve(Minv, A, np.vstack([D, G[None, :], Gt[None, :]]),
+    after, x, residual = solve_rows(Minv, A, np.vstack([D, G[None, :], Gt[None, :]]),
                                 np.concatenate([kept, [-(1.0 + e) * v, -vt]]), qd)  # fmt: skip
     P, T = float(x[-2]), float(x[-1])
     feasible = residual <= FEASIBLE_TOL * speed
@@ -112,11 +112,11 @@ def coulomb_impulse(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Frictional:
     else:  # no sticking solution: against the sliding before (or the frictionless one's)
         s = -float(np.sign(vt))
         if s == 0.0:
-            free, _, _ = _solve(Minv, A[:-1], np.vstack([D, G[None, :]]),
+            free, _, _ = solve_rows(Minv, A[:-1], np.vstack([D, G[None, :]]),
                                 np.concatenate([kept, [-(1.0 + e) * v]]), qd)  # fmt: skip
             s = -float(np.sign(Gt @ free))
     along = G + s * mu * Gt
-    after, x, _ = _solve(Minv, A[:-1], np.vstack([D, along[None, :]]),
+    after, x, _ = solve_rows(Minv, A[:-1], np.vstack([D, along[None, :]]),
                          np.concatenate([kept, [-(1.0 + e) * v]]), qd)  # fmt: skip
     P = float(x[-1])
     T = s * mu * P
@@ -183,7 +183,7 @@ def coulomb_impulses(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Simultaneous | 
         A = np.vstack([J, G, Gt[stick]])
         Dg = np.vstack([D, along, Gt[stick]])
         b = np.concatenate([kept, -(1.0 + e) * v, -vt[stick]])
-        after, x, residual = _solve(Minv, A, Dg, b, qd)
+        after, x, residual = solve_rows(Minv, A, Dg, b, qd)
         if residual > FEASIBLE_TOL * speed:
             return None
         P = x[m : m + k]
@@ -203,4 +203,4 @@ def coulomb_impulses(Minv, J, phit, G, Gt, qd, e, mu, D=None) -> Simultaneous | 
     return None
 
 
-__all__ = ["Frictional", "Simultaneous", "coulomb_impulse", "coulomb_impulses"]
+__all__ = ["Frictional", "Simultaneous", "coulomb_impulse", "coulomb_impulses", "solve_rows"]

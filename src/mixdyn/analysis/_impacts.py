@@ -36,13 +36,14 @@ A contact with a friction coefficient ``mu`` adds Coulomb's law on the impulses
 of the sticking impulse). Newton's law with friction can give energy where the normal and
 tangential motions are coupled: an impact whose contact impulses would do positive work,
 or whose sliding normal impulse would pull (jamming), ends the run as a
-:class:`~mixdyn.errors.NumericalError`. The multi-point plastic impacts of :func:`settle` (a
-point struck again at one instant) are frictionless. A resting point of a contact with
-``mu > 0`` takes Coulomb's friction with stick and slip (:class:`~._resting.RestFriction`: its
-normal force the held row's multiplier, its stick band the rest speed, below). A segment
-also ends where a sliding friction row (a resting point's, a joint's) slows into its stick
-band, and the next segment starts with the rows that stick brought to rest (:func:`_halt`),
-so that a body that its friction stops stays where it stopped.
+:class:`~mixdyn.errors.NumericalError`. Several points struck at one instant, or settling
+together in a plastic impact (:func:`~._impulses.settle`), take Coulomb's law at each rough
+point too. A resting point of a contact with ``mu > 0`` takes Coulomb's friction with stick
+and slip (:class:`~._resting.RestFriction`: its normal force the held row's multiplier, its
+stick band the rest speed, below). A segment also ends where a sliding friction row (a
+resting point's, a joint's) slows into its stick band, and the next segment starts with the
+rows that stick brought to rest (:func:`_halt`), so that a body that its friction stops
+stays where it stopped.
 
 In a mixed run (:mod:`.mixed`: ``p`` unknown forces of directions ``B`` (nq, p), ``p``
 prescribed motions ``Psi``) a prescribed motion's velocity cannot jump: its unknown force
@@ -82,7 +83,7 @@ released and its gap watched again. A resting point whose ``N`` is tensile at a 
 start, or whose row takes a pulling impulse in an impact elsewhere, is released at once. A
 point struck a second time at one instant (a box landing flat rocks from corner to corner
 in no time) settles with the other touching points together: one perfectly plastic impact
-over all of them (:func:`settle`), the set chosen so that every impulse pushes and every
+over all of them (:func:`~._impulses.settle`), the set chosen so that every impulse pushes and every
 other touching point leaves; the set rests. A resting contact does no work (its row's
 velocity is zero): the energy balance holds with the impacts' losses alone.
 
@@ -95,7 +96,6 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -114,6 +114,7 @@ from ..model._compliant import rigid_contacts
 from ..runtime._programs import cached_jit
 from ._assembly import length_scale
 from ._impact_friction import coulomb_impulse, coulomb_impulses
+from ._impulses import ENERGY_TOL, consistent, impulse, settle
 from ._problem import Problem
 from ._resting import friction_at, hold, hold_positions, holding, n_holds, normal_forces
 from .methods import Projection
@@ -149,9 +150,6 @@ FORCE_TOL = 1e-9
 #: At a lift-off, the resting points whose normal forces are within this part of the
 #: largest at the segment's start lift off together (a block pulled up at its centre).
 LIFT_TOL = 1e-9
-#: A frictional impact whose contact impulses' work exceeds this part of their size
-#: (``|P v-| + |T v_t-|``) gives the bodies energy: the run ends as a numerical failure.
-ENERGY_TOL = 1e-9
 #: The most steps of one segment's solve (its dense output's size); a segment that runs out
 #: goes on as the next.
 SEGMENT_STEPS = 2048
@@ -403,115 +401,6 @@ def _longest_step(contacts, qd, qdd, dt_out, scale) -> tuple[float, float]:
         return dt_out, math.inf
     h = 2.0 * d / (v0 + math.sqrt(v0 * v0 + 4.0 * a0 * HORIZON * d))
     return min(dt_out, h), (HORIZON * h if a0 > 0.0 else math.inf)
-
-
-def impulse(Minv, J, phit, G, qd, e, D=None):
-    """The velocity jump of one impact at a contact point (see the module).
-
-    Args:
-        Minv: (nq,) inverse of the diagonal mass matrix.
-        J: (m, nq) constraint Jacobian ``Phi_q``; phit: (m,) ``Phi_t``.
-        G: (nq,) the gap's gradient; qd: (nq,) velocities before; e: restitution.
-        D: (m, nq) the rows along which the constraints' impulses act (default ``J``; a
-            mixed problem's prescribed motions: the unknown forces' directions ``B^T``).
-
-    Returns:
-        ``(qd+ (nq,), Lambda (m,), P)``: the velocities after, the constraints' impulses and
-        the normal impulse [force * time], with ``M (qd+ - qd-) = D^T Lambda + G^T P`` and
-        ``J qd+ + Phi_t = 0``.
-    """
-    A = np.vstack([J, G[None, :]])
-    Dg = A if D is None else np.vstack([D, G[None, :]])
-    v = float(G @ qd)
-    b = np.concatenate([-(J @ qd + phit), [-(1.0 + e) * v]])
-    S = (A * Minv) @ Dg.T
-    x = np.linalg.lstsq(S, b, rcond=1e-13)[0]
-    dqd = Minv * (Dg.T @ x)
-    return qd + dqd, x[:-1], float(x[-1])
-
-
-def _consistent(found, G, Gt, qd) -> bool:
-    """Whether simultaneous impacts (:func:`~._impact_friction.coulomb_impulses`' outcome at
-    points of rows ``G``, ``Gt``) take energy from the bodies (within :data:`ENERGY_TOL` of
-    their impulses' scale): otherwise they are struck one by one, each checked on its own."""
-    scale = np.abs(found.P) @ np.abs(G @ qd) + np.abs(found.T) @ np.abs(Gt @ qd)
-    return found.work <= ENERGY_TOL * scale
-
-
-class Settled(NamedTuple):
-    """A plastic impact at several points (:func:`settle`).
-
-    Attributes:
-        qd: (nq,) the velocities after.
-        points: the indices of the points that took an impulse (and rest).
-        P: (len(points),) their normal impulses [force * time].
-        lam: (m,) the constraints' impulses, along the rows ``D``.
-        T: (len(points),) their friction impulses along ``z x n`` [force * time].
-        sticks: (len(points),) whether each leaves without sliding (false if frictionless).
-    """
-
-    qd: np.ndarray
-    points: list
-    P: np.ndarray
-    lam: np.ndarray
-    T: np.ndarray
-    sticks: np.ndarray
-
-
-def settle(Minv, J, phit, G, qd, touching, tol, D=None, Gt=None, mu=None) -> Settled | None:
-    """A perfectly plastic impact at several contact points at once: the set ``A`` of the
-    ``touching`` points (k,) whose normal velocities are all brought to zero with
-    non-negative impulses while every other touching point leaves (a linear
-    complementarity problem, solved by adding the most approaching point and dropping the
-    most pulling one, at most ``4 k`` times), with Coulomb's law at each point of ``A``
-    where ``mu > 0`` (:func:`~._impact_friction.coulomb_impulses`; frictionless where the
-    frictional impulses find no state or would give energy).
-
-    Args:
-        Minv: (nq,) inverse mass diagonal; J (m, nq), phit (m,): the constraints.
-        G: (k, nq) the gaps' gradients; qd: (nq,) velocities before.
-        touching: (k,) bool, the points that may take an impulse; tol: the normal velocity
-            [velocity] below which a point counts as approaching.
-        D: (m, nq) the rows along which the constraints' impulses act (:func:`impulse`).
-        Gt: (k, nq) the points' tangential velocities' rows; mu: (k,) their friction
-            coefficients (NaN or 0: frictionless; both None: all frictionless).
-
-    Returns:
-        :class:`Settled`, or None where no set is found.
-    """
-    k, m = len(G), len(phit)
-    rough = mu is not None and bool(np.any(np.nan_to_num(mu) > 0.0))
-    active: list[int] = []
-    after, lam = qd, np.zeros(m)
-    T, sticks = np.zeros(0), np.zeros(0, bool)
-    for _ in range(4 * k + 4):
-        if active:
-            found = None
-            if rough:
-                found = coulomb_impulses(Minv, J, phit, G[active], Gt[active], qd,
-                                         np.zeros(len(active)), mu[active], D)  # fmt: skip
-                if found is not None and not _consistent(found, G[active], Gt[active], qd):
-                    found = None
-            if found is not None:
-                after, lam, push, T, sticks = found.qd, found.lam, found.P, found.T, found.sticks
-            else:
-                rows = np.vstack([J, G[active[:-1]]])
-                along = None if D is None else np.vstack([D, G[active[:-1]]])
-                rhs = np.concatenate([phit, np.zeros(len(active) - 1)])
-                after, lam, P = impulse(Minv, rows, rhs, G[active[-1]], qd, 0.0, along)
-                push, lam = np.concatenate([lam[m:], [P]]), lam[:m]
-                T, sticks = np.zeros(len(active)), np.zeros(len(active), bool)
-            if push.min() < 0.0:  # pulling: that point leaves
-                active.pop(int(np.argmin(push)))
-                continue
-        v = np.where(touching, G @ after, np.inf)
-        v[active] = np.inf
-        if v.min() >= -tol:
-            if not active:
-                return Settled(after, active, np.zeros(0), lam, T, sticks)
-            return Settled(after, active, push, lam, T, sticks)
-        active.append(int(np.argmin(v)))
-    return None
 
 
 def _refuse_penetration(owner, gaps, scale) -> None:
@@ -807,7 +696,7 @@ def simulate_impacts(case, progress=None) -> Result:
                 if (
                     found is not None
                     and found.P.min() >= 0.0
-                    and _consistent(found, G[together], Gt[together], qd)
+                    and consistent(found, G[together], Gt[together], qd)
                 ):
                     qd_new, lam = found.qd, found.lam
                     if all(lam[first_hold + k] >= 0.0 for k in range(len(resting))):
