@@ -185,23 +185,6 @@ def pytest_unconfigure(config):
         shutil.rmtree(folder, ignore_errors=True)
 
 
-#: Share of the system's limit on memory mappings per process (``vm.max_map_count``, 65530 by
-#: default) above which JAX's compiled programs are dropped after a test module.
-CLEAR_CACHES_AT_MAPPINGS = 0.5
-
-
-def memory_mappings() -> tuple[int, int]:
-    """``(mappings, limit)``: the test process's memory mappings and the system's limit on
-    them (``(0, 1)`` where ``/proc`` is not there)."""
-    try:
-        with open("/proc/sys/vm/max_map_count") as f:
-            limit = int(f.read())
-        with open("/proc/self/maps", "rb") as f:
-            return sum(1 for _ in f), limit
-    except (OSError, ValueError):
-        return 0, 1
-
-
 @pytest.fixture(autouse=True, scope="module")
 def _release_compiled_programs():
     """Drop the compiled programs held in memory (mixdyn's and JAX's:
@@ -215,9 +198,7 @@ def _release_compiled_programs():
     set). Below the threshold the programs are kept, so that later modules reuse what they
     share (clearing after every module cost minutes of recompiling)."""
     yield
-    mappings, limit = memory_mappings()
-    if mappings > CLEAR_CACHES_AT_MAPPINGS * limit:
-        _programs.release()
+    _programs.release_if_crowded()
 
 
 @pytest.hookimpl(wrapper=True)

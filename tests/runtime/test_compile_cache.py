@@ -606,8 +606,7 @@ def _cubed_plus_sine(x):
 
 
 def _mappings() -> int:
-    with open("/proc/self/maps", "rb") as f:
-        return f.read().count(b"\n")
+    return _programs.memory_mappings()[0]
 
 
 @pytest.mark.skipif(not os.path.exists("/proc/self/maps"), reason="no /proc (not Linux)")
@@ -637,3 +636,21 @@ def test_released_programs_give_back_their_memory_and_are_read_again(cache):
     assert dict(_programs.traces) == traced
     for a, b in zip(first, again, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/maps"), reason="no /proc (not Linux)")
+def test_a_crowded_process_and_the_command_server_give_their_programs_back(cache, monkeypatch):
+    """``release_if_crowded`` releases only above its share of ``vm.max_map_count`` (a
+    process holds fewer mappings than the limit, more than none); the command server calls
+    it after each command it answers."""
+    from mixdyn.runtime import _server
+
+    mappings, limit = _programs.memory_mappings()
+    assert 0 < mappings < limit
+    f = _programs.cached_jit(_cubed_plus_sine)
+    f(jnp.ones(3))
+    assert not _programs.release_if_crowded(share=1.0) and f.programs
+    assert _programs.release_if_crowded(share=0.0) and not f.programs
+    f(jnp.ones(3))
+    monkeypatch.setattr(_programs, "CROWDED", 0.0)
+    assert _server._release_if_crowded() and not f.programs

@@ -47,7 +47,8 @@ SERVED = frozenset({"check", "show", "plot", "schema"})
 #: Seconds a server waits for a command before it stops.
 IDLE_SECONDS = 600.0
 
-#: Commands a server answers before it stops (its compiled programs only grow).
+#: Commands a server answers before it stops (its other state only grows; its compiled
+#: programs are given back where they crowd the memory mappings: :func:`_release_if_crowded`).
 MAX_COMMANDS = 1000
 
 #: Environment variables that decide what a process is once it has imported mixdyn (read at
@@ -400,6 +401,7 @@ def _answer(conn: socket.socket, command) -> bool:
         code = _run(request, fds, command)
         with contextlib.suppress(OSError):
             conn.sendall(_EXITED + struct.pack("!i", code))
+        _release_if_crowded()
         print(  # the server's log
             f"{time.strftime('%Y-%m-%d %H:%M:%S')} {' '.join(request['argv'][1:2])}: "
             f"exit {code} in {time.perf_counter() - t0:.3f} s",
@@ -411,6 +413,16 @@ def _answer(conn: socket.socket, command) -> bool:
     finally:
         for fd in fds:
             os.close(fd)
+
+
+def _release_if_crowded() -> bool:
+    """After a command (its client answered): the server's compiled programs given back
+    where they hold more than half the memory mappings the system allows a process
+    (:func:`mixdyn.runtime._programs.release_if_crowded`; at the limit XLA crashes), so
+    that a server answering many models' commands does not reach it."""
+    if "mixdyn.runtime._programs" not in sys.modules:  # nothing compiled by mixdyn
+        return False
+    return sys.modules["mixdyn.runtime._programs"].release_if_crowded()
 
 
 def _run(request: dict, fds: list[int], command) -> int:
