@@ -167,6 +167,12 @@ LONG_CASES = frozenset(
         "test_fixed_step_methods_follow_the_branch_from_perturbed_starts[gen-alpha-2ms-1]",
         "tests/elements/test_friction.py::"
         "test_a_flywheel_sticks_until_the_torque_passes_mu_r_m_g_then_turns",
+        "tests/validation/test_friction_hold.py::"
+        "test_a_block_launched_up_an_incline_stops_where_it_should_and_stays[baumgarte]",
+        "tests/validation/test_friction_hold.py::"
+        "test_a_braked_flywheel_stops_and_is_held_by_its_pin[baumgarte]",
+        "tests/validation/test_singular_positions.py::"
+        "test_adaptive_methods_follow_the_branch_whatever_the_first_step[dopri8-tight-1e-07]",
     }
 )
 
