@@ -176,6 +176,19 @@ def _row_speeds(problem, q, qd):
     return rd.directions(problem.model, problem.reaction_dependent, q).T @ qd
 
 
+#: A reaction-dependent row within this many stick bands at a segment's start has stopped:
+#: the stop event's tolerance on a row that slowed into its band (:func:`_halt`,
+#: :func:`_sliding_rows`).
+HALT_BANDS = 2.0
+
+
+def _stopped_rows(problem, q, qd):
+    """The rows' relative speeds (nf,) and whether each has stopped (within
+    :data:`HALT_BANDS` stick bands) at ``(q, qd)``."""
+    v = _row_speeds(problem, q, qd)
+    return v, jnp.abs(v) <= HALT_BANDS * rd.bands(problem.reaction_dependent)
+
+
 def _slowest(problem, sliding, t, y):
     """How far the reaction-dependent rows moving at the segment's start are from their
     stick bands: the smallest over them of ``(sign(v0) v - b) / |v0|`` (``v0``: a row's
@@ -196,8 +209,8 @@ def _sliding_rows(problem, y):
     the state ``y`` (the tolerance of :func:`_halt`), 0 for the rows within (see
     :func:`_slowest`): a row that stopped but that its limit cannot hold (it slides on the
     other way) is not watched for a stop it has just made."""
-    v = _row_speeds(problem, y[0], y[1])
-    return jnp.where(jnp.abs(v) <= 2.0 * rd.bands(problem.reaction_dependent), 0.0, v)
+    v, stopped = _stopped_rows(problem, y[0], y[1])
+    return jnp.where(stopped, 0.0, v)
 
 
 @cached_jit(optimize=False)  # once a segment of a run with reaction-dependent forces
@@ -207,8 +220,7 @@ def _halt(problem: Problem, q, qd, w, t):
     slowed into its band at a segment's end, :func:`_slowest`; within their limits)
     brought to rest (:meth:`~mixdyn.analysis._problem.Problem.halt_sticking`), so that a
     row stays where it stopped."""
-    stopped = jnp.abs(_row_speeds(problem, q, qd)) <= 2.0 * rd.bands(problem.reaction_dependent)
-    return problem.halt_sticking(q, qd, w, t, q, qd, stopped)
+    return problem.halt_sticking(q, qd, w, t, q, qd, _stopped_rows(problem, q, qd)[1])
 
 
 def _event_terms(problem, contacts, watched, origin, length, force, sliding, t, y):
@@ -705,7 +717,7 @@ def simulate_impacts(case, progress=None) -> Result:
                         for j, P_j, T_j, stuck in zip(together, found.P, found.T, found.sticks,
                                                       strict=True):  # fmt: skip
                             record(j, P_j, lam, labels, q, qd, qd_new, G[j], F, Gt[j], T_j,
-                                   bool(stuck and mu_point[j] > 0.0))  # fmt: skip
+                                   bool(stuck))  # fmt: skip
                         struck.update(together.tolist())
                         q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                         continue

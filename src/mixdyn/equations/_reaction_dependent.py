@@ -227,8 +227,11 @@ def solve(elements, positions, v, a0, H, mu0, Mu_f, h_free, state_loads=None):
         # affine in the reactions; a pin's is smooth): the iteration above converges only as
         # fast as |dF/df| (a box sliding on one corner: 0.23, 2e-8 after 12 steps). Forces
         # of loads from the state alone (a compliant contact's) settle in the iteration.
-        g, after = step(f, stick)
-        dF = jax.jacfwd(lambda x: step(x, stick)[0])(f)
+        def stepped(x):
+            g, after = step(x, stick)
+            return g, (g, after)
+
+        dF, (g, after) = jax.jacfwd(stepped, has_aux=True)(f)
         polished = f + jnp.linalg.solve(jnp.eye(f.shape[0]) - dF, g - f)
         keep = jnp.all(after == stick) & jnp.all(jnp.isfinite(polished))
         prev = jnp.where(keep, polished, g)
