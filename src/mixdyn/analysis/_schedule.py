@@ -6,7 +6,9 @@ member finished like a single run (a failure kept as that member's outcome).
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import gc
 import time
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -20,6 +22,23 @@ from ..runtime._programs import cached_jit
 from ._simulate import Case, _post_arrays, finish
 from .integrators import INTEGRATORS
 from .result import Result
+
+
+@contextlib.contextmanager
+def collector_paused():
+    """Python's cyclic garbage collector held off within (and set back as it was after): for
+    a set-up's loops over every member (flattening each member's model, reading its
+    numbers), which allocate no reference cycles but so many objects that the collector
+    runs again and again over every member's model, whose objects all stay alive (measured:
+    the set-up of 10,000 quasi-static members, each its own slider-crank, 3.0 s with it,
+    1.5-1.7 s held off, ``benchmarks/kinematic_sweep.py``)."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
 
 
 def for_batch(problem):

@@ -47,7 +47,7 @@ from ._reactions import (
     reaction_columns,
     reaction_kinds,
 )
-from ._schedule import CHUNK
+from ._schedule import CHUNK, collector_paused
 from ._stacked import LazyResults, add_points, body_columns
 from ._structure import FULL_RANK_RATIO
 from .kinematic import output_times
@@ -443,7 +443,8 @@ def run(
     if shared and isinstance(members, VariedModels):
         flat, stacked_models = None, members.stacked
     else:
-        flat = [jax.tree_util.tree_flatten(m) for m in members]  # once a member
+        with collector_paused():
+            flat = [jax.tree_util.tree_flatten(m) for m in members]  # once a member
 
         def stacked_models(idx):
             return stack_leaves(flat[0][1], [flat[i][0] for i in idx])
@@ -454,14 +455,15 @@ def run(
         rough, L = [first.start.q] * count, [length_scale(first.model)] * count
         held = ()
     else:
-        for i in range(count):
-            if i not in made and i not in errors:
-                _checked(members[i], ts, lambda i=i: describe(i), i)
-        if any(d != flat[0][1] for _, d in flat):
-            return None
-        cs = _constraint_sets(c0, members)
-        rough = [_rough(m, v) for m, v in zip(members, values, strict=True)]
-        L = [length_scale(m) for m in members]
+        with collector_paused():
+            for i in range(count):
+                if i not in made and i not in errors:
+                    _checked(members[i], ts, lambda i=i: describe(i), i)
+            if any(d != flat[0][1] for _, d in flat):
+                return None
+            cs = _constraint_sets(c0, members)
+            rough = [_rough(m, v) for m, v in zip(members, values, strict=True)]
+            L = [length_scale(m) for m in members]
         held = tuple(first.model.coordinate_index(ref) for ref in values[0].hold)
         if len({v.hold for v in values}) > 1:
             return None  # other coordinates held
@@ -547,8 +549,9 @@ def _checked(model: Model, ts: np.ndarray, describe: Callable[[], str], i: int) 
         ModelError: a law that jumps, with the member's index in a note.
     """
     try:
-        for driver in model.drivers:
-            driver.check_law(float(ts[0]), float(ts[-1]), False)
+        for driver in model.drivers:  # the method read from the class: equinox makes a
+            # method read from a module a module of its own (~40 us, most of the check)
+            type(driver).check_law(driver, float(ts[0]), float(ts[-1]), False)
     except ModelError as err:
         err.add_note(f"in member {i} of the sweep{describe()}")
         raise

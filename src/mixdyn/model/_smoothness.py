@@ -186,7 +186,7 @@ def jumps(
     """
     if order not in (1, 2):
         raise ValueError(f"order must be 1 or 2, got {order!r}")
-    if _traced(law) or (_smooth_to(law, order) and not periodic) or not stop > start:
+    if (_smooth_to(law, order) and not periodic) or _traced(law) or not stop > start:
         return []
     if isinstance(law, PiecewisePolynomial):
         return _piecewise(law, start, stop, periodic, rtol, n, order)[:limit]
@@ -210,8 +210,9 @@ _FOUND: dict = {}
 def _smooth_to(law, order: int) -> bool:
     """Whether ``law`` is continuous with its derivatives up to ``order`` by its form
     (:meth:`~mixdyn.model.Law.smooth_to`; a callable that is no Law: not known)."""
-    smooth_to = getattr(law, "smooth_to", None)
-    return bool(smooth_to(order)) if callable(smooth_to) else False
+    smooth_to = getattr(type(law), "smooth_to", None)  # read from the class: equinox makes
+    # a method read from a module a module of its own, at every read (~20 us)
+    return bool(smooth_to(law, order)) if callable(smooth_to) else False
 
 
 def _piecewise(law, start, stop, periodic, rtol, n, order=1) -> list[Jump]:
