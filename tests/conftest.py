@@ -141,6 +141,10 @@ LONG_CASES = frozenset(
         "test_adaptive_methods_follow_the_branch_from_perturbed_starts[tsit5-default-1]",
         "tests/validation/test_singular_positions.py::"
         "test_adaptive_methods_follow_the_branch_whatever_the_first_step[partitioning-1e-07]",
+        "tests/validation/test_singular_positions.py::"
+        "test_adaptive_methods_follow_the_branch_from_perturbed_starts[partitioning-1]",
+        "tests/validation/test_singular_positions.py::"
+        "test_adaptive_methods_follow_the_branch_whatever_the_first_step[dopri8-tight-0.00037]",
         "tests/command/test_cli.py::test_example_runs_from_the_cli_like_the_api[pendulum]",
         "tests/command/test_cli.py::test_example_runs_from_the_cli_like_the_api[four_bar]",
         "tests/analyses/test_sparse.py::test_jacobian_gamma_and_accelerations_agree[four_bar]",
