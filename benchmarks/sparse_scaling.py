@@ -158,7 +158,7 @@ def main():
         st = ps.c.schur_structure()
         rng = np.random.default_rng(0)
         q = jnp.asarray(np.asarray(model.q0)) + 1e-3 * rng.normal(size=model.nq)
-        q = ps.project_positions(q, 0.0, 1e-14, iters=8)
+        q, _ = ps.project_positions(q, 0.0, 1e-14, iters=8)
         qd = ps.project_velocities(q, jnp.asarray(rng.normal(size=model.nq)), 0.0)
         t = jnp.zeros(())
         count = max(4, min(2000, 200_000 // (n * 4)))
