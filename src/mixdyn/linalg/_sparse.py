@@ -39,9 +39,10 @@ UNROLL = 1
 #: :class:`~mixdyn.linalg.AutoSolver` takes the sparse path from this many constraint rows
 #: on, when the reordered bandwidth is at most :data:`MAX_AUTO_BLOCK`. Measured
 #: (``benchmarks/RESULTS.md``, the sparse path): in ``md.forward`` at 32 rows (a 16-link
-#: chain) generalized-alpha runs 4-13 % faster on it and the explicit methods 10-30 % slower;
-#: from 48 rows every method runs faster on it; below 32 the small published benchmarks stay
-#: on the dense reference path.
+#: chain) generalized-alpha runs 4-13 % faster on it; the explicit methods 10-30 % slower on
+#: one core, but on two cores the dense path takes 1.6-2.4x their CPU time; from 48 rows every
+#: method runs faster on it; below 32 the small published benchmarks stay on the dense
+#: reference path.
 AUTO_MIN_ROWS = 32
 MAX_AUTO_BLOCK = 64
 
