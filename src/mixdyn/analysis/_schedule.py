@@ -31,7 +31,7 @@ def collector_paused():
     numbers), which allocate no reference cycles but so many objects that the collector
     runs again and again over every member's model, whose objects all stay alive (measured:
     the set-up of 10,000 quasi-static members, each its own slider-crank, 3.0 s with it,
-    1.5-1.7 s held off, ``benchmarks/kinematic_sweep.py``)."""
+    1.7-1.8 s held off over its loops, ``benchmarks/kinematic_sweep.py``)."""
     was = gc.isenabled()
     gc.disable()
     try:

@@ -138,8 +138,8 @@ class AutoSolver(LinearSolver):
         max_unrolled_vectorized: most kept rows for it in a vectorized program (measured:
             :data:`~mixdyn.linalg._unrolled.UNROLLED_MAX_ROWS_VECTORIZED`).
         min_rows: fewest kept rows for the banded path (measured: at 32 rows, a 16-link
-            chain, it runs generalized-alpha 4-13% faster and the explicit methods 10-30%
-            slower; from 48 rows every method faster).
+            chain, it runs generalized-alpha 4-13% faster; the explicit methods 10-30%
+            slower on one core, but on two the dense path takes 1.6-2.4x their CPU time).
         max_block: largest reordered bandwidth of ``Phi_q M^-1 Phi_q^T`` for it.
     """
 
