@@ -549,8 +549,9 @@ def _checked(model: Model, ts: np.ndarray, describe: Callable[[], str], i: int) 
         ModelError: a law that jumps, with the member's index in a note.
     """
     try:
-        for driver in model.drivers:  # the method read from the class: equinox makes a
-            # method read from a module a module of its own (~40 us, most of the check)
+        for driver in model.drivers:
+            # Read from the class: equinox makes a method read from a module a module of
+            # its own (~40 us, most of the check of a smooth law).
             type(driver).check_law(driver, float(ts[0]), float(ts[-1]), False)
     except ModelError as err:
         err.add_note(f"in member {i} of the sweep{describe()}")

@@ -210,8 +210,9 @@ _FOUND: dict = {}
 def _smooth_to(law, order: int) -> bool:
     """Whether ``law`` is continuous with its derivatives up to ``order`` by its form
     (:meth:`~mixdyn.model.Law.smooth_to`; a callable that is no Law: not known)."""
-    smooth_to = getattr(type(law), "smooth_to", None)  # read from the class: equinox makes
-    # a method read from a module a module of its own, at every read (~20 us)
+    # Read from the class: equinox makes a method read from a module a module of its own, at
+    # every read (~20 us; a sweep checks every member's laws).
+    smooth_to = getattr(type(law), "smooth_to", None)
     return bool(smooth_to(law, order)) if callable(smooth_to) else False
 
 
