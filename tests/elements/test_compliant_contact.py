@@ -11,6 +11,8 @@ a revolute joint's ``clearance``) against independent truths.
   Flores et al. (2011) for low restitution too (within 7 % at ``e = 0.5``, measured 6 %, where
   Lankarani-Nikravesh's rebound is 45 % off; at ``e = 0.2`` it rebounds at 0.155).
 - Kinematic and inverse analyses refuse contacts by name.
+- Gradients (``md.differentiable``) through a bounce and through friction sticking at two
+  corners at once, against central differences and the closed-form stop.
 """
 
 from __future__ import annotations
@@ -459,6 +461,42 @@ def test_gradients_through_an_impact_equal_finite_differences():
     fd = [(height(theta0 + h * e) - height(theta0 - h * e)) / (2 * h) for e in np.eye(2)]
     np.testing.assert_allclose(grad, np.asarray(fd), rtol=1e-5)
     assert grad[0] > 0  # a livelier ball bounces higher
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_gradients_through_a_block_sliding_to_a_stop_on_two_corners():
+    """``md.differentiable`` through friction that sticks at two contact points at once (a
+    block on its two bottom corners sliding to a stop, the stick forces split by the
+    least-norm solve): the stop's place with respect to ``mu``, the mass, the stick band and
+    the inertia, reverse mode against central differences (2e-5 relative; steps of 1e-2 of
+    the weak dependences' numbers, below which the integration's rounding shows), and
+    against the closed form ``x = v0**2 / (2 mu g)``: ``dx/dmu = -x / mu`` and ``dx/dm = 0``
+    within the regularization's share (1e-4, as the stop itself)."""
+    g, m, W, H, rho, E, mu, v0 = 9.81, 1.0, 0.1, 0.05, 0.002, 1e9, 0.3, 1.0
+    K = float(hertz_stiffness(E, 0.3, rho))
+    settled = (m * g / 2 / K) ** (2 / 3)
+    block = md.Body("block", m, m * (W**2 + H**2) / 12, q0=(0.0, H / 2 - settled, 0.0))
+    floor = md.BoxLineContact(
+        "floor", "block", W, H, rho, "ground", young_modulus=E, restitution=0.3,
+        impact_speed=0.1, contact_model="flores", mu=mu, v_stick=1e-3,
+    )  # fmt: skip
+    model = md.Model([block], forces=[floor], gravity=(0.0, -g))
+    method = md.Projection(rtol=1e-8, atol=1e-10)
+    analysis = md.analyses.Forward(qd0=np.array([v0, 0.0, 0.0]), method=method)
+    params = ["floor.mu", "block.mass", "floor.v_stick", "block.inertia"]
+    f, theta0 = md.differentiable(model, np.linspace(0.0, 0.5, 11), params, analysis=analysis)
+
+    def stop(theta):
+        return f(theta)["q"][-1, 0]
+
+    grad = np.asarray(jax.grad(stop)(np.asarray(theta0)))
+    steps = np.array([1e-5, 1e-2, 1e-2, 1e-2]) * np.array([1.0, *np.abs(theta0[1:])])
+    fd = [float(stop(theta0 + h * e) - stop(theta0 - h * e)) / (2 * h)
+          for h, e in zip(steps, np.eye(4), strict=True)]  # fmt: skip
+    np.testing.assert_allclose(grad, fd, rtol=2e-5)
+    x = v0**2 / (2 * mu * g)
+    np.testing.assert_allclose(grad[0], -x / mu, rtol=1e-4)
+    assert abs(grad[1]) < 1e-4 * x / m
 
 
 @pytest.mark.slow  # long: run by CI's slow set

@@ -62,3 +62,46 @@ def test_a_rigid_contact_needs_the_projection_methods_adaptive_steps(
     assert f"ball.yaml:{line}: run 'drop'" in res.output
     assert f"floor: {words}" in res.output
     assert not out.exists()  # refused before anything ran
+
+
+PLASTIC = """\
+mixdyn: 1
+name: plastic-ball
+units: {length: m, mass: kg, time: s}
+gravity: [0, -9.81 m/s^2]
+ground:
+  points: {O: [0, 0]}
+bodies:
+  - {name: ball, mass: 0.1 kg, inertia: 1.0e-5, q0: [0, 0.25, 0]}
+forces:
+  - {type: circle_line_contact, name: floor, center: ball, radius: 50 mm,
+     line_point: ground.O, contact_model: rigid, restitution: 0}
+runs:
+  - name: drop
+    kind: forward
+    time: {span: [0, 0.5], n: 11}
+"""
+
+
+def test_a_plastic_rigid_contact_runs_and_a_plastic_compliant_one_is_refused(tmp_path):
+    """``restitution: 0`` on a rigid contact: the ball dropped from 0.2 m strikes once,
+    with the impulse ``m sqrt(2 g h0)``, and rests; on a compliant contact (a material,
+    no ``contact_model``) it is refused at its line (exit 2), before computing."""
+    import math
+
+    import pandas as pd
+
+    path = tmp_path / "ball.yaml"
+    path.write_text(PLASTIC)
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    table = pd.read_csv(tmp_path / "out" / "drop" / "results.csv")
+    impulse = table["floor.impulse [N·s]"].to_numpy()
+    assert impulse[-1] == pytest.approx(0.1 * math.sqrt(2 * 9.81 * 0.2), rel=1e-9)
+    assert table["ball.y [m]"].iloc[-1] == pytest.approx(0.05, rel=1e-9)
+    compliant = PLASTIC.replace("contact_model: rigid", "young_modulus: 1 GPa, impact_speed: 1")
+    path.write_text(compliant)
+    res = CliRunner().invoke(app, ["check", str(path)])
+    assert res.exit_code == 2, res.output
+    assert "ball.yaml:11: force 'floor', restitution:" in res.output
+    assert "contact_model: rigid for a perfectly plastic impact" in res.output

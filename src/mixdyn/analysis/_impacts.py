@@ -719,6 +719,10 @@ def simulate_impacts(case, progress=None) -> Result:
                             record(j, P_j, lam, labels, q, qd, qd_new, G[j], F, Gt[j], T_j,
                                    bool(stuck))  # fmt: skip
                         struck.update(together.tolist())
+                        # a perfectly plastic point (e = 0) stays on its contact: it rests
+                        for j in together[e_point[together] == 0.0].tolist():
+                            resting = tuple(sorted((*resting, j)))
+                            started[j] = t0
                         q, qd, J, D, phit, g, G, Gt = state_at(q, qd_new)
                         continue
             struck.add(i)
@@ -752,7 +756,7 @@ def simulate_impacts(case, progress=None) -> Result:
             labels = held_problem(resting).c.active_labels
             record(i, P, lam, labels, q, qd, qd_new, G[i], F, Gt[i], T, sticks)
             qd = qd_new
-            if comes_to_rest:
+            if comes_to_rest or e_i == 0.0:  # stopped on its contact (plastic): it rests
                 resting = tuple(sorted((*resting, i)))
                 started[i] = t0
                 q, qd, J, D, phit, g, G, Gt = state_at(q, qd)

@@ -110,11 +110,12 @@ def _poisson(default):
 def _restitution(optional: bool = False):
     return quantity(
         "dimensionless",
-        "Coefficient of restitution ``e`` in (0, 1] that the contact model reproduces for an "
-        "impact at ``impact_speed`` (1: no damping, the energy is kept).",
+        "Coefficient of restitution ``e``: a compliant contact's in (0, 1], which its damping "
+        "reproduces for an impact at ``impact_speed`` (1: no damping, the energy is kept); a "
+        "rigid contact's in [0, 1], Newton's (0: a perfectly plastic impact).",
         *((None,) if optional else ()),
         converter=_optional if optional else _f64,
-        above=0.0,
+        at_least=0.0,
         kw_only=True,
     )
 
@@ -186,7 +187,7 @@ def _check_law(e, name: str) -> None:
             )
         if not np.all(np.asarray(e.restitution) <= 1.0):
             raise ModelError(
-                "the coefficient of restitution must be in (0, 1], got "
+                "the coefficient of restitution must be in [0, 1], got "
                 f"{np.asarray(e.restitution).tolist()}",
                 name,
                 field="restitution",
@@ -204,9 +205,17 @@ def _check_law(e, name: str) -> None:
     if e.restitution is None:
         return
     r = np.asarray(e.restitution)
+    if not np.all(r > 0.0):
+        raise ModelError(
+            "a compliant contact's damping grows without bound as its restitution falls to "
+            f"0 (got {r.tolist()}): give restitution > 0 (e.g. 0.05 with contact_model: "
+            "flores), or contact_model: rigid for a perfectly plastic impact",
+            name,
+            field="restitution",
+        )
     if not np.all(r <= 1.0):
         raise ModelError(
-            f"the coefficient of restitution must be in (0, 1], got {r.tolist()}",
+            f"a compliant contact's restitution must be in (0, 1], got {r.tolist()}",
             name,
             field="restitution",
         )
