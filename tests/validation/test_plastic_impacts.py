@@ -24,6 +24,7 @@ import mixdyn as md
 G = 9.81
 
 
+@pytest.mark.slow  # long: run by CI's slow set (the model file's run checks it by default)
 def test_a_ball_dropped_on_plastic_ground_strikes_once_and_rests():
     m, R, h0 = 1.5, 0.05, 0.2
     ball = md.Body("ball", m, 0.4 * m * R**2, q0=(0.0, R + h0, 0.0))

@@ -22,6 +22,9 @@ A resting point's normal force ``N`` is its held row's multiplier; its friction 
   first impact (its angular momentum about the contact point kept:
   ``v_x+ = m R^2 v_x / (m R^2 + J)``) and rolls on at that speed (slow).
 - ``mixdyn run`` of a model file with the rough incline writes the friction column (slow).
+- A block sliding on rough ground into a rigid stop reaches it at the closed-form time and
+  speed, rebounds level at ``-e v1``, slides back to its closed-form stop and sticks there;
+  the impact's and the friction's losses close the energy balance (slow).
 """
 
 from __future__ import annotations
@@ -294,3 +297,46 @@ def test_a_box_sliding_on_one_corner_presses_as_its_closed_form_says(vx):
     N = M * (G_ACC + w**2 * r_c[1]) / (1 + M * r_c[0] * (r_c[0] - cf * r_P[1]) / J_BOX)
     np.testing.assert_allclose(lam[-1], N, rtol=1e-12)
     np.testing.assert_allclose(qdd[0], cf * N / M, rtol=1e-12)
+
+
+@pytest.mark.slow  # long: run by CI's slow set
+def test_a_block_sliding_into_a_stop_rebounds_slides_back_and_sticks():
+    """A block resting on rough ground (``mu``) launched at ``v0`` towards a wall ``d`` ahead
+    (a rigid stop, ``e``): it reaches the wall at ``v1 = sqrt(v0^2 - 2 mu g d)``, at
+    ``t1 = (v0 - v1) / (mu g)``; both its front corners strike at once and it rebounds
+    level at ``-e v1`` (the floor's resting corners take no impulse), slides back to a stop
+    ``(e v1)^2 / (2 mu g)`` from the wall at ``t1 + e v1 / (mu g)`` and stays there; the
+    impact took ``(1 - e^2) m v1^2 / 2`` and the friction the rest of the kinetic energy."""
+    mu, e, v0, d = 0.4, 0.5, 1.5, 0.1
+    block = md.Body("block", M, J_BOX, q0=(0.0, H_BOX / 2, 0.0))
+    floor = md.BoxLineContact(
+        "floor", "block", W_BOX, H_BOX, R_CORNER, ("ground", (0.0, 0.0)),
+        contact_model="rigid", restitution=0.5, mu=mu,
+    )  # fmt: skip
+    wall = md.BoxLineContact(
+        "wall", "block", W_BOX, H_BOX, R_CORNER, ("ground", (W_BOX / 2 + d, 0.0)),
+        axis=(0.0, 1.0), contact_model="rigid", restitution=e,
+    )  # fmt: skip
+    model = md.Model([block], forces=[floor, wall], gravity=(0, -G_ACC))
+    ts = np.linspace(0.0, 0.4, 17)
+    r = md.forward(model, ts, qd0=np.array([v0, 0.0, 0.0]), rtol=1e-10, atol=1e-12)
+    a = mu * G_ACC
+    v1 = math.sqrt(v0**2 - 2 * a * d)
+    t1 = (v0 - v1) / a
+    t2 = t1 + e * v1 / a
+    imp = r.stats["impacts"]
+    assert imp["contact"] == ["wall", "wall"]
+    np.testing.assert_allclose(imp["t"], [t1, t1], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(imp["normal_velocity_before"], [-v1, -v1], rtol=1e-9)
+    np.testing.assert_allclose(imp["normal_velocity_after"], [e * v1, e * v1], rtol=1e-9)
+    back = np.clip(ts - t1, 0.0, t2 - t1)
+    x = np.where(ts < t1, v0 * ts - a * ts**2 / 2, d - e * v1 * back + a * back**2 / 2)
+    np.testing.assert_allclose(r["block.x"], x, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(r["block.vx"][ts > t2], 0.0, atol=1e-10)
+    np.testing.assert_allclose(r["block.y"], H_BOX / 2, rtol=1e-12)
+    assert np.max(np.abs(r["block.phi"])) < 1e-12
+    assert r.stats["rests"]["contact"] == ["floor", "floor"]  # it never leaves the floor
+    lost = (1 - e**2) * M * v1**2 / 2
+    np.testing.assert_allclose(r["work.impacts"][-1], -lost, rtol=1e-9)
+    np.testing.assert_allclose(r["work.nonconservative"][-1], lost - M * v0**2 / 2, rtol=1e-9)
+    assert r.stats["energy_balance_error"] < 1e-9

@@ -135,6 +135,10 @@ TIME_TOL = 1e-14
 #: An impact whose normal velocity after misses Newton's law by more than this part of the
 #: approach speed (at least the rest speed) is singular (the constraints fix the normal velocity).
 IMPULSE_TOL = 1e-6
+#: A resting point's held row pulls in an impact only where its impulse is below minus this
+#: part of the impact's own (rounding leaves a row the impact does not load, a block resting
+#: on the floor struck level against a wall, at ~1e-17 of it, of either sign).
+PULL_TOL = 1e-9
 #: The first step of a segment, relative to the run's span (at most the first output
 #: interval, and shorter after an impact: see :func:`_first_step`).
 FIRST_STEP = 1e-4
@@ -711,7 +715,8 @@ def simulate_impacts(case, progress=None) -> Result:
                     and consistent(found, G[together], Gt[together], qd)
                 ):
                     qd_new, lam = found.qd, found.lam
-                    if all(lam[first_hold + k] >= 0.0 for k in range(len(resting))):
+                    pull = -PULL_TOL * float(np.max(found.P))
+                    if all(lam[first_hold + k] >= pull for k in range(len(resting))):
                         F = jump(qd, qd_new, lam, D)
                         labels = held_problem(resting).c.active_labels
                         for j, P_j, T_j, stuck in zip(together, found.P, found.T, found.sticks,
@@ -735,7 +740,8 @@ def simulate_impacts(case, progress=None) -> Result:
                 found = coulomb_impulse(Minv, J, phit, G[i], Gt[i], qd, e_i, mu_point[i], D)
                 qd_new, lam, P, T, sticks = found[:5]
                 _refuse_frictional(found, v[i], float(Gt[i] @ qd), owner[i].name, t0, fail)
-            pulled = [j for k, j in enumerate(resting) if lam[first_hold + k] < 0.0]
+            pull = -PULL_TOL * abs(float(P))
+            pulled = [j for k, j in enumerate(resting) if lam[first_hold + k] < pull]
             if pulled:  # a resting point the impact pulls away lifts off: again without it
                 release(pulled[0], t0)
                 q, qd, J, D, phit, g, G, Gt = state_at(q, qd)
