@@ -85,7 +85,8 @@ runs:
 
 def test_a_plastic_rigid_contact_runs_and_a_plastic_compliant_one_is_refused(tmp_path):
     """``restitution: 0`` on a rigid contact: the ball dropped from 0.2 m strikes once,
-    with the impulse ``m sqrt(2 g h0)``, and rests; on a compliant contact (a material,
+    with the impulse ``m sqrt(2 g h0)``, and rests; ``impacts.csv`` holds the impact's time,
+    impulse and velocities, in the file's output units; on a compliant contact (a material,
     no ``contact_model``) it is refused at its line (exit 2), before computing."""
     import math
 
@@ -99,6 +100,22 @@ def test_a_plastic_rigid_contact_runs_and_a_plastic_compliant_one_is_refused(tmp
     impulse = table["floor.impulse [N·s]"].to_numpy()
     assert impulse[-1] == pytest.approx(0.1 * math.sqrt(2 * 9.81 * 0.2), rel=1e-9)
     assert table["ball.y [m]"].iloc[-1] == pytest.approx(0.05, rel=1e-9)
+    impacts = pd.read_csv(tmp_path / "out" / "drop" / "impacts.csv")  # one row an impact
+    assert list(impacts["contact"]) == ["floor"]
+    assert impacts["t [s]"].iloc[0] == pytest.approx(math.sqrt(2 * 0.2 / 9.81), abs=1e-9)
+    assert impacts["impulse [N·s]"].iloc[0] == pytest.approx(impulse[-1], rel=1e-12)
+    assert impacts["normal_velocity_before [m/s]"].iloc[0] == pytest.approx(
+        -math.sqrt(2 * 9.81 * 0.2), rel=1e-9
+    )
+    shown = "output_units: {time: ms, velocity: mm/s}\nunits: {"
+    path.write_text(PLASTIC.replace("units: {", shown))
+    res = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
+    assert res.exit_code == 0, res.output
+    in_ms = pd.read_csv(tmp_path / "out" / "drop" / "impacts.csv")
+    assert in_ms["t [ms]"].iloc[0] == pytest.approx(1e3 * impacts["t [s]"].iloc[0], rel=1e-12)
+    assert in_ms["normal_velocity_before [mm/s]"].iloc[0] == pytest.approx(
+        1e3 * impacts["normal_velocity_before [m/s]"].iloc[0], rel=1e-12
+    )
     compliant = PLASTIC.replace("contact_model: rigid", "young_modulus: 1 GPa, impact_speed: 1")
     path.write_text(compliant)
     res = CliRunner().invoke(app, ["check", str(path)])

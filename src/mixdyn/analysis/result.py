@@ -72,6 +72,20 @@ def point_columns(result: Result, points=()) -> tuple[dict, dict]:
     return cols, units
 
 
+#: The columns of :meth:`Result.impacts` and their kinds of quantity (None: no unit).
+IMPACT_COLUMNS = {
+    "t": "time",
+    "contact": None,
+    "impulse": "impulse",
+    "normal_velocity_before": "velocity",
+    "normal_velocity_after": "velocity",
+    "friction_impulse": "impulse",
+    "tangential_velocity_before": "velocity",
+    "tangential_velocity_after": "velocity",
+    "sticks": None,
+}
+
+
 @dataclasses.dataclass(frozen=True)
 class Result:
     """Time histories of one analysis.
@@ -174,6 +188,43 @@ class Result:
         df = pd.DataFrame(cols, index=pd.Index(np.asarray(cols["t"])))
         df.attrs["units"] = {c: engineering(units[c]) for c in cols if c in units}
         df.attrs["kind"] = self.kind
+        return df
+
+    def impacts(self, output_units: dict | None = None):
+        """A pandas DataFrame of the run's rigid impacts, one row each in the order
+        resolved (``stats["impacts"]``): its time ``t``, the contact, the normal impulse
+        ``P`` on body j, the normal velocities (the gap's rate: negative approaching) before
+        and after, the friction impulse along ``z x n``, the tangential velocities before and
+        after and whether the point stuck. Empty for a run without rigid contacts.
+
+        Args:
+            output_units: as for :meth:`table` (time, impulse and velocity converted).
+
+        The units (engineering labels) are in ``df.attrs["units"]``.
+        """
+        import pandas as pd
+
+        from ..units import completed, engineering, preset, size_in
+
+        shown = self.output_units if output_units is None else output_units
+        shown = preset(shown) if isinstance(shown, str) else dict(shown or {})
+        shown = completed(shown, self.model.units)
+        found = self.stats.get("impacts") or {}
+        cols, units = {}, {}
+        for name, kind in IMPACT_COLUMNS.items():
+            values = list(found.get(name, []))
+            if kind is None:
+                cols[name] = values
+                continue
+            x = np.asarray(values, dtype=float)
+            if kind in shown:
+                x = x / size_in(shown[kind], kind, self.model.units)
+                units[name] = engineering(shown[kind])
+            else:
+                units[name] = engineering(self.model.units.label(kind))
+            cols[name] = x
+        df = pd.DataFrame(cols)
+        df.attrs["units"] = units
         return df
 
     def plot(self, columns, *, x: str = "t", points=(), output_units: dict | None = None, **kw):

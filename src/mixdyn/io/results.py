@@ -10,7 +10,9 @@ as names and units. ``results.parquet`` carries the units in its schema metadata
 headers in a sheet ``results`` and ``meta.json``'s entries in a sheet ``meta``
 (:func:`write_workbook`). ``meta.json`` holds the unit of every column, the run's settings
 (solver, tolerances), the solver's counters and the mixdyn version. Units are engineering
-labels (:func:`mixdyn.units.engineering`), which :mod:`mixdyn.units` reads back.
+labels (:func:`mixdyn.units.engineering`), which :mod:`mixdyn.units` reads back. A run with
+rigid contacts also writes ``impacts.csv``: a row per impact, in the order resolved, with its
+time, contact, impulses and velocities (:meth:`mixdyn.Result.impacts`), in the same units.
 """
 
 from __future__ import annotations
@@ -35,6 +37,7 @@ RESULTS_CSV = "results.csv"
 RESULTS_PARQUET = "results.parquet"
 RESULTS_XLSX = "results.xlsx"
 META_JSON = "meta.json"
+IMPACTS_CSV = "impacts.csv"
 
 
 def jsonable(value: Any) -> Any:
@@ -127,6 +130,8 @@ def write_result(
         "status": "ok",
     }
     written.append(write_meta(folder, meta, extra))
+    if "impacts" in result.stats:
+        written.append(_write_impacts(folder / IMPACTS_CSV, result, output_units))
     if excel:
         import pandas as pd
 
@@ -392,6 +397,17 @@ def _write_csv(path: pathlib.Path, names: list[str], table: np.ndarray) -> None:
     tmp = path.with_suffix(".csv.tmp")
     tmp.write_text(buf.getvalue(), encoding="utf-8")
     os.replace(tmp, path)
+
+
+def _write_impacts(path: pathlib.Path, result: Result, output_units) -> pathlib.Path:
+    """The run's impacts (:meth:`mixdyn.Result.impacts`) as CSV, headers ``name [unit]``,
+    numbers at full precision."""
+    df = result.impacts(output_units)
+    df.columns = headers(list(df.columns), df.attrs["units"])
+    tmp = path.with_suffix(".csv.tmp")
+    df.to_csv(tmp, index=False, float_format="%.17g", lineterminator="\n")
+    os.replace(tmp, path)
+    return path
 
 
 def _refuse_non_finite(table: np.ndarray, names: list[str]) -> None:

@@ -179,9 +179,9 @@ def animation_targets(outputs, file) -> list[pathlib.Path]:
 
 
 #: The files a run writes in some invocations only (``--parquet``, ``--netcdf``,
-#: ``--excel``), by a file its kind always writes.
+#: ``--excel``; ``impacts.csv``: a run with rigid contacts), by a file its kind always writes.
 _FORMAT_FILES = {
-    "results.csv": ("results.parquet", "results.xlsx"),
+    "results.csv": ("results.parquet", "results.xlsx", "impacts.csv"),
     "table.csv": ("table.parquet", "sweep.nc", "sweep.xlsx"),
 }
 
