@@ -262,7 +262,7 @@ def test_mixdyn_run_of_a_rough_rigid_incline_writes_the_resting_friction(tmp_pat
     path.write_text(FILE)
     out = CliRunner().invoke(app, ["run", str(path), "--out", str(tmp_path / "out")])
     assert out.exit_code == 0, out.output
-    (table,) = (tmp_path / "out").rglob("*.csv")
+    (table,) = (tmp_path / "out").rglob("results.csv")
     frame = pd.read_csv(table)
     (column,) = [c for c in frame.columns if c.startswith("incline.friction ")]
     assert "[N]" in column

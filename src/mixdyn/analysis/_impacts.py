@@ -400,7 +400,7 @@ def _point_rates(x, scale) -> float:
     return float(np.max(np.hypot(v[:, 0], v[:, 1]) + np.abs(v[:, 2]) * scale)) if v.size else 0.0
 
 
-def _longest_step(contacts, qd, qdd, dt_out, scale) -> tuple[float, float]:
+def _longest_step(contacts, qd, qdd, dt_out, scale, gap=0.0) -> tuple[float, float]:
     """The longest step [time] of a segment starting at the velocities ``qd`` and
     accelerations ``qdd`` (nq,), and the segment's horizon [time]: no step longer than the
     shortest output interval, nor than the time in which the fastest body point moves
@@ -410,13 +410,24 @@ def _longest_step(contacts, qd, qdd, dt_out, scale) -> tuple[float, float]:
     passed through). The point's speed may grow: with ``v0`` and ``a0`` its largest speed
     and acceleration at the start, the step ``h`` holds for a horizon of :data:`HORIZON`
     steps, ``(v0 + a0 HORIZON h) h = d``; the segment ends there (infinite where nothing
-    accelerates) and the next takes the speed it reached."""
+    accelerates) and the next takes the speed it reached.
+
+    Where the watched points are all ``gap`` [length] or more apart, no pair touches before
+    its two bodies' points have moved ``gap / 2`` each, at ``T`` with
+    ``v0 T + a0 T**2 / 2 = gap / 2``: where that is longer than the bounded segment, the
+    segment runs to ``T`` with steps up to the output interval (a contact out of reach costs
+    no steps), and the next one bounds them again from its own gaps."""
     v0, a0 = _point_rates(qd, scale), _point_rates(qdd, scale)
     d = PASS_FRACTION * min(float(np.min(np.asarray(c.effective_radius()))) for c in contacts)
     if v0 <= 0.0 and a0 <= 0.0:
         return dt_out, math.inf
     h = 2.0 * d / (v0 + math.sqrt(v0 * v0 + 4.0 * a0 * HORIZON * d))
-    return min(dt_out, h), (HORIZON * h if a0 > 0.0 else math.inf)
+    horizon = HORIZON * h if a0 > 0.0 else math.inf
+    if gap > 0.0:
+        free = gap / (v0 + math.sqrt(v0 * v0 + a0 * gap))  # v0 T + a0 T^2 / 2 = gap / 2
+        if free > min(horizon, HORIZON * h):
+            return dt_out, free
+    return min(dt_out, h), horizon
 
 
 def _refuse_penetration(owner, gaps, scale) -> None:
@@ -565,6 +576,7 @@ def simulate_impacts(case, progress=None) -> Result:
     t0 = float(ts[0])
     y = (jnp.asarray(case.q0), jnp.asarray(case.qd0), jnp.zeros(2))
     lost, worked, steps, segments = 0.0, 0.0, 0, 1
+    carried = 0.0  # the mean step [time] of a segment that ran to its horizon, for the next
     totals = {c.name: 0.0 for c in contacts}
     T_totals = dict.fromkeys(T_acc, 0.0)
     F_totals = dict.fromkeys(unknown, 0.0)
@@ -790,12 +802,14 @@ def simulate_impacts(case, progress=None) -> Result:
         if current.reaction_dependent:  # the rows that stopped held where they stopped
             y = (y[0], *_halt(current, *y, jnp.asarray(t0)))
             qd = np.asarray(y[1])
-        h = min(FIRST_STEP * span, float(ts[1] - ts[0]) if N > 1 else span)
+        h = min(max(FIRST_STEP * span, carried), float(ts[1] - ts[0]) if N > 1 else span)
         apart = (g > GAP_TOL * scale) | (G @ qd > 0.0) | released
         watched = apart & ~np.isin(np.arange(len(owner)), resting)
         dt0, qdd0 = _first_step(current, contacts, jnp.asarray(watched), y[0], y[1],
                                 jnp.asarray(t0), h, GAP_TOL * scale)  # fmt: skip
-        dtmax, horizon = _longest_step(contacts, qd, np.asarray(qdd0), dt_out, scale)
+        gap = float(np.min(g[watched])) if watched.any() else 0.0
+        dtmax, horizon = _longest_step(contacts, qd, np.asarray(qdd0), dt_out, scale, gap)
+        dt0 = jnp.minimum(dt0, dtmax)
         t1 = min(float(ts[-1]), t0 + horizon)
         ys, t_end, y_end, hit, failed, n, code = _segment(
             current, contacts, jnp.asarray(watched), jnp.asarray(scale), jnp.asarray(t0),
@@ -805,6 +819,9 @@ def simulate_impacts(case, progress=None) -> Result:
             min(SEGMENT_STEPS, int(options.max_steps)),
         )  # fmt: skip
         t_end, steps, hit = float(t_end), steps + int(n), np.asarray(hit)
+        # a segment that ran to its horizon (no impact, no event) hands its mean step on: the
+        # next goes on from there rather than from a first step sized for an impact
+        carried = (t_end - t0) / max(int(n), 1) if t_end >= t1 and not hit.any() else 0.0
         last = t_end >= ts[-1]
         take = (ts >= t0) & ((ts <= t_end) if last else (ts < t_end)) & ~filled
         Q[take], QD[take], W[take] = (np.asarray(a)[take] for a in ys)
