@@ -9,8 +9,9 @@ Truths:
   departs from the ideal joint's by at most ``sqrt(1 + tan(beta)**2) (c + delta_max)`` (its
   own offset along the guide and the rod's turn across it, ``tan(beta) <= r / sqrt(l**2 -
   r**2)``): as the clearance tends to zero the motion tends to the ideal joint's.
-- The published behaviour: free flight, impacts and continuous contact in one turn, and a
-  driving torque whose spikes exceed the ideal joint's torque.
+- The published behaviour: free flight, impacts and continuous contact in one turn, told
+  apart by the contacts' durations, and a driving torque and a slider acceleration whose
+  spikes exceed the ideal joint's.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np
 import pytest
 
 import mixdyn as md
-from fixtures.paths import DATA
+from fixtures.paths import DATA, EXAMPLES
 
 pytestmark = pytest.mark.slow  # long: run by CI's slow set
 
@@ -106,14 +107,27 @@ def test_as_the_clearance_shrinks_the_motion_tends_to_the_ideal_joints(runs):
     assert errors[1e-4] < 0.4 * errors[5e-4]
 
 
+def _contact_intervals(touching) -> list[int]:
+    """The lengths [samples] of the runs of consecutive samples in contact."""
+    edges = np.flatnonzero(np.diff(np.r_[0, touching.astype(int), 0]))
+    return list(np.diff(edges)[::2])
+
+
 def test_free_flight_impacts_and_contact_and_the_torques_spikes(runs):
-    """One turn with 0.5 mm: the journal flies (gap), impacts and rides the bearing; the
-    motor torque's peak exceeds the ideal joint's (the impacts' spikes), and the contact
-    force's peak exceeds the steady inertial load of the slider ``m r omega**2``."""
+    """One turn with 0.5 mm: the journal flies (gap), impacts and rides the bearing: contacts
+    of one or two samples (50 us each) apart, impacts with flight between, and contacts of a
+    millisecond or more (20 samples), continuous contact; the motor torque's peak and the
+    slider acceleration's exceed the ideal joint's (the impacts' spikes: 1.5 and 5 times),
+    and the contact force's peak exceeds the steady inertial load of the slider
+    ``m r omega**2``."""
     r = runs[5e-4]
     pen, F = r["B.penetration"], r["B.normal"]
     first = np.argmax(F > 0)
     assert first > 0 and np.any(pen[first:] < 0) and np.sum(F > 0) > 20
+    lengths = _contact_intervals(F > 0)
+    assert sum(n <= 2 for n in lengths) >= 3 and max(lengths) >= 20, lengths
+    ideal_ax = runs[None]["slider.ax"]
+    assert np.max(np.abs(r["slider.ax"])) > 5 * np.max(np.abs(ideal_ax))
     # the journal's orbit: its distance from the bearing's centre is the clearance plus
     # the penetration, and its direction in the rod's frame turns with the load
     orbit = np.hypot(r["B.ex"], r["B.ey"])
@@ -173,3 +187,29 @@ def test_a_sweep_over_the_clearance_is_its_single_runs(runs):
         reach = c + max(float(np.max(r["B.penetration"])), 0.0)
         error = np.max(np.abs(r["slider.x"] - runs[None]["slider.x"]))
         assert error <= math.sqrt(1 + tan_beta**2) * reach * 1.01, c
+
+
+def test_the_clearance_sweep_example_runs_and_its_member_is_the_single_run(tmp_path):
+    """``mixdyn run examples/clearance_sweep.yaml``: five members, 0.1 to 0.5 mm, every one
+    ok; the member at 0.5 mm is the file's single run (``one_turn``): its peak contact force
+    and peak motor torque equal those of the single run's columns (1e-9 relative), and every
+    member's peak force exceeds the slider's steady inertial load ``m r omega**2``."""
+    import pandas as pd
+    from typer.testing import CliRunner
+
+    from mixdyn.cli import app
+
+    out = tmp_path / "out"
+    res = CliRunner().invoke(app, ["run", str(EXAMPLES / "clearance_sweep.yaml"), "--out",
+                                   str(out)])  # fmt: skip
+    assert res.exit_code == 0, res.output
+    members = pd.read_csv(out / "sweep" / "members.csv")
+    np.testing.assert_allclose(members["c [m]"], np.linspace(1e-4, 5e-4, 5), rtol=1e-12)
+    assert list(members["status"]) == ["ok"] * 5
+    single = pd.read_csv(out / "one_turn" / "results.csv")
+    last = members.iloc[-1]
+    np.testing.assert_allclose(last["F_peak [N]"], single["B.normal [N]"].max(), rtol=1e-9)
+    np.testing.assert_allclose(
+        last["torque_peak [N·m]"], single["motor [N·m]"].abs().max(), rtol=1e-9
+    )
+    assert np.all(members["F_peak [N]"] > REF["slider.mass"] * L1 * OMEGA**2)
