@@ -7,6 +7,7 @@ from ._contact_pairs import (
     BoxLineContact,
     CircleContact,
     CircleLineContact,
+    CirclePolylineContact,
     JournalBearing,
     SliderInGuide,
 )
@@ -84,6 +85,7 @@ __all__ = [
     "CamFollower",
     "CircleContact",
     "CircleLineContact",
+    "CirclePolylineContact",
     "CircleSetContact",
     "Constant",
     "ContactFriction",

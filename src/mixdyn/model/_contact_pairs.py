@@ -1,13 +1,15 @@
 """Contact pairs: the shapes of two bodies that touch, each a compliant contact
 (:class:`~mixdyn.model._compliant._Compliant`) giving its penetrations, contact points and
-Hertz's effective radius: a circle on a line (a half-plane's edge), a box's rounded corners
-on a line (a convex polygon's vertices), two circles, a journal in a bearing (a hole) and a
-slider in a guide (a translational joint's gap).
+Hertz's effective radius: a circle on a line (a half-plane's edge), a circle on a polyline
+(segments end to end: a stop's outline, a notch, a slot's side), a box's rounded corners on a
+line (a convex polygon's vertices), two circles, a journal in a bearing (a hole) and a slider
+in a guide (a translational joint's gap).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import itertools
 from typing import ClassVar
 
 import equinox as eqx
@@ -21,6 +23,7 @@ from ._declare import direction, element, quantity, reference
 from ._element import Resolver, body_name
 from ._forces import _f64
 from ._geometry import GROUND, angle, point, rot, vector
+from ._polygon_sets import _points_field
 
 
 def _apart(r: Resolver, name: str, first: str, second: str, both: str):
@@ -89,6 +92,102 @@ class CircleLineContact(_Compliant):
         out = {"circles": [(self.bj, self.sj, self.radius)]}
         if self.bi == GROUND:
             out["guides"] = [(np.asarray(self.si), np.asarray(self.u))]
+        return out
+
+
+@element("circle_polyline_contact", "forces")
+class CirclePolylineContact(_Compliant):
+    """A circle (a pin, a roller, a ball) on body j touching a polyline of body i or the
+    ground: segments end to end through the points ``polyline`` (two points: one segment), a
+    stop's outline, a V notch, a slot's side. The polyline is a curve, not a solid: it has no
+    inside, and the circle touches it from either side.
+
+    Each segment ``k`` is a contact point: with ``p_k`` the point of the segment nearest the
+    circle's centre ``c``, the penetration is ``delta_k = radius - |c - p_k|`` and the normal
+    on the circle ``n_k = (c - p_k) / |c - p_k|``. A point where two segments meet belongs to
+    the second: where the nearest point of segment ``k`` is its end (the centre beyond a
+    convex corner), segment ``k`` is apart (``delta_k = -(radius + |c - p_k|)``) and the next
+    segment, whose nearest point is that same corner, carries the contact once; in a concave
+    corner (a notch) both sides touch, each with its own force. Hertz's effective radius is
+    the circle's (the segments flat). Result columns: ``{name}.normal`` (the segments'
+    normal forces added), ``.penetration`` (the deepest) and, with ``mu``, ``.friction``.
+    """
+
+    center: str = reference("Centre of the circle, ``body.point`` (or ``body``).")
+    radius: jax.Array = quantity("length", "Radius of the circle, > 0.", converter=_f64, above=0.0)
+    polyline: tuple = _points_field(
+        "The polyline's points in order, ``body.point`` (``ground.point``: a fixed outline), "
+        "two or more, all on one body other than the circle's, consecutive points apart."
+    )
+    #: The polyline's points in its body's frame (V, 2) [length], fixed when bound.
+    local: jax.Array | None = eqx.field(default=None, kw_only=True)
+
+    def bind(self, r: Resolver):
+        bj, sj = r.point(self.center, self.name)
+        if len(self.polyline) < 2:
+            raise ModelError(
+                f"a polyline needs two points or more (one segment), got {len(self.polyline)}",
+                self.name,
+                field="polyline",
+            )
+        located = [r.point(v, self.name) for v in self.polyline]
+        on = {int(b) for b, _ in located}
+        if len(on) > 1:
+            raise ModelError(
+                "the polyline's points are on several bodies: they must all be on one body "
+                "(or the ground)",
+                self.name,
+                field="polyline",
+            )
+        bi = on.pop()
+        if bi == bj:
+            raise ModelError(
+                f"the circle and the polyline are both on {body_name(self.center)!r}: they "
+                "must be on two different bodies",
+                self.name,
+                field="polyline",
+            )
+        V = np.array([np.asarray(s, dtype=float) for _, s in located])
+        short = np.flatnonzero(np.hypot(*np.diff(V, axis=0).T) <= 0.0)
+        if short.size:
+            k = int(short[0])
+            raise ModelError(
+                f"points {k + 1} and {k + 2} of the polyline coincide: consecutive points must "
+                "be apart (a segment of zero length has no direction)",
+                self.name,
+                field="polyline",
+            )
+        return dataclasses.replace(self, bi=bi, bj=bj, sj=sj, local=jnp.asarray(V))
+
+    def _nearest(self, q):
+        """``(c, p, owned)``: the circle's centre (2,), each segment's nearest point to it
+        (k, 2) [length] and whether the segment carries the contact (k,)."""
+        c = point(q, self.bj, self.sj)
+        P = jax.vmap(lambda s: point(q, self.bi, s))(self.local)
+        a, e = P[:-1], P[1:] - P[:-1]
+        s = jnp.clip(jnp.sum((c - a) * e, axis=1) / jnp.sum(e * e, axis=1), 0.0, 1.0)
+        last = jnp.arange(e.shape[0]) == e.shape[0] - 1
+        return c, a + s[:, None] * e, (s < 1.0) | last
+
+    def penetration(self, q):
+        c, p, owned = self._nearest(q)
+        d = jax.vmap(_safe_norm)(c - p)
+        return jnp.where(owned, self.radius - d, -(self.radius + d))
+
+    def frame(self, q):
+        c, p, _ = self._nearest(q)
+        n = jax.vmap(_unit)(c - p)
+        delta = self.penetration(q)
+        return c - (self.radius - 0.5 * delta)[:, None] * n, n
+
+    def effective_radius(self):
+        return self.radius
+
+    def drawing(self):
+        out = {"circles": [(self.bj, self.sj, self.radius)]}
+        if self.bi == GROUND:
+            V = np.asarray(self.local, dtype=float)
+            out["edges"] = list(itertools.pairwise(V))
         return out
 
 

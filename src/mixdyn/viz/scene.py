@@ -113,7 +113,11 @@ class Scene:
             for b, s, radius in d.get("circles", ())
             if b < 0
         ]
+        edges = [  # sides on the ground (a fixed shape's outline, a polyline)
+            np.asarray(e, dtype=float).reshape(2, 2) for d in drawings for e in d.get("edges", ())
+        ]
         allpts = [o.reshape(-1, 2) for o in self.outlines] + [self.ground] + self.traces + rings
+        allpts += edges
         allpts = np.concatenate([a for a in allpts if a.size], axis=0)
         lo, hi = allpts.min(axis=0), allpts.max(axis=0)
         span = max(float((hi - lo).max()), 1e-9)
@@ -124,8 +128,7 @@ class Scene:
             for p0, u in d.get("guides", ()):
                 p0, u = np.asarray(p0, dtype=float), np.asarray(u, dtype=float)
                 guides.append([p0 - 2 * span * u, p0 + 2 * span * u])
-            for a, b in d.get("edges", ()):  # sides on the ground (a fixed shape's outline)
-                guides.append([np.asarray(a, dtype=float), np.asarray(b, dtype=float)])
+        guides += [list(e) for e in edges]
         for c in rings:  # drawn as its chords
             guides += [[c[k], c[(k + 1) % len(c)]] for k in range(len(c))]
         self.guides = np.array(guides).reshape(-1, 2, 2)
