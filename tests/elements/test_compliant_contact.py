@@ -500,6 +500,27 @@ def test_gradients_through_a_block_sliding_to_a_stop_on_two_corners():
 
 
 @pytest.mark.slow  # long: run by CI's slow set
+def test_a_vectorized_sweep_over_the_restitution_is_its_single_runs():
+    """``md.sweep`` over a compliant contact's restitution in one vectorized program
+    (``batch_size``; the ball has no joints: its multipliers have no entries): every member
+    equals its single run (1e-12 m), and the rebound rises with ``e``, the restitution each
+    achieves, ``sqrt(h1 / h0)``, within Flores' model's accuracy (7 %, as above)."""
+    t_fall = math.sqrt(2 * H0 / G)
+    ts = np.linspace(0.0, 1.5 * t_fall, 301)
+    es = [0.5, 0.7, 0.9]
+    analysis = md.analyses.Forward(method=md.Projection(rtol=1e-11, atol=1e-13))
+    sw = md.sweep(ball(0.9, "flores"), ts, vary={"floor.restitution": es}, analysis=analysis,
+                  batch_size=2)  # fmt: skip
+    apexes = []
+    for e, r in zip(es, sw.results, strict=True):
+        apex, single = rebound_apex(ball(e, "flores"))
+        np.testing.assert_allclose(r.q, single.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(math.sqrt(apex / H0), e, rtol=0.07)  # e achieved
+        apexes.append(apex)
+    assert apexes[0] < apexes[1] < apexes[2]
+
+
+@pytest.mark.slow  # long: run by CI's slow set
 def test_the_example_runs(tmp_path):
     """``mixdyn run examples/clearance_slider_crank.yaml`` ends well (exit 0) with the
     contact's columns written."""

@@ -17,7 +17,6 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Sequence
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
@@ -27,7 +26,7 @@ from ..runtime._programs import cached_jit
 from . import _setup
 from ._prepared_members import finished, in_chunks, one_structure, prepare_each
 from ._prepared_members import stack as stack_trees
-from ._schedule import CHUNK
+from ._schedule import CHUNK, batched_map
 from ._stacked import LazyResults, add_points, body_columns
 from .kinematic import Kinematic, _kinematic_scan, kinematic_result, output_times, tolerance
 from .result import Result, in_units
@@ -41,7 +40,7 @@ def _scan_batch(width: int, c, q_start, ts, tol, max_iter):
         cc, q, tl = x
         return _kinematic_scan(cc, q, ts, tl, max_iter)
 
-    return jax.lax.map(one, (c, q_start, tol), batch_size=width)
+    return batched_map(one, (c, q_start, tol), width)
 
 
 _scan_batch_jit = cached_jit(_scan_batch)

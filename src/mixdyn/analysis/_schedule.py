@@ -15,6 +15,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import equinox as eqx
 import jax
+import jax.numpy as jnp
 import numpy as np
 
 from ..errors import MixdynError, ModelError
@@ -47,6 +48,28 @@ def for_batch(problem):
     return eqx.tree_at(lambda p: p.c, problem, problem.c.for_batch())
 
 
+def batched_map(f, xs, batch_size: int):
+    """``jax.lax.map(f, xs, batch_size=batch_size)`` with the shapes written out: ``f`` over
+    the leading axis of ``xs``, ``batch_size`` members at a time vectorized (a scan over the
+    full batches, then the remainder vectorized). ``jax.lax.map`` infers its reshapes
+    (``-1``), which fails on outputs of no entries (a model without constraints has
+    multipliers of shape (N, 0)); here every shape is given."""
+    n = jax.tree.leaves(xs)[0].shape[0]
+    full, rest = divmod(n, batch_size)
+    parts = []
+    if full:
+        head = jax.tree.map(
+            lambda x: x[: full * batch_size].reshape(full, batch_size, *x.shape[1:]), xs
+        )
+        _, ys = jax.lax.scan(lambda c, x: (c, jax.vmap(f)(x)), (), head)
+        parts.append(jax.tree.map(lambda y: y.reshape(full * batch_size, *y.shape[2:]), ys))
+    if rest:
+        parts.append(jax.vmap(f)(jax.tree.map(lambda x: x[full * batch_size :], xs)))
+    if len(parts) == 1:
+        return parts[0]
+    return jax.tree.map(lambda a, b: jnp.concatenate([a, b], axis=0), *parts)
+
+
 def _integrate_batch(method: str, batch_size: int, problems, ts, q0, qd0, options):
     """The trajectories of a batch of cases of one structure (leading axis: the member)."""
     integrate_one = INTEGRATORS[method]
@@ -55,7 +78,7 @@ def _integrate_batch(method: str, batch_size: int, problems, ts, q0, qd0, option
         p, a, b = x
         return integrate_one(p, ts, a, b, options, progress=None)
 
-    return jax.lax.map(one, (problems, q0, qd0), batch_size=batch_size)
+    return batched_map(one, (problems, q0, qd0), batch_size)
 
 
 _integrate_batch_jit = cached_jit(_integrate_batch)
@@ -70,7 +93,7 @@ def _post_batch(batch_size: int, problems, ts, Q, QD):
         p, q, qd = x
         return _post_arrays(p, ts, q, qd)
 
-    return jax.lax.map(one, (problems, Q, QD), batch_size=batch_size)
+    return batched_map(one, (problems, Q, QD), batch_size)
 
 
 _post_batch_jit = cached_jit(_post_batch)

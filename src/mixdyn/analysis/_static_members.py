@@ -47,7 +47,7 @@ from ._reactions import (
     reaction_columns,
     reaction_kinds,
 )
-from ._schedule import CHUNK, collector_paused
+from ._schedule import CHUNK, batched_map, collector_paused
 from ._stacked import LazyResults, add_points, body_columns
 from ._structure import FULL_RANK_RATIO
 from .kinematic import output_times
@@ -223,7 +223,7 @@ def _equilibria_batch(width: int, model, c, q_start, L, ts, tol, max_iter, held=
         mm, cc, q, length, tl = x
         return _equilibria(mm, cc, q, length, ts, tl, max_iter, held)
 
-    return jax.lax.map(one, (model, c, q_start, L, tol), batch_size=width)
+    return batched_map(one, (model, c, q_start, L, tol), width)
 
 
 _equilibria_batch_jit = cached_jit(_equilibria_batch)
