@@ -204,21 +204,33 @@ def test_a_box_touches_a_line_at_its_rounded_corners():
     assert max(expected) > 0 > min(expected)  # one corner presses, one is clear
 
 
+#: The sliding block's gravity [m/s^2], mass [kg], friction coefficient and launch speed [m/s].
+BLOCK_G, BLOCK_M, BLOCK_MU, BLOCK_V0 = 9.81, 1.0, 0.3, 1.0
+
+
+def sliding_block() -> md.Model:
+    """A block 0.1 x 0.05 m (corners rounded by 2 mm, E = 1 GPa) resting on the floor on its
+    two bottom corners, each pressed by ``m g / 2``; its floor contact has friction
+    ``BLOCK_MU`` (Flores' damping, ``v_stick`` 1 mm/s)."""
+    g, m, W, H, rho, E = BLOCK_G, BLOCK_M, 0.1, 0.05, 0.002, 1e9
+    K = float(hertz_stiffness(E, 0.3, rho))
+    settled = (m * g / 2 / K) ** (2 / 3)  # each bottom corner carries m g / 2
+    block = md.Body("block", m, m * (W**2 + H**2) / 12, q0=(0.0, H / 2 - settled, 0.0))
+    floor = md.BoxLineContact(
+        "floor", "block", W, H, rho, "ground", young_modulus=E, restitution=0.3,
+        impact_speed=0.1, contact_model="flores", mu=BLOCK_MU, v_stick=1e-3,
+    )  # fmt: skip
+    return md.Model([block], forces=[floor], gravity=(0.0, -g))
+
+
 @pytest.mark.slow  # long: run by CI's slow set
 def test_a_block_sliding_on_the_floor_stops_where_coulomb_says_and_stays():
     """A block (a box on its two bottom corners) launched along the floor at v0 with
     friction mu: the friction is mu m g while it slides, it stops at ``v0**2 / (2 mu g)``
     (<= 1e-4 relative: the regularization's creep below v_stick is a small share) and stays
     there."""
-    g, m, W, H, rho, E, mu, v0 = 9.81, 1.0, 0.1, 0.05, 0.002, 1e9, 0.3, 1.0
-    K = float(hertz_stiffness(E, 0.3, rho))
-    settled = (m * g / 2 / K) ** (2 / 3)  # each bottom corner carries m g / 2
-    block = md.Body("block", m, m * (W**2 + H**2) / 12, q0=(0.0, H / 2 - settled, 0.0))
-    floor = md.BoxLineContact(
-        "floor", "block", W, H, rho, "ground", young_modulus=E, restitution=0.3,
-        impact_speed=0.1, contact_model="flores", mu=mu, v_stick=1e-3,
-    )  # fmt: skip
-    model = md.Model([block], forces=[floor], gravity=(0.0, -g))
+    g, m, mu, v0 = BLOCK_G, BLOCK_M, BLOCK_MU, BLOCK_V0
+    model = sliding_block()
     ts = np.linspace(0.0, 0.5, 101)
     r = md.forward(model, ts, qd0=np.array([v0, 0.0, 0.0]), rtol=1e-8, atol=1e-10)
     sliding = ts < 0.8 * v0 / (mu * g)
@@ -472,15 +484,8 @@ def test_gradients_through_a_block_sliding_to_a_stop_on_two_corners():
     the weak dependences' numbers, below which the integration's rounding shows), and
     against the closed form ``x = v0**2 / (2 mu g)``: ``dx/dmu = -x / mu`` and ``dx/dm = 0``
     within the regularization's share (1e-4, as the stop itself)."""
-    g, m, W, H, rho, E, mu, v0 = 9.81, 1.0, 0.1, 0.05, 0.002, 1e9, 0.3, 1.0
-    K = float(hertz_stiffness(E, 0.3, rho))
-    settled = (m * g / 2 / K) ** (2 / 3)
-    block = md.Body("block", m, m * (W**2 + H**2) / 12, q0=(0.0, H / 2 - settled, 0.0))
-    floor = md.BoxLineContact(
-        "floor", "block", W, H, rho, "ground", young_modulus=E, restitution=0.3,
-        impact_speed=0.1, contact_model="flores", mu=mu, v_stick=1e-3,
-    )  # fmt: skip
-    model = md.Model([block], forces=[floor], gravity=(0.0, -g))
+    g, m, mu, v0 = BLOCK_G, BLOCK_M, BLOCK_MU, BLOCK_V0
+    model = sliding_block()
     method = md.Projection(rtol=1e-8, atol=1e-10)
     analysis = md.analyses.Forward(qd0=np.array([v0, 0.0, 0.0]), method=method)
     params = ["floor.mu", "block.mass", "floor.v_stick", "block.inertia"]
