@@ -136,8 +136,8 @@ def test_the_longest_step_keeps_up_with_a_falling_body():
     the segment's horizon ``T`` it falls at ``g T``, and a step of the bound then moves it
     ``PASS_FRACTION rho`` at most; thrown at ``v0`` without acceleration the step is
     ``PASS_FRACTION rho / v0`` and the horizon infinite; at rest, the output interval. With
-    the nearest watched point ``gap`` away, the steps are the output interval's until the
-    body has moved ``gap / 2`` (where that is longer than the bounded segment)."""
+    ``gap`` to close before a watched point touches, the steps are the output interval's
+    until the body has moved ``gap`` (where that is longer than the bounded segment)."""
     g, rho, dt_out = 9.81, 0.5e-3, 0.05
 
     class Contact:
@@ -152,12 +152,12 @@ def test_the_longest_step_keeps_up_with_a_falling_body():
     assert h == pytest.approx(d / 2.0, rel=1e-15) and horizon == math.inf
     h, horizon = _longest_step([Contact()], np.zeros(3), np.zeros(3), dt_out, 1.0)
     assert (h, horizon) == (dt_out, math.inf)
-    # a gap of 0.5 m to the nearest watched point: steps up to the output interval until the
-    # falling body has moved half of it (g T^2 / 2 = 0.25 m), the bounded steps nearer
+    # 0.5 m to close before a watched point touches: steps up to the output interval until the
+    # falling body has moved that far (g T^2 / 2 = 0.5 m), the bounded steps nearer
     gap = 0.5
     h, horizon = _longest_step([Contact()], np.zeros(3), np.array([0.0, -g, 0.0]), dt_out, 1.0,
                                gap)  # fmt: skip
-    assert h == dt_out and g * horizon**2 / 2 == pytest.approx(gap / 2, rel=1e-12)
+    assert h == dt_out and g * horizon**2 / 2 == pytest.approx(gap, rel=1e-12)
     near = _longest_step([Contact()], np.zeros(3), np.array([0.0, -g, 0.0]), dt_out, 1.0, 1e-5)
     assert near == _longest_step([Contact()], np.zeros(3), np.array([0.0, -g, 0.0]), dt_out, 1.0)
 

@@ -412,11 +412,11 @@ def _longest_step(contacts, qd, qdd, dt_out, scale, gap=0.0) -> tuple[float, flo
     steps, ``(v0 + a0 HORIZON h) h = d``; the segment ends there (infinite where nothing
     accelerates) and the next takes the speed it reached.
 
-    Where the watched points are all ``gap`` [length] or more apart, no pair touches before
-    its two bodies' points have moved ``gap / 2`` each, at ``T`` with
-    ``v0 T + a0 T**2 / 2 = gap / 2``: where that is longer than the bounded segment, the
-    segment runs to ``T`` with steps up to the output interval (a contact out of reach costs
-    no steps), and the next one bounds them again from its own gaps."""
+    ``gap`` [length]: the least distance a body point must move for a watched point to touch
+    (its gap against the ground, half its gap between two moving bodies). No pair touches
+    before ``T`` with ``v0 T + a0 T**2 / 2 = gap``: where that is longer than the bounded
+    segment, the segment runs to ``T`` with steps up to the output interval (a contact out
+    of reach costs no steps), and the next one bounds them again from its own gaps."""
     v0, a0 = _point_rates(qd, scale), _point_rates(qdd, scale)
     d = PASS_FRACTION * min(float(np.min(np.asarray(c.effective_radius()))) for c in contacts)
     if v0 <= 0.0 and a0 <= 0.0:
@@ -424,7 +424,7 @@ def _longest_step(contacts, qd, qdd, dt_out, scale, gap=0.0) -> tuple[float, flo
     h = 2.0 * d / (v0 + math.sqrt(v0 * v0 + 4.0 * a0 * HORIZON * d))
     horizon = HORIZON * h if a0 > 0.0 else math.inf
     if gap > 0.0:
-        free = gap / (v0 + math.sqrt(v0 * v0 + a0 * gap))  # v0 T + a0 T^2 / 2 = gap / 2
+        free = 2.0 * gap / (v0 + math.sqrt(v0 * v0 + 2.0 * a0 * gap))  # v0 T + a0 T^2/2 = gap
         if free > min(horizon, HORIZON * h):
             return dt_out, free
     return min(dt_out, h), horizon
@@ -528,6 +528,9 @@ def simulate_impacts(case, progress=None) -> Result:
     contacts = rigid_contacts(model)
     sizes = [int(np.size(np.asarray(c.penetration(case.q0)))) for c in contacts]
     owner = [c for c, n in zip(contacts, sizes, strict=True) for _ in range(n)]
+    # the part of a point's gap that one body's motion may close: all of it against the
+    # ground, half of it between two moving bodies (a set's points: between two moving)
+    closes = np.array([1.0 if len(c.body_indices()) == 1 else 0.5 for c in owner])
     holds = [hold(c, k, n) for c, n in zip(contacts, sizes, strict=True) for k in range(n)]
     index = {(c.name, k): i for i, (c, k) in enumerate(
         (c, k) for c, n in zip(contacts, sizes, strict=True) for k in range(n))}  # fmt: skip
@@ -807,7 +810,7 @@ def simulate_impacts(case, progress=None) -> Result:
         watched = apart & ~np.isin(np.arange(len(owner)), resting)
         dt0, qdd0 = _first_step(current, contacts, jnp.asarray(watched), y[0], y[1],
                                 jnp.asarray(t0), h, GAP_TOL * scale)  # fmt: skip
-        gap = float(np.min(g[watched])) if watched.any() else 0.0
+        gap = float(np.min((closes * g)[watched])) if watched.any() else 0.0
         dtmax, horizon = _longest_step(contacts, qd, np.asarray(qdd0), dt_out, scale, gap)
         dt0 = jnp.minimum(dt0, dtmax)
         t1 = min(float(ts[-1]), t0 + horizon)
