@@ -382,9 +382,9 @@ class _CachedJit:
             return None
         dynamic = [x for x in leaves if eqx.is_array(x)]
         static = tuple(None if eqx.is_array(x) else x for x in leaves)
-        avals = tuple(
-            (x.shape, str(x.dtype), bool(getattr(x, "weak_type", False))) for x in dynamic
-        )
+        # the dtype itself (hashable, equal by value): its str() costs ~3 us a leaf, a
+        # quarter millisecond a call of ~75 leaves
+        avals = tuple((x.shape, x.dtype, bool(getattr(x, "weak_type", False))) for x in dynamic)
         return leaves, treedef, dynamic, (treedef, static, avals)
 
     def __call__(self, *args, **kwargs):
