@@ -551,12 +551,14 @@ def completed(output_units: dict[str, str], model_units: UnitSystem | None) -> d
     return out
 
 
-def in_units(result, columns: dict, units: dict, output_units: dict | None):
+def in_units(result, columns: dict, units: dict, output_units: dict | None, kinds=None):
     """``(columns, units)`` with every column of a kind named in ``output_units`` (kind ->
     unit, e.g. ``{"angle": "deg", "torque": "N*m"}``, or a preset's name: ``"SI"``,
     ``"mm-N-s"``, :data:`mixdyn.units.OUTPUT_PRESETS`) converted into that unit; the others
     as they are (the model's units). ``columns`` and ``units`` as from
-    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``."""
+    :func:`mixdyn.viz.result_columns` or ``result.columns()``/``result.units()``; ``kinds``:
+    the columns' kinds of quantity by name where they are not the result's
+    (``result.kind_of``)."""
     if not output_units:
         return columns, units
     import numpy as np
@@ -569,7 +571,7 @@ def in_units(result, columns: dict, units: dict, output_units: dict | None):
 
     cols, out = dict(columns), dict(units)
     for name in columns:
-        kind = result.kind_of(name)
+        kind = result.kind_of(name) if kinds is None else kinds.get(name)
         if kind in output_units:
             cols[name] = np.asarray(columns[name]) / factor(
                 output_units[kind], kind, result.model.units

@@ -204,27 +204,18 @@ class Result:
         """
         import pandas as pd
 
-        from ..units import completed, engineering, preset, size_in
+        from ..units import engineering
 
         shown = self.output_units if output_units is None else output_units
-        shown = preset(shown) if isinstance(shown, str) else dict(shown or {})
-        shown = completed(shown, self.model.units)
         found = self.stats.get("impacts") or {}
-        cols, units = {}, {}
-        for name, kind in IMPACT_COLUMNS.items():
-            values = list(found.get(name, []))
-            if kind is None:
-                cols[name] = values
-                continue
-            x = np.asarray(values, dtype=float)
-            if kind in shown:
-                x = x / size_in(shown[kind], kind, self.model.units)
-                units[name] = engineering(shown[kind])
-            else:
-                units[name] = engineering(self.model.units.label(kind))
-            cols[name] = x
+        kinds = {name: kind for name, kind in IMPACT_COLUMNS.items() if kind is not None}
+        numbers = {name: np.asarray(found.get(name, []), dtype=float) for name in kinds}
+        labels = {name: self.model.units.label(kind) for name, kind in kinds.items()}
+        numbers, labels = in_units(self, numbers, labels, shown, kinds)
+        cols = {name: numbers[name] if name in kinds else list(found.get(name, []))
+                for name in IMPACT_COLUMNS}  # fmt: skip
         df = pd.DataFrame(cols)
-        df.attrs["units"] = units
+        df.attrs["units"] = {name: engineering(u) for name, u in labels.items()}
         return df
 
     def plot(self, columns, *, x: str = "t", points=(), output_units: dict | None = None, **kw):

@@ -160,24 +160,24 @@ class CirclePolylineContact(_Compliant):
         return dataclasses.replace(self, bi=bi, bj=bj, sj=sj, local=jnp.asarray(V))
 
     def _nearest(self, q):
-        """``(c, p, owned)``: the circle's centre (2,), each segment's nearest point to it
-        (k, 2) [length] and whether the segment carries the contact (k,)."""
+        """``(c, p, delta)``: the circle's centre (2,), each segment's point nearest to it
+        (k, 2) [length] and the segments' penetrations (k,) [length] (apart where the
+        segment's nearest point is its end, but for the last segment)."""
         c = point(q, self.bj, self.sj)
         P = jax.vmap(lambda s: point(q, self.bi, s))(self.local)
         a, e = P[:-1], P[1:] - P[:-1]
         s = jnp.clip(jnp.sum((c - a) * e, axis=1) / jnp.sum(e * e, axis=1), 0.0, 1.0)
-        last = jnp.arange(e.shape[0]) == e.shape[0] - 1
-        return c, a + s[:, None] * e, (s < 1.0) | last
+        p = a + s[:, None] * e
+        owned = (s < 1.0) | (jnp.arange(e.shape[0]) == e.shape[0] - 1)
+        d = jax.vmap(_safe_norm)(c - p)
+        return c, p, jnp.where(owned, self.radius - d, -(self.radius + d))
 
     def penetration(self, q):
-        c, p, owned = self._nearest(q)
-        d = jax.vmap(_safe_norm)(c - p)
-        return jnp.where(owned, self.radius - d, -(self.radius + d))
+        return self._nearest(q)[2]
 
     def frame(self, q):
-        c, p, _ = self._nearest(q)
+        c, p, delta = self._nearest(q)
         n = jax.vmap(_unit)(c - p)
-        delta = self.penetration(q)
         return c - (self.radius - 0.5 * delta)[:, None] * n, n
 
     def effective_radius(self):

@@ -116,8 +116,8 @@ class Scene:
         edges = [  # sides on the ground (a fixed shape's outline, a polyline)
             np.asarray(e, dtype=float).reshape(2, 2) for d in drawings for e in d.get("edges", ())
         ]
-        allpts = [o.reshape(-1, 2) for o in self.outlines] + [self.ground] + self.traces + rings
-        allpts += edges
+        outlines = [o.reshape(-1, 2) for o in self.outlines]
+        allpts = [*outlines, self.ground, *self.traces, *rings, *edges]
         allpts = np.concatenate([a for a in allpts if a.size], axis=0)
         lo, hi = allpts.min(axis=0), allpts.max(axis=0)
         span = max(float((hi - lo).max()), 1e-9)
